@@ -1,0 +1,5 @@
+import sys
+
+from drakedeburr.cli import main
+
+sys.exit(main())

@@ -1,0 +1,85 @@
+"""Process numbers and tolerances, each defined once (SPEC.md §S3, Tab. 7 of the source).
+
+Frozen dataclasses; load overrides from YAML with :func:`load_config`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+__all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "load_config"]
+
+
+@dataclass(frozen=True)
+class OrientationBounds:
+    """Box bounds on (theta_A, theta_B) [rad] for one window class."""
+
+    theta_min: float
+    theta_max: float
+
+
+@dataclass(frozen=True)
+class ProcessParameters:
+    """Deburring process (source Tab. 7). SI units."""
+
+    grinding_speed: float = 0.150  # [m/s] tool speed along a window edge
+    window_switch_speed: float = 0.450  # [m/s] moves between windows
+    purge_speed: float = 0.600  # [m/s]
+    home_speed: float = 0.600  # [m/s] return home
+    spindle_air_pressure: float = 0.15e6  # [Pa] floating spindle radial compliance
+    depth_of_cut_large: float = 1.5e-3  # [m] large windows
+    depth_of_cut_small: float = 1.2e-3  # [m] small windows
+    bounds_large: OrientationBounds = field(
+        default_factory=lambda: OrientationBounds(0.26, 0.44)
+    )
+    bounds_small: OrientationBounds = field(
+        default_factory=lambda: OrientationBounds(0.09, 0.26)
+    )
+    w1: float = 0.6  # weight of theta_A smoothness (eq. 11)
+    w2: float = 0.4  # weight of theta_B smoothness (eq. 11)
+    l_max: float = 10e-3  # [m] max chord length between CL points
+    delta_max: float = 0.12e-3  # [m] max chord-height error
+    key_point_curvature: float = 120.0  # [1/m] = 0.12 1/mm: key points get a surface fit
+    normal_search_radius: float = 6e-3  # [m] radius search around a CL point
+    ransac_threshold: float = 0.1e-3  # [m] RANSAC plane inlier distance
+    chamfer_width_min: float = 0.50e-3  # [m] T/CAAMTB 126-2023
+    chamfer_width_max: float = 1.50e-3  # [m]
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Acceptance tolerances used by planning and verification. SI units."""
+
+    path_deviation: float = 0.05e-3  # [m] tool point vs commanded Cartesian path
+    edge_deviation: float = 0.17e-3  # [m] tool point vs true edge (delta_max + 0.05 mm)
+    min_clearance: float = 2e-3  # [m] except the burr contact pair
+    speed_band: float = 0.05  # [-] +-5 % of the grinding speed
+    speed_band_fraction: float = 0.95  # [-] share of cutting inside the band
+    cone_slack: float = 1e-6  # [rad] numerical slack on cone checks
+    dense_step: float = 0.5e-3  # [m] tool travel between dense re-check samples
+    fk_match: float = 1e-9  # [m] model FK vs analytic FK
+    on_surface: float = 1e-6  # [m] edge loops on the mesh surface
+
+
+def load_config(cls, path: str | Path):
+    """Instantiate dataclass ``cls`` from a YAML mapping, overriding its defaults.
+
+    Unknown keys are an error that names the file and the key.
+    """
+    path = Path(path)
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping of {cls.__name__} fields, got {type(data).__name__}")
+    names = {f.name: f for f in dataclasses.fields(cls)}
+    kwargs = {}
+    for key, value in data.items():
+        if key not in names:
+            raise ValueError(f"{path}: unknown {cls.__name__} field {key!r}; known: {sorted(names)}")
+        if isinstance(value, dict) and key.startswith("bounds_"):
+            value = OrientationBounds(**value)
+        kwargs[key] = value
+    return cls(**kwargs)

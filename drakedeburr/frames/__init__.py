@@ -1,0 +1,1 @@
+"""drakedeburr.frames stage."""

@@ -1,0 +1,1 @@
+"""drakedeburr.hub stage."""

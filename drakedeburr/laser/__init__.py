@@ -1,0 +1,1 @@
+"""drakedeburr.laser stage."""

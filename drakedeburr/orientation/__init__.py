@@ -1,0 +1,1 @@
+"""drakedeburr.orientation stage."""

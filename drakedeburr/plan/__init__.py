@@ -1,0 +1,1 @@
+"""drakedeburr.plan stage."""

@@ -1,0 +1,1 @@
+"""drakedeburr.verify stage."""

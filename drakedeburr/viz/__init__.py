@@ -1,0 +1,1 @@
+"""drakedeburr.viz stage."""

@@ -1,0 +1,67 @@
+"""Package skeleton: resources, units, config, atomic I/O, CLI plumbing."""
+
+import json
+
+import numpy as np
+import pytest
+
+import drakedeburr
+import drakedeburr._io as io_mut
+import drakedeburr.config as config_mut
+import drakedeburr.resources as mut
+import drakedeburr.units as units
+
+
+def test_models_dir_has_package_xml():
+    assert (mut.models_dir() / "package.xml").is_file()
+
+
+def test_resolve_package_url():
+    assert mut.resolve_package_url("package://drakedeburr/package.xml").is_file()
+    with pytest.raises(ValueError, match="not a package://drakedeburr/"):
+        mut.resolve_package_url("package://other/x")
+
+
+def test_unknown_hub_and_scenario_are_named():
+    with pytest.raises(FileNotFoundError, match="no bundled hub 'nope'"):
+        mut.hub_dir("nope")
+    with pytest.raises(FileNotFoundError, match="no scenario 'nope'"):
+        mut.scenario_path("nope")
+
+
+def test_units_round_trip():
+    x = np.array([1.5, -2.0])
+    assert np.allclose(units.m_from_mm(units.mm_from_m(x)), x)
+    assert units.mm_from_m(0.15) == pytest.approx(150.0)
+    assert units.deg_from_rad(np.pi) == pytest.approx(180.0)
+    assert units.m_from_inch(1.0) == pytest.approx(0.0254)
+
+
+def test_config_from_yaml(tmp_path):
+    f = tmp_path / "p.yaml"
+    f.write_text("grinding_speed: 0.1\nbounds_small: {theta_min: 0.1, theta_max: 0.2}\n")
+    p = config_mut.load_config(config_mut.ProcessParameters, f)
+    assert p.grinding_speed == 0.1 and p.bounds_small.theta_max == 0.2
+    assert p.bounds_large.theta_min == pytest.approx(0.26)
+    f.write_text("grinding_sped: 0.1\n")
+    with pytest.raises(ValueError, match="unknown ProcessParameters field 'grinding_sped'"):
+        config_mut.load_config(config_mut.ProcessParameters, f)
+
+
+def test_atomic_write_keeps_old_file_on_failure(tmp_path):
+    f = tmp_path / "out.json"
+    io_mut.atomic_write_json(f, {"a": 1})
+
+    class Boom:
+        pass
+
+    with pytest.raises(TypeError):
+        io_mut.atomic_write_json(f, {"a": Boom()})
+    assert json.loads(f.read_text()) == {"a": 1}
+    assert [p.name for p in tmp_path.iterdir()] == ["out.json"]
+
+
+def test_lazy_public_api():
+    assert drakedeburr.ProcessParameters().grinding_speed == pytest.approx(0.150)
+    with pytest.raises(AttributeError):
+        drakedeburr.does_not_exist  # noqa: B018

@@ -1,0 +1,21 @@
+"""Tutorials are code: each ``tutorials/NN_name/tutorial.py`` runs here in test mode."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+TUTORIALS = sorted((REPO / "tutorials").glob("*/tutorial.py"))
+
+
+@pytest.mark.parametrize("script", TUTORIALS, ids=[p.parent.name for p in TUTORIALS])
+def test_tutorial_runs(script, tmp_path):
+    env = dict(os.environ, DRAKEDEBURR_TEST_MODE="1", MPLBACKEND="Agg")
+    proc = subprocess.run(
+        [sys.executable, str(script), "--test-mode", "--out", str(tmp_path)],
+        cwd=script.parent, env=env, capture_output=True, text=True, timeout=900,
+    )
+    assert proc.returncode == 0, f"{script} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
