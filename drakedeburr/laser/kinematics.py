@@ -225,6 +225,9 @@ def forward_kinematics_circles(g: FiveBarGeometry, q: np.ndarray) -> np.ndarray:
 def inverse_kinematics(g: FiveBarGeometry, p_CJ5: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Servo angles that put the head at ``p_CJ5`` in ``g.working_mode``.
 
+    Angles are returned within +-pi of the home-point solution, so a path through the working
+    disc gives continuous servo angles (no 2 pi jumps).
+
     Args:
         g: tool geometry.
         p_CJ5: (N, 2) or (2,) head positions in C [m].
@@ -233,6 +236,14 @@ def inverse_kinematics(g: FiveBarGeometry, p_CJ5: np.ndarray) -> tuple[np.ndarra
         (q, reachable): (N, 2) servo angles [rad] (NaN where unreachable) and (N,) bool.
     """
     p = np.atleast_2d(np.asarray(p_CJ5, dtype=float))
+    q, ok = _ik_raw(g, p)
+    q_ref = _ik_raw(g, g.p_CHome[None, :])[0][0]
+    if np.all(np.isfinite(q_ref)):
+        q = q_ref + np.mod(q - q_ref + np.pi, 2 * np.pi) - np.pi
+    return q, ok
+
+
+def _ik_raw(g: FiveBarGeometry, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = np.empty((len(p), 2))
     ok = np.ones(len(p), dtype=bool)
     legs = ((g.p_CJ1, g.l1, g.l3, g.working_mode[0], 0),
