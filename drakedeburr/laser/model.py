@@ -4,7 +4,8 @@ The SDF (generated from :class:`FiveBarGeometry`, the default shipped as
 ``models/tools/five_bar_cutting_tool.sdf``) is an open tree: base -> crank_1 (``servo_1``)
 -> link_1 (``passive_3``) and base -> crank_2 (``servo_2``) -> link_2 (``passive_4``); the
 loop is closed at the head J5 by a ``drake:ball_constraint`` between link_1 and link_2
-(active in a discrete SAP plant). For display the four joint angles are set from the closed-
+(active in a discrete SAP plant). The servos are actuated (effort limit 20 N m, assumed);
+the passive joints have effort 0, so Drake adds no actuator for them. For display the four joint angles are set from the closed-
 form kinematics (:func:`joint_positions`), so the loop is closed exactly.
 
 Frames: ``cutting_tool_base`` = C of :mod:`drakedeburr.laser.kinematics` (origin at servo
@@ -71,19 +72,19 @@ def five_bar_sdf(g: FiveBarGeometry | None = None, nozzle_length: float = NOZZLE
         _box_link("link_2", g.l4, -1, z2 + _THICK, "0.6 0.6 0.7 1", g.l0 - g.l2)}
     <joint name="servo_1" type="revolute">
       <parent>cutting_tool_base</parent><child>crank_1</child>
-      <axis><xyz>0 0 1</xyz></axis>
+      <axis><xyz>0 0 1</xyz><limit><effort>20</effort></limit></axis>
     </joint>
     <joint name="servo_2" type="revolute">
       <parent>cutting_tool_base</parent><child>crank_2</child>
-      <axis><xyz>0 0 1</xyz></axis>
+      <axis><xyz>0 0 1</xyz><limit><effort>20</effort></limit></axis>
     </joint>
     <joint name="passive_3" type="revolute">
       <parent>crank_1</parent><child>link_1</child>
-      <axis><xyz>0 0 1</xyz></axis>
+      <axis><xyz>0 0 1</xyz><limit><effort>0</effort></limit></axis>
     </joint>
     <joint name="passive_4" type="revolute">
       <parent>crank_2</parent><child>link_2</child>
-      <axis><xyz>0 0 1</xyz></axis>
+      <axis><xyz>0 0 1</xyz><limit><effort>0</effort></limit></axis>
     </joint>
     <frame name="laser_tcp" attached_to="link_1">
       <pose relative_to="link_1">0 {g.l3} {nozzle_length} 0 0 0</pose>
