@@ -15,4 +15,4 @@ def test_animation_tcp_follows_hole():
     tcp = mut.animate_hole(scene, prog, meshcat, fps=500.0)
     r = np.linalg.norm(tcp[:, :2] - prog.geometry.p_CHome, axis=1)
     assert np.max(np.abs(r - 0.004)) < 0.1e-3
-    assert "laser_cut" in meshcat.StaticHtml()
+    assert meshcat.HasPath("/drakedeburr/laser_cut")
