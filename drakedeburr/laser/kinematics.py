@@ -251,6 +251,8 @@ def _ik_raw(g: FiveBarGeometry, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for p_base, la, lb, sigma, col in legs:
         v = p - p_base
         d = np.linalg.norm(v, axis=1)
+        ok &= d > 0
+        d = np.where(d > 0, d, 1.0)  # a point on the servo axis is unreachable (masked)
         # crank tip on circle (base, la) and (p, lb): distance a along v, offset h
         a = (la**2 - lb**2 + d**2) / (2 * d)
         h2 = la**2 - a**2
