@@ -31,6 +31,7 @@ from drakedeburr.laser import (  # noqa: E402
     Rectangle,
     ServoLimits,
     Slot,
+    check_reach,
     forward_kinematics,
     inverse_kinematics,
     plan_contour,
@@ -57,14 +58,15 @@ def main() -> None:
     ys = np.linspace(-0.06, 0.09, 151)
     X, Y = np.meshgrid(xs, ys)
     p = np.stack([X.ravel(), Y.ravel()], axis=1)
-    q, ok = inverse_kinematics(g, p)
+    reach = check_reach(g, p, use_disc=False)  # IK + singularity + assembly-mode checks
+    q, ok = reach.q, reach.reachable
     cond = np.full(len(p), np.nan)
     if ok.any():
         cond[ok] = singularity_measures(g, q[ok])["condition"]
     fig, ax = plt.subplots(figsize=(6, 6))
     im = ax.pcolormesh(X * 1e3, Y * 1e3, np.log10(cond.reshape(X.shape)), shading="auto",
                        vmin=0, vmax=2)
-    fig.colorbar(im, label="log10 Jacobian condition number (white: unreachable)")
+    fig.colorbar(im, label="log10 Jacobian condition (white: unreachable / near singular)")
     q_home, _ = inverse_kinematics(g, g.p_CHome)
     st = forward_kinematics(g, q_home)
     for a, b in ((g.p_CJ1, st.p_CJ3[0]), (g.p_CJ2, st.p_CJ4[0]), (st.p_CJ3[0], st.p_CJ5[0]),
