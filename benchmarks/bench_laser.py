@@ -17,8 +17,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from drakedeburr.laser import FeatureSettings, plan_contour, plan_hole  # noqa: E402

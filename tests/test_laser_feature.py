@@ -71,9 +71,11 @@ def test_contour_ls_program(tmp_path):
     # FANUC W, P, R: R = Rz(r) Ry(p) Rx(w)
     w, p, r = np.deg2rad(wpr).T
     for k in range(0, len(tg), 17):
-        Rx = np.array([[1, 0, 0], [0, np.cos(w[k]), -np.sin(w[k])], [0, np.sin(w[k]), np.cos(w[k])]])
-        Ry = np.array([[np.cos(p[k]), 0, np.sin(p[k])], [0, 1, 0], [-np.sin(p[k]), 0, np.cos(p[k])]])
-        Rz = np.array([[np.cos(r[k]), -np.sin(r[k]), 0], [np.sin(r[k]), np.cos(r[k]), 0], [0, 0, 1]])
+        cw, sw, cp, sp, cr, sr = (np.cos(w[k]), np.sin(w[k]), np.cos(p[k]), np.sin(p[k]),
+                                  np.cos(r[k]), np.sin(r[k]))
+        Rx = np.array([[1, 0, 0], [0, cw, -sw], [0, sw, cw]])
+        Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+        Rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
         assert np.allclose(Rz @ Ry @ Rx, tg.R_WT[k], atol=1e-6)
     speeds = np.array(re.findall(r"L P\[\d+\] (\d+)mm/sec", text), int)
     assert len(speeds) == len(tg) - 1 and speeds.max() == 100

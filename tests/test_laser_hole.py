@@ -66,7 +66,8 @@ def test_unreachable_shape_rejected_with_name_and_point():
                                          r"\(outside working disc"):
         mut.plan_hole(shapes.Slot(length=0.040, width=0.010), spacing=0.5e-3)
     g = FiveBarGeometry(work_radius=1.0)  # disc check off: the linkage itself fails
-    with pytest.raises(InputError, match=r"circle: point \d+ .* \((out of reach|serial singularity)"):
+    with pytest.raises(InputError,
+                       match=r"circle: point \d+ .* \((out of reach|serial singularity)"):
         mut.plan_hole(shapes.Circle(diameter=0.2), spacing=2e-3, geometry=g)
 
 

@@ -104,7 +104,8 @@ def contour_program_ls(targets: LaserTargets, name: str, laser_do: int = 1, ufra
     for i in range(n):
         x, y, z = targets.p_WT[i] * 1e3
         w, p, r = wpr_deg_from_R(targets.R_WT[i])
-        pos.append(f"P[{i + 1}]{{\n   GP1:\n\tUF : {uframe}, UT : {utool},\t\tCONFIG : '{config}',\n"
+        pos.append(f"P[{i + 1}]{{\n   GP1:\n"
+                   f"\tUF : {uframe}, UT : {utool},\t\tCONFIG : '{config}',\n"
                    f"\tX =\t{x:.6f}\tmm,\tY =\t{y:.6f}\tmm,\tZ =\t{z:.6f}\tmm,\n"
                    f"\tW =\t{w:.6f}\tdeg,\tP =\t{p:.6f}\tdeg,\tR =\t{r:.6f}\tdeg\n}};")
     return _assemble(name, targets.name, mn, pos, "1,*,*,*,*")

@@ -5,8 +5,9 @@ The SDF (generated from :class:`FiveBarGeometry`, the default shipped as
 -> link_1 (``passive_3``) and base -> crank_2 (``servo_2``) -> link_2 (``passive_4``); the
 loop is closed at the head J5 by a ``drake:ball_constraint`` between link_1 and link_2
 (active in a discrete SAP plant). The servos are actuated (effort limit 20 N m, assumed);
-the passive joints have effort 0, so Drake adds no actuator for them. For display the four joint angles are set from the closed-
-form kinematics (:func:`joint_positions`), so the loop is closed exactly.
+the passive joints have effort 0, so Drake adds no actuator for them. For display the four
+joint angles are set from the closed-form kinematics (:func:`joint_positions`), so the
+loop is closed exactly.
 
 Frames: ``cutting_tool_base`` = C of :mod:`drakedeburr.laser.kinematics` (origin at servo
 axis J1, linkage in the x-y plane, beam along +z); ``laser_tcp`` is on link_1 at J5, offset
