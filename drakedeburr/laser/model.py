@@ -47,6 +47,15 @@ def _box_link(name: str, length: float, direction: int, z: float, color: str,
     </link>"""
 
 
+def _joint(name: str, parent: str, child: str, effort: float) -> str:
+    """A revolute joint about z at the child's frame; effort 0 = passive (no actuator)."""
+    return f"""
+    <joint name="{name}" type="revolute">
+      <parent>{parent}</parent><child>{child}</child>
+      <axis><xyz>0 0 1</xyz><limit><effort>{effort}</effort></limit></axis>
+    </joint>"""
+
+
 def five_bar_sdf(g: FiveBarGeometry | None = None, nozzle_length: float = NOZZLE_LENGTH) -> str:
     """SDF text of the Cutting Tool for geometry ``g`` (lengths in metres)."""
     g = g or FiveBarGeometry()
@@ -71,22 +80,10 @@ def five_bar_sdf(g: FiveBarGeometry | None = None, nozzle_length: float = NOZZLE
         _box_link("crank_2", g.l2, -1, z1, "0.3 0.3 0.3 1", g.l0)}{
         _box_link("link_1", g.l3, +1, z2, "0.6 0.6 0.7 1", -g.l1, head)}{
         _box_link("link_2", g.l4, -1, z2 + _THICK, "0.6 0.6 0.7 1", g.l0 - g.l2)}
-    <joint name="servo_1" type="revolute">
-      <parent>cutting_tool_base</parent><child>crank_1</child>
-      <axis><xyz>0 0 1</xyz><limit><effort>20</effort></limit></axis>
-    </joint>
-    <joint name="servo_2" type="revolute">
-      <parent>cutting_tool_base</parent><child>crank_2</child>
-      <axis><xyz>0 0 1</xyz><limit><effort>20</effort></limit></axis>
-    </joint>
-    <joint name="passive_3" type="revolute">
-      <parent>crank_1</parent><child>link_1</child>
-      <axis><xyz>0 0 1</xyz><limit><effort>0</effort></limit></axis>
-    </joint>
-    <joint name="passive_4" type="revolute">
-      <parent>crank_2</parent><child>link_2</child>
-      <axis><xyz>0 0 1</xyz><limit><effort>0</effort></limit></axis>
-    </joint>
+{_joint("servo_1", "cutting_tool_base", "crank_1", 20)}{
+        _joint("servo_2", "cutting_tool_base", "crank_2", 20)}{
+        _joint("passive_3", "crank_1", "link_1", 0)}{
+        _joint("passive_4", "crank_2", "link_2", 0)}
     <frame name="laser_tcp" attached_to="link_1">
       <pose relative_to="link_1">0 {g.l3} {nozzle_length} 0 0 0</pose>
     </frame>
