@@ -16,7 +16,8 @@ import numpy as np
 from drakedeburr.laser.kinematics import FiveBarGeometry
 from drakedeburr.laser.model import add_cutting_tool, set_tool_positions
 
-__all__ = ["ToolScene", "build_tool_scene", "animate_hole", "default_X_FC"]
+__all__ = ["ToolScene", "build_tool_scene", "animate_hole", "default_X_FC",
+           "tool_base_pose_for_hole"]
 
 
 def default_X_FC():
@@ -24,6 +25,28 @@ def default_X_FC():
     from pydrake.math import RigidTransform
 
     return RigidTransform([0.0, 0.0, 0.060])
+
+
+def tool_base_pose_for_hole(X_WH, g: FiveBarGeometry | None = None,
+                            nozzle_length: float | None = None):
+    """Pose X_WC of the tool base so that the TCP at the tool's home point is at the hole.
+
+    Args:
+        X_WH: RigidTransform of the hole frame H: origin at the hole's shape origin on the
+            plate, +z along the beam (into the plate), x-y = the shape's x-y.
+        g: tool geometry.
+        nozzle_length: J5 plane to TCP [m] (default the model's).
+
+    Returns:
+        RigidTransform X_WC; the robot must hold the flange at X_WC * X_FC^-1.
+    """
+    from pydrake.math import RigidTransform
+
+    from drakedeburr.laser.model import NOZZLE_LENGTH
+
+    g = g or FiveBarGeometry()
+    L = NOZZLE_LENGTH if nozzle_length is None else nozzle_length
+    return X_WH.multiply(RigidTransform([-g.p_CHome[0], -g.p_CHome[1], -L]))
 
 
 @dataclass
