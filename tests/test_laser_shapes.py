@@ -114,3 +114,21 @@ def test_bad_shapes_rejected():
 def test_shape_kinds_registry():
     assert set(mut.SHAPE_KINDS) == {"circle", "semicircle", "rectangle", "slot", "keyhole",
                                     "hexagon", "polyline"}
+
+
+def test_rotation_and_center_move_the_points():
+    a = mut.build_contour(mut.Rectangle(width=0.02, height=0.01), spacing=1e-3)
+    b = mut.build_contour(mut.Rectangle(width=0.02, height=0.01, rotation=math.pi / 2,
+                                        center=(0.003, -0.004)), spacing=1e-3)
+    R = np.array([[0.0, -1.0], [1.0, 0.0]])
+    assert np.allclose(b.p_P, a.p_P @ R.T + [0.003, -0.004], atol=1e-15)
+    assert np.allclose(b.t_P, a.t_P @ R.T, atol=1e-15)
+
+
+def test_polyline_given_clockwise_is_cut_in_the_requested_direction():
+    pts = ((0, 0), (0, 0.01), (0.01, 0.01), (0.01, 0))  # clockwise input
+    c = mut.build_contour(mut.Polyline(points=pts), 0.5e-3)
+    p = c.p_P[:-1]
+    signed = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+    assert signed == pytest.approx(1e-4)
+    assert mut.Polyline(points=pts).points == pts  # the dataclass is not rewritten

@@ -237,11 +237,11 @@ class Polyline(ShapeBase):
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         if np.any(seg <= 0):
             raise InputError(f"polyline: point {int(np.argmin(seg))} repeats the next point")
-        if _green_area_polygon(p) < 0:  # make it counter-clockwise; cut direction is separate
-            object.__setattr__(self, "points", tuple(map(tuple, p[::-1])))
 
     def primitives(self):
         p = np.asarray(self.points, dtype=float)
+        if _green_area_polygon(p) < 0:  # primitives run counter-clockwise; see ``clockwise``
+            p = p[::-1]
         m = 0.5 * (p[0] + p[1])
         prims = [_line(m, p[1])]
         prims += [_line(p[k], p[(k + 1) % len(p)]) for k in range(1, len(p))]

@@ -88,7 +88,6 @@ class TimedPath:
 def _axis_plant(n: int):
     """A MultibodyPlant with n prismatic axes in series (TOPP-RA needs a plant whose
     positions match the path rows; only velocity/acceleration limits are used)."""
-    from pydrake.math import RigidTransform
     from pydrake.multibody.plant import MultibodyPlant
     from pydrake.multibody.tree import PrismaticJoint, SpatialInertia
 
@@ -100,7 +99,6 @@ def _axis_plant(n: int):
                                       [1.0, 0.0, 0.0], -1e6, 1e6))
         parent = body
     plant.Finalize()
-    _ = RigidTransform
     return plant
 
 
