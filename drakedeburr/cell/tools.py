@@ -203,7 +203,7 @@ def X_FS_floating(spindle: FloatingSpindle = FLOATING_SPINDLE) -> np.ndarray:
 
 # --------------------------------------------------------------------------- model writers
 def _f(x: float) -> str:
-    return f"{x:.9g}"
+    return repr(float(x))
 
 
 def _pose(xyz, rpy=(0.0, 0.0, 0.0)) -> str:
