@@ -26,10 +26,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from drakedeburr.config import ProcessParameters
+from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.plan.ik import IkOptions, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
+from drakedeburr.plan.smoothing import smooth_orientations
 from drakedeburr.plan.targets import burr_contact_radius, tool_point_H
 from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
@@ -57,6 +58,10 @@ class PlanOptions:
         joint_step: joint-space sample spacing of joint moves [rad].
         max_joint_jump: largest joint change allowed between dense samples [rad].
         windows: indices of the windows to plan (None = all), in this order.
+        orientation_sigma: Gaussian width (in targets) of the orientation smoothing.
+        fit_spacings: knot spacings [m] of the least-squares joint spline, widest first.
+        fit_tolerance: largest tool deviation [m] the joint-spline fit may cause.
+        min_clearance: acceptance bound on every dense sample [m] (burr head/hub excepted).
     """
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
@@ -68,6 +73,10 @@ class PlanOptions:
     joint_step: float = 0.02
     max_joint_jump: float = 0.05
     windows: tuple[int, ...] | None = None
+    orientation_sigma: float = 2.0
+    fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3)
+    fit_tolerance: float = 0.02e-3
+    min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
 
 
 @dataclass
@@ -83,8 +92,17 @@ def _limits(kin: CellKinematics, v_cap: float, options: PlanOptions) -> TimingLi
                         v_max=tuple(kin.v_max), a_max=tuple(kin.a_max))
 
 
-def _time_cartesian(kin, q, s, X, v_cap, options) -> TimedPath:
-    return time_path(s, q, X[:, :3, 3], _limits(kin, v_cap, options))
+def _time_cartesian(kin, q, s, X, v_cap, options) -> tuple[TimedPath, float]:
+    """Timed Cartesian stretch with the widest joint-spline fit whose tool deviation from the
+    commanded samples stays within ``options.fit_tolerance``; returns it and that deviation."""
+    limits = _limits(kin, v_cap, options)
+    for spacing in (*options.fit_spacings, None):
+        timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing)
+        dev = float(np.max(np.linalg.norm(kin.X_HT_from_q(timed.q)[:, :3, 3] - X[:, :3, 3],
+                                          axis=1)))
+        if dev <= options.fit_tolerance or spacing is None:
+            return timed, dev
+    raise AssertionError("unreachable")
 
 
 def _time_joint(kin, q, s, v_cap, options) -> TimedPath:
@@ -106,31 +124,48 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     """Approach, cut and retract of one window; None when the window cannot be planned."""
     params = options.params
     r_c = burr_contact_radius()
-    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c)
+    m = len(wt)
+    # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
+    # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
+    loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
+    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c)[loop]
     t0 = time.perf_counter()
-    wik = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H, wt.cone_axis_H,
-                          wt.cone_half_angle, wt.t_H, q_from, window_index=wt.window_index,
+    wik = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
+                          wt.cone_half_angle, wt.t_H[loop], q_from, window_index=wt.window_index,
                           options=options.ik, progress=progress)
     t_ik = time.perf_counter() - t0
-    failures.extend(wik.failures)
+    for rec in wik.failures:
+        failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})
     good = np.flatnonzero(~np.any(np.isnan(wik.q), axis=1))
-    if len(good) < len(wt) // 2 or 0 not in good:
+    if len(good) < (m + 1) // 2 or 0 not in good:
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="window",
-                             reason=f"IK reached only {len(good)} of {len(wt)} targets; "
+                             reason=f"IK reached only {len(good)} of {m + 1} targets; "
                                     "window skipped"))
         return None
-    # the cutting loop: every reached target, closed back to the first one
-    order = np.concatenate([good, [good[0]]])
-    X_cut = wik.X_HT[order]
+    order = loop[good]
+    X_ik = wik.X_HT[good]
+    X_cut = smooth_orientations(X_ik, wt.cone_axis_H[order], wt.cone_half_angle,
+                                options.orientation_sigma)
     t1 = time.perf_counter()
-    cut = track_poses(kin, X_cut, wik.q[good[0]], options.dense_step)
-    # consistency with the IK at the targets and joint continuity
-    q_t = cut.q[cut.target_index[:-1]]
-    mismatch = np.nanmax(np.abs(q_t - wik.q[good]), axis=1)
-    for k in np.flatnonzero(~(mismatch < 1e-6)):
-        failures.append(dict(window=wt.window_index, cl_index=int(good[k]), stage="dense",
-                             reason="analytic IK on the window's branch disagrees with the "
-                                    f"target IK by {float(mismatch[k]):.3g} rad"))
+    # track the executed motion; where smoothing cost clearance, keep the IK orientation of the
+    # targets around the offending samples and track again
+    reverted = np.zeros(len(order), bool)
+    for _ in range(4):
+        cut = track_poses(kin, X_cut, wik.q[good[0]], options.dense_step)
+        dist = np.full(len(cut.s), np.inf)
+        for k in range(len(cut.s)):
+            if cut.ok[k]:
+                dist[k] = checker.min_distance(cut.q[k], options.min_clearance + 1e-3)[0]
+        low = np.flatnonzero(dist < options.min_clearance)
+        if low.size == 0 or options.orientation_sigma <= 0:
+            break
+        seg = np.searchsorted(cut.target_index, low)
+        fix = np.unique(np.clip(np.concatenate([seg - 2, seg - 1, seg, seg + 1]), 0, len(order) - 1))
+        fix = fix[~reverted[fix]]
+        if fix.size == 0:
+            break
+        X_cut[fix] = X_ik[fix]
+        reverted[fix] = True
     jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
     for k in np.flatnonzero(~(jumps <= options.max_joint_jump)):
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
@@ -140,15 +175,10 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                              reason="dense sample unreachable on the window's configuration"))
     if not np.all(cut.ok):
         return None
-    # clearance between the targets (targets were checked by the IK)
-    between = np.setdiff1d(np.arange(len(cut.s)), cut.target_index)
-    dmin = np.inf
-    for k in between:
-        d = checker.min_distance(cut.q[k], options.ik.min_distance + 1e-3)[0]
-        dmin = min(dmin, d)
-        if d < options.ik.min_distance - 1e-5:
-            failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
-                                 reason=f"clearance {d * 1e3:.2f} mm between targets"))
+    for k in np.flatnonzero(dist < options.min_clearance):
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
+                             reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
+    dmin = float(np.min(dist))
     t_dense = time.perf_counter() - t1
     # approach and retract along the tool axis
     X0, Xe = X_cut[0], X_cut[-1]
@@ -161,21 +191,23 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
             failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
                                  reason=f"{name} unreachable on the window's configuration"))
             return None
-        dd = min(checker.min_distance(q, options.ik.min_distance + 1e-3)[0] for q in d.q[1:])
-        if dd < options.ik.min_distance - 1e-5:
+        dd = min(checker.min_distance(q, options.min_clearance + 1e-3)[0] for q in d.q[1:])
+        if dd < options.min_clearance:
             failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
                                  reason=f"{name} clearance {dd * 1e3:.2f} mm"))
     q_app = app.q[::-1]
     X_app = app.X_HT[::-1]
     s_app = app.s[-1] - app.s[::-1]
     t2 = time.perf_counter()
-    timed_app = _time_cartesian(kin, q_app, s_app, X_app, options.approach_speed, options)
-    timed_cut = _time_cartesian(kin, cut.q, cut.s, cut.X_HT, params.grinding_speed, options)
-    timed_ret = _time_cartesian(kin, ret.q, ret.s, ret.X_HT, options.approach_speed, options)
+    timed_app, _ = _time_cartesian(kin, q_app, s_app, X_app, options.approach_speed, options)
+    timed_cut, fit_dev = _time_cartesian(kin, cut.q, cut.s, cut.X_HT, params.grinding_speed,
+                                         options)
+    timed_ret, _ = _time_cartesian(kin, ret.q, ret.s, ret.X_HT, options.approach_speed, options)
     t_time = time.perf_counter() - t2
     w = wt.window_index
-    cut_targets = [_target(kin, wik.q[i], w, "cut", int(i), params.grinding_speed, "linear",
-                           wt.p_HC[i], wt.n_H[i]) for i in order]
+    q_targets = cut.q[cut.target_index]
+    cut_targets = [_target(kin, q_targets[j], w, "cut", int(i), params.grinding_speed, "linear",
+                           wt.p_HC[i], wt.n_H[i]) for j, i in enumerate(order)]
     stretches = [
         _Stretch("approach", w, timed_app, [_target(kin, q_app[-1], w, "approach", int(good[0]),
                                                     options.approach_speed, "linear",
@@ -196,13 +228,21 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         j4_range_deg=float(np.ptp(q_deg[:, 3])), j5_range_deg=float(np.ptp(q_deg[:, 4])),
         j6_range_deg=float(np.ptp(q_deg[:, 5])),
         min_abs_j5_deg=float(np.min(np.abs(q_deg[:, 4]))),
-        min_clearance_between_targets_m=float(dmin),
+        min_clearance_m=float(dmin), smoothing_reverted_targets=int(reverted.sum()),
         speed_in_band_fraction=float(np.mean(np.abs(v_cut - params.grinding_speed) <= band))
         if len(v_cut) else 0.0,
         ik_seconds=t_ik, dense_seconds=t_dense, timing_seconds=t_time, ik=wik.stats,
-        start_pose_X_WF=None)
-    stats.pop("start_pose_X_WF")
+        joint_fit_deviation_m=fit_dev,
+        orientation_smoothing_rad=float(np.max(_angle(X_ik, X_cut))),
+        q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets.tolist(),
+        cl_order=[int(i) for i in order])
     return stretches, stats, q_app[0]
+
+
+def _angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
+    """(M,) rotation angle between paired poses [rad]."""
+    c = (np.einsum("mij,mij->m", Xa[:, :3, :3], Xb[:, :3, :3]) - 1.0) / 2.0
+    return np.arccos(np.clip(c, -1.0, 1.0))
 
 
 def _joint_stretch(cell, kin, checker, q0, q1, v_cap, kind, options, failures, label) -> _Stretch:

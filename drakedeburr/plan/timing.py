@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-__all__ = ["TimingLimits", "TimedPath", "time_path"]
+__all__ = ["TimingLimits", "TimedPath", "time_path", "joint_spline"]
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,32 @@ class TimedPath:
     v_tcp: np.ndarray
 
 
-def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimits) -> TimedPath:
+def joint_spline(s: np.ndarray, q: np.ndarray, fit_spacing: float | None = None):
+    """C2 cubic spline q(s) through (``fit_spacing`` None) or fitted to the samples.
+
+    The executed motion is piecewise linear in Cartesian space, so the joints have slope kinks
+    at every target; interpolating dense samples turns each kink into a curvature spike (and the
+    timing into a crawl). A least-squares cubic B-spline with knots every ``fit_spacing`` of
+    ``s`` rounds the kinks like a controller's small zone does; the caller checks the tool
+    deviation it causes.
+
+    Returns:
+        A callable ``f(s, nu=0)`` (scipy spline) with values (len(s), 6).
+    """
+    from scipy.interpolate import make_lsq_spline
+
+    s = np.asarray(s, float)
+    n = len(s)
+    if fit_spacing is None or n < 8 or s[-1] - s[0] < 3 * fit_spacing:
+        return CubicSpline(s, q, axis=0, bc_type="natural" if n < 4 else "not-a-knot")
+    m = int(np.ceil((s[-1] - s[0]) / fit_spacing))
+    interior = np.linspace(s[0], s[-1], m + 1)[1:-1]
+    knots = np.concatenate([[s[0]] * 4, interior, [s[-1]] * 4])
+    return make_lsq_spline(s, q, knots, k=3, axis=0)
+
+
+def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimits,
+              fit_spacing: float | None = None) -> TimedPath:
     """Time a sampled path rest to rest under a TCP speed cap and joint limits.
 
     Args:
@@ -69,6 +94,8 @@ def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimi
         q: (N, 6) joints at the samples [rad].
         p_HT: (N, 3) tool point relative to the hub at the samples [m] (for the TCP speed).
         limits: the caps.
+        fit_spacing: knot spacing of a least-squares joint spline (None: interpolate); the
+            returned ``q`` are then the fitted values at the samples.
 
     Returns:
         TimedPath with knots at the samples.
@@ -80,7 +107,8 @@ def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimi
         return TimedPath(t=np.zeros(1), q=q[:1], qd=np.zeros((1, 6)), sdot=np.zeros(1),
                          v_tcp=np.zeros(1))
     bc = "natural" if n < 4 else "not-a-knot"
-    spline = CubicSpline(s, q, axis=0, bc_type=bc)
+    spline = joint_spline(s, q, fit_spacing)
+    q = spline(s)
     dq = spline(s, 1)
     ddq = spline(s, 2)
     dp = CubicSpline(s, p_HT, axis=0, bc_type=bc)(s, 1)

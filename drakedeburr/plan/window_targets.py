@@ -8,7 +8,7 @@ tests, benchmarks and as a fallback).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -36,6 +36,8 @@ class WindowTargets:
         depth_of_cut: [m].
         source: what these came from (for the plan's metadata).
         tool_path: the ToolPath they came from, if any.
+        closed: the edge is a closed loop (the cut returns to the first point); an open
+            stretch (e.g. a part of a window, :meth:`stretch`) ends at its last point.
     """
 
     window_index: int
@@ -49,6 +51,7 @@ class WindowTargets:
     depth_of_cut: float
     source: str = ""
     tool_path: object = field(default=None, repr=False)
+    closed: bool = True
 
     def __len__(self) -> int:
         return len(self.p_HC)
@@ -71,6 +74,13 @@ class WindowTargets:
         if bad.size:
             raise InputError(f"window {self.window_index}: preferred axis more than 60 deg from "
                              f"the cone axis at CL point {int(bad[0])}")
+
+    def stretch(self, start: int, stop: int) -> WindowTargets:
+        """The open stretch of CL points ``start..stop-1`` (for partial plans and tests)."""
+        sl = slice(start, stop)
+        return replace(self, p_HC=self.p_HC[sl], t_H=self.t_H[sl], n_H=self.n_H[sl],
+                       axis_H=self.axis_H[sl], cone_axis_H=self.cone_axis_H[sl], closed=False,
+                       source=f"{self.source} [CL {start}..{stop - 1}]")
 
     @classmethod
     def from_tool_path(cls, tool_path, *, face_normal_H: np.ndarray | None = None) -> WindowTargets:
