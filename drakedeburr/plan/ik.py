@@ -72,8 +72,8 @@ class IkOptions:
     joint_weights: tuple[float, ...] = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
     trust_region: float = 0.35
     snopt_major_iterations: int = 100
-    ipopt_max_iterations: int = 100
-    retries: int = 2
+    ipopt_max_iterations: int = 50
+    retries: int = 1
     min_wrist: float = 0.25
     spin_samples: int = 36
 
@@ -147,6 +147,24 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
         if d > best_d + 1e-4:
             best, best_d = cands[j], d
     return best if best_d > 0.0 else None
+
+
+def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
+                   axis_H: np.ndarray, q_prev: np.ndarray) -> np.ndarray:
+    """Seed that already meets position and preferred axis exactly: the previous pose's X_T
+    projected normal to the new axis (minimal spin change), solved by the analytic IK on the
+    previous configuration; falls back to ``q_prev``."""
+    z = -axis_H / np.linalg.norm(axis_H)
+    x = X_prev[:3, 0] - (X_prev[:3, 0] @ z) * z
+    if np.linalg.norm(x) < 1e-6:
+        return q_prev
+    x /= np.linalg.norm(x)
+    X = np.eye(4)
+    X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, np.cross(z, x), z, p_HT
+    q, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q_prev)
+    if not ok[0] or np.max(np.abs(q[0] - q_prev)) > 0.3:
+        return q_prev
+    return q[0]
 
 
 def _solver_options(solver_id, options: IkOptions):
@@ -243,6 +261,7 @@ def solve_window_ik(
     n_dist = n_fallback = n_retry = 0
     t0 = time.perf_counter()
     q_prev = None
+    i_prev = -1
     for i in range(m):
         if q_prev is None:
             q_seed = seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], q_ref, options)
@@ -252,7 +271,8 @@ def solve_window_ik(
                 continue
             anchor = q_seed
         else:
-            q_seed = anchor = q_prev
+            anchor = q_prev
+            q_seed = _analytic_seed(kin, X_out[i_prev], p_HT[i], pref_axis_H[i], q_prev)
         done = False
         best = None
         for attempt in range(options.retries + 1):
@@ -290,6 +310,7 @@ def solve_window_ik(
         if done:
             ok[i] = True
             q_prev = q_out[i]
+            i_prev = i
         else:
             rec = dict(window=window_index, cl_index=i, stage="ik", reason="IK failed")
             if best is not None:
