@@ -66,7 +66,7 @@ class IkOptions:
     """
 
     position_tolerance: float = 1e-6
-    min_distance: float = 2.02e-3
+    min_distance: float = 2.0e-3
     influence_distance: float = 2e-3
     axis_weight: float = 10.0
     joint_weights: tuple[float, ...] = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
@@ -167,14 +167,17 @@ def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
     return q[0]
 
 
-def _solver_options(solver_id, options: IkOptions):
+def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     from pydrake.solvers import SolverOptions
 
+    # a distance-active iteration costs ~10-50 ms against a detailed hub: cap those harder
+    scale = 0.4 if with_distance else 1.0
     so = SolverOptions()
     if solver_id.name() == "SNOPT":
-        so.SetOption(solver_id, "Major iterations limit", options.snopt_major_iterations)
+        so.SetOption(solver_id, "Major iterations limit",
+                     max(10, int(scale * options.snopt_major_iterations)))
     else:
-        so.SetOption(solver_id, "max_iter", options.ipopt_max_iterations)
+        so.SetOption(solver_id, "max_iter", max(10, int(scale * options.ipopt_max_iterations)))
         so.SetOption(solver_id, "print_level", 0)
     return so
 
@@ -192,16 +195,18 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H:
                                         0.0, half_angle)
     ik.AddAngleBetweenVectorsCost(cell.hub_frame, pref_axis_H, cell.tool_frame, down_T,
                                   options.axis_weight)
-    if with_distance:
-        ik.AddMinimumDistanceLowerBoundConstraint(options.min_distance, options.influence_distance)
     prog = ik.get_mutable_prog()
     q = ik.q()
+    if with_distance:
+        prog.AddConstraint(checker.distance_constraint(options.min_distance,
+                                                       options.influence_distance), q)
     prog.AddQuadraticErrorCost(np.diag(options.joint_weights), q_prev, q)
     lo = np.maximum(cell.q_lower, q_prev - options.trust_region)
     hi = np.minimum(cell.q_upper, q_prev + options.trust_region)
     prog.AddBoundingBoxConstraint(lo, hi, q)
     prog.SetInitialGuess(q, np.clip(q_seed, lo, hi))
-    result = solver.Solve(prog, np.clip(q_seed, lo, hi), _solver_options(solver.solver_id(), options))
+    result = solver.Solve(prog, np.clip(q_seed, lo, hi),
+                          _solver_options(solver.solver_id(), options, with_distance))
     return bool(result.is_success()), result.GetSolution(q)
 
 

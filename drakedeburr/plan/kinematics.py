@@ -224,6 +224,18 @@ class ClearanceChecker:
         model = self.cell.plant.GetModelInstanceName(body.model_instance())
         return f"{model}::{body.name()}/{inspector.GetName(gid)}"
 
+    def distance_constraint(self, bound: float, influence: float):
+        """A ``MinimumDistanceLowerBoundConstraint`` on this context (built once per bound:
+        building one enumerates every collision pair, ~0.1 s with a detailed hub)."""
+        key = (round(bound, 9), round(influence, 9))
+        cache = self.__dict__.setdefault("_constraints", {})
+        if key not in cache:
+            from pydrake.multibody.inverse_kinematics import MinimumDistanceLowerBoundConstraint
+
+            cache[key] = MinimumDistanceLowerBoundConstraint(
+                self.cell.plant, bound, self.plant_context, None, influence)
+        return cache[key]
+
     def min_distances(self, q: np.ndarray, max_distance: float = 0.01) -> np.ndarray:
         """(N,) smallest signed distance [m] for each row of ``q`` (N, 6), capped."""
         return np.array([self.min_distance(row, max_distance)[0] for row in np.atleast_2d(q)])
