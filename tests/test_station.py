@@ -87,7 +87,7 @@ def test_documented_placements(cell):
         np.testing.assert_allclose(X_WT.translation()[:2], [0.75, 0.0], atol=1e-12)
         np.testing.assert_allclose(X_WT.rotation().matrix()[:, 2], [0, 0, 1], atol=1e-12)
         X_FH = cell.X_WF(q).inverse().multiply(cell.X_WH(q))
-        np.testing.assert_allclose(X_FH.translation(), [0, 0, 0.26], atol=1e-12)
+        np.testing.assert_allclose(X_FH.translation(), [0, 0, 0.24], atol=1e-12)
         np.testing.assert_allclose(X_FH.rotation().matrix(), np.eye(3), atol=1e-12)
 
 
