@@ -132,41 +132,46 @@ def ik_opw(params: OpwParameters, X_BF: np.ndarray, reach_slack: float = 1e-9) -
     psi3 = np.arctan2(a2, c3)
     r2 = C[:, 0] ** 2 + C[:, 1] ** 2 - b * b
     r = np.sqrt(np.clip(r2, 0.0, None))
-    q_all = np.full((n, 8, 6), np.nan)
-    ang = np.arctan2(C[:, 1], C[:, 0])
-    z = C[:, 2] - c1
-    for i, (s, e, w) in enumerate(_BRANCHES):
-        cx1 = s * r
-        q0 = ang - np.arctan2(b, cx1)
-        x = cx1 - a1
-        d2 = x * x + z * z
-        cphi = (d2 - c2 * c2 - k * k) / (2.0 * c2 * k)
-        ok = (np.abs(cphi) <= 1.0 + reach_slack) & (r2 >= -reach_slack)
-        phi = e * np.arccos(np.clip(cphi, -1.0, 1.0))
-        q1 = np.arctan2(x, z) - np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))
-        q2 = phi - psi3
-        # wrist: R_ce = R_0c^T R
-        s1, co1 = np.sin(q0), np.cos(q0)
-        s2, co2 = np.sin(q1 + q2), np.cos(q1 + q2)
-        zero = np.zeros_like(s1)
-        R_0c = np.stack([
-            np.stack([co1 * co2, -s1, co1 * s2], -1),
-            np.stack([s1 * co2, co1, s1 * s2], -1),
-            np.stack([-s2, zero, co2], -1)], -2)
-        R_ce = np.einsum("nji,njk->nik", R_0c, R)
-        q4 = np.arctan2(np.hypot(R_ce[:, 0, 2], R_ce[:, 1, 2]), R_ce[:, 2, 2])
-        q3 = np.arctan2(R_ce[:, 1, 2], R_ce[:, 0, 2])
-        q5 = np.arctan2(R_ce[:, 2, 1], -R_ce[:, 2, 0])
-        # at q4 ~ 0 (wrist singular) only q3 + q5 is defined: put it all in q5
-        sing = np.abs(np.sin(q4)) < 1e-12
-        if np.any(sing):
-            q5 = np.where(sing, np.arctan2(R_ce[:, 1, 0], R_ce[:, 0, 0]), q5)
-            q3 = np.where(sing, 0.0, q3)
-        if w < 0:
-            q3, q4, q5 = q3 + np.pi, -q4, q5 + np.pi
-        q = np.stack([q0, q1, q2, q3, q4, q5], -1)
-        q_rob = _wrap(params.q_robot_from_opw(q))
-        q_all[:, i] = np.where(ok[:, None], q_rob, np.nan)
+    # the four arm branches (shoulder, elbow) = (+,+), (+,-), (-,+), (-,-), shape (n, 4)
+    s_sign = np.array([1.0, 1.0, -1.0, -1.0])
+    e_sign = np.array([1.0, -1.0, 1.0, -1.0])
+    cx1 = r[:, None] * s_sign
+    q0 = np.arctan2(C[:, 1], C[:, 0])[:, None] - np.arctan2(b, cx1)
+    x = cx1 - a1
+    z = (C[:, 2] - c1)[:, None]
+    cphi = (x * x + z * z - c2 * c2 - k * k) / (2.0 * c2 * k)
+    ok = (np.abs(cphi) <= 1.0 + reach_slack) & (r2 >= -reach_slack)[:, None]
+    phi = e_sign * np.arccos(np.clip(cphi, -1.0, 1.0))
+    q1 = np.arctan2(x, z) - np.arctan2(k * np.sin(phi), c2 + k * np.cos(phi))
+    q2 = phi - psi3
+    # wrist: R_ce = R_0c^T R, R_0c = Rz(q0) Ry(q1 + q2)
+    s1, co1 = np.sin(q0), np.cos(q0)
+    s2, co2 = np.sin(q1 + q2), np.cos(q1 + q2)
+    # rows of R_0c^T: (c1 c2, s1 c2, -s2), (-s1, c1, 0), (c1 s2, s1 s2, c2)
+    Rt0 = np.stack([co1 * co2, s1 * co2, -s2], -1)
+    Rt1 = np.stack([-s1, co1, np.zeros_like(s1)], -1)
+    Rt2 = np.stack([co1 * s2, s1 * s2, co2], -1)
+    # R_ce[a, b] = Rt_a . R[:, b]
+    r02 = np.einsum("nbi,ni->nb", Rt0, R[:, :, 2])
+    r12 = np.einsum("nbi,ni->nb", Rt1, R[:, :, 2])
+    r22 = np.einsum("nbi,ni->nb", Rt2, R[:, :, 2])
+    r20 = np.einsum("nbi,ni->nb", Rt2, R[:, :, 0])
+    r21 = np.einsum("nbi,ni->nb", Rt2, R[:, :, 1])
+    q4 = np.arctan2(np.hypot(r02, r12), r22)
+    q3 = np.arctan2(r12, r02)
+    q5 = np.arctan2(r21, -r20)
+    # at q4 ~ 0 (wrist singular) only q3 + q5 is defined: put it all in q5
+    sing = np.abs(np.sin(q4)) < 1e-12
+    if np.any(sing):
+        r00 = np.einsum("nbi,ni->nb", Rt0, R[:, :, 0])
+        r10 = np.einsum("nbi,ni->nb", Rt1, R[:, :, 0])
+        q5 = np.where(sing, np.arctan2(r10, r00), q5)
+        q3 = np.where(sing, 0.0, q3)
+    up = np.stack([q0, q1, q2, q3, q4, q5], -1)  # (n, 4, 6)
+    flip = np.stack([q0, q1, q2, q3 + np.pi, -q4, q5 + np.pi], -1)
+    q_opw = np.stack([up, flip], 2).reshape(n, 8, 6)  # order matches _BRANCHES
+    q_rob = _wrap(params.q_robot_from_opw(q_opw))
+    q_all = np.where(np.repeat(ok, 2, axis=1)[:, :, None], q_rob, np.nan)
     valid = ~np.any(np.isnan(q_all), axis=-1)
     return IkSolutions(q=q_all, valid=valid, branch=_BRANCHES.copy())
 
