@@ -41,7 +41,8 @@ def pose_from_mm_deg(values: tuple[float, ...] | list[float], what: str = "pose"
 
     v = [float(x) for x in values]
     if len(v) != 6 or not np.all(np.isfinite(v)):
-        raise InputError(f"{what}: expected 6 finite numbers x,y,z,rx,ry,rz (mm, deg), got {values!r}")
+        raise InputError(f"{what}: expected 6 finite numbers x,y,z,rx,ry,rz (mm, deg), "
+                         f"got {values!r}")
     X = np.eye(4)
     X[:3, :3] = Rotation.from_euler("ZYX", rad_from_deg(np.array(v[5:2:-1]))).as_matrix()
     X[:3, 3] = m_from_mm(np.array(v[:3]))

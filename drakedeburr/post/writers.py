@@ -87,7 +87,8 @@ def _check(program: RobotProgram) -> None:
     err = program.consistency_error()
     bad = np.flatnonzero(err > _CONSISTENCY_TOL)
     if bad.size:
-        raise InputError(f"program {program.name}: move(s) {', '.join(str(i + 1) for i in bad[:10])}"
+        moves = ", ".join(str(i + 1) for i in bad[:10])
+        raise InputError(f"program {program.name}: move(s) {moves}"
                          f" have joints that do not reach their TCP pose (error "
                          f"{err[bad].max():.3g}); the writers need consistent q and X_WT")
     inside = program.robot.limits.contains(np.array([m.q for m in program.moves]))
