@@ -46,6 +46,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 _LENGTH_M = {"mm": 1.0 / MM_PER_M, "inch": INCH_M}
+_MAX_ABS = 1e9  # no CL number (mm, inch, rpm, feed) is larger: beyond is corrupt data
 # words that carry no path information here (kept silently)
 _IGNORED = frozenset({
     "PARTNO", "MACHIN", "TLDATA", "MSYS", "PAINT", "CUTTER", "COOLNT", "END", "TOOL PATH",
@@ -142,12 +143,15 @@ class ClProgram:
         return np.array([m.feed for m in self.moves], float)
 
 
-def _statements(lines: Iterable[str], source: str) -> Iterator[tuple[int, str]]:
-    """(first line number, joined text) per statement; ``$`` continues a line."""
+def _statements(lines: Iterable[str], source: str, counter: list[int]
+                ) -> Iterator[tuple[int, str]]:
+    """(first line number, joined text) per statement; ``$`` continues a line.
+    ``counter[0]`` follows the physical line number."""
     buf: list[str] = []
     start = 0
     lineno = 0
     for lineno, raw in enumerate(lines, start=1):
+        counter[0] = lineno
         text = raw.rstrip("\r\n").strip()
         if not buf:
             start = lineno
@@ -171,6 +175,8 @@ def _number(source: str, line: int, token: str) -> float:
         raise ClParseError(source, line, token, "expected a number") from None
     if not math.isfinite(value):
         raise ClParseError(source, line, token, "not a finite number")
+    if abs(value) > _MAX_ABS:
+        raise ClParseError(source, line, token, f"number beyond +-{_MAX_ABS:g}")
     return value
 
 
@@ -184,7 +190,7 @@ class _State:
         self.tool = 0
         self.rapid_next = False
         self.p_prev: np.ndarray | None = None
-        self.circle: tuple[int, np.ndarray, np.ndarray, float] | None = None
+        self.circle: tuple[int, np.ndarray, np.ndarray, float, str] | None = None
         self.ended = 0
 
 
@@ -220,9 +226,8 @@ def iter_cl_moves(
         raise InputError(f"arc_tolerance must be > 0, got {arc_tolerance!r}")
     st = _State(units)
     warn = on_warning or (lambda w: None)
-    last_line = 0
-    for line, stmt in _statements(lines, source):
-        last_line = line
+    counter = [0]
+    for line, stmt in _statements(lines, source, counter):
         if st.ended:
             continue
         if stmt.startswith("$$"):
@@ -233,7 +238,7 @@ def iter_cl_moves(
         word = " ".join(word.split()).upper()
         args = [a.strip() for a in rest.split(",")] if sep else []
         if word == "GOTO":
-            yield from _goto(st, source, line, args, arc_tolerance)
+            yield from _goto(st, source, line, args, arc_tolerance, warn)
         elif word == "RAPID":
             st.rapid_next = True
         elif word == "FEDRAT":
@@ -249,11 +254,12 @@ def iter_cl_moves(
             if nn < 1e-9 or v[6] <= 0:
                 raise ClParseError(source, line, rest.strip(),
                                    "CIRCLE axis must be non-zero and radius > 0")
-            st.circle = (line, np.array(v[:3]) * st.scale, n / nn, v[6] * st.scale)
+            st.circle = (line, np.array(v[:3]) * st.scale, n / nn, v[6] * st.scale, args[6])
         elif word == "TLAXIS":
             if len(args) < 3:
                 raise ClParseError(source, line, rest.strip(), "TLAXIS needs i,j,k")
-            st.axis = _unit(source, line, [_number(source, line, a) for a in args[:3]], warn)
+            st.axis = _unit(source, line, [_number(source, line, a) for a in args[:3]], warn,
+                            "TLAXIS")
         elif word == "MULTAX":
             pass  # GOTO carries the axis when it has 6 numbers, whatever the MULTAX state
         elif word == "UNITS":
@@ -268,8 +274,11 @@ def iter_cl_moves(
             st.units = "inch" if word == "INCHES" else "mm"
             st.scale = _LENGTH_M[st.units]
         elif word == "LOADTL" or (word == "LOAD" and args and args[0].upper() == "TOOL"):
-            tok = args[0] if word == "LOADTL" else (args[1] if len(args) > 1 else "")
-            st.tool = int(_number(source, line, tok)) if tok else 0
+            tok = (args[0] if args else "") if word == "LOADTL" else (
+                args[1] if len(args) > 1 else "")
+            if not tok:
+                raise ClParseError(source, line, word, "tool change without a tool number")
+            st.tool = int(_number(source, line, tok))
         elif word == "PPRINT":
             if on_comment is not None:
                 on_comment(line, rest.strip())
@@ -282,43 +291,48 @@ def iter_cl_moves(
                                        "plain moves"))
         else:
             warn(ClWarning(line, word, "unknown word ignored"))
+    last_line = max(counter[0], 1)
     if st.circle is not None:
         raise ClParseError(source, last_line, "CIRCLE",
                            f"CIRCLE on line {st.circle[0]} has no end GOTO (truncated?)")
     if require_end and not st.ended:
         raise ClParseError(source, last_line, "EOF",
-                           "file ends without FINI or END-OF-PATH (truncated?)")
+                           "file ends without FINI or END-OF-PATH (truncated?)"
+                           if counter[0] else "empty file")
     if state_out is not None:
         state_out.update(units=st.units, end_line=st.ended)
 
 
-def _unit(source: str, line: int, v: list[float],
-          warn: Callable[[ClWarning], None]) -> tuple[float, float, float]:
-    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-    if n < 1e-9:
+def _unit(source: str, line: int, v: list[float], warn: Callable[[ClWarning], None],
+          word: str) -> tuple[float, float, float]:
+    m = max(abs(x) for x in v)
+    if m < 1e-9:
         raise ClParseError(source, line, ",".join(f"{x:g}" for x in v), "zero tool axis")
-    if abs(n - 1.0) > 1e-3:
-        warn(ClWarning(line, "GOTO", f"tool axis length {n:.6f} normalised"))
-    return (v[0] / n, v[1] / n, v[2] / n)
+    w = [x / m for x in v]  # scaled first: no overflow for huge components
+    n = math.hypot(*w)
+    if abs(n * m - 1.0) > 1e-3:
+        warn(ClWarning(line, word, f"tool axis length {n * m:.6g} normalised"))
+    return (w[0] / n, w[1] / n, w[2] / n)
 
 
-def _goto(st: _State, source: str, line: int, args: list[str],
-          arc_tolerance: float) -> Iterator[ClMove]:
+def _goto(st: _State, source: str, line: int, args: list[str], arc_tolerance: float,
+          warn: Callable[[ClWarning], None]) -> Iterator[ClMove]:
     if len(args) not in (3, 6):
         raise ClParseError(source, line, ",".join(args),
                            f"GOTO needs 3 or 6 numbers, got {len(args)}")
     v = [_number(source, line, a) for a in args]
     p = np.array(v[:3]) * st.scale
     if len(v) == 6:
-        st.axis = _unit(source, line, v[3:], lambda w: None)
+        st.axis = _unit(source, line, v[3:], warn, "GOTO")
     rapid = st.rapid_next
     st.rapid_next = False
     if st.circle is not None:
-        c_line, center, n, radius = st.circle
+        c_line, center, n, radius, r_token = st.circle
         st.circle = None
         if st.p_prev is None:
             raise ClParseError(source, c_line, "CIRCLE", "CIRCLE before any position")
-        for q in _arc_points(source, c_line, st.p_prev, p, center, n, radius, arc_tolerance):
+        for q in _arc_points(source, c_line, st.p_prev, p, center, n, radius, r_token,
+                             arc_tolerance):
             yield ClMove(c_line, rapid, (float(q[0]), float(q[1]), float(q[2])), st.axis,
                          st.feed, st.rpm, st.tool, True)
     st.p_prev = p
@@ -327,7 +341,7 @@ def _goto(st: _State, source: str, line: int, args: list[str],
 
 
 def _arc_points(source: str, line: int, p0: np.ndarray, p1: np.ndarray, center: np.ndarray,
-                n: np.ndarray, radius: float, tol: float) -> np.ndarray:
+                n: np.ndarray, radius: float, r_token: str, tol: float) -> np.ndarray:
     """Interior points of the arc p0 -> p1, right-handed about n (helix along n allowed)."""
     r0, r1 = p0 - center, p1 - center
     h0, h1 = r0 @ n, r1 @ n
@@ -335,7 +349,7 @@ def _arc_points(source: str, line: int, p0: np.ndarray, p1: np.ndarray, center: 
     rad_tol = max(1e-3 * radius, 10 * tol)
     for rp, name in ((r0p, "start"), (r1p, "end")):
         if abs(np.linalg.norm(rp) - radius) > rad_tol:
-            raise ClParseError(source, line, f"r={radius:g}",
+            raise ClParseError(source, line, r_token,
                                f"CIRCLE {name} point is {np.linalg.norm(rp):.6g} m from the "
                                f"centre, radius {radius:.6g} m")
     e1 = r0p / np.linalg.norm(r0p)
