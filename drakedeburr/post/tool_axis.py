@@ -186,6 +186,12 @@ def solve_tool_axis_path(
         X_WT = tool_frames(np.repeat(p_W[i:i + 1], n_spin, 0), np.repeat(axis_W[i:i + 1],
                            n_spin, 0), grid, x_ref_W)
         q, ok, br = _candidates(robot, X_WT @ X_TF, q_prev)
+        if br_prev is None and mode == "theta6_zero":
+            # first point: the branch closest to q_start (as in min_travel), then J6 = 0 in it
+            c_travel = np.where(ok, np.abs(q - q_prev) @ w, np.inf)
+            k0 = np.unravel_index(np.argmin(c_travel), c_travel.shape)
+            if np.isfinite(c_travel[k0]):
+                br_prev = br[k0]
         c = cost_of(q, ok, br, q_prev, br_prev)
         k_best = np.unravel_index(np.argmin(c), c.shape)
         if not np.isfinite(c[k_best]):
