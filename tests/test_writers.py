@@ -120,7 +120,7 @@ def test_rapid_round_trip():
     X_FT, X_WO, targets, moves = read_rapid(text)
     assert np.abs(X_FT - prog.X_FT).max() < 1e-8 and np.abs(X_WO - prog.X_WO).max() < 1e-8
     assert len(targets) == len(moves) == len(prog.moves)
-    for i, (instr, name, speed, zone) in enumerate(moves):
+    for i, (instr, name, _speed, _zone) in enumerate(moves):
         X_OT, conf = targets[name]
         q = _recompute(X_FT, X_WO, X_OT, "abb", conf)
         assert np.abs(q - prog.moves[i].q).max() <= 1e-6, i
@@ -155,11 +155,11 @@ def test_ls_round_trip():
     prog = _program(np.random.default_rng(2), j6_beyond=True)
     text = mut.format_ls(prog)
     X_FT, X_WO, points, motions = read_ls(text)
-    assert np.abs(X_FT - prog.X_FT).max() < 1e-5 and np.abs(X_WO - prog.X_WO).max() < 1e-5
-    for i, (kind, n, speed, term) in enumerate(motions):
+    assert np.abs(X_FT - prog.X_FT).max() < 1e-8 and np.abs(X_WO - prog.X_WO).max() < 1e-8
+    for i, (kind, n, _speed, _term) in enumerate(motions):
         X_OT, conf = points[int(n)]
-        # frames come from 3-decimal remarks: recompute with the program's exact frames
-        q = _recompute(prog.X_FT, prog.X_WO, X_OT, "fanuc", conf)
+        # UTOOL / UFRAME come from the program's remarks (set them on the controller)
+        q = _recompute(X_FT, X_WO, X_OT, "fanuc", conf)
         assert np.abs(q - prog.moves[i].q).max() <= 1e-6, i
         assert kind == ("J" if i == 0 else "L")
     assert motions[1][2:] == ("450mm/sec", "CNT10") and motions[0][3] == "FINE"

@@ -245,7 +245,7 @@ def format_ls(program: RobotProgram, uframe: int = 1, utool: int = 1,
         mn += [f"!{part} ;" for part in textwrap.wrap(h.strip(), 30)]
     for label, X, num in (("UTOOL", p.X_FT, utool), ("UFRAME", p.X_WO, uframe)):
         x, y, z = _xyz_mm(X)
-        r, pp, w = (_f(v, 3) for v in euler_zyx_deg(X[:3, :3]))
+        r, pp, w = (_f(v) for v in euler_zyx_deg(X[:3, :3]))
         mn.append(f"!{label}[{num}] X {x} Y {y} Z {z} ;")
         mn.append(f"!{label}[{num}] W {w} P {pp} R {r} ;")
     mn += [f"UFRAME_NUM={uframe} ;", f"UTOOL_NUM={utool} ;"]
