@@ -55,6 +55,8 @@ def hubs_dir() -> Path:
 
 def hub_names() -> list[str]:
     """Names of the bundled hub models (folders of ``models/hubs`` holding a ``hub.yaml``)."""
+    if not hubs_dir().is_dir():
+        return []
     return sorted(p.name for p in hubs_dir().iterdir() if (p / "hub.yaml").is_file())
 
 
@@ -100,9 +102,17 @@ def resolve_package_url(url: str) -> Path:
 
 
 def extdata_dir() -> Path | None:
-    """``../shared/extdata`` next to a source checkout (tests only); None when absent."""
+    """``../shared/extdata`` next to a source checkout (tests only); None when absent.
+
+    ``$DRAKEDEBURR_EXTDATA`` overrides the search (e.g. for a git worktree elsewhere).
+    """
+    import os
+
     here = Path(__file__).resolve().parent.parent
-    for candidate in (here.parent / "shared" / "extdata", here / "shared" / "extdata"):
+    env = os.environ.get("DRAKEDEBURR_EXTDATA")
+    candidates = [Path(env)] if env else []
+    candidates += [here.parent / "shared" / "extdata", here / "shared" / "extdata"]
+    for candidate in candidates:
         if candidate.is_dir():
             return candidate
     return None
