@@ -35,6 +35,7 @@ from drakedeburr.post.opw_ik import (
     select_solution,
     solve_path,
 )
+from drakedeburr.post.plan_program import program_from_plan
 from drakedeburr.post.program import JOINT, LINEAR, ProgramMove, RobotProgram
 from drakedeburr.post.tool_axis import (
     ToolAxisPathResult,
@@ -60,7 +61,7 @@ __all__ = [
     "IRB1600_10_120", "OpwParameters", "fk_opw",
     "IRB1600_10_120_ROBOT", "IkSolutions", "JointLimits", "JointPathResult", "RobotKinematics",
     "ik_opw", "select_solution", "solve_path",
-    "JOINT", "LINEAR", "ProgramMove", "RobotProgram",
+    "program_from_plan", "JOINT", "LINEAR", "ProgramMove", "RobotProgram",
     "ToolAxisPathResult", "path_travel", "solve_tool_axis_path", "tool_frames",
     "contour_frames", "offset_contour", "part_contour_at_virtual", "virtual_tcp_poses",
     "format_krl", "format_ls", "format_rapid", "write_program",
