@@ -189,7 +189,7 @@ class _State:
         self.rpm = 0.0
         self.tool = 0
         self.rapid_next = False
-        self.p_prev: np.ndarray | None = None
+        self.p_prev: tuple[float, float, float] | None = None
         self.circle: tuple[int, np.ndarray, np.ndarray, float, str] | None = None
         self.ended = 0
 
@@ -321,7 +321,8 @@ def _goto(st: _State, source: str, line: int, args: list[str], arc_tolerance: fl
         raise ClParseError(source, line, ",".join(args),
                            f"GOTO needs 3 or 6 numbers, got {len(args)}")
     v = [_number(source, line, a) for a in args]
-    p = np.array(v[:3]) * st.scale
+    sc = st.scale
+    p = (v[0] * sc, v[1] * sc, v[2] * sc)  # plain floats: numpy per point costs 2x here
     if len(v) == 6:
         st.axis = _unit(source, line, v[3:], warn, "GOTO")
     rapid = st.rapid_next
@@ -331,13 +332,12 @@ def _goto(st: _State, source: str, line: int, args: list[str], arc_tolerance: fl
         st.circle = None
         if st.p_prev is None:
             raise ClParseError(source, c_line, "CIRCLE", "CIRCLE before any position")
-        for q in _arc_points(source, c_line, st.p_prev, p, center, n, radius, r_token,
-                             arc_tolerance):
+        for q in _arc_points(source, c_line, np.array(st.p_prev), np.array(p), center, n,
+                             radius, r_token, arc_tolerance):
             yield ClMove(c_line, rapid, (float(q[0]), float(q[1]), float(q[2])), st.axis,
                          st.feed, st.rpm, st.tool, True)
     st.p_prev = p
-    yield ClMove(line, rapid, (float(p[0]), float(p[1]), float(p[2])), st.axis, st.feed,
-                 st.rpm, st.tool, False)
+    yield ClMove(line, rapid, p, st.axis, st.feed, st.rpm, st.tool, False)
 
 
 def _arc_points(source: str, line: int, p0: np.ndarray, p1: np.ndarray, center: np.ndarray,
