@@ -15,6 +15,7 @@ rotation about Z_T is free. Two rules:
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -40,7 +41,7 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-SPIN_MODES = ("min_travel", "theta6_zero")
+SPIN_MODES = ("min_travel", "greedy", "theta6_zero")
 # a neutral start: arm up, wrist bent 90 deg so a tool on the flange axis points down
 READY_POSE = np.array([0.0, 0.0, 0.0, 0.0, np.pi / 2, 0.0])
 _TWO_PI = 2 * np.pi
@@ -129,6 +130,70 @@ def _candidates(robot: RobotKinematics, X_WF: np.ndarray, q_prev: np.ndarray):
         sols.branch[None], (m, 8, 3))
 
 
+_BRANCH_CHANGE_COST = 1e3  # [m] travel-equivalent penalty for a configuration change
+_DP_SPINS = 24  # spin grid of the dynamic programme (15 deg); refined per point afterwards
+
+
+def _dp_spins(robot: RobotKinematics, p_W: np.ndarray, axis_W: np.ndarray, X_TF: np.ndarray,
+              q_start: np.ndarray, grid: np.ndarray, x_ref_W: np.ndarray, w: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Globally least-travel (spin index, branch index) per point; -1 where no state exists.
+
+    States are (spin, branch) pairs; joints whose range exceeds 2*pi are compared modulo
+    2*pi (their turn is unwrapped afterwards).
+    """
+    n, m = p_W.shape[0], grid.size
+    lo, hi = np.asarray(robot.limits.lower), np.asarray(robot.limits.upper)
+    wraps = (hi - lo) > _TWO_PI + 1e-9
+    qs, oks = [], []
+    for i in range(n):
+        X = tool_frames(np.repeat(p_W[i:i + 1], m, 0), np.repeat(axis_W[i:i + 1], m, 0), grid,
+                        x_ref_W) @ X_TF
+        sols = ik_opw(robot.opw, X)
+        q = sols.q.reshape(m * 8, 6)
+        inside = np.all(((q >= lo) & (q <= hi)) | wraps, axis=1)
+        qs.append(np.nan_to_num(q))
+        oks.append(sols.valid.reshape(-1) & inside)
+    branch = np.tile(ik_opw(robot.opw, np.eye(4)).branch, (m, 1))  # (m*8, 3) per state
+    same = np.all(branch[:, None] == branch[None], axis=-1)
+    penalty = np.where(same, 0.0, _BRANCH_CHANGE_COST)
+
+    def dist(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+        d = qa[:, None, :] - qb[None, :, :]
+        d = np.where(wraps, np.abs(np.pi - np.mod(np.pi - d, _TWO_PI)), np.abs(d))
+        return d @ w
+
+    acc = None
+    back: list[np.ndarray | None] = []
+    prev_q = None
+    for i in range(n):
+        if not oks[i].any():
+            back.append(None)
+            continue
+        if acc is None:
+            acc_new = dist(q_start[None], qs[i])[0]
+            bp = np.full(m * 8, -1)
+        else:
+            total = acc[:, None] + dist(prev_q, qs[i]) + penalty
+            bp = np.argmin(total, axis=0)
+            acc_new = total[bp, np.arange(m * 8)]
+        acc = np.where(oks[i], acc_new, np.inf)
+        back.append(bp)
+        prev_q = qs[i]
+    choice = np.full(n, -1)
+    if acc is None:
+        return choice, choice.copy()
+    k = int(np.argmin(acc))
+    for i in range(n - 1, -1, -1):
+        if back[i] is None:
+            continue
+        choice[i] = k
+        k = int(back[i][k])
+    spin_idx = np.where(choice >= 0, choice // 8, -1)
+    branch_idx = np.where(choice >= 0, choice % 8, -1)
+    return spin_idx, branch_idx
+
+
 def solve_tool_axis_path(
     robot: RobotKinematics,
     p_W: np.ndarray,
@@ -147,7 +212,7 @@ def solve_tool_axis_path(
         p_W: (N, 3) tool tip positions in the robot base [m].
         axis_W: (N, 3) unit tool axes tip -> spindle (CAM convention) in the robot base.
         X_FT: (4, 4) tool in the flange frame [m].
-        mode: "min_travel" or "theta6_zero".
+        mode: "min_travel", "greedy" or "theta6_zero".
         q_start: (6,) joints before the first point [rad] (default :data:`READY_POSE`).
         n_spin: grid size over the spin before refinement.
         x_ref_W: spin-0 reference direction of X_T.
@@ -172,6 +237,11 @@ def solve_tool_axis_path(
     spin_out = np.full(n, np.nan)
     X_out = np.zeros((n, 4, 4))
     failed, changes = [], []
+    dp_spin = dp_branch = None
+    dp_grid = np.linspace(-np.pi, np.pi, _DP_SPINS, endpoint=False)
+    if mode == "min_travel":
+        dp_spin, dp_branch = _dp_spins(robot, p_W, axis_W, X_TF, q_prev, dp_grid,
+                                       np.asarray(x_ref_W, float), w)
 
     def cost_of(q: np.ndarray, ok: np.ndarray, br: np.ndarray, qp: np.ndarray,
                 bp: np.ndarray | None) -> np.ndarray:
@@ -194,13 +264,22 @@ def solve_tool_axis_path(
                 br_prev = br[k0]
         c = cost_of(q, ok, br, q_prev, br_prev)
         k_best = np.unravel_index(np.argmin(c), c.shape)
-        if not np.isfinite(c[k_best]):
+        step = _TWO_PI / n_spin
+        s_best, c_best = grid[k_best[0]], c[k_best]
+        if dp_spin is not None and dp_spin[i] >= 0:
+            # the globally chosen state; refined within +-1 DP grid step below
+            s_dp = float(dp_grid[dp_spin[i]])
+            X = tool_frames(p_W[i:i + 1], axis_W[i:i + 1], s_dp, x_ref_W)
+            qq, okk, bb = _candidates(robot, X @ X_TF, q_prev)
+            c_dp = cost_of(qq[0], okk[0], bb[0], q_prev, br_prev)[dp_branch[i]]
+            if np.isfinite(c_dp):
+                k_best = (k_best[0], int(dp_branch[i]))
+                s_best, c_best, step = s_dp, c_dp, _TWO_PI / _DP_SPINS
+        if not np.isfinite(c_best):
             failed.append(i)
             X_out[i] = tool_frames(p_W[i:i + 1], axis_W[i:i + 1], 0.0, x_ref_W)[0]
             continue
         branch_idx = k_best[1]
-        s_best, c_best = grid[k_best[0]], c[k_best]
-        step = _TWO_PI / n_spin
         # vectorised zoom around the best grid spin (same branch): 21 samples, /10 per level
         while step > 1e-9:
             local = s_best + np.linspace(-step, step, 21)
@@ -225,9 +304,20 @@ def solve_tool_axis_path(
     reach = ~np.any(np.isnan(q_out), axis=1)
     if failed:
         log.info("%d of %d CL points unreachable", len(failed), n)
-    return ToolAxisPathResult(q=q_out, X_WT=X_out, spin=spin_out, reachable=reach,
-                              failed=tuple(failed), configuration_changes=tuple(changes),
-                              mode=mode)
+    result = ToolAxisPathResult(q=q_out, X_WT=X_out, spin=spin_out, reachable=reach,
+                                failed=tuple(failed), configuration_changes=tuple(changes),
+                                mode=mode)
+    if mode == "min_travel":
+        # the DP works on a 15 deg grid; where the continuous greedy path is better (e.g. a
+        # tool on the flange axis, where keeping J6 still is optimal) take that one
+        greedy = solve_tool_axis_path(robot, p_W, axis_W, X_FT, "greedy", q_start, n_spin,
+                                      x_ref_W)
+        if (len(greedy.failed), len(greedy.configuration_changes),
+                path_travel(robot, greedy.q)["weighted"]) < (
+                len(result.failed), len(result.configuration_changes),
+                path_travel(robot, result.q)["weighted"]):
+            result = dataclasses.replace(greedy, mode=mode)
+    return result
 
 
 def path_travel(robot: RobotKinematics, q: np.ndarray) -> dict[str, float]:
