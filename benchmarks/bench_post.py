@@ -137,16 +137,21 @@ def main() -> int:
     p_W = prog.p_C[:n_pts] + np.array([0.75, 0.0, 0.25])
     axis = prog.axis_C[:n_pts]
     for label, X_FT in (("straight tool", _tool(0.0)), ("tool tilted 30 deg", _tool(30.0))):
-        t = time.perf_counter()
-        a = solve_tool_axis_path(ROBOT, p_W, axis, X_FT, "min_travel")
-        t_a = time.perf_counter() - t
-        b = solve_tool_axis_path(ROBOT, p_W, axis, X_FT, "theta6_zero")
-        ta, tb = path_travel(ROBOT, a.q), path_travel(ROBOT, b.q)
-        rows.append((f"spin: min travel vs theta6=0, {label}, {n_pts} pts",
-                     f"{n_pts / t_a:,.0f} pts/s; travel {ta['weighted']:.3f} m "
-                     f"(J4-6 {ta['wrist']:.2f} rad)",
-                     f"theta6=0 travel {tb['weighted']:.3f} m (J4-6 {tb['wrist']:.2f} rad)",
-                     f"{tb['weighted'] / ta['weighted']:.3f}x"))
+        res, secs = {}, {}
+        for mode in ("min_travel", "greedy", "theta6_zero"):
+            t = time.perf_counter()
+            out = solve_tool_axis_path(ROBOT, p_W, axis, X_FT, mode)
+            secs[mode] = time.perf_counter() - t
+            res[mode] = path_travel(ROBOT, out.q)
+        ta = res["min_travel"]
+        for base in ("theta6_zero", "greedy"):
+            tb = res[base]
+            rows.append((f"spin {label}, {n_pts} pts: min travel vs {base}",
+                         f"travel {ta['weighted']:.3f} m (J4-6 {ta['wrist']:.2f} rad), "
+                         f"{n_pts / secs['min_travel']:,.0f} pts/s",
+                         f"{base} {tb['weighted']:.3f} m (J4-6 {tb['wrist']:.2f} rad), "
+                         f"{n_pts / secs[base]:,.0f} pts/s",
+                         f"{tb['weighted'] / ta['weighted']:.3f}x travel"))
 
     w = [max(len(r[i]) for r in rows) for i in range(4)]
     head = ("case", "ours", "baseline", "ratio")
