@@ -92,7 +92,7 @@ def program_from_cl(
         robot: kinematics and limits.
         X_WO: (4, 4) work object (CL frame) in the robot base [m]; None = identity.
         X_FT: (4, 4) tool in the flange frame [m]; None = 0.2 m along the flange axis.
-        spin_mode: "min_travel" or "theta6_zero".
+        spin_mode: "min_travel", "greedy" or "theta6_zero".
         zone: corner zone of feed moves [m] (the last move is always a stop point).
         feed: TCP speed of feed moves [m/s]; None = the CL file's FEDRAT, else
             ``process.grinding_speed``.

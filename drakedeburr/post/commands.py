@@ -37,7 +37,8 @@ def register(subparsers) -> None:
                    help="TCP in the flange frame: mm, deg (default 0,0,200,0,0,0)")
     p.add_argument("--units", default="mm", choices=["mm", "inch"],
                    help="CL length unit until a UNITS statement (NX CLSF files: often inch)")
-    p.add_argument("--spin", default="min_travel", choices=["min_travel", "theta6_zero"],
+    p.add_argument("--spin", default="min_travel",
+                   choices=["min_travel", "greedy", "theta6_zero"],
                    help="rule for the free rotation about the tool axis")
     p.add_argument("--zone", type=float, default=1.0, help="corner zone of feed moves [mm]")
     p.add_argument("--feed", type=float, default=None,
