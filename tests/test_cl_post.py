@@ -58,13 +58,14 @@ def test_cli_post(extdata, tmp_path):
     cl = str(extdata / "cl_files" / CREO)
     out = tmp_path / "creo.mod"
     wobj = ",".join(str(v) for v in WOBJ)
-    assert main(["post", cl, "--format", "rapid", "-o", str(out), "--wobj", wobj]) == 0
+    fast = ["--spin", "greedy"]
+    assert main(["post", cl, "--format", "rapid", "-o", str(out), "--wobj", wobj, *fast]) == 0
     text = out.read_text()
     assert text.startswith("MODULE CreoPost__profilfraesen") and "UNVERIFIED" in text
     assert text.count("MoveL") + text.count("MoveJ") == len(read_cl(cl).moves)
     # the same command twice gives the same bytes
     out2 = tmp_path / "creo2.mod"
-    assert main(["post", cl, "--format", "rapid", "-o", str(out2), "--wobj", wobj]) == 0
+    assert main(["post", cl, "--format", "rapid", "-o", str(out2), "--wobj", wobj, *fast]) == 0
     assert out2.read_text() == text
     # KRL writes .src + .dat
     assert main(["post", cl, "--format", "krl", "-o", str(tmp_path / "c.src"),
@@ -72,7 +73,7 @@ def test_cli_post(extdata, tmp_path):
     assert (tmp_path / "c.dat").read_text().count("DECL E6POS") == len(read_cl(cl).moves)
     # in the robot base (no work object) the part sits inside the robot: nothing written
     bad = tmp_path / "bad.ls"
-    assert main(["post", cl, "--format", "ls", "-o", str(bad)]) == 1
+    assert main(["post", cl, "--format", "ls", "-o", str(bad), *fast]) == 1
     assert not bad.exists()
     # a bad work object is an input error (exit 2)
     assert main(["post", cl, "--format", "ls", "-o", str(bad), "--wobj", "1,2,3"]) == 2
