@@ -82,6 +82,7 @@ def program_from_cl(
     rapid_speed: float | None = None,
     force: bool = False,
     process: ProcessParameters | None = None,
+    q_start: np.ndarray | None = None,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> PostResult:
     """Post-process a read CL file for a robot.
@@ -101,6 +102,8 @@ def program_from_cl(
         force: build the program even with unreachable points (they are left out and the
             header says FORCED).
         process: process parameters for the defaults.
+        q_start: (6,) joints the robot starts from [rad] (default: tool_axis.READY_POSE);
+            the first point's configuration is the one closest to it.
         progress: optional callback (done, total, label).
     """
     process = process or ProcessParameters()
@@ -112,7 +115,8 @@ def program_from_cl(
         X_FT[2, 3] = 0.2
     p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
     axis_W = cl.axis_C @ X_WO[:3, :3].T
-    res = solve_tool_axis_path(robot, p_W, axis_W, X_FT, mode=spin_mode, progress=progress)
+    res = solve_tool_axis_path(robot, p_W, axis_W, X_FT, mode=spin_mode, q_start=q_start,
+                               progress=progress)
     lines = cl.lines
     bad = tuple(sorted({int(lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(lines[i]) for i in res.configuration_changes}))
