@@ -189,3 +189,18 @@ def test_fuzz_only_typed_errors(lines, units, require_end):
     for m in prog.moves:
         assert all(math.isfinite(v) for v in m.p_C)
         assert abs(math.hypot(*m.axis_C) - 1.0) < 1e-9
+
+
+def test_reader_streams():
+    """Moves come out while the file is still being read (nothing is loaded whole)."""
+    read = []
+
+    def lines():
+        for text in ("GOTO/1,2,3", "GOTO/4,5,6", "GOTO/7,8,9"):
+            read.append(text)
+            yield text
+        raise AssertionError("the consumer stopped early: never reached")
+
+    it = mut.iter_cl_moves(lines(), units="mm")
+    first = next(it)
+    assert first.p_C == pytest.approx((1e-3, 2e-3, 3e-3)) and len(read) <= 2
