@@ -110,29 +110,37 @@ def test_against_drake_fk_of_reference_urdf():
         assert np.abs(cand - q[None]).max(axis=1).min() < 1e-9
 
 
-def test_drake_model_of_the_project(extdata):
-    """The project's own Drake model (cell stage) once it is on main."""
-    urdf = REPO / "models" / "robots" / "irb1600_10_120.urdf"
-    if not urdf.exists():
-        pytest.skip("models/robots/irb1600_10_120.urdf not on this branch yet")
+def test_drake_model_of_the_project():
+    """The project's own Drake model (models/robots/irb1600_10_120.sdf, cell stage): its
+    flange FK equals the OPW model, and the analytic IK recovers the joints Drake was given."""
     from pydrake.multibody.parsing import Parser
     from pydrake.multibody.plant import MultibodyPlant
 
+    from drakedeburr.resources import models_dir
+
+    sdf = models_dir() / "robots" / "irb1600_10_120.sdf"
     plant = MultibodyPlant(0.0)
-    parser = Parser(plant)
-    parser.package_map().PopulateFromFolder(str(REPO / "models"))
-    parser.AddModels(str(urdf))
+    Parser(plant).AddModels(str(sdf))
+    base = plant.GetFrameByName("base")
+    plant.WeldFrames(plant.world_frame(), base)
     plant.Finalize()
+    assert plant.num_positions() == 6
     ctx = plant.CreateDefaultContext()
-    tool0 = plant.GetFrameByName("tool0")
-    base = plant.GetFrameByName("base_link")
+    flange = plant.GetFrameByName("flange")
     rng = np.random.default_rng(0)
     lo, hi = np.array(ROBOT.limits.lower), np.array(ROBOT.limits.upper)
-    for _ in range(20):
+    # the model's joint limits are the ones the IK uses
+    assert np.allclose(plant.GetPositionLowerLimits(), lo, atol=1e-3)
+    assert np.allclose(plant.GetPositionUpperLimits(), hi, atol=1e-3)
+    for _ in range(50):
         q = rng.uniform(lo, hi)
         plant.SetPositions(ctx, q)
-        X = plant.CalcRelativeTransform(ctx, base, tool0).GetAsMatrix4()
+        X = plant.CalcRelativeTransform(ctx, base, flange).GetAsMatrix4()
         assert np.abs(X - fk_opw(IRB1600_10_120, q)).max() < 1e-9
+        if abs(np.sin(q[4])) < 1e-3:
+            continue
+        cand = mut.joint_candidates(mut.ik_opw(IRB1600_10_120, X).q[0], ROBOT.limits)
+        assert np.abs(cand - q[None]).max(axis=1).min() < 1e-9
 
 
 def test_joint_candidates_unwraps_turns_within_limits():
