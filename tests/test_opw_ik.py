@@ -85,53 +85,22 @@ def test_unreachable_pose_has_no_solution():
     assert res.failed == (0,) and not res.ok and np.isnan(res.q[0]).all()
 
 
-def test_against_drake_fk_of_reference_urdf():
-    """Drake's FK of the ros-industrial IRB1600 joint chain equals the OPW model; the
-    analytic IK of Drake's poses returns the joints Drake was given."""
+def _check_drake_model(model: Path, base_name: str, flange_name: str):
+    """Drake FK of ``model`` (base -> flange) equals the OPW model; the analytic IK of Drake's
+    poses returns the joints Drake was given. Returns the plant for further checks."""
     from pydrake.multibody.parsing import Parser
     from pydrake.multibody.plant import MultibodyPlant
 
     plant = MultibodyPlant(0.0)
-    Parser(plant).AddModels(str(REPO / "tests" / "data" / "irb1600_6_12_reference.urdf"))
-    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("base_link"))
-    plant.Finalize()
-    ctx = plant.CreateDefaultContext()
-    rng = np.random.default_rng(0)
-    lo, hi = np.array(ROBOT.limits.lower), np.array(ROBOT.limits.upper)
-    for _ in range(50):
-        q = rng.uniform(lo, hi)
-        plant.SetPositions(ctx, q)
-        X = plant.CalcRelativeTransform(ctx, plant.world_frame(),
-                                        plant.GetFrameByName("tool0")).GetAsMatrix4()
-        assert np.abs(X - fk_opw(IRB1600_10_120, q)).max() < 1e-12
-        if abs(np.sin(q[4])) < 1e-3:
-            continue
-        cand = mut.joint_candidates(mut.ik_opw(IRB1600_10_120, X).q[0], ROBOT.limits)
-        assert np.abs(cand - q[None]).max(axis=1).min() < 1e-9
-
-
-def test_drake_model_of_the_project():
-    """The project's own Drake model (models/robots/irb1600_10_120.sdf, cell stage): its
-    flange FK equals the OPW model, and the analytic IK recovers the joints Drake was given."""
-    from pydrake.multibody.parsing import Parser
-    from pydrake.multibody.plant import MultibodyPlant
-
-    from drakedeburr.resources import models_dir
-
-    sdf = models_dir() / "robots" / "irb1600_10_120.sdf"
-    plant = MultibodyPlant(0.0)
-    Parser(plant).AddModels(str(sdf))
-    base = plant.GetFrameByName("base")
+    Parser(plant).AddModels(str(model))
+    base = plant.GetFrameByName(base_name)
     plant.WeldFrames(plant.world_frame(), base)
     plant.Finalize()
     assert plant.num_positions() == 6
     ctx = plant.CreateDefaultContext()
-    flange = plant.GetFrameByName("flange")
+    flange = plant.GetFrameByName(flange_name)
     rng = np.random.default_rng(0)
     lo, hi = np.array(ROBOT.limits.lower), np.array(ROBOT.limits.upper)
-    # the model's joint limits are the ones the IK uses
-    assert np.allclose(plant.GetPositionLowerLimits(), lo, atol=1e-3)
-    assert np.allclose(plant.GetPositionUpperLimits(), hi, atol=1e-3)
     for _ in range(50):
         q = rng.uniform(lo, hi)
         plant.SetPositions(ctx, q)
@@ -141,6 +110,23 @@ def test_drake_model_of_the_project():
             continue
         cand = mut.joint_candidates(mut.ik_opw(IRB1600_10_120, X).q[0], ROBOT.limits)
         assert np.abs(cand - q[None]).max(axis=1).min() < 1e-9
+    return plant
+
+
+def test_against_drake_fk_of_reference_urdf():
+    """The ros-industrial IRB1600 joint chain (tests/data) in Drake."""
+    _check_drake_model(REPO / "tests" / "data" / "irb1600_6_12_reference.urdf", "base_link",
+                       "tool0")
+
+
+def test_drake_model_of_the_project():
+    """The project's own Drake model (models/robots/irb1600_10_120.sdf, cell stage)."""
+    from drakedeburr.resources import models_dir
+
+    plant = _check_drake_model(models_dir() / "robots" / "irb1600_10_120.sdf", "base", "flange")
+    # the model's joint limits are the ones the IK uses
+    assert np.allclose(plant.GetPositionLowerLimits(), ROBOT.limits.lower, atol=1e-3)
+    assert np.allclose(plant.GetPositionUpperLimits(), ROBOT.limits.upper, atol=1e-3)
 
 
 def test_joint_candidates_unwraps_turns_within_limits():
