@@ -164,3 +164,20 @@ def test_solve_path_keeps_configuration_and_unwraps_j6():
     assert np.abs(res.q - q).max() < 1e-9  # J6 followed beyond pi, not wrapped back
     assert np.abs(np.diff(res.q, axis=0)).max() < 0.3
     assert np.abs(fk_opw(IRB1600_10_120, res.q) - X).max() < 1e-9
+
+
+def test_solve_path_reports_a_forced_configuration_change():
+    # J4 limited to +-0.5 rad: through J5 = 0 the wrist cannot flip back with J4 +- pi,
+    # so the branch must change and is reported
+    tight = mut.RobotKinematics(
+        opw=IRB1600_10_120,
+        limits=mut.JointLimits(lower=(-np.pi, -1.0, -3.0, -0.5, -2.0, -np.pi),
+                               upper=(np.pi, 1.5, 0.9, 0.5, 2.0, np.pi)))
+    t = np.linspace(0, 1, 21)
+    q = np.stack([0.2 + 0 * t, 0.3 + 0 * t, -0.3 + 0 * t, 0.2 + 0 * t, 0.5 - t, 0.1 + 0 * t], -1)
+    q = q[np.abs(q[:, 4]) > 1e-6]  # skip the exactly singular pose
+    res = mut.solve_path(tight, fk_opw(IRB1600_10_120, q), q_start=q[0])
+    assert res.ok and len(res.configuration_changes) == 1
+    i = res.configuration_changes[0]
+    assert res.branch[i - 1, 2] == 1 and res.branch[i, 2] == -1 and q[i, 4] < 0 < q[i - 1, 4]
+    assert np.abs(res.q - q).max() < 1e-9  # the planned joints are recovered
