@@ -34,7 +34,8 @@ def _run_generate(args: argparse.Namespace) -> int:
                 specs.append(load_spec(out_root / name / "hub.yaml"))
             else:
                 raise InputError(f"hub generate: unknown hub {name!r}: not bundled "
-                                 f"({', '.join(sorted(BUNDLED))}) and no {out_root / name}/hub.yaml")
+                                 f"({', '.join(sorted(BUNDLED))}) and no "
+                                 f"{out_root / name}/hub.yaml")
     else:
         raise InputError("hub generate: name a hub, or use --all or --spec FILE")
     for spec in specs:
@@ -88,7 +89,8 @@ def _run_info(args: argparse.Namespace) -> int:
     for w in s["windows"]:
         print(f"  {w['index']:>6} {w['kind']:<6} {w['points']:>6} {w['length_mm']:>9.1f} "
               f"{w['width_mm']:>8.1f} {w['radial_size_mm']:>9.1f} {w['fillet_mm']:>9.1f} "
-              f"{w['max_curvature_per_mm']:>14.3f} {w['z_range_mm'][0]:.1f}..{w['z_range_mm'][1]:.1f}")
+              f"{w['max_curvature_per_mm']:>14.3f} "
+              f"{w['z_range_mm'][0]:.1f}..{w['z_range_mm'][1]:.1f}")
     return 0
 
 

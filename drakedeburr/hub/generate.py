@@ -53,11 +53,14 @@ log = logging.getLogger(__name__)
 
 GENERATOR_VERSION = 1
 ARC_SAG_MM = 0.002  # chord sag of arcs in the window outlines [mm]
+ARC_MAX_STEP = math.radians(2.0)  # and at most this angle per arc segment
+REFLEX_RADIUS_MM = 3.0  # rounding of reflex (concave) outline corners
+MAX_TURN = math.radians(2.5)  # largest turn between consecutive outline segments
 RIM_SAG_MM = 0.02  # chord sag of the rim, pad, bore and bolt-hole circles [mm]
 LINE_STEP_MM = 1.0  # max outline segment on straight stretches [mm]
 COLL_CELL_MM = 60.0  # initial quadtree cell of the plate's collision pieces [mm]
-COLL_TOL_MM = 1.5  # allowed average extra thickness of a hull away from windows [mm]
-COLL_TOL_WINDOW_MM = 0.5  # ... of a hull whose cell overlaps a window [mm]
+COLL_TOL_MM = 1.0  # allowed average extra thickness of a plate hull [mm]
+COLL_WINDOW_REACH_MM = 0.5  # a hull may reach at most this far into a window opening [mm]
 COLL_SAG_MM = 0.5  # chord sag of the rim's and pad's annular-sector pieces [mm]
 MIN_CELL_MM = 2.5  # smallest quadtree cell [mm]
 OBJ_DECIMALS = 7  # 0.1 um in metres
@@ -85,8 +88,8 @@ class GeneratedHub:
 # --------------------------------------------------------------------------- 2-D outlines
 def _segments(radius_mm: float, sag_mm: float = ARC_SAG_MM) -> int:
     """Circular segments per full circle so that the chord sag is <= ``sag_mm``."""
-    dtheta = 2.0 * math.sqrt(2.0 * sag_mm / max(radius_mm, 1e-9))
-    return max(32, int(math.ceil(2.0 * math.pi / dtheta)))
+    dtheta = min(2.0 * math.sqrt(2.0 * sag_mm / max(radius_mm, 1e-9)), ARC_MAX_STEP)
+    return int(math.ceil(2.0 * math.pi / dtheta))
 
 
 def _densify(poly: np.ndarray, step: float) -> np.ndarray:
@@ -193,6 +196,11 @@ def build_window_outlines(spec: HubSpec) -> list[_Window]:
             raise InputError(f"hub {spec.name!r}: field {field!r}: fillet {f:.1f} mm is larger "
                              f"than a {kind} window can hold")
         opened = opened.offset(f, JoinType.Round, 2.0, seg)
+        # closing rounds the reflex corners that the opening keeps (e.g. where a curved spoke's
+        # side meets the fillet), so the whole edge is tangent-continuous
+        c = min(f, REFLEX_RADIUS_MM)
+        opened = opened.offset(c, JoinType.Round, 2.0, _segments(c)).offset(
+            -c, JoinType.Round, 2.0, _segments(c))
         polys = opened.to_polygons()
         if len(polys) != 1:
             field = "fillet_radius_small" if kind == "small" else "fillet_radius"
@@ -210,6 +218,13 @@ def build_window_outlines(spec: HubSpec) -> list[_Window]:
         radial = c / np.linalg.norm(c)
         start = int(np.argmax(rel @ radial))  # outermost point
         poly = np.roll(poly, -start, axis=0)
+        seg_v = np.roll(poly, -1, axis=0) - poly
+        heading = np.arctan2(seg_v[:, 1], seg_v[:, 0])
+        turn = np.abs((np.roll(heading, -1) - heading + np.pi) % (2 * np.pi) - np.pi)
+        if turn.max() > MAX_TURN:
+            raise RuntimeError(f"hub {spec.name!r}: window outline has a corner of "
+                               f"{math.degrees(turn.max()):.1f} deg at "
+                               f"{poly[int(np.argmax(turn)) + 1]} mm")
         windows.append((math.atan2(c[1], c[0]) % (2 * math.pi), kind, _densify(poly, LINE_STEP_MM),
                         f))
     windows.sort(key=lambda w: w[0])
@@ -237,47 +252,39 @@ def _hex_grid(lo: np.ndarray, hi: np.ndarray, h: float) -> np.ndarray:
     return np.concatenate(pts)
 
 
-FACE_STEP_NEAR_MM = 3.0  # face triangulation near the windows (within NEAR_BAND_MM)
-FACE_STEP_FAR_MM = 6.0
-NEAR_BAND_MM = 8.0
+# face triangulation: grid step [mm] by distance [mm] from the nearest window edge (top face);
+# the back face uses mesh_edge_length everywhere
+FACE_STEPS_MM = ((4.0, 1.5), (12.0, 3.0))
 
 
-def _dished_plate(spec: HubSpec, windows: list[_Window]):
-    """The face plate (disc minus windows, dished) as a Manifold [mm].
-
-    Written by hand instead of extrude + refine: manifold's refine subdivides the long slivers of
-    the extrusion's triangulation into ~10^5 triangles. Here the face is a Delaunay
-    triangulation of the outline points plus a hexagonal grid (3 mm near the windows, 6 mm
-    elsewhere), every outline segment checked to be a triangle edge.
-    """
-    from manifold3d import Manifold, Mesh64
+def _triangulate(spec: HubSpec, loops: list[np.ndarray], windows: list[_Window], r_plate: float,
+                 graded: bool) -> np.ndarray:
+    """Delaunay triangulation (T, 3) of the plate region: outline points (indices first, in
+    ``loops`` order) plus a hexagonal grid; every outline segment checked to be an edge."""
     from matplotlib.path import Path as MplPath
     from scipy.spatial import Delaunay, cKDTree
 
-    t = spec.face_thickness * 1e3
-    r_plate = (spec.rim_barrel_inner_radius + 0.5 * spec.rim_thickness) * 1e3
-    n_out = _segments(r_plate, RIM_SAG_MM)
-    ang = 2 * math.pi * np.arange(n_out) / n_out
-    outer = np.column_stack([r_plate * np.cos(ang), r_plate * np.sin(ang)])  # CCW, material left
-    loops = [outer] + [w.poly_mm[::-1] for w in windows]  # windows reversed: material left
     bpts = np.concatenate(loops)
-    btree = cKDTree(bpts)
     win_paths = [MplPath(w.poly_mm) for w in windows]
     wtree = cKDTree(np.concatenate([w.poly_mm for w in windows]))
     lo, hi = np.array([-r_plate, -r_plate]), np.array([r_plate, r_plate])
-    far = _hex_grid(lo, hi, spec.mesh_edge_length * 1e3)
-    near = _hex_grid(lo, hi, min(FACE_STEP_NEAR_MM, spec.mesh_edge_length * 1e3))
-    far = far[wtree.query(far)[0] > NEAR_BAND_MM]
-    near = near[wtree.query(near)[0] <= NEAR_BAND_MM]
-    grid = np.concatenate([near, far])
+    coarse = spec.mesh_edge_length * 1e3
+    bands = list(FACE_STEPS_MM) if graded else []
+    grids, steps = [], []
+    inner = 0.0
+    for outer_d, h in [*bands, (np.inf, coarse)]:
+        g = _hex_grid(lo, hi, h)
+        d = wtree.query(g)[0]
+        g = g[(d > inner) & (d <= outer_d)]
+        grids.append(g)
+        steps.append(np.full(len(g), h))
+        inner = outer_d
+    grid, step = np.concatenate(grids), np.concatenate(steps)
     keep = np.hypot(grid[:, 0], grid[:, 1]) < r_plate - 1.0
     for path in win_paths:
         keep &= ~path.contains_points(grid)
-    grid = grid[keep]
-    d_b, _ = btree.query(grid)
-    d_w = wtree.query(grid)[0]
-    step = np.where(d_w <= NEAR_BAND_MM, FACE_STEP_NEAR_MM, spec.mesh_edge_length * 1e3)
-    grid = grid[d_b > 0.6 * step]
+    grid, step = grid[keep], step[keep]
+    grid = grid[cKDTree(bpts).query(grid)[0] > 0.6 * step]
     pts = np.concatenate([bpts, grid])
     tri = Delaunay(pts).simplices
     cen = pts[tri].mean(axis=1)
@@ -285,27 +292,57 @@ def _dished_plate(spec: HubSpec, windows: list[_Window]):
     for path in win_paths:
         inside &= ~path.contains_points(cen)
     tri = tri[inside]
-    # orient CCW (normal +z)
     a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
     cw = ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])) < 0
-    tri[cw] = tri[cw][:, [0, 2, 1]]
+    tri[cw] = tri[cw][:, [0, 2, 1]]  # CCW seen from +Z
     edges = _edge_set(tri)
     offs = np.cumsum([0] + [len(lp) for lp in loops])
-    walls = []
-    n = len(pts)
-    for k, lp in enumerate(loops):
+    for k in range(len(loops)):
         idx = np.arange(offs[k], offs[k + 1])
         nxt = np.roll(idx, -1)
-        missing = [i for i, j in zip(idx, nxt, strict=True) if (min(i, j), max(i, j)) not in edges]
+        missing = sum((min(i, j), max(i, j)) not in edges for i, j in zip(idx, nxt, strict=True))
         if missing:
-            raise RuntimeError(f"hub {spec.name!r}: face triangulation misses {len(missing)} "
+            raise RuntimeError(f"hub {spec.name!r}: face triangulation misses {missing} "
                                f"outline segments of loop {k}")
-        walls.append(np.column_stack([idx, idx + n, nxt + n]))
-        walls.append(np.column_stack([idx, nxt + n, nxt]))
-    r = np.hypot(pts[:, 0], pts[:, 1]) * 1e-3
-    z_top = spec.z_face(r) * 1e3
-    V = np.concatenate([np.column_stack([pts, z_top]), np.column_stack([pts, z_top - t])])
-    F = np.concatenate([tri, tri[:, [0, 2, 1]] + n, *walls])
+    return pts, tri
+
+
+def _dished_plate(spec: HubSpec, windows: list[_Window]):
+    """The face plate (disc minus windows, dished) as a Manifold [mm].
+
+    Written by hand instead of extrude + refine: manifold's refine subdivides the long slivers of
+    the extrusion's triangulation into ~10^5 triangles. The front face is a Delaunay
+    triangulation of the outline points plus a hexagonal grid graded by the distance to the
+    window edges (1.5 mm / 3 mm / ``mesh_edge_length``), the back face a coarse one; the window
+    walls join the two copies of each outline.
+    """
+    from manifold3d import Manifold, Mesh64
+
+    t = spec.face_thickness * 1e3
+    r_plate = (spec.rim_barrel_inner_radius + 0.5 * spec.rim_thickness) * 1e3
+    n_out = _segments(r_plate, RIM_SAG_MM)
+    ang = 2 * math.pi * np.arange(n_out) / n_out
+    outer = np.column_stack([r_plate * np.cos(ang), r_plate * np.sin(ang)])  # CCW, material left
+    loops = [outer] + [w.poly_mm[::-1] for w in windows]  # windows reversed: material left
+    nb = sum(len(lp) for lp in loops)
+    top_pts, top_tri = _triangulate(spec, loops, windows, r_plate, graded=True)
+    bot_pts, bot_tri = _triangulate(spec, loops, windows, r_plate, graded=False)
+    n_top = len(top_pts)
+    offs = np.cumsum([0] + [len(lp) for lp in loops])
+    walls = []
+    for k in range(len(loops)):
+        idx = np.arange(offs[k], offs[k + 1])
+        nxt = np.roll(idx, -1)
+        walls.append(np.column_stack([idx, idx + n_top, nxt + n_top]))
+        walls.append(np.column_stack([idx, nxt + n_top, nxt]))
+    assert np.array_equal(top_pts[:nb], bot_pts[:nb])
+
+    def lift(pts: np.ndarray, dz: float) -> np.ndarray:
+        r = np.hypot(pts[:, 0], pts[:, 1]) * 1e-3
+        return np.column_stack([pts, spec.z_face(r) * 1e3 + dz])
+
+    V = np.concatenate([lift(top_pts, 0.0), lift(bot_pts, -t)])
+    F = np.concatenate([top_tri, bot_tri[:, [0, 2, 1]] + n_top, *walls])
     plate = Manifold(Mesh64(np.ascontiguousarray(V), np.ascontiguousarray(F.astype(np.uint64))))
     if plate.status().name != "NoError" or plate.is_empty():
         raise RuntimeError(f"hub {spec.name!r}: face plate mesh invalid: {plate.status()}")
@@ -314,7 +351,7 @@ def _dished_plate(spec: HubSpec, windows: list[_Window]):
 
 def build_solid(spec: HubSpec, windows: list[_Window], *, holes: bool = True):
     """The hub solid as a manifold3d Manifold in millimetres (frame H)."""
-    from manifold3d import CrossSection, Manifold
+    from manifold3d import Manifold
 
     t = spec.face_thickness * 1e3
     plate = _dished_plate(spec, windows)
@@ -461,13 +498,58 @@ def _sector_hulls(r0: float, r1: float, z0: float, z1: float, sag: float, phase:
             ring.append(np.column_stack([r * np.cos(ang), r * np.sin(ang)]))
         pts2 = np.concatenate(ring + ([] if r0 > 0 else [np.zeros((1, 2))]))
         pts = np.concatenate([np.column_stack([pts2, np.full(len(pts2), z)]) for z in (z0, z1)])
-        out.append(Manifold.hull_points(pts))
+        out.append(_mesh_arrays(Manifold.hull_points(pts))[0])
     return out
 
 
-def _plate_pieces(spec: HubSpec, plate, windows_cs, progress: Progress = None) -> list:
-    """Convex hulls of the plate's parts in a quadtree of square cells [mm] (see module doc)."""
+class _Probes:
+    """Points just inside the window openings [mm]: a collision hull containing one reaches
+    more than ``COLL_WINDOW_REACH_MM`` into an opening."""
+
+    def __init__(self, spec: HubSpec, windows: list[_Window]):
+        pts = []
+        t = spec.face_thickness * 1e3
+        for w in windows:
+            p = _densify(w.poly_mm, 1.0)
+            seg = np.roll(p, -1, axis=0) - p
+            seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+            nrm = np.stack([-seg[:, 1], seg[:, 0]], axis=1)
+            nrm = nrm + np.roll(nrm, 1, axis=0)
+            nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+            q = p + COLL_WINDOW_REACH_MM * nrm
+            z = spec.z_face(np.hypot(q[:, 0], q[:, 1]) * 1e-3) * 1e3
+            for f in np.linspace(0.02, 0.98, 6):
+                pts.append(np.column_stack([q, z - f * t]))
+        self.pts = np.concatenate(pts)
+
+    def hit(self, hull_pts: np.ndarray) -> bool:
+        from scipy.spatial import ConvexHull
+
+        lo, hi = hull_pts.min(axis=0), hull_pts.max(axis=0)
+        m = np.all((self.pts >= lo) & (self.pts <= hi), axis=1)
+        if not m.any():
+            return False
+        eq = ConvexHull(hull_pts).equations
+        return bool(np.any(np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)))
+
+
+@dataclass
+class _Piece:
+    pts: np.ndarray  # hull vertices [mm]
+    vol: float  # volume of the material part(s) it covers [mm^3]
+    hull_vol: float
+
+
+def _piece_ok(pc: _Piece, t: float, probes: _Probes) -> bool:
+    excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
+    return excess <= COLL_TOL_MM and not probes.hit(pc.pts)
+
+
+def _plate_pieces(spec: HubSpec, plate, probes: _Probes, progress: Progress = None) -> list:
+    """Convex pieces [mm] of the plate: quadtree of square cells, then greedy merging of
+    neighbours (see module doc)."""
     from manifold3d import CrossSection
+    from scipy.spatial import ConvexHull
 
     t = spec.face_thickness * 1e3
     bb = plate.bounding_box()
@@ -476,7 +558,7 @@ def _plate_pieces(spec: HubSpec, plate, windows_cs, progress: Progress = None) -
     n0 = int(math.ceil(2 * half / COLL_CELL_MM))
     edge = 2 * half / n0
     stack = [(-half + i * edge, -half + j * edge, edge) for j in range(n0) for i in range(n0)]
-    pieces = []
+    pieces: list[_Piece] = []
     done, total = 0, len(stack)
     while stack:
         x0, y0, c = stack.pop()
@@ -487,39 +569,64 @@ def _plate_pieces(spec: HubSpec, plate, windows_cs, progress: Progress = None) -
         cell = plate ^ box2.extrude(z1 - z0).translate((0, 0, z0))
         if cell.is_empty():
             continue
-        near_window = not (box2 ^ windows_cs).is_empty()
-        tol = COLL_TOL_WINDOW_MM if near_window else COLL_TOL_MM
-        hulls = []
+        parts = []
         split = False
         for comp in cell.decompose():
             vol = comp.volume()
             if vol < 1e-6:
                 continue
             hull = comp.hull()
-            excess = (hull.volume() - vol) / max(vol / t, 1.0)
-            if excess > tol and c > MIN_CELL_MM:
+            pc = _Piece(_mesh_arrays(hull)[0], vol, hull.volume())
+            if c > MIN_CELL_MM and not _piece_ok(pc, t, probes):
                 split = True
                 break
-            hulls.append(hull)
+            parts.append(pc)
         if split:
             h = c / 2
             stack.extend([(x0, y0, h), (x0 + h, y0, h), (x0, y0 + h, h), (x0 + h, y0 + h, h)])
             total += 4
             continue
-        pieces.extend(hulls)
-    return pieces
+        pieces.extend(parts)
+    # greedy merge of touching pieces while the merged hull stays acceptable
+    changed = True
+    while changed:
+        changed = False
+        lo = np.array([p.pts.min(axis=0) for p in pieces])
+        hi = np.array([p.pts.max(axis=0) for p in pieces])
+        i = 0
+        while i < len(pieces):
+            touch = np.flatnonzero(np.all((lo[i] <= hi + 1e-6) & (hi[i] >= lo - 1e-6), axis=1))
+            best = None
+            for j in touch:
+                if j <= i:
+                    continue
+                pts = np.concatenate([pieces[i].pts, pieces[j].pts])
+                hull = ConvexHull(pts)
+                pc = _Piece(pts[hull.vertices], pieces[i].vol + pieces[j].vol, hull.volume)
+                if _piece_ok(pc, t, probes):
+                    score = pc.hull_vol - pc.vol
+                    if best is None or score < best[0]:
+                        best = (score, j, pc)
+            if best is None:
+                i += 1
+                continue
+            _, j, pc = best
+            pieces[i] = pc
+            del pieces[j]
+            lo = np.delete(lo, j, axis=0)
+            hi = np.delete(hi, j, axis=0)
+            lo[i], hi[i] = pc.pts.min(axis=0), pc.pts.max(axis=0)
+            changed = True
+    return [p.pts for p in pieces]
 
 
 def _collision_pieces(spec: HubSpec, windows: list[_Window], progress: Progress = None) -> list:
-    """Convex pieces [mm manifolds] covering the hub: plate by quadtree, pad and rim by
-    construction (annular sectors). Bolt holes are filled; the centre bore stays open."""
-    from manifold3d import CrossSection
-
+    """Convex pieces (hull vertex arrays [mm]) covering the hub: plate by quadtree + merging,
+    pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
     t = spec.face_thickness * 1e3
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = _dished_plate(spec, windows) - _tube(0.0, bore_r, -1e3, 1e3)
-    windows_cs = CrossSection([w.poly_mm for w in windows])
-    pieces = _plate_pieces(spec, plate, windows_cs, progress)
+    pieces = _plate_pieces(spec, plate, _Probes(spec, windows), progress)
     pad_depth = spec.hub_pad_depth * 1e3
     if pad_depth > 0:
         pieces += _sector_hulls(bore_r, spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5,
@@ -698,8 +805,13 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
         pieces = _collision_pieces(spec, windows)
         coll_dir.mkdir(exist_ok=True)
         piece_V = []
+        from manifold3d import Manifold
+
+        hull_vol = 0.0
         for i, piece in enumerate(pieces):
-            pv, pf = _mesh_arrays(piece)
+            hull = Manifold.hull_points(piece)
+            hull_vol += hull.volume() * 1e-9
+            pv, pf = _mesh_arrays(hull)
             pv_m = np.round(pv * 1e-3, OBJ_DECIMALS) + 0.0
             piece_V.append(pv_m)
             name = f"collision/piece_{i:03d}.obj"
@@ -709,13 +821,13 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             if f"collision/{stale.name}" not in piece_files:
                 stale.unlink()
         files.extend(piece_files)
-        hull_vol = float(sum(p.volume() for p in pieces)) * 1e-9
         intrusion = _window_intrusion(loops, piece_V, spec)
         collision_info = {
             "method": "face plate: quadtree of square cells, convex hull of each connected "
-                      f"part, split while the hull adds > {COLL_TOL_MM} mm ({COLL_TOL_WINDOW_MM} "
-                      "mm at windows) average thickness; pad and rim: hulls of annular sectors "
-                      f"(chord sag <= {COLL_SAG_MM} mm)",
+                      f"part, split while the hull adds > {COLL_TOL_MM} mm average thickness or "
+                      f"reaches > {COLL_WINDOW_REACH_MM} mm into a window, then greedy merging "
+                      "of touching pieces under the same rule; pad and rim: hulls of annular "
+                      f"sectors (chord sag <= {COLL_SAG_MM} mm)",
             "piece_count": len(pieces),
             "hull_volume_over_solid": round(hull_vol / float(mp.volume), 4),
             "max_window_intrusion_mm": round(intrusion * 1e3, 3),

@@ -105,18 +105,37 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
         to /= np.linalg.norm(to, axis=1, keepdims=True)
         facing |= np.sum(normal * to, axis=1) > cos_max
     cand = facing & (area2 > 0)
+    T, N = tri[cand], normal[cand]
     if max_edge_distance is not None:
+        # split large triangles (longest-edge bisection) so the band test per triangle is tight
         edge_pts = np.concatenate([w.p_HE for w in hub.windows])
-        size = np.max(np.linalg.norm(tri - centroid[:, None, :], axis=2), axis=1)
-        d, _ = cKDTree(edge_pts).query(centroid)
-        cand &= d <= max_edge_distance + size
+        etree = cKDTree(edge_pts)
+        lim = max(max_edge_distance, 2 * spacing)
+        for _ in range(16):
+            c = T.mean(axis=1)
+            size = np.max(np.linalg.norm(T - c[:, None, :], axis=2), axis=1)
+            d, _ = etree.query(c)
+            near = d <= max_edge_distance + size
+            T, N, size = T[near], N[near], size[near]
+            big = size > lim
+            if not big.any():
+                break
+            Tb = T[big]
+            e = np.stack([np.linalg.norm(Tb[:, 1] - Tb[:, 0], axis=1),
+                          np.linalg.norm(Tb[:, 2] - Tb[:, 1], axis=1),
+                          np.linalg.norm(Tb[:, 0] - Tb[:, 2], axis=1)], axis=1)
+            k = np.argmax(e, axis=1)  # longest edge k: vertices k, k+1
+            rows = np.arange(len(Tb))
+            a, b, o = Tb[rows, k], Tb[rows, (k + 1) % 3], Tb[rows, (k + 2) % 3]
+            m = 0.5 * (a + b)
+            T = np.concatenate([T[~big], np.stack([a, m, o], axis=1), np.stack([m, b, o], axis=1)])
+            N = np.concatenate([N[~big], N[big], N[big]])
     if partial is not None:
         th0, th1 = (float(x) for x in partial)
         if not th1 > th0:
             raise InputError(f"simulate_scan: partial sector needs theta_max > theta_min, "
                              f"got {partial}")
-    idx = np.flatnonzero(cand)
-    areas = 0.5 * area2[idx]
+    areas = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
     total = float(areas.sum())
     n = int(round(total / spacing**2))
     if n > 5_000_000:
@@ -124,16 +143,16 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
                          f"{spacing * 1e3:.2f} mm spacing); raise spacing or set "
                          "max_edge_distance")
     rng = np.random.default_rng(seed)
-    pick = idx[rng.choice(len(idx), size=n, p=areas / total)]
+    pick = rng.choice(len(T), size=n, p=areas / total)
     u, v = rng.random(n), rng.random(n)
     flip = u + v > 1
     u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
-    t = V[F[pick]]
+    t = T[pick]
     p = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
-    nrm = normal[pick]
+    nrm = N[pick]
     keep = np.ones(n, bool)
     if max_edge_distance is not None:
-        d, _ = cKDTree(edge_pts).query(p)
+        d, _ = etree.query(p)
         keep &= d <= max_edge_distance
     if partial is not None:
         th = np.arctan2(p[:, 1], p[:, 0])

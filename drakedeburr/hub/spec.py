@@ -82,7 +82,7 @@ class HubSpec:
     spoke_width_outer: float = 0.034  # at window_outer_radius (also the arm width of split)
     spoke_sweep: float = 0.0  # curved: angular sweep of the centre line [rad]
     split_radius: float = 0.120  # split: radius where the stem forks
-    split_angle: float = 0.20  # split: half-spread of the arms at window_outer_radius [rad]
+    split_angle: float = math.radians(12.0)  # split: arms' half-spread at window_outer_radius
     fillet_radius: float = 0.010  # large windows
     fillet_radius_small: float = 0.004  # small windows (split style)
     # centre
@@ -200,6 +200,11 @@ class HubSpec:
             pitch = self.bolt_circle_diameter * math.sin(math.pi / self.bolt_count)
             if self.bolt_count > 1 and pitch < 1.5 * self.bolt_hole_diameter:
                 raise bad("bolt_hole_diameter", "bolt holes overlap each other")
+        radial = self.window_outer_radius - self.window_inner_radius
+        if 2 * self.fillet_radius + 0.002 > radial:
+            raise bad("fillet_radius", "larger than half the radial size of the windows")
+        if self.fillet_radius_small > self.fillet_radius:
+            raise bad("fillet_radius_small", "must not exceed fillet_radius")
         # spokes: the gap between spokes at the window inner radius must hold a window
         n = self.spoke_count
         gap_in = 2 * self.window_inner_radius * math.sin(math.pi / n) - self.spoke_width
@@ -225,11 +230,6 @@ class HubSpec:
             raise bad("spoke_width_outer", f"too wide for {n} spokes at the window outer radius")
         if abs(self.spoke_sweep) > math.radians(60):
             raise bad("spoke_sweep", "must be within +-60 deg")
-        radial = self.window_outer_radius - self.window_inner_radius
-        if 2 * self.fillet_radius + 0.002 > radial:
-            raise bad("fillet_radius", "larger than half the radial size of the windows")
-        if self.fillet_radius_small > self.fillet_radius:
-            raise bad("fillet_radius_small", "must not exceed fillet_radius")
         return self
 
 
@@ -248,10 +248,19 @@ def spec_to_mapping(spec: HubSpec) -> dict:
         if f.name in _PLAIN_FIELDS:
             out[f.name] = v
         elif f.name in _ANGLE_FIELDS:
-            out[_yaml_key(f.name)] = round(deg_from_rad(v), 9)
+            out[_yaml_key(f.name)] = _short(deg_from_rad(v), lambda d, v=v: rad_from_deg(d) == v)
         else:
-            out[_yaml_key(f.name)] = round(mm_from_m(v), 9)
+            out[_yaml_key(f.name)] = _short(mm_from_m(v), lambda d, v=v: m_from_mm(d) == v)
     return out
+
+
+def _short(value: float, exact) -> float:
+    """The shortest decimal rounding of ``value`` that converts back exactly (YAML round trip)."""
+    for digits in range(0, 17):
+        cand = round(value, digits)
+        if exact(cand):
+            return cand
+    return value
 
 
 def spec_to_yaml(spec: HubSpec) -> str:
