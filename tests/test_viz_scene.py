@@ -82,3 +82,21 @@ def test_show_command_writes_html(tmp_path):
                  "--q", "0", "10"]) == 2
     assert main(["show", str(STAND_IN_HUB), "--html", str(out)]) == 0
     assert b"/drakedeburr/hub/hub/hub" in _decoded_commands(out.read_text())
+
+
+def test_show_bundled_hub_with_its_window_edges(tmp_path):
+    from drakedeburr.cli import main
+    from drakedeburr.hub import load_hub
+
+    n = len(load_hub("h5_split").windows)
+    out = tmp_path / "hub.html"
+    assert main(["show", "h5_split", "--html", str(out)]) == 0
+    commands = _decoded_commands(out.read_text())
+    assert b"/drakedeburr/hub/hub/hub" in commands
+    for i in range(n):
+        assert f"/drakedeburr/edges/window_{i:02d}".encode() in commands
+    assert f"/drakedeburr/edges/window_{n:02d}".encode() not in commands
+    out2 = tmp_path / "cell.html"
+    assert main(["show", "tool_in_hand", "--hub", "h5_split", "--html", str(out2)]) == 0
+    commands = _decoded_commands(out2.read_text())
+    assert b"/drakedeburr/cell/hub/hub" in commands and b"/drakedeburr/edges/window_09" in commands
