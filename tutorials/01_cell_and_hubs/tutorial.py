@@ -6,7 +6,7 @@ Steps:
 2. the frames every later stage uses: W, F (flange), T (cutting point), H (hub);
 3. home is collision-free (SceneGraph query with a positive clearance);
 4. the burr geometry the planner and verifier share;
-5. reachability of the hub face from both cells (Drake InverseKinematics, re-checked by FK);
+5. reachability of the window edges from both cells (Drake InverseKinematics, FK re-check);
 6. show both cells and the hub's window edges in Meshcat and save static HTML files.
 
 Run:  python tutorials/01_cell_and_hubs/tutorial.py --out /tmp/cells  [--hub h5_split] [--test-mode]
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell import BURR, face_targets, load_cell, survey_reach
+from drakedeburr.cell import BURR, ReachTarget, face_targets, load_cell, survey_reach
 from drakedeburr.resources import hub_names, models_dir
 from drakedeburr.viz import (
     get_meshcat,
@@ -98,19 +98,27 @@ def main() -> None:
           f"{BURR.head_diameter * 1e3:.1f} mm, contact circle r = {BURR.contact_radius * 1e3:.1f} "
           f"mm at T, apex {BURR.apex_offset * 1e3:.1f} mm ahead of T")
 
-    # 5. reachability of the hub face -------------------------------------------------------
-    # Targets on the plane z_H = 0 out to the windows' outer radius (0.175 m), burr axis along
-    # -Z_H and tilted 0.5 rad. Kinematic survey (no distance constraint: the hub's ~400 convex
-    # collision pieces make that slow); the clearance of each solution is reported instead.
-    if args.test_mode:
+    # 5. reachability of the window edges ----------------------------------------------------
+    # Targets: points of every window edge with the burr axis along the face normal (into the
+    # face) and tilted 0.5 rad from it. Kinematic survey (no distance constraint: the hub's ~400
+    # convex collision pieces make that slow); each solution's clearance is reported instead
+    # (the burr body against the hub excepted: the survey puts T on the edge itself).
+    per_window = 2 if args.test_mode else 8
+    targets = []
+    for w in windows:
+        for k in np.linspace(0, len(w.p_HE), per_window, endpoint=False).astype(int):
+            n = w.n_face_H[k] if w.n_face_H is not None else np.array([0.0, 0.0, 1.0])
+            tilt_dir = np.cross(n, w.t_H[k]) if w.t_H is not None else np.array([1.0, 0, 0])
+            for tilt in (0.0, 0.5):
+                a = -np.cos(tilt) * n + np.sin(tilt) * tilt_dir / np.linalg.norm(tilt_dir)
+                targets.append(ReachTarget(w.p_HE[k], a))
+    if not targets:  # a plain SDF hub without edges: points of its face instead
         targets = face_targets(0.175, rings=1, per_ring=4, tilt=0.5, tilts=2)
-    else:
-        targets = face_targets(0.175, rings=2, per_ring=8, tilt=0.5, tilts=4)
     for name, cell in cells.items():
         survey = survey_reach(cell, targets, min_distance=None)
         reached = [r for r in survey.results if r.success]
         worst = max(r.position_error for r in reached)
-        print(f"{name}: {len(reached)}/{len(targets)} face targets reached "
+        print(f"{name}: {len(reached)}/{len(targets)} edge targets reached "
               f"(axis up to 0.5 rad off the face normal, 10 deg joint margin, |J5| >= "
               f"{survey.min_wrist:.2f} rad), FK error <= {worst * 1e6:.2f} um, clearance "
               f"(burr body vs hub excepted) >= {min(r.clearance for r in reached) * 1e3:.1f} mm")
