@@ -1,0 +1,414 @@
+"""Cutter-location (CL) point planners on a closed EdgeCurve (source §1.2 and §3.1).
+
+Every planner has the same interface, ``plan_cl(curve, method=..., params=...) -> ClPath``:
+
+``proposed``
+    The source's method, step by step (§1.2, Fig. 3): curvature of the initial CL points;
+    K-means on curvature with K chosen by the elbow of the SSE curve (eq. 3); clusters ranked
+    by centroid: the top cluster is "near max curvature" (kept), the bottom one "low
+    curvature" (chord-length / chord-height walk with L_max and delta_max, eq. 2), clusters in
+    between "near median" (sorted by curvature descending, every other point kept); the kept
+    points re-sorted by their original index. It selects a *subset of the initial points* and
+    checks its thresholds only inside the low-curvature walk, as the source does; its other
+    segments are not bounded (the metrics show by how much).
+``isoparametric``
+    Equal steps of arc length (the source uses the initial points' accumulated arc length as
+    the parameter). The source does not say how it picks the step; we take the fewest equal
+    steps for which every segment has true chord height <= delta_max and chord <= L_max.
+``equal_chord_height``
+    The classic baseline: march along the curve, each next point as far as the true chord
+    height allows (delta_max); no length cap.
+``adaptive`` (ours)
+    Curvature-adaptive spacing: the allowed chord of a circle of the local curvature,
+    l(kappa) = 2 sqrt(2 delta/kappa - delta^2), capped by L_max, gives a point density
+    1/l(s); points are placed at equal steps of the integrated density, and the fewest points
+    (and best start phase) for which every segment passes the TRUE chord height <= delta_max
+    and chord <= L_max are found by a scan on the count. Among feasible plans with at most
+    ``count_budget`` points (default: the proposed method's count) it then picks the one with
+    the most uniform spacing (smallest c_v) by blending the adaptive density with a uniform
+    one.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from drakedeburr.config import ProcessParameters
+from drakedeburr.errors import InputError
+from drakedeburr.hub.types import WindowKind
+from drakedeburr.path.edge_curve import EdgeCurve
+from drakedeburr.path.metrics import cl_metrics
+from drakedeburr.path.types import ClPath
+
+__all__ = [
+    "PlannerParams",
+    "METHODS",
+    "plan_cl",
+    "plan_all",
+    "kmeans_sse",
+    "elbow_k",
+    "cluster_roles",
+    "every_other_by_curvature",
+    "chord_walk",
+    "proposed_indices",
+]
+
+log = logging.getLogger(__name__)
+
+METHODS: tuple[str, ...] = ("proposed", "isoparametric", "equal_chord_height", "adaptive")
+
+# relative safety margin between the sampled chord height used while planning and the refined
+# one reported by the metrics (sampling underestimates a smooth maximum by < 5e-4 relative)
+_SAMPLED_MARGIN = 1e-3
+
+
+@dataclass(frozen=True)
+class PlannerParams:
+    """Thresholds of the CL planners (defaults: source §3.1 via ProcessParameters).
+
+    Attributes:
+        l_max: max chord length between CL points [m] (10 mm).
+        delta_max: max chord-height error [m] (0.12 mm).
+        k_max: largest K tried by the elbow method.
+        seed: random state of K-means.
+        count_budget: ``adaptive`` only: max point count (None: the proposed method's count).
+    """
+
+    l_max: float = ProcessParameters.l_max
+    delta_max: float = ProcessParameters.delta_max
+    k_max: int = 8
+    seed: int = 0
+    count_budget: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (self.l_max > 0 and self.delta_max > 0):
+            raise InputError(f"planner thresholds must be > 0: l_max={self.l_max}, "
+                             f"delta_max={self.delta_max}")
+        if self.k_max < 1:
+            raise InputError(f"k_max must be >= 1, got {self.k_max}")
+
+
+# ---------------------------------------------------------------------------------------------
+# proposed method, one function per step (each unit-tested)
+# ---------------------------------------------------------------------------------------------
+def kmeans_sse(kappa: np.ndarray, k_max: int, seed: int = 0) -> tuple[np.ndarray, list]:
+    """K-means (scikit-learn) on the curvature values for K = 1..k_max (eq. 3).
+
+    Args:
+        kappa: (N,) curvature values [1/m].
+        k_max: largest K (clipped to the number of distinct values).
+        seed: random state.
+
+    Returns:
+        sse: (K,) within-cluster sum of squares for K = 1..K; labels: list of (N,) arrays.
+    """
+    from sklearn.cluster import KMeans
+
+    x = np.asarray(kappa, float).reshape(-1, 1)
+    k_max = max(1, min(k_max, len(np.unique(np.round(x[:, 0], 12)))))
+    sse, labels = [], []
+    for k in range(1, k_max + 1):
+        km = KMeans(n_clusters=k, n_init=10, random_state=seed).fit(x)
+        sse.append(float(km.inertia_))
+        labels.append(km.labels_.copy())
+    return np.array(sse), labels
+
+
+def elbow_k(sse: np.ndarray) -> int:
+    """The elbow of an SSE-versus-K curve (K = 1, 2, ...): the point farthest below the line
+    from the first to the last point, both axes normalised to [0, 1] ("kneedle").
+
+    Returns 1 when the SSE is already ~0 at K = 1 (all curvatures equal) or only K = 1 exists.
+    """
+    sse = np.asarray(sse, float)
+    if len(sse) < 3 or sse[0] <= 1e-12 * max(1.0, abs(sse).max()):
+        return 1 if len(sse) < 2 or sse[0] <= 1e-12 * max(1.0, abs(sse).max()) else 2
+    x = np.linspace(0.0, 1.0, len(sse))
+    y = (sse - sse[-1]) / max(sse[0] - sse[-1], 1e-300)
+    return int(np.argmax((1.0 - x) - y)) + 1
+
+
+def cluster_roles(kappa: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Role of every point from its cluster: 2 near max, 1 near median, 0 low curvature.
+
+    Clusters are ranked by their mean curvature: the top one is "near max", the bottom one
+    "low", all in between "near median". One cluster: everything is "low" (the walk alone).
+
+    Returns:
+        (N,) int roles.
+    """
+    kappa = np.asarray(kappa, float)
+    ids = np.unique(labels)
+    roles = np.zeros(len(kappa), int)
+    if len(ids) == 1:
+        return roles
+    order = ids[np.argsort([kappa[labels == i].mean() for i in ids])]
+    for rank, cid in enumerate(order):
+        roles[labels == cid] = 2 if rank == len(order) - 1 else (0 if rank == 0 else 1)
+    return roles
+
+
+def every_other_by_curvature(idx: np.ndarray, kappa: np.ndarray) -> np.ndarray:
+    """Near-median step: sort the points by curvature descending, keep every other one
+    (the 1st, 3rd, ...). Ties keep the original order (stable sort).
+
+    Args:
+        idx: (n,) indices of the near-median points.
+        kappa: (N,) curvature of all points.
+
+    Returns:
+        kept indices (in curvature-descending order).
+    """
+    idx = np.asarray(idx, int)
+    order = idx[np.argsort(-kappa[idx], kind="stable")]
+    return order[::2]
+
+
+def chord_walk(curve: EdgeCurve, u: np.ndarray, l_max: float, delta_max: float) -> np.ndarray:
+    """Low-curvature step: walk the points in order from the first one (the start); drop the
+    next point while both the chord length and the chord-height error (eq. 2) from the start
+    stay below their thresholds; otherwise keep it and make it the new start.
+
+    Args:
+        curve: the edge curve (chords and eq.-2 chord heights are measured on it).
+        u: (n,) increasing parameters of the low-curvature points.
+
+    Returns:
+        (k,) positions into ``u`` of the kept points (the first point is always kept).
+    """
+    u = np.asarray(u, float)
+    if len(u) == 0:
+        return np.zeros(0, int)
+    kept = [0]
+    start = 0
+    for j in range(1, len(u)):
+        l = float(curve.chord_length(u[start], u[j]))
+        d = float(curve.chord_height_circle(u[start], u[j])[0])
+        if l < l_max and d < delta_max:
+            continue
+        kept.append(j)
+        start = j
+    return np.array(kept, int)
+
+
+def proposed_indices(curve: EdgeCurve, params: PlannerParams) -> dict:
+    """The source's planner on the initial points ``curve.u_data``; all intermediate results.
+
+    Returns:
+        dict with ``kappa`` (N,), ``sse`` (K,), ``k`` (elbow), ``labels`` (N,), ``roles`` (N,),
+        ``kept`` (sorted indices into the initial points).
+    """
+    u = curve.u_data
+    kappa = curve.curvature(u)
+    sse, labels = kmeans_sse(kappa, params.k_max, params.seed)
+    k = elbow_k(sse)
+    lab = labels[k - 1]
+    roles = cluster_roles(kappa, lab)
+    keep_max = np.flatnonzero(roles == 2)
+    keep_med = every_other_by_curvature(np.flatnonzero(roles == 1), kappa)
+    low = np.flatnonzero(roles == 0)
+    keep_low = low[chord_walk(curve, u[low], params.l_max, params.delta_max)]
+    kept = np.sort(np.concatenate([keep_max, keep_med, keep_low]))
+    return {"kappa": kappa, "sse": sse, "k": k, "labels": lab, "roles": roles, "kept": kept}
+
+
+def _plan_proposed(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    return curve.u_data[proposed_indices(curve, params)["kept"]]
+
+
+# ---------------------------------------------------------------------------------------------
+# baselines and ours
+# ---------------------------------------------------------------------------------------------
+def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
+                 length_cap: bool = True) -> bool:
+    u_next = np.roll(u, -1)
+    u_next[-1] += 1.0
+    if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
+        return False
+    d = curve.chord_height(u, u_next, refine=False)
+    return bool((d <= params.delta_max * (1.0 - _SAMPLED_MARGIN)).all())
+
+
+def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    n = max(4, int(np.ceil(curve.length / params.l_max)))
+    while True:
+        u = curve.u_from_arc(np.arange(n) * curve.length / n)
+        if _segments_ok(curve, u, params):
+            return u
+        n += max(1, n // 50)
+
+
+def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
+    L = curve.length
+    s, out = 0.0, [0.0]
+    # a step can never exceed the length of the rest of the loop
+    while True:
+        rest = L - s
+        if curve.chord_height(curve.u_from_arc(s), curve.u_from_arc(s + rest) + (
+                1.0 if s + rest >= L - 1e-15 else 0.0), refine=False)[0] <= target:
+            break
+        lo, hi = 0.0, rest
+        # grow a bracket geometrically, then bisect on the arc step
+        step = min(rest, 1e-3)
+        while step < rest:
+            if _ch(curve, s, step) > target:
+                hi = step
+                break
+            lo, step = step, step * 2.0
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            if _ch(curve, s, mid) > target:
+                hi = mid
+            else:
+                lo = mid
+            if hi - lo < 1e-7:
+                break
+        s += lo
+        out.append(s)
+    return curve.u_from_arc(np.array(out))
+
+
+def _ch(curve: EdgeCurve, s: float, step: float) -> float:
+    u0 = curve.u_from_arc(s)
+    u1 = curve.u_from_arc(s + step)
+    if u1 <= u0:
+        u1 = u1 + 1.0
+    return float(curve.chord_height(u0, u1, refine=False)[0])
+
+
+def _adaptive_density(curve: EdgeCurve, params: PlannerParams, n_grid: int = 4000):
+    """Point density 1/l(s) [1/m] on an arc-length grid, l = allowed chord of the osculating
+    circle for delta_max, capped at l_max, taking the worst curvature within +-l/2."""
+    s = np.linspace(0.0, curve.length, n_grid, endpoint=False)
+    kappa = curve.curvature(curve.u_from_arc(s))
+    d = params.delta_max
+    with np.errstate(divide="ignore", invalid="ignore"):
+        l_allow = np.where(kappa * d < 1.0, 2.0 * np.sqrt(np.maximum(2 * d / kappa - d * d, 0)),
+                           2 * d)
+    l_allow = np.minimum(l_allow, params.l_max)
+    # a chord sees the curvature of its whole arc: take the max density within +-l/2
+    ds = curve.length / n_grid
+    half = np.maximum(1, np.round(0.5 * l_allow / ds).astype(int))
+    g = 1.0 / l_allow
+    g_win = np.empty_like(g)
+    for i in range(n_grid):
+        h = half[i]
+        idx = np.arange(i - h, i + h + 1) % n_grid
+        g_win[i] = g[idx].max()
+    return s, g_win
+
+
+def _place(curve: EdgeCurve, s: np.ndarray, g: np.ndarray, n: int, phase: float) -> np.ndarray:
+    ds = curve.length / len(s)
+    G = np.concatenate([[0.0], np.cumsum(g) * ds])
+    s_ext = np.concatenate([s, [curve.length]])
+    targets = (np.arange(n) + phase) * G[-1] / n
+    return np.sort(np.mod(curve.u_from_arc(np.interp(targets, G, s_ext)), 1.0))
+
+
+def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    s, g = _adaptive_density(curve, params)
+    n_lo = max(4, int(np.floor(g.mean() * curve.length * 0.9)))
+    budget = params.count_budget
+    if budget is None:
+        budget = len(_plan_proposed(curve, params))
+    phases = np.linspace(0.0, 1.0, 8, endpoint=False)
+    g_uniform = np.full_like(g, g.mean())
+    best = None
+    for n in range(n_lo, max(budget, n_lo) + 1):
+        for alpha in (0.0, 0.25, 0.5, 0.75):
+            gg = np.maximum(g, (1 - alpha) * 0 + alpha * g_uniform) if alpha else g
+            for ph in phases:
+                u = _place(curve, s, gg, n, ph)
+                if _segments_ok(curve, u, params):
+                    cv = cl_metrics_cv(curve, u)
+                    if best is None or cv < best[0]:
+                        best = (cv, u)
+        if best is not None and n >= budget:
+            break
+    if best is None:  # never within budget: fewest feasible points beyond it
+        n = max(budget, n_lo) + 1
+        while best is None:
+            for ph in phases:
+                u = _place(curve, s, g, n, ph)
+                if _segments_ok(curve, u, params):
+                    best = (0.0, u)
+                    break
+            n += 1
+    return best[1]
+
+
+def cl_metrics_cv(curve: EdgeCurve, u: np.ndarray) -> float:
+    u_next = np.roll(u, -1)
+    u_next[-1] += 1.0
+    d = curve.chord_length(u, u_next)
+    return float(d.std() / d.mean())
+
+
+_PLANNERS: dict[str, Callable[[EdgeCurve, PlannerParams], np.ndarray]] = {
+    "proposed": _plan_proposed,
+    "isoparametric": _plan_isoparametric,
+    "equal_chord_height": _plan_equal_chord_height,
+    "adaptive": _plan_adaptive,
+}
+
+
+def plan_cl(
+    curve: EdgeCurve,
+    method: str = "proposed",
+    params: PlannerParams | None = None,
+    *,
+    window_index: int = 0,
+    kind: WindowKind = "large",
+) -> ClPath:
+    """Plan CL points on one closed edge curve.
+
+    Args:
+        curve: the fitted window edge (frame H, metres).
+        method: one of ``METHODS``.
+        params: thresholds (default: L_max = 10 mm, delta_max = 0.12 mm).
+        window_index, kind: copied into the ClPath.
+
+    Returns:
+        ClPath with points in edge order and ``metrics`` from :func:`cl_metrics`.
+
+    Raises:
+        InputError: unknown method.
+    """
+    if method not in _PLANNERS:
+        raise InputError(f"unknown CL planning method {method!r}; choose from {', '.join(METHODS)}")
+    params = params or PlannerParams()
+    u = np.sort(np.mod(np.asarray(_PLANNERS[method](curve, params), float), 1.0))
+    metrics = cl_metrics(curve, u)
+    metrics["method"] = method
+    return ClPath(
+        window_index=window_index,
+        kind=kind,
+        method=method,
+        u=u,
+        p_HC=curve.position(u),
+        t_H=curve.tangent(u),
+        kappa=curve.curvature(u),
+        arc_length=curve.arc_length(u),
+        total_length=curve.length,
+        metrics=metrics,
+    )
+
+
+def plan_all(curve: EdgeCurve, params: PlannerParams | None = None, *, window_index: int = 0,
+             kind: WindowKind = "large", methods=METHODS) -> dict[str, ClPath]:
+    """Run several planners on one curve; ``adaptive`` gets the proposed count as budget."""
+    params = params or PlannerParams()
+    out: dict[str, ClPath] = {}
+    for m in methods:
+        p = params
+        if m == "adaptive" and params.count_budget is None and "proposed" in out:
+            p = PlannerParams(params.l_max, params.delta_max, params.k_max, params.seed,
+                              count_budget=len(out["proposed"]))
+        out[m] = plan_cl(curve, m, p, window_index=window_index, kind=kind)
+    return out
