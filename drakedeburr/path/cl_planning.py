@@ -36,6 +36,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.distance import pdist
 
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
@@ -63,7 +64,7 @@ METHODS: tuple[str, ...] = ("proposed", "isoparametric", "equal_chord_height", "
 
 # relative safety margin between the sampled chord height used while planning and the refined
 # one reported by the metrics (sampling underestimates a smooth maximum by < 5e-4 relative)
-_SAMPLED_MARGIN = 1e-3
+_SAMPLED_MARGIN = 5e-3
 
 
 @dataclass(frozen=True)
@@ -229,8 +230,15 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     u_next[-1] += 1.0
     if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
         return False
-    d = curve.chord_height(u, u_next, refine=False)
+    d = curve.chord_height(u, u_next, samples=_samples_for(curve, u, u_next), refine=False)
     return bool((d <= params.delta_max * (1.0 - _SAMPLED_MARGIN)).all())
+
+
+def _samples_for(curve: EdgeCurve, u0, u1) -> int:
+    """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
+    0.25 mm of the longest arc, 48..600."""
+    arc = float(np.max(curve.arc_length(u0, u1)))
+    return int(np.clip(arc / 0.25e-3, 48, 600))
 
 
 def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
@@ -249,8 +257,7 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
     # a step can never exceed the length of the rest of the loop
     while True:
         rest = L - s
-        if curve.chord_height(curve.u_from_arc(s), curve.u_from_arc(s + rest) + (
-                1.0 if s + rest >= L - 1e-15 else 0.0), refine=False)[0] <= target:
+        if _ch(curve, s, rest) <= target:
             break
         lo, hi = 0.0, rest
         # grow a bracket geometrically, then bisect on the arc step
@@ -276,9 +283,10 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
 def _ch(curve: EdgeCurve, s: float, step: float) -> float:
     u0 = curve.u_from_arc(s)
     u1 = curve.u_from_arc(s + step)
-    if u1 <= u0:
+    if s + step >= curve.length - 1e-12 or u1 <= u0:
         u1 = u1 + 1.0
-    return float(curve.chord_height(u0, u1, refine=False)[0])
+    return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
+                                    refine=False)[0])
 
 
 def _adaptive_density(curve: EdgeCurve, params: PlannerParams, n_grid: int = 4000):
@@ -321,12 +329,12 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
     g_uniform = np.full_like(g, g.mean())
     best = None
     for n in range(n_lo, max(budget, n_lo) + 1):
-        for alpha in (0.0, 0.25, 0.5, 0.75):
-            gg = np.maximum(g, (1 - alpha) * 0 + alpha * g_uniform) if alpha else g
+        for alpha in (0.0, 0.25, 0.5, 0.75, 1.0):
+            gg = np.maximum(g, alpha * g_uniform)
             for ph in phases:
                 u = _place(curve, s, gg, n, ph)
                 if _segments_ok(curve, u, params):
-                    cv = cl_metrics_cv(curve, u)
+                    cv = _pairwise_cv(curve, u)
                     if best is None or cv < best[0]:
                         best = (cv, u)
         if best is not None and n >= budget:
@@ -343,10 +351,8 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
     return best[1]
 
 
-def cl_metrics_cv(curve: EdgeCurve, u: np.ndarray) -> float:
-    u_next = np.roll(u, -1)
-    u_next[-1] += 1.0
-    d = curve.chord_length(u, u_next)
+def _pairwise_cv(curve: EdgeCurve, u: np.ndarray) -> float:
+    d = pdist(curve.position(u))
     return float(d.std() / d.mean())
 
 
