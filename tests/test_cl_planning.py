@@ -1,0 +1,118 @@
+import numpy as np
+import pytest
+
+import drakedeburr.path.cl_planning as mut
+from drakedeburr.errors import InputError
+from drakedeburr.path.edge_curve import fit_edge_curve
+from drakedeburr.path.metrics import segment_figures
+from drakedeburr.path.synthetic import hub_like_window
+
+PARAMS = mut.PlannerParams()
+
+
+@pytest.fixture(scope="module")
+def windows():
+    """Hub-like synthetic loops (large and small, conical face) until bundled hubs land."""
+    return {k: fit_edge_curve(hub_like_window(k, n)) for k, n in (("large", 182), ("small", 63))}
+
+
+@pytest.fixture(scope="module")
+def planned(windows):
+    return {k: mut.plan_all(c, PARAMS, kind=k) for k, c in windows.items()}
+
+
+def test_elbow_picks_three_separated_clusters():
+    rng = np.random.default_rng(0)
+    kappa = np.concatenate([rng.normal(10, 0.5, 60), rng.normal(60, 0.5, 30),
+                            rng.normal(150, 0.5, 10)])
+    sse, labels = mut.kmeans_sse(kappa, 8, seed=0)
+    assert np.all(np.diff(sse) <= 1e-9 * sse[0])
+    assert mut.elbow_k(sse) == 3
+    roles = mut.cluster_roles(kappa, labels[2])
+    np.testing.assert_array_equal(roles, np.r_[np.zeros(60), np.ones(30), 2 * np.ones(10)])
+
+
+def test_elbow_constant_curvature_is_one_cluster():
+    assert mut.elbow_k(np.array([0.0, 0.0, 0.0])) == 1
+    assert mut.elbow_k(np.array([100.0, 1.0, 0.5, 0.4, 0.3])) == 2
+
+
+def test_every_other_by_curvature_descending():
+    kappa = np.array([5.0, 9.0, 1.0, 7.0, 3.0, 8.0])
+    kept = mut.every_other_by_curvature(np.arange(6), kappa)
+    # descending: 1 (9), 5 (8), 3 (7), 0 (5), 4 (3), 2 (1) -> keep 1st, 3rd, 5th
+    np.testing.assert_array_equal(kept, [1, 3, 4])
+
+
+def test_chord_walk_on_circle_keeps_every_kth():
+    # circle R = 50 mm, points every 1 mm of arc: circle chord height grows as l^2 / 8R;
+    # delta_max = 0.12 mm allows l < 2 sqrt(2 R d) = 6.93 mm; the walk drops points while the
+    # chord from the start stays below, keeps the first that is not: every 7th point.
+    R = 0.05
+    n = int(round(2 * np.pi * R / 1e-3))
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    c = fit_edge_curve(np.c_[R * np.cos(th), R * np.sin(th), np.zeros(n)])
+    kept = mut.chord_walk(c, c.u_data[:60], l_max=0.010, delta_max=0.12e-3)
+    np.testing.assert_array_equal(kept, np.arange(0, 60, 7))
+    # with a length cap of 4.5 mm the cap binds first: every 5th point (chord 4.998 mm)
+    kept = mut.chord_walk(c, c.u_data[:60], l_max=4.5e-3, delta_max=0.12e-3)
+    np.testing.assert_array_equal(kept, np.arange(0, 60, 5))
+
+
+def test_proposed_composes_its_steps(windows):
+    c = windows["large"]
+    r = mut.proposed_indices(c, PARAMS)
+    assert r["k"] == mut.elbow_k(r["sse"])
+    roles = r["roles"]
+    kept = set(r["kept"].tolist())
+    # all near-max points kept; half (rounded up) of the near-median points kept
+    assert set(np.flatnonzero(roles == 2)) <= kept
+    n_med = int((roles == 1).sum())
+    assert len(kept & set(np.flatnonzero(roles == 1))) == (n_med + 1) // 2
+    # kept indices sorted, unique, subset of the initial points
+    assert np.all(np.diff(r["kept"]) > 0)
+    path = mut.plan_cl(c, "proposed")
+    np.testing.assert_allclose(path.u, c.u_data[r["kept"]])
+
+
+@pytest.mark.parametrize("kind", ["large", "small"])
+def test_thresholds_on_every_segment(windows, planned, kind):
+    c = windows[kind]
+    for method, path in planned[kind].items():
+        seg = segment_figures(c, path.u)
+        # points lie on the curve and in edge order
+        assert np.all(np.diff(path.u) > 0)
+        np.testing.assert_allclose(path.p_HC, c.position(path.u), atol=1e-15)
+        if method in ("isoparametric", "adaptive"):
+            assert seg["chord_height"].max() <= PARAMS.delta_max, method
+            assert seg["chord"].max() <= PARAMS.l_max + 1e-12, method
+        if method == "equal_chord_height":
+            assert seg["chord_height"].max() <= PARAMS.delta_max
+            # each step is as long as the tolerance allows: all but the closing one use
+            # >= 90 % of delta_max
+            assert np.all(seg["chord_height"][:-1] >= 0.9 * PARAMS.delta_max)
+        assert path.metrics["count"] == len(path.u)
+        assert path.metrics["max_chord_height_m"] == pytest.approx(seg["chord_height"].max())
+
+
+@pytest.mark.parametrize("kind", ["large", "small"])
+def test_adaptive_against_baselines(planned, kind):
+    m = {k: p.metrics for k, p in planned[kind].items()}
+    # fewer points than the isoparametric baseline at the same guarantees
+    assert m["adaptive"]["count"] < 0.6 * m["isoparametric"]["count"]
+    # more uniform than the equal-chord-height baseline (neighbour distances)
+    assert m["adaptive"]["cv"] < m["equal_chord_height"]["cv"]
+
+
+def test_isoparametric_is_uniform_in_arc_length(windows):
+    c = windows["small"]
+    path = mut.plan_cl(c, "isoparametric")
+    arcs = np.diff(np.r_[path.arc_length, c.length])
+    np.testing.assert_allclose(arcs, c.length / len(arcs), rtol=1e-9)
+
+
+def test_unknown_method_and_bad_params(windows):
+    with pytest.raises(InputError, match="unknown CL planning method 'fast'"):
+        mut.plan_cl(windows["small"], "fast")
+    with pytest.raises(InputError, match="thresholds must be > 0"):
+        mut.PlannerParams(l_max=0.0)
