@@ -116,3 +116,32 @@ def test_unknown_method_and_bad_params(windows):
         mut.plan_cl(windows["small"], "fast")
     with pytest.raises(InputError, match="thresholds must be > 0"):
         mut.PlannerParams(l_max=0.0)
+
+
+def test_adaptive_on_large_window_beats_proposed(planned):
+    m = {k: p.metrics for k, p in planned["large"].items()}
+    # same or fewer points than the source's method, all thresholds held, more uniform
+    assert m["adaptive"]["count"] <= m["proposed"]["count"]
+    assert m["adaptive"]["cv"] < m["proposed"]["cv"]
+
+
+def test_adaptive_fewest_points_not_above_a_greedy_march(windows):
+    """With no count budget the DP returns its fewest points; an independent greedy march
+    (farthest next point that keeps true chord height and L_max) can't need fewer."""
+    c = windows["small"]
+    fewest = mut.plan_cl(c, "adaptive", mut.PlannerParams(count_budget=1))
+    s_grid = np.linspace(0, c.length, 1500, endpoint=False)
+    u_grid = c.u_from_arc(s_grid)
+    i, count = 0, 0
+    while i < len(u_grid):
+        j = i + 1
+        while j < len(u_grid):
+            u1 = u_grid[j + 1] if j + 1 < len(u_grid) else 1.0
+            if (c.chord_length(u_grid[i], u1) > PARAMS.l_max
+                    or c.chord_height(u_grid[i], u1)[0] > PARAMS.delta_max):
+                break
+            j += 1
+        i, count = j, count + 1
+    assert np.ceil(c.length / PARAMS.l_max) <= len(fewest) <= count
+    seg = segment_figures(c, fewest.u)
+    assert seg["chord_height"].max() <= PARAMS.delta_max
