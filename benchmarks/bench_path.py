@@ -12,6 +12,8 @@ import argparse
 import time
 from pathlib import Path
 
+import sklearn.cluster  # noqa: F401  (import once before timing: 2-6 s cold)
+
 from drakedeburr.hub.types import WindowEdge
 from drakedeburr.path import METHODS, cl_table
 from drakedeburr.path.synthetic import hub_like_window
