@@ -137,3 +137,34 @@ def test_no_opening_and_bad_files(tmp_path):
     trimesh.creation.box([40.0, 40.0, 40.0]).export(huge)
     with pytest.raises(InputError, match="not a wheel's size"):
         load_hub_mesh(huge, unit="m")
+
+
+def _bundled_hubs():
+    try:
+        from drakedeburr.resources import hub_names
+
+        return hub_names()
+    except FileNotFoundError:
+        return []
+
+
+@pytest.mark.parametrize("name", _bundled_hubs())
+def test_bundled_hub_extraction_matches_ground_truth(name):
+    """Every window of every generated hub is found; the fitted edge through the extracted
+    points is within 0.2 mm (Hausdorff) of the generator's ground-truth loop."""
+    hub_model = pytest.importorskip("drakedeburr.hub.model")
+    from drakedeburr.path.edge_curve import fit_edge_curve
+
+    hub = hub_model.load_hub(name)
+    axis = None if name == "h5_split" else [0, 0, 1]  # one hub with the axis estimated
+    res = mut.extract_window_edges(hub.trimesh, source=name, axis_M=axis,
+                                   origin_M=None if axis is None else [0, 0, 0],
+                                   expected_windows=len(hub.windows))
+    for w in res.windows:
+        c = fit_edge_curve(w.p_HE)
+        p_H = c.position(np.linspace(0, 1, 4000, endpoint=False))
+        p_M = p_H @ res.X_MH[:3, :3].T + res.X_MH[:3, 3]
+        d = [_hausdorff(p_M, g.p_HE) for g in hub.windows]
+        k = int(np.argmin(d))
+        assert d[k] <= 0.2e-3, (name, w.index, d[k])
+        assert w.kind == hub.windows[k].kind

@@ -23,35 +23,36 @@ def windows_from_source(source: str | Path, *, unit: str | None = None,
                         spacing: float = 2.0e-3) -> tuple[list[WindowEdge], str]:
     """Window edges from a mesh file, a hub model folder or a bundled hub name.
 
-    A folder (or bundled name) is read with ``drakedeburr.hub.load_hub`` when that exists and
-    gives window edges; otherwise its mesh file (STL/OBJ/PLY) is extracted.
+    A mesh file is extracted (``extract_window_edges``). A generated hub (folder or bundled
+    name) gives its ground-truth loops via ``drakedeburr.hub.load_hub``, resampled at
+    ``spacing``; without that loader a folder's first mesh file is extracted.
 
     Returns:
         (windows, description of the source).
     """
-    from drakedeburr.hub.extract import extract_window_edges
+    from drakedeburr.hub.extract import extract_window_edges, resample_loop
     from drakedeburr.hub.mesh_io import MESH_SUFFIXES, load_hub_mesh
 
     path = Path(source)
-    if path.is_file():
+    if path.is_file() and path.suffix.lower() in MESH_SUFFIXES:
         lm = load_hub_mesh(path, unit=unit)
         return extract_window_edges(lm.mesh, source=str(path), spacing=spacing).windows, str(path)
-    if not path.is_dir():
-        from drakedeburr.resources import hub_dir
-
-        path = hub_dir(str(source))  # FileNotFoundError names the bundled hubs
-    try:  # the parametric hub generator's loader (ground-truth loops), when present
+    try:  # a generated hub (folder, file in it, or bundled name): its ground-truth loops
         from drakedeburr.hub import load_hub  # type: ignore[attr-defined]
-
-        hub = load_hub(path)
-        windows = getattr(hub, "windows", None) or getattr(hub, "window_edges", None)
-        if windows:
-            return list(windows), str(path)
     except ImportError:
-        pass
+        load_hub = None
+    if load_hub is not None and (not path.is_dir() or (path / "hub.yaml").is_file()):
+        hub = load_hub(source)
+        # the ground truth is dense (mesh vertices); the planners start from equidistant
+        # "initial CL points" as in the source
+        windows = [WindowEdge(index=w.index, kind=w.kind, p_HE=resample_loop(w.p_HE, spacing))
+                   for w in hub.windows]
+        return windows, f"hub {hub.name}"
+    if not path.is_dir():
+        raise FileNotFoundError(f"{source}: not a mesh file or hub model folder")
     meshes = sorted(p for p in path.iterdir() if p.suffix.lower() in MESH_SUFFIXES)
     if not meshes:
-        raise InputError(f"{path}: no hub mesh (STL/OBJ/PLY) and no window edges found")
+        raise InputError(f"{path}: no hub mesh (STL/OBJ/PLY) found")
     lm = load_hub_mesh(meshes[0], unit=unit)
     return extract_window_edges(lm.mesh, source=str(meshes[0]), spacing=spacing).windows, str(path)
 
