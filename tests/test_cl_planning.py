@@ -145,3 +145,42 @@ def test_adaptive_fewest_points_not_above_a_greedy_march(windows):
     assert np.ceil(c.length / PARAMS.l_max) <= len(fewest) <= count
     seg = segment_figures(c, fewest.u)
     assert seg["chord_height"].max() <= PARAMS.delta_max
+
+
+def _bundled_shapes():
+    """(hub, window) of distinct window shapes of the bundled hubs: the windows of a hub are
+    rotated copies of one large (and one small) shape. To keep the suite short three shapes
+    are checked here (split large + small, curved); benchmarks/bench_path.py checks every
+    window of every bundled hub and prints any threshold violation."""
+    try:
+        from drakedeburr.resources import hub_names
+
+        names = hub_names()
+    except FileNotFoundError:
+        return []
+    return [(n, i) for n, i in (("h5_split", 0), ("h5_split", 1), ("h6_curved", 0))
+            if n in names]
+
+
+@pytest.mark.parametrize("name,index", _bundled_shapes())
+def test_thresholds_on_bundled_windows(name, index):
+    hub_model = pytest.importorskip("drakedeburr.hub.model")
+    from drakedeburr.path.table import windows_from_source
+
+    windows, _ = windows_from_source(name)
+    w = windows[index]
+    c = fit_edge_curve(w.p_HE)
+    paths = mut.plan_all(c, PARAMS, kind=w.kind, window_index=w.index)
+    for method, path in paths.items():
+        seg = segment_figures(c, path.u)
+        if method in ("isoparametric", "adaptive"):
+            assert seg["chord_height"].max() <= PARAMS.delta_max, method
+            assert seg["chord"].max() <= PARAMS.l_max + 1e-12, method
+        if method == "equal_chord_height":
+            assert seg["chord_height"].max() <= PARAMS.delta_max
+        if method == "proposed":  # subset of the initial points; the walk's own segments
+            assert np.isin(path.u, c.u_data).all()
+    m = {k: p.metrics for k, p in paths.items()}
+    assert m["adaptive"]["count"] < m["isoparametric"]["count"]
+    assert m["adaptive"]["cv"] < m["proposed"]["cv"]
+    del hub_model
