@@ -17,7 +17,8 @@ Steps (each failure raises an InputError that says which step and what was found
    closed mesh, also open boundaries on a non-watertight one) are chained into closed loops;
    each window takes the smallest loop whose plan view encloses the window's opening.
 4. Loops are oriented counter-clockwise seen from +Z_H and resampled at equal arc length
-   (the source's "initial CL points").
+   (the source's "initial CL points"); ``t_H`` holds chord tangents (central differences),
+   the wall and face normals are left None (the frames stage estimates them from the scan).
 """
 
 from __future__ import annotations
@@ -373,7 +374,9 @@ def extract_window_edges(
     for idx, (_, area, p) in enumerate(windows):
         q = resample_loop(p, spacing)
         kind = "large" if area >= 0.6 * a_max else "small"
-        out.append(WindowEdge(index=idx, kind=kind, p_HE=q))
+        t = np.roll(q, -1, axis=0) - np.roll(q, 1, axis=0)  # central differences, loop order
+        t /= np.linalg.norm(t, axis=1, keepdims=True)
+        out.append(WindowEdge(index=idx, kind=kind, p_HE=q, t_H=t))
     log.info("%s: %d windows, loop lengths %s mm", source, len(out),
              [round(float(np.linalg.norm(np.diff(np.vstack([w.p_HE, w.p_HE[:1]]), axis=0),
                                          axis=1).sum() * 1e3), 1) for w in out])
