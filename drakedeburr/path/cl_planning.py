@@ -41,7 +41,7 @@ from scipy.spatial.distance import pdist
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.hub.types import WindowKind
-from drakedeburr.path.edge_curve import EdgeCurve, _dist_to_segment
+from drakedeburr.path.edge_curve import EdgeCurve
 from drakedeburr.path.metrics import cl_metrics
 from drakedeburr.path.types import ClPath
 
@@ -293,33 +293,46 @@ def _ch(curve: EdgeCurve, s: float, step: float) -> float:
                                     refine=False)[0])
 
 
-def _feasibility(p: np.ndarray, reach: int, l_max: float, delta: float):
-    """For a closed grid of curve points p (G, 3): chord (G, R) and ok (G, R) for the segment
-    from grid point i to i + r (r = 1..R), ok = chord <= l_max and the max distance of the grid
-    points between them from the chord <= delta (the chord height sampled on the grid)."""
+def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
+    """For a closed grid of curve points p (G, 3): chord (G, R) and sampled chord height
+    (G, R) of the segment from grid point i to i + r (r = 1..R): the max distance of the grid
+    points between them from the chord. Rows stop (inf) at the first r whose segment breaks
+    chord <= l_max or height <= delta (longer segments from the same start break them too)."""
     G = len(p)
-    chord = np.empty((G, reach))
-    ok = np.zeros((G, reach), bool)
-    alive = np.arange(G)  # rows whose segments are still feasible (longer ones fail too)
+    chord = np.full((G, reach), np.inf)
+    height = np.full((G, reach), np.inf)
+    alive = np.arange(G)
     for r in range(1, reach + 1):
         a = p[alive]
         b = p[(alive + r) % G]
         c = np.linalg.norm(b - a, axis=1)
-        chord[:, r - 1] = np.inf
-        chord[alive, r - 1] = c
-        good = c <= l_max
+        h = np.zeros(len(alive))
         if r > 1:
-            inner = p[(alive[:, None] + np.arange(1, r)) % G]  # (n, r-1, 3)
-            good &= _dist_to_segment(inner, a[:, None, :], b[:, None, :]).max(1) <= delta
-        ok[alive[good], r - 1] = True
-        alive = alive[good]
+            # squared distance of the inner points to the segment, without (n, r-1, 3)
+            # temporaries beyond ap: |ap|^2 - 2 t ap.ab + t^2 |ab|^2, t clipped to [0, 1]
+            ap = p[(alive[:, None] + np.arange(1, r)) % G] - a[:, None, :]  # (n, r-1, 3)
+            ab = b - a
+            L2 = np.maximum(c * c, 1e-300)[:, None]
+            dot = np.einsum("nkj,nj->nk", ap, ab)
+            t = np.clip(dot / L2, 0.0, 1.0)
+            d2 = np.einsum("nkj,nkj->nk", ap, ap) - 2 * t * dot + t * t * L2
+            h = np.sqrt(np.maximum(d2.max(1), 0.0))
+        chord[alive, r - 1] = c
+        height[alive, r - 1] = h
+        alive = alive[(c <= l_max) & (h <= delta)]
         if len(alive) == 0:
             break
-    chord[~ok] = np.inf
-    return chord, ok
+    return chord, height
 
 
-def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int):
+def _feasible(chord: np.ndarray, height: np.ndarray, l_max: float, delta: float):
+    """(chord with inf where infeasible, ok): ok[i, r] = every segment from i up to i + r
+    keeps chord <= l_max and height <= delta (prefix-closed, like the true constraint)."""
+    ok = np.logical_and.accumulate((chord <= l_max) & (height <= delta), axis=1)
+    return np.where(ok, chord, np.inf), ok
+
+
+def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enough: int = 0):
     """Shortest-path layers over the closed grid from ``start`` back to it: best[k][j] = min
     sum of squared chords of k feasible segments from start to j (j in 0..G, G = back at
     start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable."""
@@ -339,6 +352,8 @@ def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int):
         r_best = np.argmin(cand, axis=1)
         best[k] = cand[j, r_best]
         arg[k] = r_best + 1
+        if k >= k_enough and np.isfinite(best[k, G]):  # the budget and the fewest are covered
+            return best[: k + 1], arg[: k + 1]
     return best, arg
 
 
@@ -372,12 +387,13 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
     if budget is None:
         budget = len(_plan_proposed(curve, params))
     k_max = max(budget, 3 * n_lo) + 2
+    chords, heights = _chords_and_heights(p, reach, params.l_max, params.delta_max)
     # the grid samples the chord height (slightly low): plans are re-checked on the spline,
     # best first; the margin is tightened only if none passes
     for margins in ((1.0, 0.997), (0.99, 0.97), (0.94, 0.9)):
         cands = []
         for margin in margins:
-            chord, ok = _feasibility(p, reach, params.l_max, params.delta_max * margin)
+            chord, ok = _feasible(chords, heights, params.l_max, params.delta_max * margin)
             km = k_max
             found = _dp_candidates(curve, u_grid, chord, ok, budget, km)
             while not found and km < G:  # sharp corners need more points than guessed
@@ -398,7 +414,7 @@ def _dp_candidates(curve, u_grid, chord, ok, budget, k_max) -> list:
     G = len(u_grid)
     out = []
     for start in np.linspace(0, G, 5, endpoint=False).astype(int) % G:
-        best, arg = _dp_layers(chord, ok, int(start), k_max)
+        best, arg = _dp_layers(chord, ok, int(start), k_max, k_enough=budget)
         finite = np.flatnonzero(np.isfinite(best[:, G]))
         if len(finite) == 0:
             continue
