@@ -263,22 +263,27 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
         rest = L - s
         if _ch(curve, s, rest) <= target:
             break
-        lo, hi = 0.0, rest
-        # grow a bracket geometrically, then bisect on the arc step
+        lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
+        # grow a bracket geometrically, then shrink it with guesses from the model
+        # h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of the target
         step = min(rest, 1e-3)
         while step < rest:
-            if _ch(curve, s, step) > target:
-                hi = step
+            h = _ch(curve, s, step)
+            if h > target:
+                hi, h_hi = step, h
                 break
-            lo, step = step, step * 2.0
+            lo, h_lo, step = step, h, step * 2.0
         for _ in range(40):
-            mid = 0.5 * (lo + hi)
-            if _ch(curve, s, mid) > target:
-                hi = mid
-            else:
-                lo = mid
-            if hi - lo < 1e-7:
+            if h_lo >= 0.998 * target or hi - lo < 1e-7:
                 break
+            guess = hi * np.sqrt(target / h_hi) if np.isfinite(h_hi) else 0.5 * (lo + hi)
+            width = hi - lo
+            guess = float(np.clip(guess, lo + 0.05 * width, hi - 0.05 * width))
+            h = _ch(curve, s, guess)
+            if h > target:
+                hi, h_hi = guess, h
+            else:
+                lo, h_lo = guess, h
         s += lo
         out.append(s)
     return curve.u_from_arc(np.array(out))
