@@ -37,10 +37,10 @@ if args.mesh:
 
     windows = extract_window_edges(load_hub_mesh(args.mesh).mesh, source=args.mesh).windows
 else:
-    n = 91 if args.test_mode else 182  # the source's window 1 had 182 initial CL points
-    windows = [WindowEdge(0, "large", hub_like_window("large", n)),
+    # the source's windows 1 and 2 had 182 and 63 initial CL points
+    windows = [WindowEdge(0, "large", hub_like_window("large", 182)),
                WindowEdge(1, "small", hub_like_window("small", 63, angle=1.2))]
-w = windows[0]
+w = windows[-1] if args.test_mode else windows[0]
 
 # 2. the closed NURBS (periodic B-spline) fit
 curve = fit_edge_curve(w.p_HE)
@@ -51,9 +51,15 @@ print(f"window {w.index}: {len(w.p_HE)} initial points, length {curve.length * 1
 # 3. the four planners on one window
 paths = plan_all(curve, kind=w.kind, window_index=w.index)
 
-# 4. figures for all windows, and a plot of window 0
-table = cl_table(windows if not args.test_mode else windows[:1], methods=METHODS)
-print(format_table(table))
+for name, path in paths.items():
+    m = path.metrics
+    print(f"{name:20s} {m['count']:4d} points  c_v {m['cv']:.3f} (all pairs "
+          f"{m['cv_pairwise']:.3f})  max chord height {m['max_chord_height_m'] * 1e3:.4f} mm  "
+          f"max chord {m['max_chord_length_m'] * 1e3:.2f} mm")
+
+# 4. the Tab. 1-2 style table for all windows (library call = `drakedeburr cl`), and a plot
+if not args.test_mode:
+    print(format_table(cl_table(windows, methods=METHODS)))
 
 fig, axes = plt.subplots(1, 4, figsize=(18, 5), sharex=True, sharey=True)
 p = curve.position(u) * 1e3
