@@ -266,6 +266,8 @@ def extract_window_edges(
     import open3d as o3d
     from scipy import ndimage
 
+    if edge_source not in ("auto", "mesh", "silhouette"):
+        raise InputError(f"edge_source must be auto, mesh or silhouette, got {edge_source!r}")
     frame = hub_frame_from_mesh(mesh, axis_M, origin_M)
     X_HM = np.linalg.inv(frame.X_MH)
     v_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
@@ -341,10 +343,11 @@ def extract_window_edges(
             if _point_in_polygon(sample, xy).mean() < 0.95:
                 continue
             best = (area, loop)
-        if best is None and edge_source in ("auto", "silhouette") or edge_source == "silhouette":
+        if edge_source == "silhouette" or (best is None and edge_source == "auto"):
             p = _silhouette_loop(scene, op["mask"], g, pixel, z0, spacing)
-            log.warning("%s: opening %d: no closed front-face edge loop in the mesh; using the "
-                        "opening's silhouette lifted onto the front surface", source, k)
+            if edge_source == "auto":
+                log.warning("%s: opening %d: no closed front-face edge loop in the mesh; using "
+                            "the opening's silhouette lifted onto the front surface", source, k)
             notes.setdefault("edge_source", {})[k] = "silhouette"
             windows.append((np.arctan2(*op["inner"][::-1]) % (2 * np.pi), op["area"], p))
             continue
@@ -364,8 +367,6 @@ def extract_window_edges(
         notes.setdefault("edge_source", {})[k] = "mesh"
         windows.append((np.arctan2(*op["inner"][::-1]) % (2 * np.pi), best[0], p))
 
-    if edge_source not in ("auto", "mesh", "silhouette"):
-        raise InputError(f"edge_source must be auto, mesh or silhouette, got {edge_source!r}")
     if expected_windows is not None and len(windows) != expected_windows:
         raise InputError(f"{source}: found {len(windows)} windows, expected {expected_windows}")
     windows.sort(key=lambda t: t[0])
