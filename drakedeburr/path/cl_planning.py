@@ -65,6 +65,8 @@ METHODS: tuple[str, ...] = ("proposed", "isoparametric", "equal_chord_height", "
 # relative safety margin between the sampled chord height used while planning and the refined
 # one reported by the metrics (sampling underestimates a smooth maximum by < 5e-4 relative)
 _SAMPLED_MARGIN = 5e-3
+# start points tried by the adaptive DP (each is one DP pass)
+N_STARTS = 5
 
 
 @dataclass(frozen=True)
@@ -418,7 +420,7 @@ def _dp_candidates(curve, u_grid, chord, ok, budget, k_max) -> list:
     over-budget ones by count."""
     G = len(u_grid)
     out = []
-    for start in np.linspace(0, G, 5, endpoint=False).astype(int) % G:
+    for start in np.linspace(0, G, N_STARTS, endpoint=False).astype(int) % G:
         best, arg = _dp_layers(chord, ok, int(start), k_max, k_enough=budget)
         finite = np.flatnonzero(np.isfinite(best[:, G]))
         if len(finite) == 0:
