@@ -263,7 +263,7 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
     # a step can never exceed the length of the rest of the loop
     while True:
         rest = L - s
-        if _ch(curve, s, rest) <= target:
+        if _ch(curve, s, rest) <= target and _ch(curve, s, rest, refine=True) <= params.delta_max:
             break
         lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
         # grow a bracket geometrically, then shrink it with guesses from the model
@@ -286,18 +286,21 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
                 hi, h_hi = guess, h
             else:
                 lo, h_lo = guess, h
+        # the search used sampled chord heights; confirm the step with the refined one
+        while lo > 1e-6 and _ch(curve, s, lo, refine=True) > params.delta_max:
+            lo *= 0.995
         s += lo
         out.append(s)
     return curve.u_from_arc(np.array(out))
 
 
-def _ch(curve: EdgeCurve, s: float, step: float) -> float:
+def _ch(curve: EdgeCurve, s: float, step: float, refine: bool = False) -> float:
     u0 = curve.u_from_arc(s)
     u1 = curve.u_from_arc(s + step)
     if s + step >= curve.length - 1e-12 or u1 <= u0:
         u1 = u1 + 1.0
     return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
-                                    refine=False)[0])
+                                    refine=refine)[0])
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
