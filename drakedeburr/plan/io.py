@@ -154,36 +154,41 @@ def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_
 
     Args:
         plan: the plan. name: program name.
-        flag, flag_reason: header warning (e.g. "FORCED" when verification failed).
+        flag, flag_reason: header warning (e.g. "FORCED" when verification failed); empty:
+            FORCED when the plan has failures, else UNVERIFIED (tool mode, post's rule).
         include_transitions: keep home/transition joint moves (else cuts, approach, retract).
     """
+    X_FT = np.asarray(plan.meta["X_FT"], float)
+    notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
+             f"cycle time {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records")
+    targets = [tg for tg in plan.targets
+               if include_transitions or tg.segment not in ("home", "transition")]
+    if plan.mode == "tool":
+        # the post stage's converter (tool-in-hand) with the plan's own tool transform
+        from dataclasses import replace
+
+        from drakedeburr.post.plan_program import program_from_plan as _post_program
+
+        extra = dict(flag=flag, flag_reason=flag_reason) if flag else {}
+        return _post_program(replace(plan, targets=tuple(targets)), name, X_FT, notes=notes,
+                             source=f"drakedeburr plan {plan.hub}", **extra)
     from drakedeburr.post.program import JOINT, LINEAR, RobotProgram
 
-    X_FT = np.asarray(plan.meta["X_FT"], float)
+    # workpiece in hand: the moving "tool" is the hub frame in the gripper
     X_FH = np.asarray(plan.meta["X_FH"], float)
     X_WT_fixed = np.asarray(plan.meta["X_WT"], float)
-    workpiece = plan.mode == "workpiece"
-    X_Fmov = X_FH if workpiece else X_FT
-    moves_X, moves_q, speeds, types, comments = [], [], [], [], []
-    for tg in plan.targets:
-        if not include_transitions and tg.segment in ("home", "transition"):
-            continue
-        moves_X.append(np.asarray(tg.X_WF) @ X_Fmov)
-        moves_q.append(tg.q)
-        speeds.append(tg.speed)
-        types.append(JOINT if tg.motion == "joint" else LINEAR)
-        label = tg.segment if tg.window_index < 0 else f"window {tg.window_index} {tg.segment}"
-        comments.append(label + (f" CL {tg.cl_index}" if tg.cl_index >= 0 else ""))
-    # comment only where the label changes (keeps programs readable)
-    comments = [c if i == 0 or c.split(" CL")[0] != comments[i - 1].split(" CL")[0] else ""
-                for i, c in enumerate(comments)]
-    notes = [f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
-             f"cycle time {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records"]
-    if workpiece:
-        notes.append("workpiece in hand: the tool data is the hub held by the robot; the work "
-                     "object is the stationary spindle (set robhold/ufprog accordingly)")
+    comments, prev = [], None
+    for tg in targets:
+        label = (tg.segment, tg.window_index)
+        comments.append("" if label == prev else
+                        tg.segment + (f" window {tg.window_index}" if tg.window_index >= 0 else ""))
+        prev = label
     return RobotProgram.from_poses(
-        name, np.array(moves_X), np.array(moves_q), speed=speeds, move_type=types,
-        comments=comments, X_FT=X_Fmov, X_WO=X_WT_fixed if workpiece else np.asarray(plan.X_WH),
-        source=f"drakedeburr plan {plan.hub}", flag=flag, flag_reason=flag_reason,
-        notes=tuple(notes))
+        name, np.array([np.asarray(tg.X_WF) @ X_FH for tg in targets]),
+        np.array([tg.q for tg in targets]), speed=[tg.speed for tg in targets],
+        zone=[tg.zone for tg in targets],
+        move_type=[JOINT if tg.motion == "joint" else LINEAR for tg in targets],
+        comments=comments, X_FT=X_FH, X_WO=X_WT_fixed, source=f"drakedeburr plan {plan.hub}",
+        flag=flag, flag_reason=flag_reason,
+        notes=notes + ("workpiece in hand: the tool data is the hub held by the robot; the work "
+                       "object is the stationary spindle (set robhold/ufprog accordingly)",))
