@@ -38,12 +38,14 @@ def naive_kto(cell, wt, max_points: int, iterations: int = 300):
     from pydrake.solvers import SnoptSolver, SolverOptions
 
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
-    from drakedeburr.plan.targets import burr_contact_radius, tool_point_H
+    from drakedeburr.plan.planner import PlanOptions
+    from drakedeburr.plan.targets import contact_geometry, tool_point_H
 
     kin = cell_kinematics(cell)
     checker = ClearanceChecker(cell)
     m = min(len(wt), max_points)
-    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, burr_contact_radius())[:m]
+    r_c, lift = contact_geometry(PlanOptions().contact_radius)
+    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[:m]
     s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p_HT, axis=0), axis=1))])
     r = s / s[-1]
     t0 = time.perf_counter()

@@ -48,3 +48,22 @@ def test_X_HT_from_axis_is_a_rotation_with_z_along_minus_axis_and_spin_recovered
     np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
     np.testing.assert_allclose(R[:, :, 2], -axis, atol=1e-12)
     np.testing.assert_allclose(mut.spin_of(X, t), spin, atol=1e-12)
+
+
+def test_cutting_lower_on_the_flank_lifts_the_tool_but_keeps_the_chamfer():
+    from drakedeburr.cell.tools import BURR
+
+    r, lift = mut.contact_geometry(2.25e-3)
+    assert lift == pytest.approx((BURR.contact_radius - r) / np.tan(BURR.cone_half_angle))
+    d = 1.5e-3
+    n = np.array([[1.0, 0.0, 0.0]])
+    axis = np.array([[0.0, 0.0, 1.0]])
+    p_T = mut.tool_point_H(np.zeros((1, 3)), n, axis, d, r, lift)
+    assert p_T[0, 2] == pytest.approx(lift)
+    # flank radius at height z (measured from T along the axis toward the spindle): r_c + z
+    z_face = -p_T[0, 2]
+    assert p_T[0, 0] - (BURR.contact_radius + z_face) == pytest.approx(-d, abs=1e-12)
+    X = mut.X_HT_from_axis(p_T, axis, np.array([[0.0, 1.0, 0.0]]))
+    np.testing.assert_allclose(mut.edge_point_from_tool_pose(X, n, d, r, lift), 0.0, atol=1e-15)
+    with pytest.raises(ValueError, match="flank"):
+        mut.contact_geometry(1.0)

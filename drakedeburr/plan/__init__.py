@@ -12,6 +12,7 @@ from drakedeburr.plan.planner import PlanOptions, plan_hub, plan_windows, window
 from drakedeburr.plan.targets import (
     X_HT_from_axis,
     burr_contact_radius,
+    contact_geometry,
     edge_point_from_tool_pose,
     tool_point_H,
 )
@@ -24,7 +25,7 @@ __all__ = [
     "PlanOptions", "plan_hub", "plan_windows", "window_targets_for_hub", "WindowTargets",
     "IkOptions", "WindowIk", "solve_window_ik",
     "CellKinematics", "ClearanceChecker", "cell_kinematics",
-    "tool_point_H", "edge_point_from_tool_pose", "X_HT_from_axis", "burr_contact_radius",
+    "tool_point_H", "edge_point_from_tool_pose", "X_HT_from_axis", "burr_contact_radius", "contact_geometry",
     "TimingLimits", "time_path",
     "save_plan", "load_plan", "write_joint_csv", "program_from_plan",
 ]

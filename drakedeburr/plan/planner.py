@@ -31,7 +31,7 @@ from drakedeburr.plan.ik import IkOptions, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.smoothing import smooth_orientations
-from drakedeburr.plan.targets import burr_contact_radius, tool_point_H
+from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
@@ -62,6 +62,8 @@ class PlanOptions:
         fit_spacings: knot spacings [m] of the least-squares joint spline, widest first.
         fit_tolerance: largest tool deviation [m] the joint-spline fit may cause.
         min_clearance: acceptance bound on every dense sample [m] (burr head/hub excepted).
+        contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
+            3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
     """
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
@@ -77,6 +79,7 @@ class PlanOptions:
     fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3)
     fit_tolerance: float = 0.02e-3
     min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
+    contact_radius: float | None = 2.25e-3
 
 
 @dataclass
@@ -123,12 +126,12 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                  failures: list, progress: Progress) -> tuple[list[_Stretch], dict, np.ndarray] | None:
     """Approach, cut and retract of one window; None when the window cannot be planned."""
     params = options.params
-    r_c = burr_contact_radius()
+    r_c, lift = contact_geometry(options.contact_radius)
     m = len(wt)
     # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
     # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
     loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
-    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c)[loop]
+    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[loop]
     t0 = time.perf_counter()
     wik = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
                           wt.cone_half_angle, wt.t_H[loop], q_from, window_index=wt.window_index,
@@ -359,7 +362,8 @@ def _assemble(cell, kin, stretches, home, window_stats, failures, scenario, hub,
     meta = dict(
         version=1,
         planner="drakedeburr.plan",
-        contact_radius_m=burr_contact_radius(),
+        contact_radius_m=contact_geometry(options.contact_radius)[0],
+        contact_lift_m=contact_geometry(options.contact_radius)[1],
         X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
         windows=window_stats,
         window_sources=[w.source for w in windows],

@@ -20,6 +20,11 @@ flank then meets the side wall ``d`` below the face (for an upright 45 deg burr:
 axis, which lies over the opening). Inverse (what a verifier uses to compare a tool pose with
 the true edge): ``C = p_HT - r_c u + d N``.
 
+Cutting lower on the flank (a circle of radius r < r_c, :func:`contact_geometry`) raises T by
+``lift = (r_c - r) / tan(alpha)`` along the axis: ``p_HT = C - d N + r u + lift a``. The planner
+uses r = 2.25 mm by default (``PlanOptions.contact_radius``): it lifts the burr shank 0.75 mm,
+which it needs for 2 mm clearance over the face, and still exceeds the 1.5 mm depth of cut.
+
 The offset is computed with the preferred axis of the ToolPath; the IK may tilt the axis inside
 the cone, which moves the implied edge point by at most ``r_c * (1 - cos(tilt))`` plus the
 tilt of u; :func:`edge_point_from_tool_pose` gives the exact implied point for any pose.
@@ -35,6 +40,7 @@ __all__ = [
     "X_HT_from_axis",
     "spin_of",
     "burr_contact_radius",
+    "contact_geometry",
 ]
 
 
@@ -56,7 +62,7 @@ def _u(n_H: np.ndarray, axis_H: np.ndarray) -> np.ndarray:
 
 
 def tool_point_H(p_HC: np.ndarray, n_H: np.ndarray, axis_H: np.ndarray, depth: float,
-                 r_c: float) -> np.ndarray:
+                 r_c: float, lift: float = 0.0) -> np.ndarray:
     """Tool point p_HT for CL points.
 
     Args:
@@ -64,23 +70,26 @@ def tool_point_H(p_HC: np.ndarray, n_H: np.ndarray, axis_H: np.ndarray, depth: f
         n_H: (M, 3) unit inner normals (out of the material into the opening).
         axis_H: (M, 3) unit tool axes (tip -> spindle).
         depth: chamfer leg / depth of cut [m].
-        r_c: nominal contact radius of the burr [m].
+        r_c: radius of the flank circle that touches C' [m].
+        lift: distance [m] from that circle's centre back along the axis (toward the spindle)
+            to the tool frame T (0 when the circle is T's own; see :func:`contact_geometry`).
 
     Returns:
         (M, 3) tool points in H [m].
     """
     n = np.asarray(n_H, float)
-    return np.asarray(p_HC, float) - depth * n + r_c * _u(n, axis_H)
+    a = _unit(np.asarray(axis_H, float))
+    return np.asarray(p_HC, float) - depth * n + r_c * _u(n, a) + lift * a
 
 
 def edge_point_from_tool_pose(X_HT: np.ndarray, n_H: np.ndarray, depth: float,
-                              r_c: float) -> np.ndarray:
+                              r_c: float, lift: float = 0.0) -> np.ndarray:
     """The edge point a tool pose cuts (inverse of :func:`tool_point_H`).
 
     Args:
         X_HT: (..., 4, 4) tool poses in H [m].
         n_H: (..., 3) inner normals at the edge.
-        depth, r_c: as in :func:`tool_point_H`.
+        depth, r_c, lift: as in :func:`tool_point_H`.
 
     Returns:
         (..., 3) implied edge points in H [m].
@@ -88,7 +97,30 @@ def edge_point_from_tool_pose(X_HT: np.ndarray, n_H: np.ndarray, depth: float,
     X_HT = np.asarray(X_HT, float)
     a = -X_HT[..., :3, 2]
     n = np.asarray(n_H, float)
-    return X_HT[..., :3, 3] - r_c * _u(n, a) + depth * n
+    return X_HT[..., :3, 3] - lift * a - r_c * _u(n, a) + depth * n
+
+
+def contact_geometry(r_contact: float | None = None, burr=None) -> tuple[float, float]:
+    """(radius, lift) of the flank circle used for cutting [m].
+
+    The tool frame T sits at the height of the burr's nominal contact circle
+    (``BurrGeometry.contact_radius``, 3 mm). Cutting lower on the flank, on a circle of radius
+    ``r_contact`` < r_c, raises the whole burr (and its shank) by ``lift = (r_c - r_contact) /
+    tan(alpha)`` for the same chamfer; the circle must still reach the chamfer's far side
+    (r_contact > depth of cut).
+
+    Args:
+        r_contact: radius of the cutting circle [m] (None: the nominal one, lift 0).
+    """
+    if burr is None:
+        from drakedeburr.cell.tools import BURR as burr
+    r_c = float(burr.contact_radius)
+    if r_contact is None:
+        return r_c, 0.0
+    if not 0.0 < r_contact <= burr.head_radius:
+        raise ValueError(f"contact radius {r_contact} m is not on the burr's flank "
+                         f"(0, {burr.head_radius}]")
+    return float(r_contact), float((r_c - r_contact) / np.tan(burr.cone_half_angle))
 
 
 def X_HT_from_axis(p_HT: np.ndarray, axis_H: np.ndarray, t_H: np.ndarray,
