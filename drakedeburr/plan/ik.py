@@ -61,7 +61,8 @@ class IkOptions:
         trust_region: max joint change from the previous target [rad].
         snopt_major_iterations: SNOPT major iteration cap; ipopt_max_iterations: IPOPT's.
         retries: re-seeded attempts after SNOPT and IPOPT both fail.
-        min_wrist: keep |J5| at least this far from the wrist singularity in seeds [rad].
+        min_wrist: keep |J5| at least this far from the wrist singularity (seeds, and a bound
+            in every solve on the side of the window's wrist branch) [rad].
         spin_samples: spins tried by the seed sweep.
     """
 
@@ -121,15 +122,19 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
     b_ref = kin.branch_of(q_ref)
     cands, scores = [], []
     w = np.array([2.0, 2.0, 1.5, 0.5, 0.5, 0.5])
+    centre = np.concatenate([q_ref[:3], 0.5 * (kin.q_lower + kin.q_upper)[3:]])
     for k in range(q_all.shape[0]):
         for b in range(8):
             q = q_all[k, b]
             if np.any(np.isnan(q)):
                 continue
-            q = q_ref + np.mod(q - q_ref + np.pi, 2 * np.pi) - np.pi
+            # turns of J4/J6 nearest the middle of their range (a window winds the wrist by up
+            # to ~100 deg: start it centred), the arm nearest q_ref
+            q = centre + np.mod(q - centre + np.pi, 2 * np.pi) - np.pi
             if not kin.within_limits(q) or abs(q[4]) < options.min_wrist:
                 continue
-            score = float(w @ np.abs(q - q_ref)) + (0.0 if np.all(branches[b] == b_ref) else 100.0)
+            score = (float(w[:3] @ np.abs(q - q_ref)[:3]) + float(w[3:] @ np.abs(q - centre)[3:])
+                     + (0.0 if np.all(branches[b] == b_ref) else 100.0))
             cands.append(q)
             scores.append(score)
     if not cands:
@@ -203,6 +208,12 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H:
     prog.AddQuadraticErrorCost(np.diag(options.joint_weights), q_prev, q)
     lo = np.maximum(cell.q_lower, q_prev - options.trust_region)
     hi = np.minimum(cell.q_upper, q_prev + options.trust_region)
+    # stay on the wrist branch of the window, away from the J5 = 0 singularity: the free spin
+    # about the burr axis moves J5 (45 deg spindle mount), so the IK can always use it
+    if q_prev[4] >= 0:
+        lo[4] = max(lo[4], min(options.min_wrist, q_prev[4]))
+    else:
+        hi[4] = min(hi[4], max(-options.min_wrist, q_prev[4]))
     prog.AddBoundingBoxConstraint(lo, hi, q)
     prog.SetInitialGuess(q, np.clip(q_seed, lo, hi))
     result = solver.Solve(prog, np.clip(q_seed, lo, hi),
