@@ -102,7 +102,7 @@ class WindowIk:
 
 def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
                  axis_H: np.ndarray, t_H: np.ndarray, q_ref: np.ndarray,
-                 options: IkOptions = IkOptions()) -> np.ndarray | None:
+                 options: IkOptions = IkOptions(), count: int = 1) -> np.ndarray | None:
     """Best joint vector for one target over a sweep of spins and all IK branches.
 
     Score: same branch as ``q_ref`` first, then weighted distance to ``q_ref``; candidates with
@@ -112,8 +112,11 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
         p_HT: (3,) tool point [m]; axis_H: (3,) preferred axis; t_H: (3,) feed tangent.
         q_ref: (6,) reference joints (e.g. home or the previous window's end) [rad].
 
+        count: > 1 returns a list of up to ``count`` distinct seeds (J4/J6 differing by more
+            than 0.5 rad), best first, for window-level retries.
+
     Returns:
-        (6,) joints [rad], or None when no spin/branch reaches.
+        (6,) joints [rad], or None when no spin/branch reaches (a list when count > 1).
     """
     spins = np.linspace(-np.pi, np.pi, options.spin_samples, endpoint=False)
     X_HT = X_HT_from_axis(np.repeat(p_HT[None], len(spins), 0), np.repeat(axis_H[None], len(spins), 0),
@@ -138,19 +141,28 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
             cands.append(q)
             scores.append(score)
     if not cands:
-        return None
+        return None if count == 1 else []
     ranked = np.argsort(scores)
-    if checker is None:
+    if checker is None and count == 1:
         return cands[ranked[0]]
     # the IK's distance constraint can tilt the axis inside the cone: a seed needs clearance
     # from the arm and cell, not the full bound at the burr (that depends on the axis only)
+    picked: list[np.ndarray] = []
     best, best_d = None, -np.inf
-    for j in ranked[:12]:
-        d = checker.min_distance(cands[j], options.min_distance)[0]
+    for j in ranked[:max(12, 6 * count)]:
+        if any(np.max(np.abs(cands[j][[3, 5]] - p[[3, 5]])) < 0.5 for p in picked):
+            continue
+        d = np.inf if checker is None else checker.min_distance(cands[j], options.min_distance)[0]
         if d >= options.min_distance:
-            return cands[j]
-        if d > best_d + 1e-4:
+            picked.append(cands[j])
+            if len(picked) >= count:
+                break
+        elif d > best_d + 1e-4:
             best, best_d = cands[j], d
+    if count > 1:
+        return picked or ([best] if best is not None and best_d > 0.0 else [])
+    if picked:
+        return picked[0]
     return best if best_d > 0.0 else None
 
 
@@ -246,6 +258,7 @@ def solve_window_ik(
     window_index: int = 0,
     options: IkOptions = IkOptions(),
     progress: Callable[[int, int, str], None] | None = None,
+    q_first: np.ndarray | None = None,
 ) -> WindowIk:
     """IK at every CL target of one window, warm-started along the path.
 
@@ -258,6 +271,7 @@ def solve_window_ik(
         t_H: (M, 3) feed tangents (spin reference of the seeds).
         q_ref: (6,) joints the robot comes from (configuration preference) [rad].
         window_index: for failure records.
+        q_first: seed of the first target (default: the spin sweep's best).
 
     Returns:
         WindowIk; failures are listed per point (``{"window", "cl_index", "stage", "reason",
@@ -280,7 +294,8 @@ def solve_window_ik(
     i_prev = -1
     for i in range(m):
         if q_prev is None:
-            q_seed = seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], q_ref, options)
+            q_seed = (q_first if q_first is not None and i == 0 else
+                      seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], q_ref, options))
             if q_seed is None:
                 failures.append(dict(window=window_index, cl_index=i, stage="ik",
                                      reason="no IK branch reaches the first target"))

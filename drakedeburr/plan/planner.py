@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
-from drakedeburr.plan.ik import IkOptions, solve_window_ik
+from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.smoothing import smooth_orientations
@@ -64,6 +64,7 @@ class PlanOptions:
         min_clearance: acceptance bound on every dense sample [m] (burr head/hub excepted).
         contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
             3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
+        window_attempts: distinct start configurations tried when a window's IK fails.
     """
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
@@ -80,6 +81,7 @@ class PlanOptions:
     fit_tolerance: float = 0.02e-3
     min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
     contact_radius: float | None = 2.25e-3
+    window_attempts: int = 4
 
 
 @dataclass
@@ -133,9 +135,22 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
     p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[loop]
     t0 = time.perf_counter()
-    wik = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
-                          wt.cone_half_angle, wt.t_H[loop], q_from, window_index=wt.window_index,
-                          options=options.ik, progress=progress)
+    # window-level retries: the start configuration (J4/J6 turns, spin) decides whether the
+    # wrist can follow the whole loop inside its limits; try the best few distinct seeds
+    seeds = seed_by_spin(kin, checker, p_HT[0], wt.axis_H[0], wt.t_H[0], q_from, options.ik,
+                         count=options.window_attempts) or [None]
+    wik = None
+    for attempt, q_first in enumerate(seeds):
+        trial = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
+                                wt.cone_half_angle, wt.t_H[loop], q_from,
+                                window_index=wt.window_index, options=options.ik,
+                                progress=progress, q_first=q_first)
+        if wik is None or len(trial.failures) < len(wik.failures):
+            wik = trial
+        if not trial.failures:
+            break
+        log.info("window %d: start seed %d left %d IK failures; trying another",
+                 wt.window_index, attempt, len(trial.failures))
     t_ik = time.perf_counter() - t0
     for rec in wik.failures:
         failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})

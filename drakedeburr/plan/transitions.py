@@ -76,9 +76,9 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
                lift: float = 0.08) -> JointMove:
     """A collision-free joint move from ``q0`` to ``q1``.
 
-    Tries, in order: the straight joint line; the line through a via point above both ends
-    (the tool lifted by ``lift`` along the hub's face normal, solved by the analytic IK);
-    KinematicTrajectoryOptimization warm-started from the via path.
+    Tries, in order: the straight joint line; lines through via points (the mid-pose lifted
+    by ``lift`` and 2.5 ``lift`` along the hub's face normal, both ends lifted, home; solved by
+    the analytic IK); KinematicTrajectoryOptimization warm-started from the first via path.
 
     Args:
         q0, q1: (6,) joints [rad]. step: joint-space sample spacing [rad].
@@ -89,21 +89,39 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     d = check_joint_samples(checker, q, min_distance)
     if d >= min_distance:
         return JointMove(q=q, s=_arc(q), clearance=d, method="straight", ok=True)
-    via = _via(kin, q0, q1, lift)
-    if via is not None:
-        q = _densify(np.vstack([q0, via, q1]), step)
+    # via points, in order of preference: the lifted mid-pose at growing heights, both ends
+    # lifted, home
+    candidates = []
+    for h in (lift, 2.5 * lift):
+        v = _via(kin, q0, q1, h)
+        if v is not None:
+            candidates.append(np.vstack([q0, v, q1]))
+    a, b = _lifted(kin, q0, 2.5 * lift), _lifted(kin, q1, 2.5 * lift)
+    if a is not None and b is not None:
+        candidates.append(np.vstack([q0, a, b, q1]))
+    candidates.append(np.vstack([q0, kin.q_home, q1]))
+    for way in candidates:
+        q = _densify(way, step)
         d = check_joint_samples(checker, q, min_distance)
         if d >= min_distance:
-            return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True)
-    guess = np.vstack([q0, via, q1]) if via is not None else np.stack([q0, q1])
+            return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
+                             info=dict(via_points=len(way) - 2))
+    guess = candidates[0] if candidates else np.stack([q0, q1])
     q_kto, info = _kto(cell, checker, q0, q1, guess, min_distance)
     if q_kto is not None:
         q = _densify(q_kto, step)
         d = check_joint_samples(checker, q, min_distance)
         return JointMove(q=q, s=_arc(q), clearance=d, method="kto", ok=d >= min_distance,
                          info=info)
-    return JointMove(q=q, s=_arc(q), clearance=d, method="via" if via is not None else "straight",
-                     ok=False, info=info)
+    return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=False, info=info)
+
+
+def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
+    """Joints of the pose at ``q`` lifted by ``lift`` along +Z_H (same branch)."""
+    X = kin.X_HT_from_q(q)
+    X[2, 3] += lift
+    qq, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q)
+    return qq[0] if ok[0] else None
 
 
 def _via(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, lift: float) -> np.ndarray | None:
