@@ -128,9 +128,10 @@ def main() -> None:
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
-    from drakedeburr.resources import hub_names
 
-    hub_name = args.hub or hub_names()[0]
+    from drakedeburr.hub import DEFAULT_HUB
+
+    hub_name = args.hub or DEFAULT_HUB
     t0 = time.perf_counter()
     cell = load_cell("tool_in_hand", hub_name)
     t_cell = time.perf_counter() - t0

@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from drakedeburr.cell.station import load_cell  # noqa: E402
-from drakedeburr.hub import load_hub  # noqa: E402
+from drakedeburr.hub import DEFAULT_HUB, load_hub  # noqa: E402
 from drakedeburr.plan import (  # noqa: E402
     PlanOptions,
     WindowTargets,
@@ -39,7 +39,6 @@ from drakedeburr.plan import (  # noqa: E402
     window_targets_for_hub,
     write_joint_csv,
 )
-from drakedeburr.resources import hub_names  # noqa: E402
 
 
 def main() -> None:
@@ -52,7 +51,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
 
     # 1. cell + hub + targets ---------------------------------------------------------------
-    hub_name = args.hub or hub_names()[0]
+    hub_name = args.hub or DEFAULT_HUB
     cell = load_cell("tool_in_hand", hub_name)
     hub = load_hub(hub_name)
     print(f"cell: {cell.mode}-in-hand, hub {hub_name} with {len(hub.windows)} windows")
