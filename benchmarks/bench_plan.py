@@ -87,7 +87,7 @@ def naive_kto(cell, wt, max_points: int, iterations: int = 300):
 
 def toppra_check(cell, plan):
     """Time window 0's cut with Drake TOPP-RA at 150 mm/s; duration and dense max speed."""
-    from pydrake.multibody.optimization import Toppra
+    from pydrake.multibody.optimization import CalcGridPointsOptions, Toppra
     from pydrake.trajectories import PiecewisePolynomial
 
     from drakedeburr.plan.kinematics import cell_kinematics
@@ -101,7 +101,7 @@ def toppra_check(cell, plan):
     s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
     path = PiecewisePolynomial.CubicWithContinuousSecondDerivatives(s, q.T, np.zeros(6), np.zeros(6))
     t0 = time.perf_counter()
-    grid = Toppra.CalcGridPoints(path, None)
+    grid = Toppra.CalcGridPoints(path, CalcGridPointsOptions())
     topp = Toppra(path, cell.plant, grid)
     topp.AddJointVelocityLimit(cell.v_lower, cell.v_upper)
     topp.AddJointAccelerationLimit(cell.a_lower, cell.a_upper)
