@@ -1,0 +1,154 @@
+"""Local frames at CL points (source eqs. 4-6) and the tool axis <-> (theta_A, theta_B) maps.
+
+Local frame L at a CL point (columns of ``R_HL``, all in the hub frame H):
+
+* ``X_L = N_new``: the inner-side normal of the window's side wall, pointing out of the
+  material into the opening, made orthogonal to the tangent (eq. 5: ``N_new = B x T``);
+* ``Y_L = T``: the unit tangent = feed direction (window loops run counter-clockwise seen
+  from +Z_H, DESIGN.md);
+* ``Z_L = B = T x N`` (eq. 4). For a CCW loop with N pointing into the opening, B points out of
+  the visible front face (B ~ +Z_H on a flat hub).
+
+``R_HL = [N_new, T, B]`` (eq. 6) is a proper rotation (right-handed), checked in the tests.
+
+Tool axis. ``axis`` is the unit vector from the burr's cutting point toward the spindle,
+i.e. the CAM/APT tool-axis convention (i, j, k); in DESIGN.md's tool frame T (+Z_T spindle ->
+tip) it is ``-Z_T``. With both angles zero the axis is B: the tool stands upright over the
+front face. The definition (one precise reading of the source's "rotate about Y by theta_A,
+then about X by theta_B"; the source's wording is not self-consistent, SPEC.md S3.5):
+
+    axis_L = R_y(theta_A) @ R_x(theta_B) @ e_z
+           = (sin(theta_A) cos(theta_B),  -sin(theta_B),  cos(theta_A) cos(theta_B))
+
+i.e. intrinsic rotations: first about Y_L (= T) by theta_A, then about the once-rotated X axis
+by theta_B. Geometric meaning, which is what the inverse uses:
+
+* ``theta_A`` (work / tilt angle) = ``atan2(axis . N, axis . B)``: the angle of the axis,
+  projected into the plane normal to the feed (N-B plane), away from B toward N. Positive
+  theta_A leans the spindle *toward the opening*, away from the side wall being chamfered, so
+  the burr's body clears the wall and its flank meets the edge; this is the source's "about Y,
+  i.e. away from the window inner side".
+* ``theta_B`` (lead / travel angle) = ``asin(-axis . T)``: the angle of the axis out of the
+  N-B plane. Positive theta_B leans the spindle *back against the feed* (the tip leads, the
+  spindle trails - a "push" angle in welding terms).
+
+The source calls theta_A "the angle between tool axis and normal" and theta_B "the angle to the
+tangent"; with this definition those angles are ``pi/2 - theta_A`` (for theta_B = 0) and
+``pi/2 + theta_B``. The maps are exact inverses for |theta_A| < pi/2, |theta_B| < pi/2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drakedeburr.errors import InputError
+
+__all__ = [
+    "local_frames",
+    "axis_from_angles",
+    "angles_from_axis",
+    "axis_jacobian",
+    "axis_H_from_angles",
+    "angles_from_axis_H",
+    "check_rotations",
+]
+
+
+def _unit_rows(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndarray:
+    """Local frames R_HL = [N_new, T, B] (eqs. 4-6).
+
+    Args:
+        t_H: (M, 3) tangents (feed direction) in H; normalised here.
+        n_H: (M, 3) inner-side normals in H (need not be exactly orthogonal to t_H).
+        name: item name for error messages (e.g. "window 2").
+
+    Returns:
+        (M, 3, 3) rotations; column 0 = N_new, 1 = T, 2 = B = T x N.
+
+    Raises:
+        InputError: shapes differ, or a normal is (nearly) parallel to its tangent.
+    """
+    t = np.asarray(t_H, float)
+    n = np.asarray(n_H, float)
+    if t.shape != n.shape or t.ndim != 2 or t.shape[1] != 3:
+        raise InputError(f"{name or 'local_frames'}: t_H {t.shape} and n_H {n.shape} must both be (M, 3)")
+    t = _unit_rows(t)
+    b = np.cross(t, n)
+    nb = np.linalg.norm(b, axis=1)
+    bad = np.flatnonzero(nb < 1e-6 * np.maximum(np.linalg.norm(n, axis=1), 1e-300))
+    if bad.size:
+        raise InputError(
+            f"{name or 'local_frames'}: normal parallel to tangent at point(s) {bad[:10].tolist()}"
+        )
+    b = b / nb[:, None]
+    n_new = np.cross(b, t)
+    return np.stack([n_new, t, b], axis=2)
+
+
+def axis_from_angles(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
+    """Tool axis in the local frame L from (theta_A, theta_B).
+
+    Args:
+        theta_A: (...) work/tilt angle [rad] (see module docstring).
+        theta_B: (...) lead/travel angle [rad].
+
+    Returns:
+        (..., 3) unit axis in L (tip -> spindle, = -Z_T).
+    """
+    a = np.asarray(theta_A, float)
+    b = np.asarray(theta_B, float)
+    cb = np.cos(b)
+    return np.stack([np.sin(a) * cb, -np.sin(b), np.cos(a) * cb], axis=-1)
+
+
+def angles_from_axis(axis_L: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`axis_from_angles`.
+
+    Args:
+        axis_L: (..., 3) axis in L (any positive length).
+
+    Returns:
+        (theta_A, theta_B) [rad], each (...).
+    """
+    v = np.asarray(axis_L, float)
+    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    theta_A = np.arctan2(v[..., 0], v[..., 2])
+    theta_B = np.arcsin(np.clip(-v[..., 1], -1.0, 1.0))
+    return theta_A, theta_B
+
+
+def axis_jacobian(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
+    """d axis_L / d(theta_A, theta_B).
+
+    Returns:
+        (..., 3, 2): column 0 = d/d theta_A, column 1 = d/d theta_B.
+    """
+    a = np.asarray(theta_A, float)
+    b = np.asarray(theta_B, float)
+    sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
+    d_a = np.stack([ca * cb, np.zeros_like(a), -sa * cb], axis=-1)
+    d_b = np.stack([-sa * sb, -cb, -ca * sb], axis=-1)
+    return np.stack([d_a, d_b], axis=-1)
+
+
+def axis_H_from_angles(R_HL: np.ndarray, theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
+    """Tool axis in H: (M, 3) from (M, 3, 3) frames and (M,) angles [rad]."""
+    return np.einsum("mij,mj->mi", np.asarray(R_HL, float), axis_from_angles(theta_A, theta_B))
+
+
+def angles_from_axis_H(R_HL: np.ndarray, axis_H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(theta_A, theta_B) [rad], each (M,), of (M, 3) axes given in H w.r.t. frames R_HL."""
+    axis_L = np.einsum("mji,mj->mi", np.asarray(R_HL, float), np.asarray(axis_H, float))
+    return angles_from_axis(axis_L)
+
+
+def check_rotations(R: np.ndarray) -> np.ndarray:
+    """Per-frame error max(|R^T R - I|, |det R - 1|) of (M, 3, 3) matrices."""
+    R = np.asarray(R, float)
+    orth = np.abs(np.einsum("mki,mkj->mij", R, R) - np.eye(3)).max(axis=(1, 2))
+    det = np.abs(np.linalg.det(R) - 1.0)
+    return np.maximum(orth, det)
