@@ -55,6 +55,8 @@ def hubs_dir() -> Path:
 
 def hub_names() -> list[str]:
     """Names of the bundled hub models (folders of ``models/hubs`` holding a ``hub.yaml``)."""
+    if not hubs_dir().is_dir():
+        return []
     return sorted(p.name for p in hubs_dir().iterdir() if (p / "hub.yaml").is_file())
 
 

@@ -1,0 +1,126 @@
+"""Data passed out of the planning stage (contract shared by plan/, verify/, post/, viz/).
+
+A plan has two faces that must agree:
+  * the Cartesian program a controller executes: targets joined by linear moves (MoveL / LIN /
+    L) with the tool orientation interpolated between them, each with its speed and zone;
+  * a dense timed joint trajectory that simulates that program (for Meshcat, verification and
+    controllers that take joint streams).
+
+Frames (DESIGN.md): W world = robot base frame B (z up); H hub frame; T tool frame (burr
+cutting point, +Z spindle -> tip); F robot flange (ABB tool0). In the tool-in-hand cell T rides
+on the flange and H is fixed; in the workpiece-in-hand cell H rides on the flange and T is
+fixed (virtual TCP).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+__all__ = ["SegmentKind", "CartesianTarget", "PlanSegment", "JointTrajectory", "Plan"]
+
+SegmentKind = Literal["home", "approach", "cut", "retract", "transition"]
+
+
+@dataclass(frozen=True, eq=False)
+class CartesianTarget:
+    """One target of the Cartesian program.
+
+    Attributes:
+        window_index: hub window the target belongs to, -1 for home/transition targets.
+        segment: which kind of motion ends at this target.
+        cl_index: index of the CL point in the window's ToolPath, -1 if none.
+        X_HT: (4, 4) tool pose relative to the hub [m] (the process view).
+        X_WF: (4, 4) flange pose in world = robot base [m] (what a controller moves).
+        q: (6,) joint values of the robot at this target [rad] (ABB axis order).
+        speed: TCP speed of the linear move that ends here [m/s] (relative speed of tool and
+            hub in the workpiece-in-hand cell).
+        zone: blending radius at this target [m] (0 = fine point).
+    """
+
+    window_index: int
+    segment: SegmentKind
+    cl_index: int
+    X_HT: np.ndarray
+    X_WF: np.ndarray
+    q: np.ndarray
+    speed: float
+    zone: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class JointTrajectory:
+    """Timed joint trajectory as a piecewise cubic Hermite spline (exact to re-evaluate).
+
+    Attributes:
+        t: (K,) strictly increasing knot times [s], t[0] = 0.
+        q: (K, 6) joint positions at the knots [rad].
+        qd: (K, 6) joint velocities at the knots [rad/s].
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def value(self, t: np.ndarray | float) -> np.ndarray:
+        """Joint positions at times ``t`` [s] -> (len(t), 6) (or (6,) for a scalar)."""
+        from scipy.interpolate import CubicHermiteSpline
+
+        return CubicHermiteSpline(self.t, self.q, self.qd, axis=0)(t)
+
+    def derivative(self, t: np.ndarray | float, order: int = 1) -> np.ndarray:
+        from scipy.interpolate import CubicHermiteSpline
+
+        return CubicHermiteSpline(self.t, self.q, self.qd, axis=0).derivative(order)(t)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanSegment:
+    """A stretch of the plan: one motion kind, usually for one window.
+
+    Attributes:
+        window_index: -1 for home/transition segments.
+        kind: motion kind.
+        target_range: (first, last+1) indices into Plan.targets.
+        t_range: (start, end) times in Plan.trajectory [s].
+    """
+
+    window_index: int
+    kind: SegmentKind
+    target_range: tuple[int, int]
+    t_range: tuple[float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A complete deburring plan for one hub in one cell.
+
+    Attributes:
+        scenario: bundled scenario name or path the plan was made for.
+        hub: bundled hub name or model path.
+        mode: "tool" (tool in hand) or "workpiece" (workpiece in hand, virtual TCP).
+        X_WH: (4, 4) hub pose in world used for planning (after registration if any).
+        targets: the Cartesian program, in execution order.
+        segments: stretches of the program/trajectory, in order.
+        trajectory: the timed joint trajectory simulating the program.
+        tool_path: the orientation stage's ToolPath per window this plan came from.
+        failures: per-point failure records (empty when every point planned).
+        meta: solver statistics, versions, timings.
+    """
+
+    scenario: str
+    hub: str
+    mode: Literal["tool", "workpiece"]
+    X_WH: np.ndarray
+    targets: tuple[CartesianTarget, ...]
+    segments: tuple[PlanSegment, ...]
+    trajectory: JointTrajectory
+    tool_path: Any = None
+    failures: tuple[dict, ...] = ()
+    meta: dict = field(default_factory=dict)
