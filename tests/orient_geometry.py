@@ -100,3 +100,23 @@ def scan_of(mesh, spacing=0.3e-3, sigma=0.05e-3, seed=0, box=None):
 def cl_from_loop(p, t, kappa, s, window_index=0, kind="large"):
     total = float(s[-1] + np.linalg.norm(p[0] - p[-1]))
     return ClPath(window_index, kind, "test", s / total, p, t, kappa, s, total)
+
+
+def disc_with_windows(n=5, radius=0.06, thickness=0.012, window=(0.012, 0.008, 0.004),
+                      ring=0.035, segments=180):
+    """A hub-like disc (front face z = 0) with n rounded-rectangle windows on a ring; the
+    windows' long axis is radial, so the part is n-fold symmetric about +Z."""
+    import trimesh
+    from manifold3d import Manifold
+
+    disc = Manifold.cylinder(thickness, radius, radius, segments).translate((0, 0, -thickness))
+    hub = Manifold.cylinder(thickness * 2, 0.008, 0.008, 64).translate((0, 0, -thickness * 1.5))
+    boss = Manifold.cylinder(0.006, 0.018, 0.014, 64)  # front boss: no front/back symmetry
+    disc = (disc + boss) - hub
+    a, b, r = window
+    for k in range(n):
+        ang = 2 * np.pi * k / n
+        cs = rounded_rect_cross_section(a, b, r, (ring * np.cos(ang), ring * np.sin(ang)), ang)
+        disc = disc - Manifold.extrude(cs, thickness * 3).translate((0, 0, -thickness * 2))
+    mesh = disc.to_mesh()
+    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts))
