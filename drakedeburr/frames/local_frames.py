@@ -1,36 +1,40 @@
 """Local frames at CL points (source eqs. 4-6) and the tool axis <-> (theta_A, theta_B) maps.
 
-Local frame L at a CL point (columns of ``R_HL``, all in the hub frame H):
+Source eqs. 4-6: ``B = T x N``, ``N_new = B x T``, ``R_loc = [N_new, T, B]``. As printed that
+matrix has determinant -1 (``N_new x T = -B``): it is a reflection, not a frame. We keep the
+source's X and Y and make the frame right-handed:
 
 * ``X_L = N_new``: the inner-side normal of the window's side wall, pointing out of the
-  material into the opening, made orthogonal to the tangent (eq. 5: ``N_new = B x T``);
+  material into the opening, made orthogonal to the tangent (eq. 5);
 * ``Y_L = T``: the unit tangent = feed direction (window loops run counter-clockwise seen
   from +Z_H, DESIGN.md);
-* ``Z_L = B = T x N`` (eq. 4). For a CCW loop with N pointing into the opening, B points out of
-  the visible front face (B ~ +Z_H on a flat hub).
+* ``Z_L = X_L x Y_L = -B``: for a CCW loop, B = T x N points out of the visible front face,
+  so Z_L points *into* the material (-Z_H on a flat hub) - the direction a tool approaches the
+  edge from above.
 
-``R_HL = [N_new, T, B]`` (eq. 6) is a proper rotation (right-handed), checked in the tests.
+``R_HL = [N_new, T, -B]`` is a proper rotation (checked in the tests).
 
-Tool axis. ``axis`` is the unit vector from the burr's cutting point toward the spindle,
-i.e. the CAM/APT tool-axis convention (i, j, k); in DESIGN.md's tool frame T (+Z_T spindle ->
-tip) it is ``-Z_T``. With both angles zero the axis is B: the tool stands upright over the
-front face. The definition (one precise reading of the source's "rotate about Y by theta_A,
-then about X by theta_B"; the source's wording is not self-consistent, SPEC.md S3.5):
+Tool axis. Throughout drakedeburr the *tool axis* is DESIGN.md's ``+Z_T``: the unit vector
+along the burr from the spindle toward the tip. (A CAM/APT (i, j, k) vector is ``-Z_T``.)
+With both angles zero the tool stands upright over the front face, ``Z_T = Z_L``. The tool
+orientation is the source's "rotate about Y by theta_A, then about X by theta_B", read as
+intrinsic rotations of the local frame (the source's wording is not self-consistent,
+SPEC.md S3.5)::
 
-    axis_L = R_y(theta_A) @ R_x(theta_B) @ e_z
-           = (sin(theta_A) cos(theta_B),  -sin(theta_B),  cos(theta_A) cos(theta_B))
+    R_LT = R_y(theta_A) @ R_x(theta_B)
+    Z_T in L = R_LT @ e_z = (sin(theta_A) cos(theta_B),  -sin(theta_B),  cos(theta_A) cos(theta_B))
 
-i.e. intrinsic rotations: first about Y_L (= T) by theta_A, then about the once-rotated X axis
-by theta_B. Geometric meaning, which is what the inverse uses:
+(``R_LT`` also fixes the spin about the axis: X_T is N rotated with it; a planner may use it
+as the preferred tool orientation.) Geometric meaning, which is what the inverse uses:
 
-* ``theta_A`` (work / tilt angle) = ``atan2(axis . N, axis . B)``: the angle of the axis,
-  projected into the plane normal to the feed (N-B plane), away from B toward N. Positive
-  theta_A leans the spindle *toward the opening*, away from the side wall being chamfered, so
-  the burr's body clears the wall and its flank meets the edge; this is the source's "about Y,
-  i.e. away from the window inner side".
-* ``theta_B`` (lead / travel angle) = ``asin(-axis . T)``: the angle of the axis out of the
-  N-B plane. Positive theta_B leans the spindle *back against the feed* (the tip leads, the
-  spindle trails - a "push" angle in welding terms).
+* ``theta_A`` (work / tilt angle, about the feed direction) = ``atan2(Z_T . N, Z_T . Z_L)``:
+  the angle of the axis, projected into the plane normal to the feed, from the upright. Positive
+  theta_A tilts the tip toward the opening (+N) - the spindle leans back over the front face,
+  away from the opening - so the burr's flank meets the edge from the opening's side and the
+  spindle body stays over the free space above the spoke.
+* ``theta_B`` (lead / travel angle) = ``asin(-Z_T . T)``: the angle of the axis out of the
+  plane normal to the feed. Positive theta_B tilts the tip backward (-T): the spindle top leads
+  the tip in the feed direction, the usual sign of a milling "lead angle".
 
 The source calls theta_A "the angle between tool axis and normal" and theta_B "the angle to the
 tangent"; with this definition those angles are ``pi/2 - theta_A`` (for theta_B = 0) and
@@ -51,6 +55,7 @@ __all__ = [
     "axis_H_from_angles",
     "angles_from_axis_H",
     "check_rotations",
+    "R_LT_from_angles",
 ]
 
 
@@ -59,7 +64,7 @@ def _unit_rows(v: np.ndarray) -> np.ndarray:
 
 
 def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndarray:
-    """Local frames R_HL = [N_new, T, B] (eqs. 4-6).
+    """Right-handed local frames R_HL = [N_new, T, -B] (eqs. 4-6, see module docstring).
 
     Args:
         t_H: (M, 3) tangents (feed direction) in H; normalised here.
@@ -67,7 +72,7 @@ def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndar
         name: item name for error messages (e.g. "window 2").
 
     Returns:
-        (M, 3, 3) rotations; column 0 = N_new, 1 = T, 2 = B = T x N.
+        (M, 3, 3) rotations; column 0 = N_new, 1 = T, 2 = N_new x T = -B (B = T x N).
 
     Raises:
         InputError: shapes differ, or a normal is (nearly) parallel to its tangent.
@@ -86,7 +91,7 @@ def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndar
         )
     b = b / nb[:, None]
     n_new = np.cross(b, t)
-    return np.stack([n_new, t, b], axis=2)
+    return np.stack([n_new, t, -b], axis=2)
 
 
 def axis_from_angles(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
@@ -97,7 +102,7 @@ def axis_from_angles(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
         theta_B: (...) lead/travel angle [rad].
 
     Returns:
-        (..., 3) unit axis in L (tip -> spindle, = -Z_T).
+        (..., 3) unit tool axis +Z_T (spindle -> tip) in L.
     """
     a = np.asarray(theta_A, float)
     b = np.asarray(theta_B, float)
@@ -152,3 +157,18 @@ def check_rotations(R: np.ndarray) -> np.ndarray:
     orth = np.abs(np.einsum("mki,mkj->mij", R, R) - np.eye(3)).max(axis=(1, 2))
     det = np.abs(np.linalg.det(R) - 1.0)
     return np.maximum(orth, det)
+
+
+def R_LT_from_angles(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
+    """Tool orientation in the local frame, R_y(theta_A) @ R_x(theta_B): (..., 3, 3).
+
+    Column 2 is :func:`axis_from_angles`; column 0 (X_T) is N_new turned with the tool.
+    """
+    a = np.asarray(theta_A, float)
+    b = np.asarray(theta_B, float)
+    sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
+    z = np.zeros_like(a)
+    x_t = np.stack([ca, z, -sa], axis=-1)
+    y_t = np.stack([sa * sb, cb, ca * sb], axis=-1)
+    z_t = np.stack([sa * cb, -sb, ca * cb], axis=-1)
+    return np.stack([x_t, y_t, z_t], axis=-1)

@@ -52,7 +52,7 @@ class OrientationProblem:
     Attributes:
         model: "axis" or "paper".
         p_HC: (M, 3) CL points in H [m].
-        R_HL: (M, 3, 3) local frames [N_new, T, B] in H.
+        R_HL: (M, 3, 3) right-handed local frames [N_new, T, -B] in H.
         theta_min, theta_max: box bounds on both angles [rad].
         w1, w2: eq. 11 weights (paper model).
         second_difference_weight: w2 of the axis model [m^2] (0 = first differences only).

@@ -8,7 +8,7 @@ import numpy as np
 from pydrake.math import RigidTransform
 
 from drakedeburr.config import OrientationBounds
-from drakedeburr.frames.local_frames import angles_from_axis_H
+from drakedeburr.frames.local_frames import R_LT_from_angles, angles_from_axis_H
 from drakedeburr.hub.types import WindowKind
 from drakedeburr.path.types import ClPath
 
@@ -22,9 +22,10 @@ class ToolPath:
     Everything per point is stored in the hub frame H; the world view follows ``X_WH`` (the
     registered hub pose), so re-targeting to a new hub pose is :meth:`with_hub_pose`.
 
-    Tool-axis convention: ``axis_H`` is the unit vector from the burr's cutting point toward
-    the spindle (CAM/APT i, j, k); DESIGN.md's tool frame has ``Z_T = -axis`` (spindle -> tip),
-    see :attr:`z_T_H`. The rotation about the axis is free (not fixed here).
+    Tool-axis convention: ``axis_H`` is DESIGN.md's tool ``+Z_T``, the unit vector along the
+    burr from the spindle toward the tip (into the material side); a CAM/APT (i, j, k) vector
+    is ``-axis`` (:attr:`ijk_H`). The spin about the axis is free; :attr:`R_HT` gives one
+    (X_T = the local N turned with the tool) as a preference.
 
     Attributes:
         window_index: window number (0-based, as WindowEdge.index / ClPath.window_index).
@@ -32,8 +33,8 @@ class ToolPath:
         cl_path: the ClPath the points came from.
         X_WH: hub pose in world used for the world-frame views.
         p_HC: (M, 3) CL points (burr cutting point) in H [m].
-        R_HL: (M, 3, 3) local frames [N_new, T, B] in H (frames.local_frames).
-        axis_H: (M, 3) chosen unit tool axes in H (tip -> spindle).
+        R_HL: (M, 3, 3) right-handed local frames [N_new, T, -B] in H (frames.local_frames).
+        axis_H: (M, 3) chosen unit tool axes +Z_T in H (spindle -> tip).
         theta_A: (M,) work/tilt angle [rad] of axis_H in its local frame.
         theta_B: (M,) lead/travel angle [rad].
         bounds: the box [theta_min, theta_max] both angles must stay in.
@@ -78,9 +79,19 @@ class ToolPath:
         return len(self.p_HC)
 
     @property
-    def z_T_H(self) -> np.ndarray:
-        """(M, 3) DESIGN.md tool +Z (spindle -> tip) in H: ``-axis_H``."""
+    def ijk_H(self) -> np.ndarray:
+        """(M, 3) CAM/APT tool-axis vectors (tip -> spindle) in H: ``-axis_H``."""
         return -self.axis_H
+
+    @property
+    def R_HT(self) -> np.ndarray:
+        """(M, 3, 3) preferred tool orientations in H: R_HL @ R_y(theta_A) @ R_x(theta_B)."""
+        return np.einsum("mij,mjk->mik", self.R_HL, R_LT_from_angles(self.theta_A, self.theta_B))
+
+    @property
+    def R_WT(self) -> np.ndarray:
+        """(M, 3, 3) preferred tool orientations in world."""
+        return np.einsum("ij,mjk->mik", self.X_WH.rotation().matrix(), self.R_HT)
 
     @property
     def p_WC(self) -> np.ndarray:
@@ -89,7 +100,7 @@ class ToolPath:
 
     @property
     def axis_W(self) -> np.ndarray:
-        """(M, 3) tool axes (tip -> spindle) in world."""
+        """(M, 3) tool axes +Z_T (spindle -> tip) in world."""
         return (self.X_WH.rotation().matrix() @ self.axis_H.T).T
 
     @property
@@ -103,7 +114,7 @@ class ToolPath:
         return np.einsum("ij,mjk->mik", self.X_WH.rotation().matrix(), self.R_HL)
 
     def admissible(self, axis_W: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-        """(M,) bool: does the world-frame axis (M, 3) (tip -> spindle) keep both angles in
+        """(M,) bool: does the world-frame tool axis +Z_T (M, 3) keep both angles in
         the box at each point? The exact test behind the cone approximations."""
         axis_H = (self.X_WH.rotation().matrix().T @ np.asarray(axis_W, float).T).T
         a, b = angles_from_axis_H(self.R_HL, axis_H)
