@@ -80,7 +80,8 @@ def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndar
     t = np.asarray(t_H, float)
     n = np.asarray(n_H, float)
     if t.shape != n.shape or t.ndim != 2 or t.shape[1] != 3:
-        raise InputError(f"{name or 'local_frames'}: t_H {t.shape} and n_H {n.shape} must both be (M, 3)")
+        raise InputError(f"{name or 'local_frames'}: t_H {t.shape} and n_H {n.shape} "
+                         "must both be (M, 3)")
     t = _unit_rows(t)
     b = np.cross(t, n)
     nb = np.linalg.norm(b, axis=1)

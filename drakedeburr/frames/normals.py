@@ -147,7 +147,7 @@ def inner_normals_from_cloud(
     cloud: ScanCloud,
     cl: ClPath,
     *,
-    params: ProcessParameters = ProcessParameters(),
+    params: ProcessParameters | None = None,
     voxel_size: float = 0.3e-3,
     knn: int = 20,
     min_neighbours: int = 40,
@@ -176,6 +176,7 @@ def inner_normals_from_cloud(
     """
     import open3d as o3d
 
+    params = params or ProcessParameters()
     p = np.asarray(cloud.p_S, float)
     if p.ndim != 2 or p.shape[1] != 3 or len(p) < min_neighbours:
         raise InputError(f"{cloud.source or 'scan'}: need an (N, 3) cloud, got {p.shape}")
@@ -266,7 +267,7 @@ def inner_normals_from_mesh(
     mesh,
     cl: ClPath,
     *,
-    params: ProcessParameters = ProcessParameters(),
+    params: ProcessParameters | None = None,
     sample_spacing: float = 0.3e-3,
     mesh_sigma: float = 0.5e-3,
     seed: int = 0,
@@ -285,6 +286,7 @@ def inner_normals_from_mesh(
     """
     import trimesh
 
+    params = params or ProcessParameters()
     r = params.normal_search_radius
     lo = cl.p_HC.min(axis=0) - r
     hi = cl.p_HC.max(axis=0) + r

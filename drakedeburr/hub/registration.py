@@ -144,7 +144,7 @@ def register_hub(
     X_WH_prior: RigidTransform | None = None,
     *,
     options: RegistrationOptions = RegistrationOptions(),
-    tolerances: Tolerances = Tolerances(),
+    tolerances: Tolerances | None = None,
 ) -> RegistrationResult:
     """Register a scan (in W) to the hub mesh (in H).
 
@@ -153,7 +153,7 @@ def register_hub(
         mesh: ``trimesh.Trimesh`` hub model in H [m].
         X_WH_prior: the vision's rough hub pose (default identity).
         options: see RegistrationOptions.
-        tolerances: acceptance thresholds (registration_* fields).
+        tolerances: acceptance thresholds (registration_* fields); default Tolerances().
 
     Returns:
         RegistrationResult (check ``accepted`` or call ``require()``).
@@ -162,6 +162,7 @@ def register_hub(
     import trimesh
 
     t0 = time.perf_counter()
+    tolerances = tolerances or Tolerances()
     reg = o3d.pipelines.registration
     p_W = np.asarray(scan.p_S, float)
     if p_W.ndim != 2 or p_W.shape[1] != 3 or len(p_W) < 100:

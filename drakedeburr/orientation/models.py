@@ -216,5 +216,6 @@ def make_problem(
     d = prob.chords
     bad = np.flatnonzero(d <= 1e-9)
     if bad.size:
-        raise InputError(f"{name}: coincident consecutive CL points at segment(s) {bad[:10].tolist()}")
+        raise InputError(f"{name}: coincident consecutive CL points at segment(s) "
+                         f"{bad[:10].tolist()}")
     return prob

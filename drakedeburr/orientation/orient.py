@@ -55,9 +55,10 @@ def _bounds_for(kind: str, params: ProcessParameters) -> OrientationBounds:
 
 
 def problem_for(cl: ClPath, R_HL: np.ndarray, model: ModelName = "axis",
-                params: ProcessParameters = ProcessParameters(),
+                params: ProcessParameters | None = None,
                 options: OrientOptions = OrientOptions()) -> OrientationProblem:
     """The orientation problem of one window (bounds from its kind)."""
+    params = params or ProcessParameters()
     b = _bounds_for(cl.kind, params)
     return make_problem(model, cl.p_HC, R_HL, b.theta_min, b.theta_max, w1=params.w1,
                         w2=params.w2, second_difference_weight=options.second_difference_weight,
@@ -114,7 +115,7 @@ def orient_window(
     X_WH: RigidTransform | None = None,
     model: ModelName = "axis",
     solver: SolverName = "exact",
-    params: ProcessParameters = ProcessParameters(),
+    params: ProcessParameters | None = None,
     options: OrientOptions = OrientOptions(),
     x0: np.ndarray | None = None,
 ) -> ToolPath:
@@ -127,13 +128,14 @@ def orient_window(
         X_WH: hub pose in world (default identity); only stored, the solve is in H.
         model: "axis" (default) or "paper" (eq. 11 literally).
         solver: "exact" (default) or "pso" (the source's baseline).
-        params: process parameters (bounds, weights, depth of cut).
+        params: process parameters (bounds, weights, depth of cut); default ProcessParameters().
         options: solver settings.
         x0: optional warm start (2M,) [theta_A_0, theta_B_0, ...] [rad].
 
     Returns:
         ToolPath; ``success`` False (with a message) when the solver's checks fail.
     """
+    params = params or ProcessParameters()
     n = np.asarray(n_H, float)
     if n.shape != cl.p_HC.shape:
         raise InputError(f"window {cl.window_index}: n_H has shape {n.shape}, "
