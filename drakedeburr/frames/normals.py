@@ -307,20 +307,23 @@ def inner_normals_from_mesh(
     n_wall = np.zeros((m, 3))
     n_face = np.zeros((m, 3))
     counts = np.zeros(m, int)
-    for i, p_C in enumerate(cl.p_HC):
-        idx = np.asarray(tree.query_ball_point(p_C, r))
-        counts[i] = idx.size
-        if idx.size < 10:
-            raise InputError(f"window {cl.window_index}, CL point {i}: no mesh surface within "
-                             f"{r * 1e3:.1f} mm of {np.round(p_C * 1e3, 2).tolist()} mm")
-        labels = _kmeans_split(nrm[idx], seed)
-        w = np.exp(-0.5 * np.sum((pts[idx] - p_C) ** 2, axis=1) / mesh_sigma**2)
-        means = []
-        for c in range(2):
-            sel = labels == c
-            v = (nrm[idx[sel]] * w[sel, None]).sum(axis=0) if sel.any() else z_loop
-            means.append(v / max(np.linalg.norm(v), 1e-300))
-        wall = int(np.argmin([_fold(v @ z_loop) for v in means]))  # wall: ~perpendicular to Z
-        n_wall[i], n_face[i] = means[wall], means[1 - wall]
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        for i, p_C in enumerate(cl.p_HC):
+            idx = np.asarray(tree.query_ball_point(p_C, r))
+            counts[i] = idx.size
+            if idx.size < 10:
+                raise InputError(f"window {cl.window_index}, CL point {i}: no mesh surface within "
+                                 f"{r * 1e3:.1f} mm of {np.round(p_C * 1e3, 2).tolist()} mm")
+            labels = _kmeans_split(nrm[idx], seed)
+            w = np.exp(-0.5 * np.sum((pts[idx] - p_C) ** 2, axis=1) / mesh_sigma**2)
+            means = []
+            for c in range(2):
+                sel = labels == c
+                v = (nrm[idx[sel]] * w[sel, None]).sum(axis=0) if sel.any() else z_loop
+                means.append(v / max(np.linalg.norm(v), 1e-300))
+            wall = int(np.argmin([_fold(v @ z_loop) for v in means]))  # wall: ~perpendicular to Z
+            n_wall[i], n_face[i] = means[wall], means[1 - wall]
     return NormalEstimate(cl.window_index, n_wall, n_face, ("mesh",) * m, counts,
                           np.zeros(0, int))
