@@ -59,5 +59,6 @@ def test_too_few_neighbours_names_window_and_point(plate):
     scan = scan_of(mesh, spacing=0.5e-3, sigma=0.05e-3, seed=1)
     keep = scan.p_S[:, 0] < 0.02  # the scan misses the edge at x = +25 mm
     cropped = ScanCloud(scan.p_S[keep], source="cropped.ply")
-    with pytest.raises(InputError, match=r"cropped.ply: window 3, CL point 0 .* only \d+ scan points"):
+    with pytest.raises(InputError,
+                       match=r"cropped.ply: window 3, CL point 0 .* only \d+ scan points"):
         mut.inner_normals_from_cloud(cropped, cl)

@@ -22,7 +22,7 @@ from drakedeburr.orientation.types import ToolPath
 from drakedeburr.path.types import ClPath
 
 __all__ = ["OrientOptions", "SolverName", "orient_window", "solve_problem", "problem_for",
-           "cone_half_angles"]
+           "cone_half_angles", "tool_path_summary"]
 
 log = logging.getLogger(__name__)
 
@@ -163,3 +163,27 @@ def orient_window(
         depth_of_cut=depth, model=model, solver=solver, objective=rep.objective,
         success=rep.success, solve_seconds=rep.solve_seconds, stats=stats, message=rep.message,
     )
+
+
+def tool_path_summary(tp: ToolPath) -> dict:
+    """JSON-ready summary of one window's ToolPath (angles in rad, lengths in mm)."""
+    return {
+        "window": tp.window_index,
+        "kind": tp.kind,
+        "n_points": len(tp),
+        "model": tp.model,
+        "solver": tp.solver,
+        "objective": tp.objective,
+        "solve_seconds": tp.solve_seconds,
+        "success": tp.success,
+        "message": tp.message,
+        "bounds_rad": [tp.bounds.theta_min, tp.bounds.theta_max],
+        "cone_half_angle_rad": tp.cone_half_angle,
+        "cone_outer_half_angle_rad": tp.cone_outer_half_angle,
+        "depth_of_cut_mm": tp.depth_of_cut * 1e3,
+        "theta_A": tp.stats["theta_A"],
+        "theta_B": tp.stats["theta_B"],
+        "axis_turn_deg_per_mm": tp.stats["axis_turn_deg_per_mm"],
+        "axis_turn_total_deg": tp.stats["axis_turn_total_deg"],
+        "solver_info": tp.stats.get("solver_info", {}),
+    }
