@@ -207,3 +207,20 @@ def test_bad_inputs_are_named():
         mut.orient_window(cl, n, model="nope")
     with pytest.raises(InputError, match="unknown solver 'magic'"):
         mut.orient_window(cl, n, solver="magic")
+
+
+def test_axis_model_hessian_matches_finite_differences_of_the_gradient():
+    cl, n = WINDOWS[1]
+    prob = _problem(cl, n, "axis", 1e-5)
+    x = np.random.default_rng(5).uniform(0.09, 0.26, prob.n_vars)
+    f, g, H_gn, _ = prob.derivatives(x)
+    H = prob.hessian(x)
+    assert f == pytest.approx(prob.objective(x), rel=1e-12)
+    h = 1e-6
+    for k in np.random.default_rng(6).choice(prob.n_vars, 8, replace=False):
+        e = np.zeros(prob.n_vars)
+        e[k] = h
+        fd = (prob.gradient(x + e) - prob.gradient(x - e)) / (2 * h)
+        np.testing.assert_allclose(H[:, k], fd, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+    J = prob.residual_jacobian(x)
+    np.testing.assert_allclose(H_gn, 2 * J.T @ J, atol=1e-10 * np.abs(H_gn).max())

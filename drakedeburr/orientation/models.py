@@ -33,6 +33,7 @@ this (Gauss-Newton / sequential convex QPs).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -152,32 +153,82 @@ class OrientationProblem:
         before, after, scale = self._second_rows()
         return (slope[..., after, :] - slope[..., before, :]) * scale[:, None]
 
-    def residual_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """Dense Jacobian d r / d x, shape (3R, 2M), rows ordered as residuals(x).reshape(-1)."""
-        x = np.asarray(x, float)
-        th = x.reshape(self.m, 2)
-        # d axis_H_i / d theta_i: (M, 3, 2)
-        J_pt = np.einsum("mij,mjk->mik", self.R_HL, axis_jacobian(th[:, 0], th[:, 1]))
+    @cached_property
+    def _gram(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """G = C^T C (M, M) and its nonzero pattern (i, j, G_ij)."""
+        C = self.coefficients()
+        G = C.T @ C
+        ii, jj = np.nonzero(np.abs(G) > 0)
+        return G, ii, jj, G[ii, jj]
+
+    def coefficients(self) -> np.ndarray:
+        """(R, M) matrix C with residuals = C @ axes (every axis-model residual is a linear
+        combination of the tool axes; row order as :meth:`residuals`)."""
         i, j = self.segment_index
         d = self.chords
         k = len(d)
-        # d(diff_k)/dx as (K, 3, 2M)
-        D = np.zeros((k, 3, self.n_vars))
-        rows = np.arange(k)
-        for s in range(2):
-            D[rows, :, 2 * j + s] += J_pt[j, :, s]
-            D[rows, :, 2 * i + s] -= J_pt[i, :, s]
-        blocks = [D / np.sqrt(d)[:, None, None]]
+        D = np.zeros((k, self.m))  # D @ axes = differences a_j - a_i
+        D[np.arange(k), j] += 1.0
+        D[np.arange(k), i] -= 1.0
+        rows = [D / np.sqrt(d)[:, None]]
         if self.second_difference_weight > 0.0:
             before, after, scale = self._second_rows()
-            S = D / d[:, None, None]
-            blocks.append((S[after] - S[before]) * scale[:, None, None])
-        return np.concatenate(blocks, axis=0).reshape(-1, self.n_vars)
+            S = D / d[:, None]
+            rows.append((S[after] - S[before]) * scale[:, None])
+        return np.concatenate(rows, axis=0)
+
+    def _point_derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """axes (M, 3), d axis / d theta (M, 3, 2) and second derivatives (M, 3, 2, 2) in H."""
+        th = np.asarray(x, float).reshape(self.m, 2)
+        a, b = th[:, 0], th[:, 1]
+        sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
+        z = np.zeros_like(a)
+        d_aa = np.stack([-sa * cb, z, -ca * cb], axis=-1)
+        d_ab = np.stack([-ca * sb, z, sa * sb], axis=-1)
+        d_bb = np.stack([-sa * cb, sb, -ca * cb], axis=-1)
+        H_L = np.stack([np.stack([d_aa, d_ab], -1), np.stack([d_ab, d_bb], -1)], -1)
+        R = self.R_HL
+        axes_H = np.einsum("mij,mj->mi", R, axis_from_angles(a, b))
+        J_H = np.einsum("mij,mjk->mik", R, axis_jacobian(a, b))
+        H_H = np.einsum("mij,mjkl->mikl", R, H_L)
+        return axes_H, J_H, H_H
+
+    def residual_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """Dense Jacobian d r / d x, shape (3R, 2M), rows ordered as residuals(x).reshape(-1)."""
+        _, J_pt, _ = self._point_derivatives(x)
+        C = self.coefficients()
+        # r[q, c] = sum_m C[q, m] a[m, c]  ->  d r[q, c] / d theta[m, s] = C[q, m] J_pt[m, c, s]
+        return np.einsum("qm,mcs->qcms", C, J_pt).reshape(-1, self.n_vars)
+
+    def derivatives(self, x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        """Axis model derivatives.
+
+        Returns:
+            (objective, gradient (2M,), Gauss-Newton Hessian 2 J^T J (2M, 2M), curvature
+            blocks (M, 2, 2)); the exact Hessian is the Gauss-Newton Hessian plus the blocks on
+            its 2x2 diagonal (the curvature of each axis in its own two angles).
+        """
+        A, J_pt, H_pt = self._point_derivatives(x)
+        G, ii, jj, g = self._gram  # G = C^T C is banded: use its nonzero pattern only
+        GA = np.zeros_like(A)
+        np.add.at(GA, ii, g[:, None] * A[jj])
+        f = float(np.einsum("mc,mc->", A, GA))
+        grad = 2.0 * np.einsum("mcs,mc->ms", J_pt, GA).reshape(-1)
+        pair = 2.0 * g[:, None, None] * np.einsum("pcs,pct->pst", J_pt[ii], J_pt[jj])
+        H_gn = np.zeros((self.m, 2, self.m, 2))
+        H_gn[ii, :, jj, :] = pair
+        H_gn = H_gn.reshape(self.n_vars, self.n_vars)
+        blocks = 2.0 * np.einsum("mc,mcst->mst", GA, H_pt)
+        return f, grad, H_gn, blocks
+
+    def hessian(self, x: np.ndarray) -> np.ndarray:
+        """Exact Hessian of the axis objective, (2M, 2M)."""
+        _, _, H, blocks = self.derivatives(x)
+        return H + block_diag_2(blocks)
 
     def gradient(self, x: np.ndarray) -> np.ndarray:
         """Exact gradient of the axis objective, (2M,)."""
-        r = self.residuals(x).reshape(-1)
-        return 2.0 * self.residual_jacobian(x).T @ r
+        return self.derivatives(x)[1]
 
     def in_bounds(self, x: np.ndarray, tol: float = 1e-9) -> np.ndarray:
         """(M,) bool: both angles of point i inside the box (with tolerance)."""
@@ -219,3 +270,13 @@ def make_problem(
         raise InputError(f"{name}: coincident consecutive CL points at segment(s) "
                          f"{bad[:10].tolist()}")
     return prob
+
+
+def block_diag_2(blocks: np.ndarray) -> np.ndarray:
+    """(M, 2, 2) blocks -> (2M, 2M) block-diagonal matrix."""
+    m = len(blocks)
+    out = np.zeros((2 * m, 2 * m))
+    for s_ in range(2):
+        for t_ in range(2):
+            out[2 * np.arange(m) + s_, 2 * np.arange(m) + t_] = blocks[:, s_, t_]
+    return out
