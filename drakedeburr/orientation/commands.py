@@ -84,7 +84,8 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
     if normals == "cloud":
         from drakedeburr.hub import simulate_scan
 
-        scan = simulate_scan(hub, sigma=sigma, seed=seed)
+        scan = simulate_scan(hub, sigma=sigma, seed=seed, spacing=0.3e-3,
+                             max_edge_distance=1.5 * 6e-3)
     rows = []
     for w, edge in enumerate(hub.windows):
         cl, idx = cl_points_from_edge(edge, spacing)
@@ -95,7 +96,7 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
                 raise InputError(f"window {edge.index}: the hub model has no ground-truth normals")
             n_H = np.asarray(edge.n_wall_H)[idx]
         elif normals == "mesh":
-            n_H = inner_normals_from_mesh(hub.mesh, cl).n_wall_H
+            n_H = inner_normals_from_mesh(hub.trimesh, cl).n_wall_H
         else:
             n_H = inner_normals_from_cloud(scan, cl).n_wall_H
         tp = orient_window(cl, n_H, model=model, solver=solver)
