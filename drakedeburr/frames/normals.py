@@ -11,7 +11,9 @@ of the material into the opening (WindowEdge.n_wall_H). Point-cloud procedure, a
 3. key points (curvature > ``key_point_curvature``, 0.12 1/mm) get a local curved-surface fit
    (a Gaussian-weighted quadric height field, refitted once in its own tangent frame), the
    others a RANSAC plane (open3d ``segment_plane``, 0.1 mm threshold) refined by least squares
-   on its inliers;
+   on its inliers. A plane that does not describe the surface *at* the CL point (the point off
+   the plane, or the points next to it not inliers - RANSAC found a flat stretch beside a
+   fillet whose curvature is just under the threshold) is rejected for the curved fit;
 4. consistent grouping along the curve with the source's angle test | |angle| - pi/2 |;
 5. inner-side group = the one whose normals make the larger (sign-free) angle with the loop
    axis Z (the Z axis of the frame at the CL-point centroid), i.e. the wall, not the face;
@@ -53,7 +55,9 @@ class NormalEstimate:
         window_index: the window.
         n_wall_H: (M, 3) unit inner-side normals (out of the material into the opening).
         n_face_H: (M, 3) unit front-face normals (out of the material).
-        method: (M,) "quadric" (key point), "plane" (RANSAC) or "mesh".
+        method: (M,) "quadric" (key point), "plane" (RANSAC), "quadric (plane rejected)"
+            (a non-key point whose RANSAC plane did not describe the surface at the point) or
+            "mesh".
         neighbours: (M,) points found within the search radius.
         source_sign_disagreements: (K,) indices where the source's centroid sign test would
             have chosen the other sign (informative; empty on convex windows).
@@ -93,15 +97,26 @@ def _fold(cos: np.ndarray) -> np.ndarray:
     return np.abs(np.arccos(np.clip(cos, -1.0, 1.0)) - np.pi / 2)
 
 
-def _plane_normal(pts: np.ndarray, threshold: float, seed: int) -> np.ndarray:
+def _plane_normal(pts: np.ndarray, p0: np.ndarray, threshold: float, seed: int,
+                  local_radius: float) -> np.ndarray | None:
+    """RANSAC plane (open3d ``segment_plane``) refined by least squares on its inliers; None
+    when the plane is not the local surface at p0 (p0 farther than 2 thresholds from it, or
+    fewer than 80 % of the points within ``local_radius`` of p0 are inliers) - e.g. a
+    fillet next to a flat stretch, where RANSAC finds the flat stretch."""
     import open3d as o3d
 
     pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
     o3d.utility.random.seed(seed)
     _, inliers = pc.segment_plane(distance_threshold=threshold, ransac_n=3, num_iterations=200)
     q = pts[np.asarray(inliers)] if len(inliers) >= 3 else pts
-    _, _, vt = np.linalg.svd(q - q.mean(axis=0), full_matrices=False)
-    return vt[2]
+    c = q.mean(axis=0)
+    _, _, vt = np.linalg.svd(q - c, full_matrices=False)
+    n = vt[2]
+    near = np.linalg.norm(pts - p0, axis=1) <= local_radius
+    dist = np.abs((pts[near] - c) @ n)
+    if abs((p0 - c) @ n) > 2 * threshold or (near.any() and np.mean(dist <= threshold) < 0.8):
+        return None
+    return n
 
 
 def _quadric_normal(pts: np.ndarray, p0: np.ndarray, n0: np.ndarray, t0: np.ndarray,
@@ -206,7 +221,10 @@ def inner_normals_from_cloud(
     side_pts = np.zeros((m, 2, 3))  # centroid of each cluster's points
     method: list[str] = []
     counts = np.zeros(m, int)
-    # one thread for k-means: the neighbourhoods are small, thread start-up would dominate
+    # one thread for k-means: the neighbourhoods are small and OpenMP start-up/spinning would
+    # dominate (x100 on a loaded machine). sklearn must be imported before the limit is set.
+    import sklearn.cluster  # noqa: F401
+
     with threadpool_limits(1):
         for i, p_C in enumerate(cl.p_HC):
             k, idx, _ = tree.search_radius_vector_3d(p_C, r)
@@ -220,18 +238,24 @@ def inner_normals_from_cloud(
             idx = np.asarray(idx)
             labels = _kmeans_split(nrm[idx], seed)
             key = cl.kappa[i] > params.key_point_curvature
-            method.append("quadric" if key else "plane")
+            label = "quadric" if key else "plane"
             for c in range(2):
                 q = pts[idx[labels == c]]
                 side_pts[i, c] = q.mean(axis=0) if len(q) else p_C
                 if len(q) < 6:
                     fitted[i, c] = _principal(nrm[idx[labels == c]]) if len(q) else z_loop
                     continue
-                if key:
+                n_fit = None
+                if not key:
+                    n_fit = _plane_normal(q, p_C, params.ransac_threshold, seed,
+                                          2 * quadric_sigma)
+                    if n_fit is None:  # not planar at this point after all: curved fit
+                        label = "quadric (plane rejected)"
+                if n_fit is None:
                     n0 = _principal(nrm[idx[labels == c]])
-                    fitted[i, c] = _quadric_normal(q, p_C, n0, cl.t_H[i], quadric_sigma, 0.5 * r)
-                else:
-                    fitted[i, c] = _plane_normal(q, params.ransac_threshold, seed)
+                    n_fit = _quadric_normal(q, p_C, n0, cl.t_H[i], quadric_sigma, 0.5 * r)
+                fitted[i, c] = n_fit
+            method.append(label)
             if progress is not None:
                 progress(i + 1, m, f"window {w}")
     # 4. consistent grouping along the curve (source's angle test)
@@ -307,9 +331,10 @@ def inner_normals_from_mesh(
     n_wall = np.zeros((m, 3))
     n_face = np.zeros((m, 3))
     counts = np.zeros(m, int)
+    import sklearn.cluster  # noqa: F401
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(1):
+    with threadpool_limits(1):  # see inner_normals_from_cloud
         for i, p_C in enumerate(cl.p_HC):
             idx = np.asarray(tree.query_ball_point(p_C, r))
             counts[i] = idx.size
