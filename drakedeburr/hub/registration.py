@@ -8,9 +8,12 @@ model (a mesh in H) with open3d:
    correspondences (``registration_ransac_based_on_feature_matching``). A hub is n-fold
    symmetric about its axis, so the global result is snapped to the symmetric equivalent
    closest to the prior pose (the vision's angular position is good to better than pi/n);
-2. candidates around the prior as well (turns about the hub axis across +-pi/n), because RANSAC
-   is random and a symmetric part gives it several equally good answers;
-3. each candidate refined by point-to-plane ICP (coarse, then fine), the best kept;
+2. candidates around the prior as well (turns about the hub axis across +-pi/n every
+   ``start_step``), because RANSAC is random and a symmetric part gives it several equally good
+   answers;
+3. each candidate refined by coarse point-to-plane ICP (scan onto the model, whose normals are
+   exact), the best plausible one (turn within the window, hub axis not tilted) refined by fine
+   point-to-plane ICP;
 4. acceptance: share of scan points within ``registration_inlier_distance`` of the posed mesh
    (fitness) and the RMS point-to-mesh distance of those inliers, both measured exactly on the
    mesh with open3d's RaycastingScene. A poor fit (e.g. the wrong hub model) is refused:
@@ -52,11 +55,16 @@ class RegistrationOptions:
         symmetry_order: n of the hub's n-fold symmetry about +Z_H (number of identical window
             groups); 1 = no symmetry assumed.
         prior_turn_range: [rad] the vision's angular uncertainty; default pi / symmetry_order.
-        global_voxel: voxel size of the FPFH / RANSAC stage.
+        feature_voxel: voxel size of the FPFH / RANSAC stage.
+        global_voxel: voxel size of the coarse ICP stage.
         fine_voxel: voxel size of the fine ICP stage.
-        model_spacing: sampling spacing of the model mesh.
-        prior_starts: ICP starts spread over the prior turn range (in addition to the global
-            result).
+        model_spacing: sampling spacing of the model mesh (only the part near the scan).
+        start_step: [rad] spacing of the ICP starts over the prior turn range (in addition to
+            the global result); smaller than the turn an ICP recovers from (about half a
+            window's angular width).
+        roi_radii: optional (r_min, r_max) [m]: use only scan and model points at these
+            distances from the hub axis (e.g. the window annulus: the axisymmetric rim says
+            nothing about the turn and only costs time).
         ransac_iterations: RANSAC iteration cap of the global stage.
         max_tilt: [rad] largest angle between the hub axis of a candidate and of the prior (a
             clamped hub is never upside down; a flat, mirror-symmetric part could fit so).
@@ -65,11 +73,13 @@ class RegistrationOptions:
 
     symmetry_order: int = 1
     prior_turn_range: float | None = None
-    global_voxel: float = 2.0e-3
+    feature_voxel: float = 6.0e-3
+    global_voxel: float = 3.0e-3
     fine_voxel: float = 1.0e-3
-    model_spacing: float = 0.5e-3
-    prior_starts: int = 5
-    ransac_iterations: int = 20000
+    model_spacing: float = 0.7e-3
+    start_step: float = np.radians(4.0)
+    roi_radii: tuple[float, float] | None = None
+    ransac_iterations: int = 5000
     max_tilt: float = np.radians(5.0)
     seed: int = 0
 
@@ -171,70 +181,90 @@ def register_hub(
     n_sym = max(int(options.symmetry_order), 1)
     turn_range = options.prior_turn_range if options.prior_turn_range is not None else np.pi / n_sym
 
-    # model: dense samples with exact face normals (H)
-    count = int(np.ceil(mesh.area / options.model_spacing**2))
-    p_H, fid = trimesh.sample.sample_surface(mesh, count, seed=options.seed)
-    model = _cloud(p_H, mesh.face_normals[fid])
-    scan_pc = _cloud(p_W)
-    scan_fine = scan_pc.voxel_down_sample(options.fine_voxel)
-    scan_fine.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=4 * options.fine_voxel,
-                                                                     max_nn=30))
-    model_fine = model.voxel_down_sample(options.fine_voxel)
-    # work in "registration" form: source = model (H), target = scan (W), T = X_WH
-    starts: list[tuple[str, np.ndarray]] = []
+    # scan, in the prior hub frame, optionally cut to the region of interest
+    p_Hprior = X0.inverse().multiply(p_W.T).T
+    keep = np.ones(len(p_W), bool)
+    if options.roi_radii is not None:
+        rad = np.hypot(p_Hprior[:, 0], p_Hprior[:, 1])
+        keep = (rad >= options.roi_radii[0]) & (rad <= options.roi_radii[1])
+        if keep.sum() < 100:
+            raise InputError(f"{scan.source or 'scan'}: fewer than 100 points inside the region "
+                             f"of interest r = {options.roi_radii} m")
+    scan_pc = _cloud(p_W[keep])
+    # model: samples with exact face normals (H), only near the scanned region
+    margin = 0.02
+    lo = p_Hprior[keep].min(axis=0) - margin
+    hi = p_Hprior[keep].max(axis=0) + margin
+    tri = np.asarray(mesh.triangles)
+    faces = np.flatnonzero(np.all((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi), axis=1))
+    sub = mesh.submesh([faces], append=True)
+    count = int(np.ceil(sub.area / options.model_spacing**2))
+    p_H, fid = trimesh.sample.sample_surface(sub, count, seed=options.seed)
+    n_H = sub.face_normals[fid]
+    if options.roi_radii is not None:
+        rad = np.hypot(p_H[:, 0], p_H[:, 1])
+        sel = (rad >= options.roi_radii[0] - margin) & (rad <= options.roi_radii[1] + margin)
+        p_H, n_H = p_H[sel], n_H[sel]
+    model = _cloud(p_H, n_H)
     gv = options.global_voxel
-    src_g = model.voxel_down_sample(gv)
-    tgt_g = scan_pc.voxel_down_sample(gv)
-    try:
-        f_src, f_tgt = _fpfh(src_g, gv), _fpfh(tgt_g, gv)
+    model_c = model.voxel_down_sample(gv)
+    scan_c = scan_pc.voxel_down_sample(gv)
+    model_f = model.voxel_down_sample(options.fine_voxel)
+    scan_f = scan_pc.voxel_down_sample(options.fine_voxel)
+
+    # candidate starts (as X_WH)
+    starts: list[tuple[str, RigidTransform]] = []
+    try:  # global, feature based
+        fv = options.feature_voxel
+        src_g, tgt_g = model.voxel_down_sample(fv), scan_pc.voxel_down_sample(fv)
+        f_src, f_tgt = _fpfh(src_g, fv), _fpfh(tgt_g, fv)
         o3d.utility.random.seed(options.seed)
         glob = reg.registration_ransac_based_on_feature_matching(
-            src_g, tgt_g, f_src, f_tgt, True, 1.5 * gv,
+            src_g, tgt_g, f_src, f_tgt, True, 1.5 * fv,
             reg.TransformationEstimationPointToPoint(False), 3,
             [reg.CorrespondenceCheckerBasedOnEdgeLength(0.9),
-             reg.CorrespondenceCheckerBasedOnDistance(1.5 * gv)],
+             reg.CorrespondenceCheckerBasedOnDistance(1.5 * fv)],
             reg.RANSACConvergenceCriteria(options.ransac_iterations, 0.999))
         X_g = RigidTransform(glob.transformation)
         # snap to the symmetric equivalent nearest the prior
         best = min(range(n_sym), key=lambda k: abs(_z_turn(
             X0.rotation().matrix(), turn_about_hub_axis(X_g, 2 * np.pi * k / n_sym)
             .rotation().matrix())))
-        starts.append(("global", turn_about_hub_axis(X_g, 2 * np.pi * best / n_sym).GetAsMatrix4()))
+        starts.append(("global", turn_about_hub_axis(X_g, 2 * np.pi * best / n_sym)))
     except RuntimeError as exc:  # pragma: no cover - open3d failure is reported, not fatal
         log.warning("global registration failed: %s", exc)
-    for phi in np.linspace(-turn_range, turn_range, max(options.prior_starts, 1)):
-        starts.append((f"prior{np.degrees(phi):+.0f}deg",
-                       turn_about_hub_axis(X0, float(phi)).GetAsMatrix4()))
+    n_starts = max(int(np.ceil(2 * turn_range / options.start_step)) + 1, 1)
+    for phi in np.linspace(-turn_range, turn_range, n_starts):
+        starts.append((f"prior{np.degrees(phi):+.1f}deg", turn_about_hub_axis(X0, float(phi))))
 
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
                         o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
     thr = tolerances.registration_inlier_distance
-
-    scan_coarse = np.asarray(scan_pc.voxel_down_sample(gv).points)
     scan_all = np.asarray(scan_pc.points)
 
-    def score(X_WH: RigidTransform, coarse: bool = False) -> tuple[float, float]:
+    def score(X_WH: RigidTransform) -> tuple[float, float]:
         """(fitness, inlier RMS [m]) of the scan against the posed mesh (exact distances)."""
-        q = scan_coarse if coarse else scan_all
-        q_H = X_WH.inverse().multiply(q.T).T.astype(np.float32)
+        q_H = X_WH.inverse().multiply(scan_all.T).T.astype(np.float32)
         d = scene.compute_distance(o3d.core.Tensor(q_H)).numpy().astype(float)
-        inl = d <= (3 * thr if coarse else thr)
+        inl = d <= thr
         fit = float(inl.mean())
         rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else float("inf")
         return fit, rmse
 
-    src_c = model.voxel_down_sample(gv)
-    tgt_c = scan_pc.voxel_down_sample(gv)
+    def icp(source, target, X_HW: np.ndarray, dist: float, iters: int):
+        return reg.registration_icp(source, target, dist, X_HW,
+                                    reg.TransformationEstimationPointToPlane(),
+                                    reg.ICPConvergenceCriteria(1e-9, 1e-9, iters))
+
+    # coarse: point-to-plane ICP of the scan onto the model (exact normals) from every start
     X0_R = X0.rotation().matrix()
     cands = []
-    for label, T in starts:  # coarse: point-to-point ICP at the global voxel size
-        T1 = reg.registration_icp(src_c, tgt_c, 3 * gv, T,
-                                  reg.TransformationEstimationPointToPoint(),
-                                  reg.ICPConvergenceCriteria(max_iteration=50)).transformation
-        X = RigidTransform(T1)
-        fit, rmse = score(X, coarse=True)
-        cands.append((fit, rmse, label, X))
+    for label, X in starts:
+        r = icp(scan_c, model_c, X.inverse().GetAsMatrix4(), 2.0 * gv, 30)
+        cands.append((float(r.fitness), float(r.inlier_rmse), label,
+                      RigidTransform(np.linalg.inv(r.transformation))))
+
     def plausible(X: RigidTransform) -> bool:
         """Within the vision's turn window and hub axis within max_tilt of the prior's."""
         R = X.rotation().matrix()
@@ -249,14 +279,12 @@ def register_hub(
             f"{np.degrees(turn_range):.1f} deg turn and {np.degrees(options.max_tilt):.1f} deg "
             "axis tilt of the prior", 0.0, time.perf_counter() - t0,
             [(c[0], c[1], c[2]) for c in cands])
-    _, _, label, X = max(pool, key=lambda c: (round(c[0], 2), -c[1]))
-    # fine: point-to-plane ICP with the scan as source (the model's normals are exact)
-    T_inv = X.inverse().GetAsMatrix4()
-    for dist in (4 * options.fine_voxel, 2 * options.fine_voxel):
-        T_inv = reg.registration_icp(scan_fine, model_fine, dist, T_inv,
-                                     reg.TransformationEstimationPointToPlane(),
-                                     reg.ICPConvergenceCriteria(1e-9, 1e-9, 60)).transformation
-    X = RigidTransform(np.linalg.inv(T_inv))
+    _, _, label, X = max(pool, key=lambda c: (round(c[0], 3), -c[1]))
+    # fine: point-to-plane ICP at the fine voxel size, shrinking the correspondence distance
+    T = X.inverse().GetAsMatrix4()
+    for dist in (4 * options.fine_voxel, 2 * options.fine_voxel, options.fine_voxel):
+        T = icp(scan_f, model_f, T, dist, 60).transformation
+    X = RigidTransform(np.linalg.inv(T))
     fit, rmse = score(X)
     turn = _z_turn(X0.rotation().matrix(), X.rotation().matrix())
     ok = fit >= tolerances.registration_fitness_min and rmse <= tolerances.registration_rmse_max
