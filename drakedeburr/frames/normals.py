@@ -17,7 +17,10 @@ of the material into the opening (WindowEdge.n_wall_H). Point-cloud procedure, a
 4. consistent grouping along the curve with the source's angle test | |angle| - pi/2 |;
 5. inner-side group = the one whose normals make the larger (sign-free) angle with the loop
    axis Z (the Z axis of the frame at the CL-point centroid), i.e. the wall, not the face;
-6. sign: each wall normal must point away from the material, i.e. away from the centroid of its
+6. both normals are made exactly perpendicular to the edge tangent (the edge lies on both
+   faces; this is eq. 5's correction applied to the estimate, and it removes the fits' bias
+   along the edge at fillet/flat junctions);
+7. sign: each wall normal must point away from the material, i.e. away from the centroid of its
    neighbourhood's *front-face* cluster (a local test that also holds on non-convex windows).
    The source's test (dot product with the vector to the CL-point centroid) is evaluated too
    and its disagreements are reported, not used.
@@ -79,6 +82,15 @@ def loop_axis(p_HC: np.ndarray) -> np.ndarray:
     z = vt[2]
     area = np.cross(p_HC - c, np.roll(p_HC, -1, axis=0) - c).sum(axis=0)
     return z if area @ z >= 0 else -z
+
+
+def _perpendicular_to_edge(n: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Remove the tangent component: the edge lies on both faces, so both normals are exactly
+    perpendicular to its tangent (eq. 5's correction, applied to the estimate). This removes
+    the fits' bias along the edge where a fillet meets a flat stretch."""
+    t = t / np.linalg.norm(t, axis=1, keepdims=True)
+    v = n - np.einsum("ij,ij->i", n, t)[:, None] * t
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
 def _sym_features(n: np.ndarray) -> np.ndarray:
@@ -278,6 +290,7 @@ def inner_normals_from_cloud(
     n_wall = np.where(flip[:, None], -n_wall, n_wall)
     flip_f = np.einsum("ij,ij->i", n_face, wall_side - cl.p_HC) > 0
     n_face = np.where(flip_f[:, None], -n_face, n_face)
+    n_wall, n_face = _perpendicular_to_edge(n_wall, cl.t_H), _perpendicular_to_edge(n_face, cl.t_H)
     to_centroid = cl.p_HC.mean(axis=0) - cl.p_HC
     source_says = np.einsum("ij,ij->i", n_wall, to_centroid) > 0
     disagree = np.flatnonzero(~source_says)
@@ -350,5 +363,6 @@ def inner_normals_from_mesh(
                 means.append(v / max(np.linalg.norm(v), 1e-300))
             wall = int(np.argmin([_fold(v @ z_loop) for v in means]))  # wall: ~perpendicular to Z
             n_wall[i], n_face[i] = means[wall], means[1 - wall]
+    n_wall, n_face = _perpendicular_to_edge(n_wall, cl.t_H), _perpendicular_to_edge(n_face, cl.t_H)
     return NormalEstimate(cl.window_index, n_wall, n_face, ("mesh",) * m, counts,
                           np.zeros(0, int))
