@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from drakedeburr.frames.local_frames import local_frames
+from drakedeburr.frames.local_frames import R_HL_from_normals
 from drakedeburr.frames.normals import inner_normals_from_cloud
 from drakedeburr.hub import load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, problem_for, solve_problem
@@ -37,7 +37,7 @@ def main() -> None:
     speed, ratio = [], []
     for edge in windows:
         cl, idx = cl_points_from_edge(edge, 2e-3)
-        prob = problem_for(cl, local_frames(cl.t_H, edge.n_wall_H[idx]), "axis", options=opts)
+        prob = problem_for(cl, R_HL_from_normals(cl.t_H, edge.n_wall_H[idx]), "axis", options=opts)
         solve_problem(prob, "exact", opts)  # warm-up (imports, first Drake solve)
         ex = solve_problem(prob, "exact", opts)
         ps = solve_problem(prob, "pso", opts)

@@ -14,7 +14,7 @@ def _random_tn(rng, m=200):
 def test_frames_orthonormal_right_handed_and_follow_eqs_4_6():
     rng = np.random.default_rng(0)
     t, n = _random_tn(rng)
-    R = mut.local_frames(t, n)
+    R = mut.R_HL_from_normals(t, n)
     assert mut.check_rotations(R).max() < 1e-12
     t_hat = t / np.linalg.norm(t, axis=1)[:, None]
     np.testing.assert_allclose(R[:, :, 1], t_hat, atol=1e-12)  # Y = T
@@ -30,7 +30,7 @@ def test_flat_ccw_window_gives_z_into_the_material():
     ang = np.linspace(0, 2 * np.pi, 40, endpoint=False)
     t = np.c_[-np.sin(ang), np.cos(ang), np.zeros(40)]  # CCW about +Z
     n_wall = -np.c_[np.cos(ang), np.sin(ang), np.zeros(40)]  # into the opening (centre)
-    R = mut.local_frames(t, n_wall)
+    R = mut.R_HL_from_normals(t, n_wall)
     np.testing.assert_allclose(R[:, :, 2], np.tile([0, 0, -1.0], (40, 1)), atol=1e-12)
 
 
@@ -80,7 +80,7 @@ def test_axis_jacobian_matches_finite_differences():
 def test_world_axes_round_trip_through_frames():
     rng = np.random.default_rng(3)
     t, n = _random_tn(rng, 50)
-    R = mut.local_frames(t, n)
+    R = mut.R_HL_from_normals(t, n)
     a, b = rng.uniform(0.09, 0.44, 50), rng.uniform(0.09, 0.44, 50)
     axis_H = mut.axis_H_from_angles(R, a, b)
     a2, b2 = mut.angles_from_axis_H(R, axis_H)
@@ -92,7 +92,7 @@ def test_normal_parallel_to_tangent_is_an_input_error():
     t = np.array([[1.0, 0, 0], [0, 1.0, 0]])
     n = np.array([[2.0, 0, 0], [1.0, 0, 0]])
     with pytest.raises(InputError, match=r"window 7: normal parallel to tangent at point\(s\) \[0"):
-        mut.local_frames(t, n, name="window 7")
+        mut.R_HL_from_normals(t, n, name="window 7")
 
 
 def test_tool_rotation_is_proper_and_its_z_is_the_axis():

@@ -9,7 +9,11 @@ from scipy.spatial.transform import Rotation
 import drakedeburr.orientation.orient as mut
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
-from drakedeburr.frames.local_frames import angles_from_axis_H, axis_from_angles, local_frames
+from drakedeburr.frames.local_frames import (
+    R_HL_from_normals,
+    angles_from_axis_H,
+    axis_from_angles,
+)
 from drakedeburr.orientation.exact import projected_gradient_norm, solve_exact
 from drakedeburr.orientation.models import make_problem
 from drakedeburr.orientation.pso import PsoOptions
@@ -34,7 +38,7 @@ WINDOWS = [_window("large", 3.0, 90, (0.03, 0.02, 0.006), 0),
 
 def _problem(cl, n, model="axis", w2nd=0.0):
     b = ProcessParameters().bounds_large if cl.kind == "large" else ProcessParameters().bounds_small
-    return make_problem(model, cl.p_HC, local_frames(cl.t_H, n), b.theta_min, b.theta_max,
+    return make_problem(model, cl.p_HC, R_HL_from_normals(cl.t_H, n), b.theta_min, b.theta_max,
                         second_difference_weight=w2nd, name=f"window {cl.window_index}")
 
 

@@ -12,7 +12,7 @@ if not hasattr(hub_mod, "load_hub"):
     pytest.skip("hub stage not in this checkout", allow_module_level=True)
 
 import drakedeburr.orientation.orient as mut  # noqa: E402
-from drakedeburr.frames.local_frames import check_rotations, local_frames  # noqa: E402
+from drakedeburr.frames.local_frames import R_HL_from_normals, check_rotations  # noqa: E402
 from drakedeburr.frames.normals import inner_normals_from_cloud  # noqa: E402
 from drakedeburr.hub.registration import (  # noqa: E402
     RegistrationOptions,
@@ -45,7 +45,7 @@ def test_cloud_normals_on_bundled_hubs(name, windows):
         assert np.median(err) <= 1.0, (name, i)
         assert np.percentile(err, 95) <= 3.0, (name, i)
         assert np.all(np.einsum("ij,ij->i", est.n_wall_H, edge.n_wall_H[idx]) > 0.8)
-        R = local_frames(cl.t_H, est.n_wall_H)
+        R = R_HL_from_normals(cl.t_H, est.n_wall_H)
         assert check_rotations(R).max() < 1e-12
 
 
@@ -55,7 +55,7 @@ def test_exact_beats_pso_on_every_bundled_window(name):
     opts = mut.OrientOptions()
     for edge in hub.windows:
         cl, idx = cl_points_from_edge(edge, 3e-3)
-        prob = mut.problem_for(cl, local_frames(cl.t_H, edge.n_wall_H[idx]), "axis")
+        prob = mut.problem_for(cl, R_HL_from_normals(cl.t_H, edge.n_wall_H[idx]), "axis")
         ex = mut.solve_problem(prob, "exact", opts)
         ps = mut.solve_problem(prob, "pso", opts)
         assert ex.success, (name, edge.index, ex.message)

@@ -1,12 +1,12 @@
 """drakedeburr.frames: inner-side normals and local frames at CL points (source §2.1-2.2)."""
 
 from drakedeburr.frames.local_frames import (
+    R_HL_from_normals,
     R_LT_from_angles,
     angles_from_axis,
     angles_from_axis_H,
     axis_from_angles,
     axis_H_from_angles,
-    local_frames,
 )
 from drakedeburr.frames.normals import (
     NormalEstimate,
@@ -15,7 +15,7 @@ from drakedeburr.frames.normals import (
 )
 
 __all__ = [
-    "local_frames",
+    "R_HL_from_normals",
     "axis_from_angles",
     "angles_from_axis",
     "axis_H_from_angles",

@@ -48,7 +48,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = [
-    "local_frames",
+    "R_HL_from_normals",
     "axis_from_angles",
     "angles_from_axis",
     "axis_jacobian",
@@ -63,7 +63,7 @@ def _unit_rows(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndarray:
+def R_HL_from_normals(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndarray:
     """Right-handed local frames R_HL = [N_new, T, -B] (eqs. 4-6, see module docstring).
 
     Args:
@@ -80,7 +80,7 @@ def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndar
     t = np.asarray(t_H, float)
     n = np.asarray(n_H, float)
     if t.shape != n.shape or t.ndim != 2 or t.shape[1] != 3:
-        raise InputError(f"{name or 'local_frames'}: t_H {t.shape} and n_H {n.shape} "
+        raise InputError(f"{name or 'R_HL_from_normals'}: t_H {t.shape} and n_H {n.shape} "
                          "must both be (M, 3)")
     t = _unit_rows(t)
     b = np.cross(t, n)
@@ -88,7 +88,8 @@ def local_frames(t_H: np.ndarray, n_H: np.ndarray, *, name: str = "") -> np.ndar
     bad = np.flatnonzero(nb < 1e-6 * np.maximum(np.linalg.norm(n, axis=1), 1e-300))
     if bad.size:
         raise InputError(
-            f"{name or 'local_frames'}: normal parallel to tangent at point(s) {bad[:10].tolist()}"
+            f"{name or 'R_HL_from_normals'}: normal parallel to tangent at point(s) "
+            f"{bad[:10].tolist()}"
         )
     b = b / nb[:, None]
     n_new = np.cross(b, t)

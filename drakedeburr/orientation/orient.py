@@ -12,7 +12,7 @@ from pydrake.math import RigidTransform
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.errors import InputError
-from drakedeburr.frames.local_frames import axis_from_angles, local_frames
+from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
 from drakedeburr.orientation.exact import ExactOptions, SolveReport, solve_exact
 from drakedeburr.orientation.models import ModelName, OrientationProblem, make_problem
 from drakedeburr.orientation.pso import PsoOptions, pso_minimize
@@ -140,7 +140,7 @@ def orient_window(
     if n.shape != cl.p_HC.shape:
         raise InputError(f"window {cl.window_index}: n_H has shape {n.shape}, "
                          f"expected {cl.p_HC.shape} (one normal per CL point)")
-    R_HL = local_frames(cl.t_H, n, name=f"window {cl.window_index}")
+    R_HL = R_HL_from_normals(cl.t_H, n, name=f"window {cl.window_index}")
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)
     th = rep.x.reshape(prob.m, 2)
