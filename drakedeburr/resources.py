@@ -102,9 +102,17 @@ def resolve_package_url(url: str) -> Path:
 
 
 def extdata_dir() -> Path | None:
-    """``../shared/extdata`` next to a source checkout (tests only); None when absent."""
+    """``../shared/extdata`` next to a source checkout (tests only); None when absent.
+
+    ``$DRAKEDEBURR_EXTDATA`` overrides the search (e.g. for a git worktree elsewhere).
+    """
+    import os
+
     here = Path(__file__).resolve().parent.parent
-    for candidate in (here.parent / "shared" / "extdata", here / "shared" / "extdata"):
+    env = os.environ.get("DRAKEDEBURR_EXTDATA")
+    candidates = [Path(env)] if env else []
+    candidates += [here.parent / "shared" / "extdata", here / "shared" / "extdata"]
+    for candidate in candidates:
         if candidate.is_dir():
             return candidate
     return None

@@ -13,7 +13,9 @@ TUTORIALS = sorted((REPO / "tutorials").glob("*/tutorial.py"))
 
 @pytest.mark.parametrize("script", TUTORIALS, ids=[p.parent.name for p in TUTORIALS])
 def test_tutorial_runs(script, tmp_path):
-    env = dict(os.environ, DRAKEDEBURR_TEST_MODE="1", MPLBACKEND="Agg")
+    # the tutorial imports this checkout's drakedeburr, installed or not
+    pythonpath = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
+    env = dict(os.environ, DRAKEDEBURR_TEST_MODE="1", MPLBACKEND="Agg", PYTHONPATH=pythonpath)
     proc = subprocess.run(
         [sys.executable, str(script), "--test-mode", "--out", str(tmp_path)],
         cwd=script.parent, env=env, capture_output=True, text=True, timeout=900,

@@ -1,1 +1,46 @@
-"""drakedeburr.laser stage."""
+"""drakedeburr.laser: FANUC robot laser cutting with a five-bar "Cutting Tool" (SPEC.md §S4).
+
+* :mod:`~drakedeburr.laser.kinematics` - five-bar FK (eqs. 1-9), IK, Jacobian, singularities
+* :mod:`~drakedeburr.laser.model` - Drake SDF model (closed loop) for Meshcat / the flange
+* :mod:`~drakedeburr.laser.shapes` - circle, semicircle, rectangle, slot, keyhole, hexagon,
+  polyline contours at a point spacing
+* :mod:`~drakedeburr.laser.timing` - TOPP-RA timing under axis and feed limits
+* :mod:`~drakedeburr.laser.hole` - holes by the tool alone (servo trajectory)
+* :mod:`~drakedeburr.laser.feature` - larger contours by the robot ("Feature" settings)
+* :mod:`~drakedeburr.laser.power` - TCP speed -> analogue laser command
+* :mod:`~drakedeburr.laser.fanuc_ls` - FANUC .ls programs with the analogue output
+"""
+
+from drakedeburr.laser.feature import FeatureSettings, LaserTargets, plan_contour
+from drakedeburr.laser.hole import HoleProgram, ServoLimits, plan_hole
+from drakedeburr.laser.kinematics import (
+    FiveBarGeometry,
+    check_reach,
+    forward_kinematics,
+    inverse_kinematics,
+    jacobian,
+    singularity_measures,
+)
+from drakedeburr.laser.power import PowerMap, PowerProfile
+from drakedeburr.laser.shapes import (
+    SHAPE_KINDS,
+    Circle,
+    Contour,
+    Hexagon,
+    Keyhole,
+    Polyline,
+    Rectangle,
+    Semicircle,
+    Slot,
+    build_contour,
+)
+
+__all__ = [
+    "FiveBarGeometry", "forward_kinematics", "inverse_kinematics", "jacobian",
+    "singularity_measures", "check_reach",
+    "Circle", "Semicircle", "Rectangle", "Slot", "Keyhole", "Hexagon", "Polyline",
+    "SHAPE_KINDS", "Contour", "build_contour",
+    "ServoLimits", "HoleProgram", "plan_hole",
+    "FeatureSettings", "LaserTargets", "plan_contour",
+    "PowerMap", "PowerProfile",
+]
