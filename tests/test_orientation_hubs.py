@@ -26,6 +26,14 @@ from drakedeburr.orientation.exact import projected_gradient_norm  # noqa: E402
 BUNDLED = ("h5_split", "h5_straight", "h6_curved", "h5_deepdish")
 
 
+def _sector(edges, margin=0.15):
+    """(theta_min, theta_max) [rad] about +Z_H covering the edges' loops plus a margin."""
+    ang = np.concatenate([np.arctan2(e.p_HE[:, 1], e.p_HE[:, 0]) for e in edges])
+    c = np.angle(np.exp(1j * ang).mean())
+    d = np.angle(np.exp(1j * (ang - c)))
+    return c + d.min() - margin, c + d.max() + margin
+
+
 def _angles_deg(a, b):
     return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0)))
 
@@ -33,10 +41,9 @@ def _angles_deg(a, b):
 @pytest.mark.parametrize("name, windows", [("h5_split", (0, 1)), ("h5_deepdish", (0,))])
 def test_cloud_normals_on_bundled_hubs(name, windows):
     hub = hub_mod.load_hub(name)
-    centres = [np.arctan2(*hub.window_center_H(i)[1::-1]) for i in windows]
     scan = hub_mod.simulate_scan(hub, sigma=0.05e-3, seed=0, spacing=0.3e-3,
                                  max_edge_distance=9e-3,
-                                 partial=(min(centres) - 0.5, max(centres) + 0.5))
+                                 partial=_sector([hub.windows[i] for i in windows]))
     for i in windows:
         edge = hub.windows[i]
         cl, idx = cl_points_from_edge(edge, 3e-3)

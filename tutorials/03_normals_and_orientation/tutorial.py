@@ -44,8 +44,10 @@ def main() -> None:
     spacing = 4e-3 if args.test_mode else 2e-3  # CL point spacing [m]
 
     # 1. a dense scan near the window edges only (cheap); restricted to the two windows' sector
-    centres = [np.arctan2(*hub.window_center_H(w.index)[1::-1]) for w in windows]
-    sector = (min(centres) - 0.6, max(centres) + 0.6)
+    ang = np.concatenate([np.arctan2(w.p_HE[:, 1], w.p_HE[:, 0]) for w in windows])
+    mid = np.angle(np.exp(1j * ang).mean())
+    d = np.angle(np.exp(1j * (ang - mid)))  # polar angles relative to their mean, no wrap
+    sector = (mid + d.min() - 0.15, mid + d.max() + 0.15)
     scan = simulate_scan(hub, sigma=0.05e-3, seed=0, spacing=0.3e-3, max_edge_distance=9e-3,
                          partial=sector)
     print(f"scan: {len(scan.p_S)} points near the edges of windows "
