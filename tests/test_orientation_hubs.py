@@ -107,4 +107,4 @@ def test_cli_writes_json_windows(tmp_path):
     for w in data["windows"]:
         assert {"objective", "solve_seconds", "theta_A", "theta_B", "success"} <= set(w)
         assert {"max", "min", "variance", "cv"} <= set(w["theta_A"])
-        assert w["normal_error_deg"]["max"] < 1e-6  # truth normals
+        assert w["normal_error_deg"]["max"] < 1e-4  # truth normals (arccos rounding)
