@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-__all__ = ["register", "run_orient", "cl_points_from_edge"]
+__all__ = ["register", "run_orient", "cl_points_from_edge", "cl_points_planned"]
 
 log = logging.getLogger(__name__)
 
@@ -24,8 +24,13 @@ def register(subparsers) -> None:
                    help="normal source: simulated scan (default), mesh, or the model's truth")
     p.add_argument("--sigma-mm", type=float, default=0.05, help="scan noise [mm] (cloud)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--cl", default="proposed",
+                   choices=["proposed", "isoparametric", "equal_chord_height", "adaptive",
+                            "loop"],
+                   help="CL planner of the path stage (default: the source's proposed method); "
+                        "'loop': points of the edge loop every --spacing-mm")
     p.add_argument("--spacing-mm", type=float, default=2.0,
-                   help="CL point spacing [mm] of the stand-in isoparametric CL points")
+                   help="CL point spacing [mm] for --cl loop")
     p.add_argument("--json", metavar="FILE", help="write the per-window results as JSON")
     p.set_defaults(_run=_run)
 
@@ -67,8 +72,21 @@ def cl_points_from_edge(edge, spacing: float):
     return cl, idx
 
 
+def cl_points_planned(edge, method: str):
+    """CL points from the path stage (NURBS fit + planner) and, for each, the index of the
+    nearest edge-loop point (for ground-truth comparisons)."""
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.path import fit_edge_curve, plan_cl
+
+    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+    cl = plan_cl(curve, method, window_index=edge.index, kind=edge.kind)
+    _, idx = cKDTree(edge.p_HE).query(cl.p_HC)
+    return cl, idx
+
+
 def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05e-3, seed=0,
-               spacing=2e-3, progress=None) -> list[dict]:
+               spacing=2e-3, cl_method="proposed", progress=None) -> list[dict]:
     """Orient every window of ``hub`` (a drakedeburr.hub HubModel); JSON-ready rows.
 
     Returns:
@@ -88,7 +106,10 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
                              max_edge_distance=1.5 * 6e-3)
     rows = []
     for w, edge in enumerate(hub.windows):
-        cl, idx = cl_points_from_edge(edge, spacing)
+        if cl_method == "loop":
+            cl, idx = cl_points_from_edge(edge, spacing)
+        else:
+            cl, idx = cl_points_planned(edge, cl_method)
         if normals == "truth":
             if edge.n_wall_H is None:
                 from drakedeburr.errors import InputError
@@ -127,7 +148,7 @@ def _run(args: argparse.Namespace) -> int:
     hub = load_hub(args.hub)
     rows = run_orient(hub, solver=args.solver, model=args.model, normals=args.normals,
                       sigma=args.sigma_mm * 1e-3, seed=args.seed, spacing=args.spacing_mm * 1e-3,
-                      progress=tqdm_progress("orient"))
+                      cl_method=args.cl, progress=tqdm_progress("orient"))
     print(f"{'window':>6} {'kind':>5} {'pts':>4} {'objective':>12} {'ms':>8} "
           f"{'thA min..max':>14} {'thB min..max':>14} {'turn deg/mm max':>16} ok")
     for r in rows:
@@ -138,7 +159,7 @@ def _run(args: argparse.Namespace) -> int:
               f"{r['axis_turn_deg_per_mm']['max']:>16.3f} {'yes' if r['success'] else 'NO'}")
     if args.json:
         out = {"hub": args.hub, "solver": args.solver, "model": args.model,
-               "normals": args.normals,
+               "normals": args.normals, "cl": args.cl,
                "windows": [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]}
         atomic_write_json(args.json, out)
         log.info("wrote %s", args.json)
