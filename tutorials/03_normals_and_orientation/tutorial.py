@@ -6,6 +6,7 @@ Run:  python tutorial.py [--hub h5_split] [--out DIR] [--test-mode]
 2. estimate the inner-side normals at the CL points of one large and one small window
    (the source's procedure: radius search, k-means, RANSAC plane / quadric fit) and compare
    them with the model's ground truth;
+   (CL points from the path stage: NURBS fit + the source's planner);
 3. build the local frames [N, T, -B] and optimise the tool axis with the `axis` model
    (exact solver) - and, for comparison, the source's eq. 11 with its PSO;
 4. write a meshcat scene as static HTML (normals = green, tool axes = red, source's
@@ -24,7 +25,7 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.frames import inner_normals_from_cloud
 from drakedeburr.hub import load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, PsoOptions, orient_window
-from drakedeburr.orientation.commands import cl_points_from_edge
+from drakedeburr.path import fit_edge_curve, plan_cl
 
 
 def main() -> None:
@@ -41,7 +42,7 @@ def main() -> None:
     large = next(w for w in hub.windows if w.kind == "large")
     small = next((w for w in hub.windows if w.kind == "small"), None)
     windows = [large] if small is None else [large, small]
-    spacing = 4e-3 if args.test_mode else 2e-3  # CL point spacing [m]
+    method = "equal_chord_height" if args.test_mode else "proposed"  # CL planner (path stage)
 
     # 1. a dense scan near the window edges only (cheap); restricted to the two windows' sector
     ang = np.concatenate([np.arctan2(w.p_HE[:, 1], w.p_HE[:, 0]) for w in windows])
@@ -56,10 +57,12 @@ def main() -> None:
     results = []
     pso = OrientOptions(pso=PsoOptions(iterations=50 if args.test_mode else 200))
     for edge in windows:
-        cl, idx = cl_points_from_edge(edge, spacing)
-        # 2. normals from the cloud vs ground truth
+        curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+        cl = plan_cl(curve, method, window_index=edge.index, kind=edge.kind)
+        # 2. normals from the cloud vs ground truth (at the nearest point of the model's loop)
         est = inner_normals_from_cloud(scan, cl)
-        n_true = edge.n_wall_H[idx]
+        nearest = np.argmin(np.linalg.norm(cl.p_HC[:, None] - edge.p_HE[None], axis=2), axis=1)
+        n_true = edge.n_wall_H[nearest]
         err = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", est.n_wall_H, n_true), -1, 1)))
         print(f"window {edge.index} ({edge.kind}, {len(cl)} CL points): normal error "
               f"median {np.median(err):.2f} deg, 95 % {np.percentile(err, 95):.2f} deg; "
