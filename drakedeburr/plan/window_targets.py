@@ -88,7 +88,8 @@ class WindowTargets:
 
         Args:
             tool_path: has ``window_index, kind, p_HC, R_HL, axis_H, cone_axis_H,
-                cone_half_angle, depth_of_cut``.
+                cone_half_angle, depth_of_cut``; ``axis_H``/``cone_axis_H`` are +Z_T
+                (spindle -> tip, the ToolPath convention) and are flipped here.
             face_normal_H: (3,) outward normal of the visible face (default +Z_H): the tool
                 axes must point to that side (the burr comes from the front).
 
@@ -97,7 +98,9 @@ class WindowTargets:
         """
         tp = tool_path
         face = np.array([0.0, 0.0, 1.0]) if face_normal_H is None else _unit(np.asarray(face_normal_H, float))
-        axis = _unit(np.asarray(tp.axis_H, float))
+        # the ToolPath's axis_H / cone_axis_H are +Z_T (spindle -> tip); ours point tip -> spindle
+        axis = -_unit(np.asarray(tp.axis_H, float))
+        cone = -_unit(np.asarray(tp.cone_axis_H, float))
         bad = np.flatnonzero(axis @ face <= 0.0)
         if bad.size:
             raise InputError(f"ToolPath of window {tp.window_index}: tool axis (tip -> spindle) "
@@ -106,8 +109,7 @@ class WindowTargets:
                              f"{face.tolist()})")
         return cls(window_index=int(tp.window_index), kind=str(tp.kind),
                    p_HC=np.asarray(tp.p_HC, float), t_H=_unit(np.asarray(tp.R_HL)[:, :, 1]),
-                   n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), axis_H=axis,
-                   cone_axis_H=_unit(np.asarray(tp.cone_axis_H, float)),
+                   n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), axis_H=axis, cone_axis_H=cone,
                    cone_half_angle=float(tp.cone_half_angle), depth_of_cut=float(tp.depth_of_cut),
                    source=f"ToolPath ({getattr(tp, 'model', '')}/{getattr(tp, 'solver', '')})",
                    tool_path=tp)
