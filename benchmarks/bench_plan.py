@@ -99,7 +99,8 @@ def toppra_check(cell, plan):
     kin = cell_kinematics(cell)
     p = kin.X_HT_from_q(q)[:, :3, 3]
     s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-    path = PiecewisePolynomial.CubicWithContinuousSecondDerivatives(s, q.T, np.zeros(6), np.zeros(6))
+    path = PiecewisePolynomial.CubicWithContinuousSecondDerivatives(s, q.T, np.zeros(6),
+                                                                    np.zeros(6))
     t0 = time.perf_counter()
     grid = Toppra.CalcGridPoints(path, CalcGridPointsOptions())
     topp = Toppra(path, cell.plant, grid)
@@ -126,10 +127,8 @@ def main() -> None:
     args = ap.parse_args()
 
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.hub import load_hub
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
     from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
-
-    from drakedeburr.hub import DEFAULT_HUB
 
     hub_name = args.hub or DEFAULT_HUB
     t0 = time.perf_counter()

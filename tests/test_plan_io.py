@@ -23,7 +23,8 @@ def _plan(failures=()):
             window_index=-1 if i == 0 else 0, segment="home" if i == 0 else "cut",
             cl_index=i - 1, X_HT=np.linalg.inv(X_WH) @ X_WF @ X_FT, X_WF=X_WF, q=qi,
             speed=0.15, motion="joint" if i == 0 else "linear",
-            p_HC=None if i == 0 else rng.normal(size=3), n_H=None if i == 0 else np.array([1.0, 0, 0])))
+            p_HC=None if i == 0 else rng.normal(size=3),
+            n_H=None if i == 0 else np.array([1.0, 0, 0])))
     traj = JointTrajectory(t=np.array([0.0, 1.0, 2.0]), q=q, qd=np.zeros((3, 6)))
     meta = dict(X_FT=X_FT.tolist(), X_FH=np.eye(4).tolist(), X_WT=np.eye(4).tolist(), windows=[],
                 note=np.float64(1.5))
@@ -40,7 +41,7 @@ def test_save_load_round_trip(tmp_path):
     np.testing.assert_array_equal(back.trajectory.q, plan.trajectory.q)
     assert back.targets[0].p_HC is None and back.targets[0].motion == "joint"
     np.testing.assert_array_equal(back.targets[2].p_HC, plan.targets[2].p_HC)
-    assert back.segments == plan.segments or [s.t_range for s in back.segments] == [(0.0, 1.0), (1.0, 2.0)]
+    assert [s.t_range for s in back.segments] == [(0.0, 1.0), (1.0, 2.0)]
     assert back.failures[0]["cl_index"] == 3 and back.meta["note"] == 1.5
 
 
@@ -82,5 +83,6 @@ def test_export_cli_refuses_failed_plan_unless_forced(tmp_path):
     out = tmp_path / "d.mod"
     assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out)]) == 2
     assert not out.exists()
-    assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out), "--force"]) == 0
+    args = ["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out), "--force"]
+    assert main(args) == 0
     assert "FORCED" in out.read_text()

@@ -16,9 +16,7 @@ TOL = Tolerances()
 @pytest.fixture(scope="module", params=["tool_in_hand", "workpiece_in_hand"])
 def planned(request):
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.hub import load_hub
-
-    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
 
     hub = DEFAULT_HUB
     cell = load_cell(request.param, hub)

@@ -25,7 +25,8 @@ __all__ = [
     "PlanOptions", "plan_hub", "plan_windows", "window_targets_for_hub", "WindowTargets",
     "IkOptions", "WindowIk", "solve_window_ik",
     "CellKinematics", "ClearanceChecker", "cell_kinematics",
-    "tool_point_H", "edge_point_from_tool_pose", "X_HT_from_axis", "burr_contact_radius", "contact_geometry",
+    "tool_point_H", "edge_point_from_tool_pose", "X_HT_from_axis", "burr_contact_radius",
+    "contact_geometry",
     "TimingLimits", "time_path",
     "save_plan", "load_plan", "write_joint_csv", "program_from_plan",
 ]

@@ -19,7 +19,8 @@ def _parse_windows(text: str | None) -> tuple[int, ...] | None:
     try:
         return tuple(int(x) for x in text.split(",") if x.strip())
     except ValueError as exc:
-        raise InputError(f"--windows: expected comma-separated window numbers, got {text!r}") from exc
+        raise InputError(f"--windows: expected comma-separated window numbers, "
+                         f"got {text!r}") from exc
 
 
 def _run_plan(args: argparse.Namespace) -> int:

@@ -119,7 +119,8 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
         (6,) joints [rad], or None when no spin/branch reaches (a list when count > 1).
     """
     spins = np.linspace(-np.pi, np.pi, options.spin_samples, endpoint=False)
-    X_HT = X_HT_from_axis(np.repeat(p_HT[None], len(spins), 0), np.repeat(axis_H[None], len(spins), 0),
+    k = len(spins)
+    X_HT = X_HT_from_axis(np.repeat(p_HT[None], k, 0), np.repeat(axis_H[None], k, 0),
                           np.repeat(t_H[None], len(spins), 0), spins)
     q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X_HT))
     b_ref = kin.branch_of(q_ref)
@@ -289,6 +290,7 @@ def solve_window_ik(
     clearance = np.zeros(m)
     failures: list[dict] = []
     n_dist = n_fallback = n_retry = 0
+    reach = options.min_distance + options.influence_distance
     t0 = time.perf_counter()
     q_prev = None
     i_prev = -1
@@ -309,7 +311,8 @@ def solve_window_ik(
         for attempt in range(options.retries + 1):
             if attempt > 0:
                 n_retry += 1
-                reseed = seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], anchor, options)
+                reseed = seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], anchor,
+                                      options)
                 if reseed is None:
                     break
                 q_seed = reseed
@@ -321,7 +324,7 @@ def solve_window_ik(
                                           pref_axis_H[i], anchor, q_seed, with_distance, solver,
                                           options)
                 good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options)
-                dist = checker.min_distance(q, options.min_distance + options.influence_distance)[0]
+                dist = checker.min_distance(q, reach)[0]
                 if good and dist < options.min_distance - 1e-5 and not with_distance:
                     # lazy collision constraint: re-solve with it from this solution
                     with_distance = True
@@ -329,7 +332,7 @@ def solve_window_ik(
                     success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
                                               pref_axis_H[i], anchor, q, True, solver, options)
                     good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options)
-                    dist = checker.min_distance(q, options.min_distance + options.influence_distance)[0]
+                    dist = checker.min_distance(q, reach)[0]
                 best = (q, X, dist, err, ang)
                 if good and dist >= options.min_distance - 1e-5:
                     done = True
@@ -346,8 +349,8 @@ def solve_window_ik(
             rec = dict(window=window_index, cl_index=i, stage="ik", reason="IK failed")
             if best is not None:
                 rec.update(position_error=best[3], cone_angle=best[4], clearance=best[2])
-                rec["reason"] = ("clearance below bound" if best[3] <= 1e-5 and best[4] <= half + 1e-6
-                                 else "position/cone not met")
+                met = best[3] <= 1e-5 and best[4] <= half + 1e-6
+                rec["reason"] = "clearance below bound" if met else "position/cone not met"
             failures.append(rec)
         if progress is not None:
             progress(i + 1, m, f"window {window_index} IK")

@@ -137,7 +137,8 @@ def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Pa
         q = tr.value(t)
     rows = ["t_s,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg"]
     qd = deg_from_rad(np.asarray(q))
-    rows += [f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row) for ti, row in zip(t, qd)]
+    rows += [f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row)
+             for ti, row in zip(t, qd, strict=True)]
     return atomic_write_text(path, "\n".join(rows) + "\n")
 
 

@@ -205,7 +205,8 @@ class ClearanceChecker:
                 GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
         self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
 
-    def min_distance(self, q: np.ndarray, max_distance: float = 0.01) -> tuple[float, tuple[str, str]]:
+    def min_distance(self, q: np.ndarray,
+                     max_distance: float = 0.01) -> tuple[float, tuple[str, str]]:
         """Smallest signed distance [m] at ``q`` (capped at ``max_distance``) and its pair."""
         c = self.cell
         c.plant.SetPositions(self.plant_context, np.asarray(q, float))

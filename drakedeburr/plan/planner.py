@@ -125,7 +125,8 @@ def _target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None) -> Cart
 
 
 def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, options: PlanOptions,
-                 failures: list, progress: Progress) -> tuple[list[_Stretch], dict, np.ndarray] | None:
+                 failures: list, progress: Progress
+                 ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
     """Approach, cut and retract of one window; None when the window cannot be planned."""
     params = options.params
     r_c, lift = contact_geometry(options.contact_radius)
@@ -178,7 +179,8 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         if low.size == 0 or options.orientation_sigma <= 0:
             break
         seg = np.searchsorted(cut.target_index, low)
-        fix = np.unique(np.clip(np.concatenate([seg - 2, seg - 1, seg, seg + 1]), 0, len(order) - 1))
+        near = np.concatenate([seg - 2, seg - 1, seg, seg + 1])
+        fix = np.unique(np.clip(near, 0, len(order) - 1))
         fix = fix[~reverted[fix]]
         if fix.size == 0:
             break
@@ -411,7 +413,7 @@ def _jsonable(obj):
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",
-                           params: ProcessParameters = ProcessParameters(),
+                           params: ProcessParameters | None = None,
                            windows: Sequence[int] | None = None,
                            progress: Progress = None) -> list[WindowTargets]:
     """Targets of a hub's windows: hub edges -> CL points -> orientation (-> WindowTargets).
@@ -423,6 +425,7 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
             give usable axes, else edges).
         windows: window indices (default all).
     """
+    params = params or ProcessParameters()
     chosen = [w for w in hub_model.windows if windows is None or w.index in set(windows)]
     out = []
     for k, edge in enumerate(chosen):

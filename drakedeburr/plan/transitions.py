@@ -49,7 +49,7 @@ class JointMove:
 
 def _densify(q_way: np.ndarray, step: float) -> np.ndarray:
     out = [q_way[:1]]
-    for a, b in zip(q_way[:-1], q_way[1:]):
+    for a, b in zip(q_way[:-1], q_way[1:], strict=True):
         n = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
         f = np.linspace(0, 1, n + 1)[1:, None]
         out.append(a + f * (b - a))
@@ -130,7 +130,8 @@ def _via(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, lift: float) -> np
 
     X0, X1 = kin.X_HT_from_q(q0), kin.X_HT_from_q(q1)
     X = np.eye(4)
-    X[:3, :3] = Slerp([0, 1], Rotation.from_matrix(np.stack([X0[:3, :3], X1[:3, :3]])))(0.5).as_matrix()
+    ends = Rotation.from_matrix(np.stack([X0[:3, :3], X1[:3, :3]]))
+    X[:3, :3] = Slerp([0, 1], ends)(0.5).as_matrix()
     X[:3, 3] = 0.5 * (X0[:3, 3] + X1[:3, 3])
     X[2, 3] = max(X0[2, 3], X1[2, 3]) + lift
     q, ok = kin.track(kin.X_WF_from_X_HT(X[None]), 0.5 * (q0 + q1))

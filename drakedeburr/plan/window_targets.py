@@ -97,7 +97,8 @@ class WindowTargets:
             InputError: axes pointing into the hub (names the window and point).
         """
         tp = tool_path
-        face = np.array([0.0, 0.0, 1.0]) if face_normal_H is None else _unit(np.asarray(face_normal_H, float))
+        face = (np.array([0.0, 0.0, 1.0]) if face_normal_H is None
+                else _unit(np.asarray(face_normal_H, float)))
         # the ToolPath's axis_H / cone_axis_H are +Z_T (spindle -> tip); ours point tip -> spindle
         axis = -_unit(np.asarray(tp.axis_H, float))
         cone = -_unit(np.asarray(tp.cone_axis_H, float))
@@ -117,7 +118,7 @@ class WindowTargets:
     @classmethod
     def from_window_edge(cls, edge, *, spacing: float = 1.5e-3, tilt: float | None = None,
                          cone_half_angle: float = 0.08,
-                         params: ProcessParameters = ProcessParameters()) -> WindowTargets:
+                         params: ProcessParameters | None = None) -> WindowTargets:
         """Stand-in targets from a hub's ground-truth window edge (``WindowEdge``).
 
         CL points every ``spacing`` of arc length; the preferred axis is the face normal tilted
@@ -129,6 +130,7 @@ class WindowTargets:
             spacing: arc length between CL points [m].
             tilt: theta_A [rad]; cone_half_angle: [rad].
         """
+        params = params or ProcessParameters()
         if edge.n_wall_H is None or edge.n_face_H is None:
             raise InputError(f"window {edge.index}: the edge has no wall/face normals")
         p = np.asarray(edge.p_HE, float)

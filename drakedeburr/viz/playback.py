@@ -80,7 +80,7 @@ def plan_replay(plan, *, cell=None, meshcat=None, dt: float = 0.04, show_path: b
     times = np.append(np.arange(tr.t[0], tr.t[-1], dt), tr.t[-1])
     q = tr.value(times)
     recording = viz.StartRecording(set_transforms_while_recording=False)
-    for ti, qi in zip(times, q):
+    for ti, qi in zip(times, q, strict=True):
         context.SetTime(float(ti))
         cell.plant.SetPositions(plant_context, qi)
         viz.ForcedPublish(viz_context)
