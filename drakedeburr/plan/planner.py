@@ -29,6 +29,7 @@ import numpy as np
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
+from drakedeburr.plan.io import _jsonable
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.smoothing import smooth_orientations
 from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -398,18 +399,6 @@ def _assemble(cell, kin, stretches, home, window_stats, failures, scenario, hub,
     return Plan(scenario=str(scenario), hub=str(hub), mode=cell.mode, X_WH=kin.X_WH.copy(),
                 targets=tuple(targets), segments=tuple(segments), trajectory=traj,
                 tool_path=tool_paths, failures=tuple(failures), meta=meta)
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.floating, np.integer)):
-        return obj.item()
-    return obj
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",
