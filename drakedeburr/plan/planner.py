@@ -141,18 +141,25 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     # wrist can follow the whole loop inside its limits; try the best few distinct seeds
     seeds = seed_by_spin(kin, checker, p_HT[0], wt.axis_H[0], wt.t_H[0], q_from, options.ik,
                          count=options.window_attempts) or [None]
-    wik = None
+    wik, best_score = None, 0
     for attempt, q_first in enumerate(seeds):
         trial = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
                                 wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=options.ik,
                                 progress=progress, q_first=q_first)
-        if wik is None or len(trial.failures) < len(wik.failures):
-            wik = trial
-        if not trial.failures:
+        # the executed motion between the targets must stay on the branch and inside the
+        # joint limits too (J4 winds around a loop): a cheap analytic pre-check
+        reached = np.flatnonzero(~np.any(np.isnan(trial.q), axis=1))
+        dense_ok = bool(len(reached) > 1 and np.all(track_poses(
+            kin, trial.X_HT[reached], trial.q[reached[0]], options.dense_step).ok))
+        score = len(trial.failures) + (0 if dense_ok else 10 * (m + 1))
+        if wik is None or score < best_score:
+            wik, best_score = trial, score
+        if score == 0:
             break
-        log.info("window %d: start seed %d left %d IK failures; trying another",
-                 wt.window_index, attempt, len(trial.failures))
+        log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
+                 "another", wt.window_index, attempt, len(trial.failures),
+                 "ok" if dense_ok else "leaves the limits")
     t_ik = time.perf_counter() - t0
     for rec in wik.failures:
         failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})
