@@ -57,7 +57,8 @@ class PlanOptions:
         approach_speed: TCP speed of approach/retract [m/s].
         tcp_acceleration: TCP path acceleration cap [m/s^2] (ramps at start/end of moves).
         joint_step: joint-space sample spacing of joint moves [rad].
-        max_joint_jump: largest joint change allowed between dense samples [rad].
+        max_joint_jump: largest joint change allowed between dense samples [rad] (a flip or a
+            2*pi turn shows as ~1-6 rad; fast wrist motion at corners reaches ~0.05).
         windows: indices of the windows to plan (None = all), in this order.
         orientation_sigma: Gaussian width (in targets) of the orientation smoothing.
         fit_spacings: knot spacings [m] of the least-squares joint spline, widest first.
@@ -75,7 +76,7 @@ class PlanOptions:
     approach_speed: float = 0.05
     tcp_acceleration: float = 3.0
     joint_step: float = 0.02
-    max_joint_jump: float = 0.05
+    max_joint_jump: float = 0.2
     windows: tuple[int, ...] | None = None
     orientation_sigma: float = 2.0
     fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3)
