@@ -86,13 +86,15 @@ def main() -> None:
     # 4. joints before/after smoothing, speed, wrist ranges ------------------------------------
     ws = m["windows"][0]
     q_ik, q_sm = np.degrees(ws["q_ik_rad"]), np.degrees(ws["q_smoothed_rad"])
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     for j in range(6):
         axes[0].plot(q_ik[:, j], label=f"J{j + 1}")
         axes[1].plot(q_sm[:, j], label=f"J{j + 1}")
+        axes[2].plot(q_sm[:, j] - q_ik[:, j], label=f"J{j + 1}")
+    axes[2].set_title("change made by smoothing")
     axes[0].set_title("joint angles at the CL targets: per-target IK (before smoothing)")
     axes[1].set_title("after orientation smoothing + analytic IK on one configuration")
-    axes[1].set_xlabel("CL target")
+    axes[2].set_xlabel("CL target")
     for a in axes:
         a.set_ylabel("deg")
         a.legend(ncol=6, fontsize=7)
