@@ -349,6 +349,23 @@ def _dished_plate(spec: HubSpec, windows: list[_Window]):
     return plate
 
 
+def _rings(spec: HubSpec):
+    """The axisymmetric parts [mm]: hub pad ``(r_out, z0, z1)`` (None without a pad) and the rim
+    rings ``(r_in, r_out, z0, z1)``: barrel, front flange (lip) and back flange."""
+    t = spec.face_thickness * 1e3
+    pad_depth = spec.hub_pad_depth * 1e3
+    pad = (spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5) if pad_depth > 0 else None
+    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
+    z_back = z_lip - spec.rim_width * 1e3
+    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
+    rb_in = spec.rim_barrel_inner_radius * 1e3
+    rf = 0.5 * spec.rim_outer_diameter * 1e3
+    tf = spec.rim_flange_thickness * 1e3
+    rims = [(rb_in, rb_out, z_back, z_lip), (rb_out - 0.5, rf, z_lip - tf, z_lip),
+            (rb_out - 0.5, rf, z_back, z_back + tf)]
+    return pad, rims
+
+
 def build_solid(spec: HubSpec, windows: list[_Window], *, holes: bool = True):
     """The hub solid as a manifold3d Manifold in millimetres (frame H)."""
     from manifold3d import Manifold
@@ -357,18 +374,10 @@ def build_solid(spec: HubSpec, windows: list[_Window], *, holes: bool = True):
     plate = _dished_plate(spec, windows)
     pad_depth = spec.hub_pad_depth * 1e3
     parts = [plate]
-    if pad_depth > 0:
-        parts.append(_tube(0.0, spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5))
-    # rim: barrel, front flange (lip) and back flange
-    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
-    z_back = z_lip - spec.rim_width * 1e3
-    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
-    rb_in = spec.rim_barrel_inner_radius * 1e3
-    rf = 0.5 * spec.rim_outer_diameter * 1e3
-    tf = spec.rim_flange_thickness * 1e3
-    parts.append(_tube(rb_in, rb_out, z_back, z_lip))
-    parts.append(_tube(rb_out - 0.5, rf, z_lip - tf, z_lip))
-    parts.append(_tube(rb_out - 0.5, rf, z_back, z_back + tf))
+    pad, rims = _rings(spec)
+    if pad is not None:
+        parts.append(_tube(0.0, *pad))
+    parts.extend(_tube(*ring) for ring in rims)
     from manifold3d import OpType
 
     solid = Manifold.batch_boolean(parts, OpType.Add)
@@ -623,23 +632,14 @@ def _plate_pieces(spec: HubSpec, plate, probes: _Probes, progress: Progress = No
 def _collision_pieces(spec: HubSpec, windows: list[_Window], progress: Progress = None) -> list:
     """Convex pieces (hull vertex arrays [mm]) covering the hub: plate by quadtree + merging,
     pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
-    t = spec.face_thickness * 1e3
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = _dished_plate(spec, windows) - _tube(0.0, bore_r, -1e3, 1e3)
     pieces = _plate_pieces(spec, plate, _Probes(spec, windows), progress)
-    pad_depth = spec.hub_pad_depth * 1e3
-    if pad_depth > 0:
-        pieces += _sector_hulls(bore_r, spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5,
-                                COLL_SAG_MM, spec.spoke_phase)
-    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
-    z_back = z_lip - spec.rim_width * 1e3
-    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
-    rb_in = spec.rim_barrel_inner_radius * 1e3
-    rf = 0.5 * spec.rim_outer_diameter * 1e3
-    tf = spec.rim_flange_thickness * 1e3
-    pieces += _sector_hulls(rb_in, rb_out, z_back, z_lip, COLL_SAG_MM, 0.0)
-    pieces += _sector_hulls(rb_out - 0.5, rf, z_lip - tf, z_lip, COLL_SAG_MM, 0.0)
-    pieces += _sector_hulls(rb_out - 0.5, rf, z_back, z_back + tf, COLL_SAG_MM, 0.0)
+    pad, rims = _rings(spec)
+    if pad is not None:
+        pieces += _sector_hulls(bore_r, *pad, COLL_SAG_MM, spec.spoke_phase)
+    for ring in rims:
+        pieces += _sector_hulls(*ring, COLL_SAG_MM, 0.0)
     return pieces
 
 
