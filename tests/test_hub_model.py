@@ -250,3 +250,17 @@ def test_load_hub_by_folder_and_file_and_errors(tmp_path):
     (tmp_path / "x" / "hub.yaml").write_text((hub_dir("h5_split") / "hub.yaml").read_text())
     with pytest.raises(FileNotFoundError, match="hub generate"):
         mut.load_hub(tmp_path / "x")
+
+
+def test_sdf_loads_through_the_package_url():
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from drakedeburr.resources import add_package_to
+
+    plant = MultibodyPlant(0.0)
+    parser = Parser(plant)
+    add_package_to(parser.package_map())
+    (model,) = parser.AddModelsFromUrl("package://drakedeburr/hubs/h5_straight/hub.sdf")
+    plant.Finalize()
+    assert plant.GetBodyByName("hub", model).default_mass() > 5.0
