@@ -5,7 +5,8 @@ in every file written):
 
 1. 2-D window outlines (``CrossSection``): the annulus between the window radii minus the spoke
    bands; each connected component is one window. Its convex corners are rounded by an
-   opening (offset by -f then +f with round joins), which gives exact circular fillets.
+   opening (offset by -f then +f with round joins), which gives exact circular fillets; a
+   closing with ``blend_radius`` then rounds reflex corners (tangent-continuous outline).
    Straight stretches are subdivided so that no outline segment exceeds ~1 mm; arcs are
    segmented so that their chord sag stays below 2 um.
 2. The face plate (disc minus windows) is extruded as a 1 mm slab, refined to
@@ -54,7 +55,6 @@ log = logging.getLogger(__name__)
 GENERATOR_VERSION = 1
 ARC_SAG_MM = 0.002  # chord sag of arcs in the window outlines [mm]
 ARC_MAX_STEP = math.radians(2.0)  # and at most this angle per arc segment
-REFLEX_RADIUS_MM = 3.0  # rounding of reflex (concave) outline corners
 MAX_TURN = math.radians(2.5)  # largest turn between consecutive outline segments
 RIM_SAG_MM = 0.02  # chord sag of the rim, pad, bore and bolt-hole circles [mm]
 LINE_STEP_MM = 1.0  # max outline segment on straight stretches [mm]
@@ -198,7 +198,7 @@ def build_window_outlines(spec: HubSpec) -> list[_Window]:
         opened = opened.offset(f, JoinType.Round, 2.0, seg)
         # closing rounds the reflex corners that the opening keeps (e.g. where a curved spoke's
         # side meets the fillet), so the whole edge is tangent-continuous
-        c = min(f, REFLEX_RADIUS_MM)
+        c = min(f, spec.blend_radius * 1e3)
         opened = opened.offset(c, JoinType.Round, 2.0, _segments(c)).offset(
             -c, JoinType.Round, 2.0, _segments(c))
         polys = opened.to_polygons()
@@ -461,7 +461,7 @@ def _loops_from_mesh(spec: HubSpec, windows: list[_Window], V_m: np.ndarray,
         tan /= np.linalg.norm(tan, axis=1, keepdims=True)
         out.append({"index": w.index, "kind": w.kind, "p_HE": p, "t_H": tan,
                     "n_wall_H": n_wall, "n_face_H": n_face, "fillet_m": w.fillet_mm * 1e-3,
-                    "poly_xy_m": xy})
+                    "poly_xy_m": xy, "vertices_m": P})
     return out
 
 
@@ -841,7 +841,10 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
     win_summary = []
     for lp in loops:
         p = lp["p_HE"]
-        kappa = _curvature(p)
+        # curvature from the outline's mesh vertices (arcs: <= 2 deg steps, so the circle
+        # through three consecutive vertices is the fillet); the resampled points in between
+        # are collinear and would give spikes
+        kappa = _curvature(lp["vertices_m"])
         c_xy = window_center_xy(lp["poly_xy_m"])
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         win_summary.append({
@@ -849,7 +852,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             "length_mm": round(float(seg.sum()) * 1e3, 3),
             "max_spacing_mm": round(float(seg.max()) * 1e3, 4),
             "fillet_mm": round(lp["fillet_m"] * 1e3, 3),
-            "max_curvature_per_mm": round(float(np.percentile(kappa, 99.5)) * 1e-3, 4),
+            "max_curvature_per_mm": round(float(np.percentile(kappa, 99)) * 1e-3, 4),
             "z_range_mm": [round(float(p[:, 2].min()) * 1e3, 3),
                            round(float(p[:, 2].max()) * 1e3, 3)],
             "center_xy_mm": [round(float(c_xy[0]) * 1e3, 3), round(float(c_xy[1]) * 1e3, 3)],
