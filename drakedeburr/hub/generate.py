@@ -479,10 +479,10 @@ def window_center_xy(poly_xy: np.ndarray, grid: int = 80) -> np.ndarray:
     return cand[int(np.argmax(d))]
 
 
-def _curvature(p: np.ndarray) -> np.ndarray:
-    """Discrete curvature [1/m] of a closed polyline from circumscribed circles of triples."""
-    a = np.roll(p, 1, axis=0)
-    c = np.roll(p, -1, axis=0)
+def _curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
+    """Discrete curvature [1/m] of a closed polyline: circle through points i-k, i, i+k."""
+    a = np.roll(p, k, axis=0)
+    c = np.roll(p, -k, axis=0)
     ab, bc, ca = np.linalg.norm(p - a, axis=1), np.linalg.norm(c - p, axis=1), np.linalg.norm(
         a - c, axis=1)
     cross = np.linalg.norm(np.cross(p - a, c - a), axis=1)
@@ -841,10 +841,10 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
     win_summary = []
     for lp in loops:
         p = lp["p_HE"]
-        # curvature from the outline's mesh vertices (arcs: <= 2 deg steps, so the circle
-        # through three consecutive vertices is the fillet); the resampled points in between
-        # are collinear and would give spikes
-        kappa = _curvature(lp["vertices_m"])
+        # curvature over chords of ~0.6 of the smallest radius (fillet or blend): consecutive
+        # points are collinear between outline vertices and would give spikes
+        r_min = min(lp["fillet_m"], spec.blend_radius)
+        kappa = _curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
         c_xy = window_center_xy(lp["poly_xy_m"])
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         win_summary.append({
@@ -852,7 +852,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             "length_mm": round(float(seg.sum()) * 1e3, 3),
             "max_spacing_mm": round(float(seg.max()) * 1e3, 4),
             "fillet_mm": round(lp["fillet_m"] * 1e3, 3),
-            "max_curvature_per_mm": round(float(np.percentile(kappa, 99)) * 1e-3, 4),
+            "max_curvature_per_mm": round(float(np.percentile(kappa, 99.5)) * 1e-3, 4),
             "z_range_mm": [round(float(p[:, 2].min()) * 1e3, 3),
                            round(float(p[:, 2].max()) * 1e3, 3)],
             "center_xy_mm": [round(float(c_xy[0]) * 1e3, 3), round(float(c_xy[1]) * 1e3, 3)],
