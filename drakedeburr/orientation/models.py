@@ -27,7 +27,7 @@ first), dbar_i = (d_{i-1} + d_i)/2 and w2 [m^2] an optional second-difference we
 The hub is rigid, so the change is the same in the world frame W and in H. For small turns
 |axis_{k+1} - axis_k| is the turning angle, so J ~ integral of (d angle/ds)^2 ds: what the
 robot's wrist feels. Both sums are sums of squares of residuals r(x); the exact solver uses
-this (Gauss-Newton / sequential convex QPs).
+this (Gauss-Newton Hessian, banded projected Newton).
 """
 
 from __future__ import annotations
