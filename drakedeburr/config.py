@@ -63,6 +63,13 @@ class Tolerances:
     dense_step: float = 0.5e-3  # [m] tool travel between dense re-check samples
     fk_match: float = 1e-9  # [m] model FK vs analytic FK
     on_surface: float = 1e-6  # [m] edge loops on the mesh surface
+    orientation_match: float = 1e-3  # [rad] trajectory vs program tool orientation (verify)
+    wrist_margin: float = 0.15  # [rad] smallest |J5| allowed (J5 = 0 is the wrist singularity)
+    min_manipulability: float = 1e-4  # [-] |det J| of the flange Jacobian (advisory)
+    cycle_time_ratio: float = 1.05  # [-] cycle time / physical limit target (advisory)
+    j6_range_large: float = 0.3491  # [rad] 20 deg: paper's J6 range on large windows (advisory)
+    j6_range_small: float = 0.1745  # [rad] 10 deg: on small windows (advisory)
+    query_distance: float = 0.02  # [m] distances above this are reported as "> this" (verify)
 
 
 def load_config(cls, path: str | Path):
