@@ -1,0 +1,403 @@
+"""Build a deburring cell (a Drake ``RobotDiagram``) from a scenario file and a hub.
+
+A scenario (``models/scenarios/*.yaml``) is a list of Drake model directives. It must contain
+
+* the robot as model instance ``irb1600`` (``robots/irb1600_10_120.sdf``) welded to the world by
+  its ``base`` frame (world W = robot base frame), with its home configuration given as the
+  model's ``default_joint_positions``;
+* exactly one frame named ``tool_tip`` (the tool frame T of a tool model);
+* exactly one frame named ``hub_mount``: where the hub frame H goes.
+
+The hub is *not* in the scenario: :func:`load_cell` parses the chosen hub SDF (model ``hub``,
+body ``hub`` whose body frame is H) and welds H onto ``hub_mount``. Whether ``tool_tip`` or
+``hub_mount`` moves with the robot decides the mode: ``"tool"`` (tool-in-hand: spindle on the
+flange, hub on a fixture) or ``"workpiece"`` (workpiece-in-hand: hub on a flange gripper, spindle
+on a stand; T is then the fixed "virtual TCP" of source S0). Everything else is the same code.
+
+Collision filtering done here: bodies joined by a joint or welded together (Drake's default,
+so the flange/spindle, spindle/burr, fixture/table pairs) and the hub against the body that
+holds it (chuck or gripper: a clamped contact is intended). The burr head against the hub is
+NOT filtered: that contact is the process, and the planner decides (see ``Cell.burr_head_ids``).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from drakedeburr.cell.robot import JOINT_NAMES, ROBOT_MODEL_NAME
+from drakedeburr.errors import InputError
+from drakedeburr.resources import add_package_to, hub_dir, hub_names, scenario_path
+
+__all__ = [
+    "Cell",
+    "load_cell",
+    "resolve_hub_sdf",
+    "TOOL_FRAME_NAME",
+    "HUB_MOUNT_FRAME_NAME",
+    "HUB_MODEL_NAME",
+    "BURR_HEAD_GEOMETRY_NAME",
+]
+
+log = logging.getLogger(__name__)
+
+TOOL_FRAME_NAME = "tool_tip"
+HUB_MOUNT_FRAME_NAME = "hub_mount"
+HUB_MODEL_NAME = "hub"
+#: collision geometry name of the cutting head in the tool models
+BURR_HEAD_GEOMETRY_NAME = "burr_head"
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A loaded deburring cell. Arrays are (6,) in joint order ``joint_1..joint_6``.
+
+    Attributes:
+        diagram: the ``pydrake.planning.RobotDiagram`` (plant + scene graph).
+        plant: its ``MultibodyPlant`` (finalized; its positions are exactly the 6 robot joints).
+        scene_graph: its ``SceneGraph``.
+        robot: model instance of the robot.
+        hub_instance: model instance of the hub.
+        mode: ``"tool"`` (tool-in-hand) or ``"workpiece"`` (workpiece-in-hand).
+        tool_frame: frame T (``tool_tip``): origin at the cutting point, +Z along the burr axis
+            pointing out of the tool (spindle -> tip).
+        hub_frame: frame H (body frame of the hub): origin on the hub axis at the front face,
+            +Z out of the visible face.
+        flange_frame: frame F (ABB tool0). base_frame: robot base (= world W here).
+        q_lower, q_upper: position limits [rad].
+        v_lower, v_upper: velocity limits [rad/s].
+        a_lower, a_upper: acceleration limits [rad/s^2] (assumed values, see robot.py).
+        q_home: home configuration [rad] from the scenario; collision-free.
+        burr_head_ids: proximity geometries of the burr's cutting head.
+        hub_ids: proximity geometries of the hub.
+        robot_ids: every other geometry that moves with the robot (robot links, spindle body,
+            bracket, collet, shank; or the hub gripper).
+        environment_ids: every other geometry fixed in the world (pedestal, fixture, stand...).
+            The four sets partition all proximity geometries.
+        moving_model_instances: model instances moving with the robot (robot + tool, or robot +
+            gripper + hub): the ``robot_model_instances`` of a SceneGraphCollisionChecker.
+        scenario: the scenario file. hub_sdf: the hub model file.
+    """
+
+    diagram: object
+    plant: object
+    scene_graph: object
+    robot: object
+    hub_instance: object
+    mode: Literal["tool", "workpiece"]
+    tool_frame: object
+    hub_frame: object
+    flange_frame: object
+    base_frame: object
+    q_lower: np.ndarray
+    q_upper: np.ndarray
+    v_lower: np.ndarray
+    v_upper: np.ndarray
+    a_lower: np.ndarray
+    a_upper: np.ndarray
+    q_home: np.ndarray
+    burr_head_ids: frozenset
+    hub_ids: frozenset
+    robot_ids: frozenset
+    environment_ids: frozenset
+    moving_model_instances: tuple
+    scenario: Path
+    hub_sdf: Path
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def num_joints(self) -> int:
+        return len(self.q_home)
+
+    def create_context(self, q: np.ndarray | None = None):
+        """A fresh diagram context with the robot at ``q`` (default ``q_home``)."""
+        context = self.diagram.CreateDefaultContext()
+        self.plant.SetPositions(
+            self.plant.GetMyMutableContextFromRoot(context),
+            self.q_home if q is None else self._check_q(q),
+        )
+        return context
+
+    def _plant_context(self, q: np.ndarray):
+        # one cached context for pose queries (not thread-safe; use create_context for that)
+        if "context" not in self._cache:
+            self._cache["context"] = self.diagram.CreateDefaultContext()
+        plant_context = self.plant.GetMyMutableContextFromRoot(self._cache["context"])
+        self.plant.SetPositions(plant_context, self._check_q(q))
+        return plant_context
+
+    def _check_q(self, q: np.ndarray) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self.num_joints,):
+            raise InputError(f"joint vector must have shape ({self.num_joints},), got {q.shape}")
+        return q
+
+    def X_WT(self, q: np.ndarray):
+        """Pose of the tool frame T in world at joints ``q`` [rad] (a RigidTransform)."""
+        return self.tool_frame.CalcPoseInWorld(self._plant_context(q))
+
+    def X_WH(self, q: np.ndarray):
+        """Pose of the hub frame H in world at joints ``q`` [rad]."""
+        return self.hub_frame.CalcPoseInWorld(self._plant_context(q))
+
+    def X_WF(self, q: np.ndarray):
+        """Pose of the robot flange F (tool0) in world at joints ``q`` [rad]."""
+        return self.flange_frame.CalcPoseInWorld(self._plant_context(q))
+
+    def X_HT(self, q: np.ndarray):
+        """Pose of the tool frame T in the hub frame H at joints ``q``: the process pose."""
+        return self.tool_frame.CalcPose(self._plant_context(q), self.hub_frame)
+
+    def collision_pairs(self, q: np.ndarray, *, ignore_burr_hub: bool = True) -> list[tuple]:
+        """Penetrating pairs at ``q`` as (name_a, name_b, depth [m]), filters applied.
+
+        ``ignore_burr_hub`` drops burr-head/hub contacts (the process contact).
+        """
+        context = self.create_context(q)
+        sg_context = self.scene_graph.GetMyContextFromRoot(context)
+        query = self.scene_graph.get_query_output_port().Eval(sg_context)
+        inspector = query.inspector()
+        out = []
+        for pair in query.ComputePointPairPenetration():
+            ids = {pair.id_A, pair.id_B}
+            if ignore_burr_hub and ids & self.burr_head_ids and ids & self.hub_ids:
+                continue
+            out.append((_geometry_label(self, inspector, pair.id_A),
+                        _geometry_label(self, inspector, pair.id_B), float(pair.depth)))
+        return out
+
+    def min_distance(self, q: np.ndarray, *, ignore_burr_hub: bool = True,
+                     max_distance: float = 1.0) -> tuple[float, tuple[str, str]]:
+        """Smallest signed distance [m] between unfiltered geometry pairs at ``q`` and its pair.
+
+        Distances above ``max_distance`` are not computed (returned as ``max_distance``).
+        """
+        context = self.create_context(q)
+        sg_context = self.scene_graph.GetMyContextFromRoot(context)
+        query = self.scene_graph.get_query_output_port().Eval(sg_context)
+        inspector = query.inspector()
+        best, names = float(max_distance), ("", "")
+        for d in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
+            ids = {d.id_A, d.id_B}
+            if ignore_burr_hub and ids & self.burr_head_ids and ids & self.hub_ids:
+                continue
+            if d.distance < best:
+                best = float(d.distance)
+                names = (_geometry_label(self, inspector, d.id_A),
+                         _geometry_label(self, inspector, d.id_B))
+        return best, names
+
+
+def _geometry_label(cell: Cell, inspector, geometry_id) -> str:
+    body = cell.plant.GetBodyFromFrameId(inspector.GetFrameId(geometry_id))
+    model = cell.plant.GetModelInstanceName(body.model_instance())
+    return f"{model}::{body.name()}/{inspector.GetName(geometry_id)}"
+
+
+def resolve_hub_sdf(hub: str | Path | None) -> Path:
+    """Hub model file from a bundled hub name, a hub folder or an SDF path.
+
+    ``None`` picks the first bundled hub (alphabetical).
+    """
+    if hub is None:
+        names = hub_names() if _hubs_dir_exists() else []
+        if not names:
+            raise FileNotFoundError("no bundled hub models (models/hubs/*/hub.yaml); pass hub=")
+        hub = names[0]
+    path = Path(hub)
+    if path.suffix == ".sdf":
+        if not path.is_file():
+            raise FileNotFoundError(f"hub model {path} does not exist")
+        return path.resolve()
+    if path.is_dir() and (path / "hub.sdf").is_file():
+        return (path / "hub.sdf").resolve()
+    sdf = hub_dir(str(hub)) / "hub.sdf"
+    if not sdf.is_file():
+        raise FileNotFoundError(f"bundled hub {hub!r} has no hub.sdf ({sdf})")
+    return sdf
+
+
+def _hubs_dir_exists() -> bool:
+    from drakedeburr.resources import hubs_dir
+
+    return hubs_dir().is_dir()
+
+
+def _unique_frame(plant, name: str, scenario: Path):
+    from pydrake.multibody.tree import ModelInstanceIndex
+
+    frames = [
+        plant.get_frame(index)
+        for m in range(plant.num_model_instances())
+        for index in plant.GetFrameIndices(ModelInstanceIndex(m))
+        if plant.get_frame(index).name() == name
+    ]
+    if len(frames) != 1:
+        raise InputError(
+            f"{scenario}: a scenario needs exactly one frame named {name!r}, found {len(frames)}"
+            + (" (" + ", ".join(
+                plant.GetModelInstanceName(f.model_instance()) for f in frames) + ")"
+               if frames else "")
+        )
+    return frames[0]
+
+
+def load_cell(
+    scenario: str | Path,
+    hub: str | Path | None = None,
+    *,
+    time_step: float = 0.0,
+) -> Cell:
+    """Build the cell of a scenario with a hub.
+
+    Args:
+        scenario: bundled scenario name (``"tool_in_hand"``, ``"workpiece_in_hand"``) or a path
+            to a model-directives YAML file (see module docstring for what it must contain).
+        hub: bundled hub name, hub folder, or path to a hub SDF (model ``hub``, body ``hub``
+            with its body frame = H). ``None``: the first bundled hub.
+        time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
+
+    Returns:
+        The :class:`Cell`.
+
+    Raises:
+        FileNotFoundError: unknown scenario or hub.
+        InputError: the scenario or hub breaks the conventions above (the message names the file).
+    """
+    from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+    from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirectives
+    from pydrake.planning import RobotDiagramBuilder
+
+    scenario_file = scenario_path(scenario)
+    hub_sdf = resolve_hub_sdf(hub)
+
+    builder = RobotDiagramBuilder(time_step=time_step)
+    plant = builder.plant()
+    parser = builder.parser()
+    add_package_to(parser.package_map())
+    try:
+        directives = LoadModelDirectives(str(scenario_file))
+        ProcessModelDirectives(directives, plant, parser)
+    except RuntimeError as exc:  # Drake reports parse errors as RuntimeError
+        raise InputError(f"{scenario_file}: cannot load model directives: {exc}") from exc
+    if not plant.HasModelInstanceNamed(ROBOT_MODEL_NAME):
+        raise InputError(f"{scenario_file}: no model instance named {ROBOT_MODEL_NAME!r}")
+    robot = plant.GetModelInstanceByName(ROBOT_MODEL_NAME)
+    if plant.HasModelInstanceNamed(HUB_MODEL_NAME):
+        raise InputError(f"{scenario_file}: the model name {HUB_MODEL_NAME!r} is reserved for "
+                         "the hub that load_cell adds")
+
+    try:
+        hub_models = parser.AddModels(str(hub_sdf))
+    except RuntimeError as exc:
+        raise InputError(f"{hub_sdf}: cannot parse hub model: {exc}") from exc
+    hub_instance = next(
+        (m for m in hub_models if plant.GetModelInstanceName(m) == HUB_MODEL_NAME), None)
+    if hub_instance is None or not plant.HasBodyNamed(HUB_MODEL_NAME, hub_instance):
+        raise InputError(f"{hub_sdf}: a hub model must be named {HUB_MODEL_NAME!r} with a body "
+                         f"{HUB_MODEL_NAME!r} (its body frame is the hub frame H)")
+    hub_body = plant.GetBodyByName(HUB_MODEL_NAME, hub_instance)
+    hub_mount = _unique_frame(plant, HUB_MOUNT_FRAME_NAME, scenario_file)
+    plant.WeldFrames(hub_mount, hub_body.body_frame())
+    tool_frame = _unique_frame(plant, TOOL_FRAME_NAME, scenario_file)
+
+    plant.Finalize()
+    if plant.num_positions() != len(JOINT_NAMES):
+        raise InputError(
+            f"{scenario_file}: the cell must have exactly the {len(JOINT_NAMES)} robot joints as "
+            f"degrees of freedom, found {plant.num_positions()} (is every other model welded?)"
+        )
+    for i, name in enumerate(JOINT_NAMES):
+        joint = plant.GetJointByName(name, robot)
+        if joint.position_start() != i:
+            raise InputError(
+                f"{scenario_file}: joint {name} is at position {joint.position_start()}, not {i}")
+
+    world_group = {b.index() for b in plant.GetBodiesWeldedTo(plant.world_body())}
+    tool_fixed = tool_frame.body().index() in world_group
+    hub_fixed = hub_body.index() in world_group
+    if tool_fixed == hub_fixed:
+        raise InputError(
+            f"{scenario_file}: exactly one of {TOOL_FRAME_NAME!r} and the hub must move with the "
+            f"robot (tool fixed: {tool_fixed}, hub fixed: {hub_fixed})"
+        )
+    mode: Literal["tool", "workpiece"] = "workpiece" if tool_fixed else "tool"
+
+    # geometry sets
+    scene_graph = builder.scene_graph()
+    inspector = scene_graph.model_inspector()
+    burr_head, hub_ids, robot_ids, env_ids = set(), set(), set(), set()
+    moving_instances = {robot}
+    for gid in inspector.GetAllGeometryIds(Role.kProximity):
+        body = plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
+        if body.model_instance() == hub_instance:
+            hub_ids.add(gid)
+        elif inspector.GetName(gid).split("::")[-1] == BURR_HEAD_GEOMETRY_NAME:
+            burr_head.add(gid)
+        elif body.index() in world_group:
+            env_ids.add(gid)
+        else:
+            robot_ids.add(gid)
+        if body.index() not in world_group:
+            moving_instances.add(body.model_instance())
+    if not burr_head:
+        raise InputError(f"{scenario_file}: no collision geometry named "
+                         f"{BURR_HEAD_GEOMETRY_NAME!r} (the burr's cutting head)")
+    if not hub_ids:
+        raise InputError(f"{hub_sdf}: the hub has no collision geometry")
+
+    # the hub is clamped by the body carrying hub_mount: that contact is intended
+    holder = plant.GetBodiesWeldedTo(hub_mount.body())
+    holder_frames = {plant.GetBodyFrameIdOrThrow(b.index()) for b in holder
+                     if b.index() != hub_body.index()}
+    holder_ids = [gid for gid in inspector.GetAllGeometryIds(Role.kProximity)
+                  if inspector.GetFrameId(gid) in holder_frames and gid not in hub_ids]
+    # welded groups: the hub holder may be the whole world group (fixture) -> restrict to the
+    # fixture model that owns hub_mount
+    holder_ids = [gid for gid in holder_ids
+                  if plant.GetBodyFromFrameId(inspector.GetFrameId(gid)).model_instance()
+                  == hub_mount.model_instance()]
+    if holder_ids:
+        scene_graph.collision_filter_manager().Apply(
+            CollisionFilterDeclaration().ExcludeBetween(
+                GeometrySet(list(hub_ids)), GeometrySet(holder_ids)))
+
+    diagram = builder.Build()
+    plant = diagram.plant()
+    scene_graph = diagram.scene_graph()
+
+    cell = Cell(
+        diagram=diagram,
+        plant=plant,
+        scene_graph=scene_graph,
+        robot=robot,
+        hub_instance=hub_instance,
+        mode=mode,
+        tool_frame=tool_frame,
+        hub_frame=hub_body.body_frame(),
+        flange_frame=plant.GetFrameByName("flange", robot),
+        base_frame=plant.GetFrameByName("base", robot),
+        q_lower=plant.GetPositionLowerLimits(),
+        q_upper=plant.GetPositionUpperLimits(),
+        v_lower=plant.GetVelocityLowerLimits(),
+        v_upper=plant.GetVelocityUpperLimits(),
+        a_lower=plant.GetAccelerationLowerLimits(),
+        a_upper=plant.GetAccelerationUpperLimits(),
+        q_home=plant.GetDefaultPositions(),
+        burr_head_ids=frozenset(burr_head),
+        hub_ids=frozenset(hub_ids),
+        robot_ids=frozenset(robot_ids),
+        environment_ids=frozenset(env_ids),
+        moving_model_instances=tuple(sorted(moving_instances, key=int)),
+        scenario=scenario_file,
+        hub_sdf=hub_sdf,
+    )
+    for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
+                cell.a_upper, cell.q_home):
+        arr.setflags(write=False)
+    log.info("loaded cell %s (%s-in-hand) with hub %s", scenario_file.name, mode, hub_sdf)
+    return cell

@@ -1,0 +1,206 @@
+"""CL/APT reader on the real NX and Creo files, error cases, and a property-based fuzz."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import drakedeburr.post.cl_reader as mut
+from drakedeburr.errors import InputError
+from drakedeburr.units import INCH_M
+
+CL = "cl_files"
+
+
+def _count_goto(path):
+    return sum(1 for line in path.read_text().splitlines() if line.lstrip().startswith("GOTO"))
+
+
+def test_nx_contour_chamfer_inch(extdata):
+    path = extdata / CL / "MECH491_NX_CLSF__APT_code.txt"
+    prog = mut.read_cl(path, units="inch")
+    assert len(prog.moves) == _count_goto(path) == 325
+    first, last = prog.moves[0], prog.moves[-1]
+    # GOTO/0.0776,1.6841,3.4760,0.7196045,0.2803955,0.6352541 on line 10, inches
+    assert first.line == 10 and first.rapid
+    assert np.allclose(first.p_C, np.array([0.0776, 1.6841, 3.4760]) * INCH_M, atol=1e-12)
+    assert np.allclose(first.axis_C, [0.7196045, 0.2803955, 0.6352541], atol=1e-6)
+    assert last.line == 347 and not last.rapid
+    assert np.allclose(last.p_C, np.array([0.7417, 0.4924, 3.4959]) * INCH_M, atol=1e-12)
+    # 4 RAPID statements, each for one move
+    assert prog.rapid.sum() == 4
+    # FEDRAT/IPM,10 -> 10 in/min
+    feed = prog.feed[~np.isnan(prog.feed)]
+    assert np.allclose(feed, 10 * INCH_M / 60)
+    assert np.allclose(np.linalg.norm(prog.axis_C, axis=1), 1.0, atol=1e-12)
+    assert prog.end_line == 350 and prog.warnings == ()  # END-OF-PATH; nothing unknown
+    assert prog.moves[0].tool == 1  # LOAD/TOOL,1
+    # a 3-number GOTO keeps the previous axis
+    assert prog.moves[2].axis_C == prog.moves[1].axis_C
+
+
+def test_nx_variable_axis_inch(extdata):
+    path = extdata / CL / "MECH491_NX_CLSF__APT_Variable_Axis.txt"
+    prog = mut.read_cl(path, units="inch")
+    assert len(prog.moves) == _count_goto(path) == 348
+    ax = prog.axis_C
+    assert np.allclose(np.linalg.norm(ax, axis=1), 1.0, atol=1e-12)
+    assert np.allclose(ax[0], [-0.3778015, -0.0069217, 0.9258607], atol=1e-6)
+    # variable axis: the tool axis really varies (> 20 deg spread)
+    ang = np.degrees(np.arccos(np.clip(ax @ ax[0], -1, 1)))
+    assert ang.max() > 20
+    assert np.allclose(prog.moves[-1].p_C, np.array([3.6648, 3.0081, 3.0]) * INCH_M)
+
+
+def test_creo_profile_circles_mm(extdata):
+    path = extdata / CL / "CreoPost__profilfraesen_2.ncl.2"
+    prog = mut.read_cl(path, arc_tolerance=1e-5)
+    gotos = _count_goto(path)
+    circ = [m for m in prog.moves if m.from_circle]
+    assert len(prog.moves) == gotos + len(circ)
+    assert prog.units == "mm" and prog.end_line == 112 and prog.warnings == ()
+    assert prog.moves[0].p_C == pytest.approx((0.0, 1.5e-3, 2e-3))
+    assert prog.moves[0].spindle_rpm == pytest.approx(15915.507752)
+    assert np.allclose(prog.feed[2:], 400e-3 / 60)  # FEDRAT / 400, MMPM
+    # every CIRCLE point lies on its circle (radius 1.5 mm about its centre, in its plane)
+    text = path.read_text().splitlines()
+    by_line: dict[int, list] = {}
+    for m in circ:
+        by_line.setdefault(m.line, []).append(np.array(m.p_C))
+    assert len(by_line) == 20
+    for line, pts in by_line.items():
+        nums = [float(v) for v in (text[line - 1].split("/")[1] + text[line]).replace("$", "")
+                .split(",")]
+        c = np.array(nums[:3]) * 1e-3
+        pts = np.array(pts)
+        assert np.allclose(np.linalg.norm(pts[:, :2] - c[:2], axis=1), 1.5e-3, atol=1e-12)
+        assert np.allclose(pts[:, 2], c[2])
+        # chord-height error within tolerance: chord between neighbours
+        chords = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        sagitta = 1.5e-3 - np.sqrt(1.5e-3 ** 2 - (chords / 2) ** 2)
+        assert sagitta.max() <= 1e-5 + 1e-12
+    # first arc: from (0, 1.5) to (1.5, 0) right-handed about -z (clockwise seen from +z)
+    first = np.array(by_line[min(by_line)])
+    ang = np.unwrap(np.arctan2(first[:, 1], first[:, 0]))
+    assert np.all(np.diff(ang) < 0) and ang[0] < math.pi / 2 and ang[-1] > 0
+
+
+def test_creo_drilling_cycle_warns(extdata):
+    prog = mut.read_cl(extdata / CL / "CreoPost__bohren_1.ncl.8")
+    assert len(prog.moves) == 4
+    assert [(w.line, w.word) for w in prog.warnings] == [(16, "CYCLE"), (20, "CYCLE")]
+    assert prog.moves[0].rapid and prog.moves[0].spindle_rpm == 9000
+    assert any("MFGNO" in t for _, t in prog.comments)
+
+
+def test_statements_and_units():
+    text = "\n".join([
+        "UNITS/INCHES", "LOADTL/3", "SPINDL/RPM,1200,CCLW", "TLAXIS/0,0,2",
+        "PPRINT/HELLO", "FEDRAT/20,IPM", "GOTO/1,2,$", "  3", "MULTAX/ON",
+        "GOTO/1,2,3,0,1,0", "UNITS/MM", "FEDRAT/MMPR,0.1", "GOTO/10,0,0", "FOO/1",
+        "FINI", "GOTO/oops"])
+    prog = mut.parse_cl_text(text)
+    m0, m1, m2 = prog.moves
+    assert m0.p_C == pytest.approx((INCH_M, 2 * INCH_M, 3 * INCH_M)) and m0.line == 7
+    assert m0.axis_C == pytest.approx((0, 0, 1)) and m0.tool == 3
+    assert m0.spindle_rpm == -1200 and m0.feed == pytest.approx(20 * INCH_M / 60)
+    assert m1.axis_C == pytest.approx((0, 1, 0))
+    assert m2.p_C == pytest.approx((0.01, 0, 0))
+    assert m2.feed == pytest.approx(0.1e-3 * 1200 / 60)
+    assert [(w.line, w.word) for w in prog.warnings] == [(4, "TLAXIS"), (14, "FOO")]
+    assert prog.comments == ((5, "HELLO"),)  # data after FINI are ignored
+
+
+@pytest.mark.parametrize("text, line, token", [
+    ("GOTO/1,2,nan\nFINI", 1, "nan"),
+    ("GOTO/1,2,3\nGOTO/1,2,inf\nFINI", 2, "inf"),
+    ("GOTO/1,2,3\nGOTO/1,2\nFINI", 2, "1,2"),
+    ("GOTO/1,2,3\nGOTO/1,2,x3\nFINI", 2, "x3"),
+    ("GOTO/1,2,3\nGOTO/1,2,$", 2, "$"),
+    ("GOTO/1,2,3\nGOTO/4,5,6", 2, "EOF"),
+    ("GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,5\nFINI", 3, "CIRCLE"),
+    ("GOTO/1,0,0\nCIRCLE/0,0,0,0,0,1,1\nGOTO/0,3,0\nFINI", 2, "1"),
+    ("GOTO/1,0,0,0,0,0\nFINI", 1, "0,0,0"),
+    ("UNITS/FURLONG\nFINI", 1, "FURLONG"),
+    ("GOTO/1,2,1e300\nFINI", 1, "1e300"),
+    ("LOADTL\nFINI", 1, "LOADTL"),
+])
+def test_errors_name_file_line_token(text, line, token):
+    with pytest.raises(mut.ClParseError, match=r"<t>:\d+:") as info:
+        mut.parse_cl_text(text, source="<t>")
+    assert info.value.line == line and token in info.value.token
+    assert isinstance(info.value, InputError)
+
+
+def test_truncated_real_file_fails_with_line(extdata, tmp_path):
+    lines = (extdata / CL / "CreoPost__profilfraesen_2.ncl.2").read_text().splitlines()
+    cut = tmp_path / "cut.ncl"
+    cut.write_text("\n".join(lines[:35]) + "\n")  # ends after "CIRCLE / ... $"
+    with pytest.raises(mut.ClParseError, match=r"cut.ncl:35: .*truncated"):
+        mut.read_cl(cut)
+    cut.write_text("\n".join(lines[:60]) + "\n")
+    with pytest.raises(mut.ClParseError, match=r"cut.ncl:60: .*without FINI"):
+        mut.read_cl(cut)
+    nan = tmp_path / "nan.ncl"
+    nan.write_text("\n".join(lines[:20] + ["GOTO / NaN, 1.0, 2.0"] + lines[20:]) + "\n")
+    with pytest.raises(mut.ClParseError, match=r"nan.ncl:21: not a finite number"):
+        mut.read_cl(nan)
+
+
+def test_circle_full_and_helix():
+    text = "GOTO/1,0,0\nCIRCLE/0,0,0,0,0,1,1\nGOTO/1,0,0.5\nFINI"
+    prog = mut.parse_cl_text(text, units="mm", arc_tolerance=1e-7)
+    p = prog.p_C * 1e3
+    ang = np.unwrap(np.arctan2(p[:, 1], p[:, 0]))
+    assert ang[-2] > 1.9 * np.pi  # a full turn, counter-clockwise about +z
+    assert np.allclose(np.hypot(p[:, 0], p[:, 1]), 1.0)
+    assert np.all(np.diff(p[:, 2]) > 0) and p[-1, 2] == pytest.approx(0.5)
+
+
+_WORDS = ["GOTO", "FEDRAT", "SPINDL", "RAPID", "CIRCLE", "TLAXIS", "MULTAX", "UNITS", "LOADTL",
+          "PPRINT", "FINI", "END-OF-PATH", "PAINT", "CYCLE", "$$", "LOAD", "XYZ", "INCHES"]
+_TOKENS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.integers(-10**6, 10**6).map(str),
+    st.floats(-1e9, 1e9).map(repr),
+    st.sampled_from(["IPM", "MMPM", "IPR", "MMPR", "RPM", "CLW", "CCLW", "OFF", "ON", "MM",
+                     "INCHES", "TOOL", "", "$", "nan", "1e999", "-0", " "]),
+    st.text(max_size=6),
+)
+_LINE = st.one_of(
+    st.builds(lambda w, args, sep: w + (sep + ",".join(args) if args is not None else ""),
+              st.sampled_from(_WORDS), st.one_of(st.none(), st.lists(_TOKENS, max_size=8)),
+              st.sampled_from(["/", " / "])),
+    st.text(max_size=30),
+)
+
+
+@settings(max_examples=2000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(lines=st.lists(_LINE, max_size=12), units=st.sampled_from(["mm", "inch"]),
+       require_end=st.booleans())
+def test_fuzz_only_typed_errors(lines, units, require_end):
+    try:
+        prog = mut.parse_cl_text("\n".join(lines), units=units, require_end=require_end)
+    except mut.ClParseError as exc:
+        assert exc.line >= 1
+        return
+    for m in prog.moves:
+        assert all(math.isfinite(v) for v in m.p_C)
+        assert abs(math.hypot(*m.axis_C) - 1.0) < 1e-9
+
+
+def test_reader_streams():
+    """Moves come out while the file is still being read (nothing is loaded whole)."""
+    read = []
+
+    def lines():
+        for text in ("GOTO/1,2,3", "GOTO/4,5,6", "GOTO/7,8,9"):
+            read.append(text)
+            yield text
+        raise AssertionError("the consumer stopped early: never reached")
+
+    it = mut.iter_cl_moves(lines(), units="mm")
+    first = next(it)
+    assert first.p_C == pytest.approx((1e-3, 2e-3, 3e-3)) and len(read) <= 2
