@@ -257,6 +257,7 @@ def verify_plan(
     params: ProcessParameters = ProcessParameters(),
     time_step: float = 0.02,
     joint_move_step: float = 2e-3,
+    expected_windows: list[int] | None = None,
     cell=None,
     hub_model=None,
     progress: Callable[[int, int, str], None] | None = None,
@@ -272,6 +273,8 @@ def verify_plan(
         joint_move_step: tool travel between samples on home/transition moves [m] (these run
             at 450-600 mm/s away from the edge; sampling them every 0.5 mm would triple the
             cost for no information).
+        expected_windows: windows the plan must cut (default: every window of the hub); give
+            a subset to verify a partial plan (e.g. one re-planned window).
         cell: an already loaded cell for the plan's scenario and hub (default: load afresh).
         hub_model: the hub's :class:`drakedeburr.hub.HubModel` (default: ``load_hub(plan.hub)``).
         progress: optional callback (done, total, label).
@@ -301,6 +304,11 @@ def verify_plan(
     tool_paths = _tool_paths(plan)
     items: list[CheckItem] = []
     windows_hub = [w.index for w in hub_model.windows]
+    if expected_windows is not None:
+        bad = [w for w in expected_windows if w not in windows_hub]
+        if bad:
+            raise InputError(f"hub {hub_model.name} has no window(s) {bad} (has {windows_hub})")
+        windows_hub = sorted(int(w) for w in expected_windows)
     edge_of = {w.index: w for w in hub_model.windows}
 
     # ---------------------------------------------------------------- structure
@@ -891,7 +899,7 @@ def verify_plan(
     passed = all(i.passed for i in items if i.required)
     windows_in_plan = sorted({t.window_index for t in targets if t.window_index >= 0})
     plan_info = {"scenario": str(plan.scenario), "hub": str(plan.hub), "mode": plan.mode,
-                 "hub_windows": windows_hub, "windows": windows_in_plan,
+                 "expected_windows": windows_hub, "windows": windows_in_plan,
                  "targets": len(targets), "segments": len(segments), "knots": len(traj.t),
                  "duration_s": traj.duration, "planner": str(plan.meta.get("planner", ""))}
     settings = {"tolerances": {k: getattr(tol, k) for k in tol.__dataclass_fields__},

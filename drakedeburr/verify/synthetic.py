@@ -217,12 +217,12 @@ def reference_plan(
     windows: Sequence[int] | None = None,
     *,
     theta: dict[int, tuple[float, float]] | None = None,
-    cl_chord_height: float = 0.10e-3,
+    cl_chord_height: float = 0.01e-3,
     retract: float = 0.04,
-    sample_step: float = 0.5e-3,
-    ramp_time: float = 0.05,
+    sample_step: float = 1e-3,
+    ramp_time: float = 0.1,
     spin_direction_H: Sequence[float] = (1.0, 0.0, 0.0),
-    contact_radius: float = 2e-3,
+    contact_radius: float = 1.5e-3,
     bounds: OrientationBounds | None = None,
     fixed_axis_H: Sequence[float] = (0.0, 0.0, 1.0),
     box_margin: float = 0.05,
@@ -335,7 +335,11 @@ def reference_plan(
                 raise RuntimeError(f"reference_plan: Newton IK failed ({err:.3g}) on a linear move")
             q[i] = prev
         t, sdot, _ = _ramp_times(s_acc, s_acc[-1], v, ramp_time, True, True)
-        dq_ds = np.gradient(q, s_acc, axis=0)
+        # slopes from a C2 spline through the IK samples: consistent knot velocities keep the
+        # Hermite pieces' accelerations at the path's own (corner) curvature
+        from scipy.interpolate import CubicSpline
+
+        dq_ds = CubicSpline(s_acc, q, axis=0)(s_acc, 1)
         qd = dq_ds * sdot[:, None]
         qd[0] = 0.0
         qd[-1] = 0.0
