@@ -362,7 +362,7 @@ def verify_plan(
                 break
             n = 2 * n
         s_acc = np.concatenate([[0.0], np.cumsum(ds)])
-        k_travel = np.arange(0.0, s_acc[-1], step)
+        k_travel = np.arange(0.0, s_acc[-1], 0.95 * step)  # margin: chords of a fine grid
         t_travel = np.interp(k_travel, s_acc, tf)
         t_time = np.arange(t0, t1, time_step)
         knots = traj.t[(traj.t > t0) & (traj.t < t1)]

@@ -129,23 +129,27 @@ def _ik_drake(cell, X_HT: np.ndarray, q_seed: np.ndarray) -> np.ndarray:
     lo, hi = np.asarray(cell.q_lower), np.asarray(cell.q_upper)
     q = ik.q()
     prog = ik.get_mutable_prog()
-    # keep the wrist away from J5 = 0 on the seed's side
-    sign = 1.0 if q_seed[4] >= 0 else -1.0
-    bound_lo, bound_hi = lo.copy(), hi.copy()
-    if sign > 0:
-        bound_lo[4] = 0.2
-    else:
-        bound_hi[4] = -0.2
-    prog.AddBoundingBoxConstraint(bound_lo, bound_hi, q)
+    prog.AddBoundingBoxConstraint(lo, hi, q)
     prog.AddQuadraticErrorCost(np.eye(6), q_seed, q)
-    prog.SetInitialGuess(q, q_seed)
-    result = Solve(prog)
-    if not result.is_success():
-        raise RuntimeError("reference_plan: no IK solution for a window's first pose")
-    q_sol, err = solve_pose_newton(cell, X_HT, result.GetSolution(q))
-    if err > 1e-9:
-        raise RuntimeError(f"reference_plan: Newton refinement left {err:.3g}")
-    return q_sol
+    wrist = prog.AddBoundingBoxConstraint(-np.inf, np.inf, q[4])
+    seeds = [np.asarray(q_seed, float), np.asarray(cell.q_home, float)]
+    # keep the wrist away from J5 = 0, on the seed's side first
+    first = 1.0 if q_seed[4] >= 0 else -1.0
+    for seed in seeds:
+        for sign in (first, -first):
+            if sign > 0:
+                wrist.evaluator().UpdateLowerBound([0.2])
+                wrist.evaluator().UpdateUpperBound([hi[4]])
+            else:
+                wrist.evaluator().UpdateLowerBound([lo[4]])
+                wrist.evaluator().UpdateUpperBound([-0.2])
+            prog.SetInitialGuess(q, seed)
+            result = Solve(prog)
+            if result.is_success():
+                q_sol, err = solve_pose_newton(cell, X_HT, result.GetSolution(q))
+                if err <= 1e-9:
+                    return q_sol
+    raise RuntimeError("reference_plan: no IK solution for a window's first pose")
 
 
 def _ramp_times(s: np.ndarray, length: float, v: float, t_ramp: float,
