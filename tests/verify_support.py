@@ -22,8 +22,9 @@ COARSE = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1, "joint_mo
 
 @functools.cache
 def cell_and_hub():
-    from drakedeburr.cell.station import load_cell
     from drakedeburr.hub.model import load_hub
+
+    from drakedeburr.cell.station import load_cell
 
     return load_cell(SCENARIO, HUB), load_hub(HUB)
 

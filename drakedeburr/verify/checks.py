@@ -41,6 +41,8 @@ log = logging.getLogger(__name__)
 
 #: segment kinds executed as linear Cartesian moves unless a target says otherwise
 LINEAR_KINDS = ("approach", "cut", "retract")
+_TOLERANCES = Tolerances()
+_PARAMS = ProcessParameters()
 _KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
 
 
@@ -253,8 +255,8 @@ def _validate(plan) -> None:
 def verify_plan(
     plan,
     *,
-    tolerances: Tolerances = Tolerances(),
-    params: ProcessParameters = ProcessParameters(),
+    tolerances: Tolerances = _TOLERANCES,
+    params: ProcessParameters = _PARAMS,
     time_step: float = 0.02,
     joint_move_step: float = 2e-3,
     expected_windows: list[int] | None = None,
@@ -573,7 +575,7 @@ def verify_plan(
         f = seg_f[idx]
         p_HC = np.asarray(tp.p_HC, float)
 
-        def p_TC(k, cl):
+        def p_TC(k, cl, p_HC=p_HC):
             X = np.asarray(targets[k].X_HT)
             return X[:3, :3].T @ (p_HC[cl] - X[:3, 3])
 
@@ -753,7 +755,8 @@ def verify_plan(
     rest = float(max(np.abs(traj.qd[0]).max(), np.abs(traj.qd[-1]).max()))
     items.append(CheckItem("rest_at_ends", rest <= 1e-9, rest, 1e-9, "rad/s", "<=",
                            detail="joint velocity at the first and last knot"))
-    home = float(max(np.abs(traj.q[0] - cell.q_home).max(), np.abs(traj.q[-1] - cell.q_home).max()))
+    home = float(max(np.abs(traj.q[0] - cell.q_home).max(),
+                     np.abs(traj.q[-1] - cell.q_home).max()))
     items.append(CheckItem("start_end_home", home <= 1e-6, home, 1e-6, "rad", "<=",
                            required=False, detail="trajectory starts and ends at q_home"))
 
@@ -882,7 +885,8 @@ def verify_plan(
             heights.append(float(np.linalg.norm(dv - np.outer(dv @ ab / L, ab / L), axis=1).max()))
         mu = chords.mean()
         cl_stats[w] = {"count": len(p), "cv": float(chords.std() / mu) if mu > 0 else None,
-                       "max_chord_height_m": max(heights), "max_chord_length_m": float(chords.max())}
+                       "max_chord_height_m": max(heights),
+                       "max_chord_length_m": float(chords.max())}
         if max(heights) > worst_h:
             worst_h, worst_hw = max(heights), w
         if chords.max() > worst_l:
@@ -904,6 +908,7 @@ def verify_plan(
                  "duration_s": traj.duration, "planner": str(plan.meta.get("planner", ""))}
     settings = {"tolerances": {k: getattr(tol, k) for k in tol.__dataclass_fields__},
                 "time_step_s": time_step, "joint_move_step_m": joint_move_step, "samples": N,
+                "grinding_speed": params.grinding_speed,
                 "cut_samples": int((kind_all == _KIND_CODE["cut"]).sum())}
     series = {"t": ts_all, "q": q_all, "qd": qd_all, "speed": v_all, "clearance": clear,
               "self": selfd, "burr": burr, "kind": kind_all, "window": win_all,
@@ -913,7 +918,7 @@ def verify_plan(
               "contact_H": contact}
     import drakedeburr
 
-    run = {"timestamp": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    run = {"timestamp": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
            "elapsed_s": round(_time.perf_counter() - started, 3),
            "versions": {"drakedeburr": getattr(drakedeburr, "__version__", "")}}
     log.info("verified plan for %s (%s): %s, %d samples", plan.hub, plan.scenario,

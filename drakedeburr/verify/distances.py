@@ -162,7 +162,7 @@ class DistanceProbe:
         poses = [plant.EvalBodyPoseInWorld(self.plant_context, b[0]).GetAsMatrix4()
                  for b in self._bodies]
         pairs_mf, pairs_mm = [], []
-        for (body, members, lo, hi, c, r), X in zip(self._bodies, poses, strict=True):
+        for (_, members, lo, hi, _, _), X in zip(self._bodies, poses, strict=True):
             R, t = X[:3, :3], X[:3, 3]
             p = (self._fixed_c - t) @ R  # fixed sphere centres in B
             ii, jj = self._near(lo, hi, p, self._fixed_r, d_max)

@@ -35,6 +35,8 @@ from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanS
 
 __all__ = ["reference_plan", "greedy_cl_indices", "solve_pose_newton"]
 
+_PARAMS = ProcessParameters()
+
 log = logging.getLogger(__name__)
 
 
@@ -182,7 +184,8 @@ def _ramp_times(s: np.ndarray, length: float, v: float, t_ramp: float,
             t2 = t1 + t_cruise
             m = t > t2
             tau = t[m] - t2
-            out[m] = s1 + v * t_cruise + 0.5 * v * (tau + t_ramp / np.pi * np.sin(np.pi * tau / t_ramp))
+            out[m] = s1 + v * t_cruise + 0.5 * v * (
+                tau + t_ramp / np.pi * np.sin(np.pi * tau / t_ramp))
         return out
 
     def sdot_of_t(t):
@@ -231,7 +234,7 @@ def reference_plan(
     fixed_axis_H: Sequence[float] = (0.0, 0.0, 1.0),
     box_margin: float = 0.05,
     axis_tilt: dict[int, float] | None = None,
-    params: ProcessParameters = ProcessParameters(),
+    params: ProcessParameters = _PARAMS,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> Plan:
     """Build the reference plan (see module docstring).
