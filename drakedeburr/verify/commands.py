@@ -103,7 +103,12 @@ def _run_verify(args: argparse.Namespace) -> int:
     width = max(len(i.name) for i in report.items)
     for it in report.items:
         mark = "PASS" if it.passed else ("FAIL" if it.required else "miss")
-        print(f"{mark}  {it.name:<{width}}  {it.detail}")
+        value = "" if it.value is None else f"{it.value:.4g} {it.unit}"
+        limit = "" if it.limit is None else f"{it.comparison} {it.limit:.4g}"
+        where = "" if it.window is None else f" [window {it.window}" + (
+            f", t={it.time:.3f} s" if it.time is not None else "") + "]"
+        pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
+        print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
     print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
     return 0 if report.passed else 1
 
