@@ -8,7 +8,7 @@ import pytest
 
 import drakedeburr.verify.batch as mut
 
-HUBS = ["h5_straight", "h5_deepdish"]
+HUBS = ["h5_straight", "h5_split"]
 OPTIONS = {"scenarios": ["tool_in_hand"], "planner": "reference", "windows": [0],
            "quick": True, "grinding_speed": 0.075}
 
