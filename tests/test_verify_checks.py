@@ -47,9 +47,12 @@ def test_clearance_matches_drake_pairwise_query():
 
 
 def test_json_is_deterministic_apart_from_run():
+    from drakedeburr.config import Tolerances
+
     plan = vs.good_plan()
-    a = vs.verify(plan)
-    b = vs.verify(plan)
+    coarser = {"tolerances": Tolerances(dense_step=5e-3), "time_step": 0.5}
+    a = vs.verify(plan, **coarser)
+    b = vs.verify(plan, **coarser)
     assert a.passed and b.passed
     assert report_json(a, include_run=False) == report_json(b, include_run=False)
     assert '"run"' in report_json(a)
@@ -139,9 +142,10 @@ def test_point_segment_distances_against_brute_force():
     a = rng.normal(size=(7, 3))
     b = a + rng.normal(size=(7, 3))
     d, k, f = mut._point_segment(p, a, b)
+    s = np.linspace(0, 1, 2001)
+    pts = a[:, None] + s[None, :, None] * (b - a)[:, None]  # (7, 2001, 3)
     for i in range(len(p)):
-        best = min(np.linalg.norm(p[i] - (a[j] + s * (b[j] - a[j])))
-                   for j in range(7) for s in np.linspace(0, 1, 2001))
+        best = np.linalg.norm(pts - p[i], axis=2).min()
         assert d[i] == pytest.approx(best, abs=1e-5)
         assert np.linalg.norm(p[i] - (a[k[i]] + f[i] * (b[k[i]] - a[k[i]]))) == pytest.approx(d[i])
     loop = np.c_[np.cos(np.linspace(0, 2 * np.pi, 200, endpoint=False)),
