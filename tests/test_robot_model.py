@@ -87,7 +87,7 @@ def test_fk_equals_opw_at_random_configurations():
     qs = rng.uniform(plant.GetPositionLowerLimits(), plant.GetPositionUpperLimits(), (150, 6))
     X_opw = fk_opw(IRB1600_10_120, qs)
     worst_p = worst_R = 0.0
-    for q, X_ref in zip(qs, X_opw):
+    for q, X_ref in zip(qs, X_opw, strict=True):
         plant.SetPositions(context, q)
         X = flange.CalcPoseInWorld(context).GetAsMatrix4()
         worst_p = max(worst_p, np.linalg.norm(X[:3, 3] - X_ref[:3, 3]))

@@ -16,7 +16,7 @@ from drakedeburr.resources import add_package_to, model_path
 def test_committed_tool_models_are_generated_from_the_dataclasses():
     for name, text in mut.tool_model_texts().items():
         assert model_path(f"tools/{name}").read_text() == text, (
-            f"models/tools/{name} is stale: run `python -m drakedeburr.cell.tools`")
+            f"models/tools/{name} is stale: run `python -m drakedeburr.cell`")
 
 
 def test_write_tool_models(tmp_path):

@@ -201,13 +201,18 @@ def _geometry_label(cell: Cell, inspector, geometry_id) -> str:
 def resolve_hub_sdf(hub: str | Path | None) -> Path:
     """Hub model file from a bundled hub name, a hub folder or an SDF path.
 
-    ``None`` picks the first bundled hub (alphabetical).
+    ``None`` picks the hub stage's default hub (``drakedeburr.hub.DEFAULT_HUB``) when it is
+    bundled, else the first bundled hub (alphabetical).
     """
     if hub is None:
         names = hub_names() if _hubs_dir_exists() else []
         if not names:
             raise FileNotFoundError("no bundled hub models (models/hubs/*/hub.yaml); pass hub=")
-        hub = names[0]
+        try:
+            from drakedeburr.hub.catalogue import DEFAULT_HUB
+        except ImportError:  # hub stage without a catalogue
+            DEFAULT_HUB = None
+        hub = DEFAULT_HUB if DEFAULT_HUB in names else names[0]
     path = Path(hub)
     if path.suffix == ".sdf":
         if not path.is_file():

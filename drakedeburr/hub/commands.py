@@ -1,0 +1,144 @@
+"""``drakedeburr hub ...``: generate, list and inspect the parametric hub models."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+__all__ = ["register"]
+
+
+def _run_generate(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.errors import InputError
+    from drakedeburr.hub.catalogue import BUNDLED
+    from drakedeburr.hub.generate import generate_hub
+    from drakedeburr.hub.spec import load_spec
+    from drakedeburr.resources import hubs_dir
+
+    out_root = Path(args.out) if args.out else hubs_dir()
+    specs = []
+    if args.spec:
+        if args.names or args.all:
+            raise InputError("hub generate: give either --spec FILE or hub names/--all")
+        specs.append(load_spec(args.spec))
+    elif args.all:
+        specs.extend(BUNDLED[n] for n in sorted(BUNDLED))
+    elif args.names:
+        for name in args.names:
+            if name in BUNDLED:
+                specs.append(BUNDLED[name])
+            elif (out_root / name / "hub.yaml").is_file():
+                specs.append(load_spec(out_root / name / "hub.yaml"))
+            else:
+                raise InputError(f"hub generate: unknown hub {name!r}: not bundled "
+                                 f"({', '.join(sorted(BUNDLED))}) and no "
+                                 f"{out_root / name}/hub.yaml")
+    else:
+        raise InputError("hub generate: name a hub, or use --all or --spec FILE")
+    for spec in specs:
+        progress = None if args.no_progress else tqdm_progress(f"hub {spec.name}")
+        res = generate_hub(spec, out_root / spec.name, progress=progress)
+        coll = res.summary.get("collision", {})
+        print(f"{spec.name}: {res.summary['window_count']} windows, "
+              f"{res.summary['mesh']['triangles']} triangles, "
+              f"{coll.get('piece_count', 0)} collision pieces, "
+              f"{res.seconds:.1f} s -> {res.dir}")
+    return 0
+
+
+def _run_list(args: argparse.Namespace) -> int:
+    from drakedeburr.resources import hubs_dir
+
+    root = Path(args.dir) if args.dir else hubs_dir()
+    rows = []
+    for d in sorted(p for p in root.iterdir() if (p / "hub.yaml").is_file()):
+        summ = d / "summary.json"
+        if summ.is_file():
+            s = json.loads(summ.read_text())
+            kinds = [w["kind"] for w in s["windows"]]
+            rows.append(f"{d.name:<16} {s['window_count']:>2} windows "
+                        f"({kinds.count('large')} large, {kinds.count('small')} small)  "
+                        f"{s['mass_kg']:6.2f} kg")
+        else:
+            rows.append(f"{d.name:<16} (not generated)")
+    print("\n".join(rows) if rows else f"no hub models in {root}")
+    return 0
+
+
+def _run_info(args: argparse.Namespace) -> int:
+    from drakedeburr.hub.model import resolve_hub_dir
+
+    d = resolve_hub_dir(args.hub)
+    s = json.loads((d / "summary.json").read_text())
+    if args.json:
+        json.dump(s, sys.stdout, indent=2)
+        print()
+        return 0
+    print(f"hub {s['name']} ({d})")
+    print(f"  mesh: {s['mesh']['vertices']} vertices, {s['mesh']['triangles']} triangles, "
+          f"genus {s['mesh']['genus']}, mass {s['mass_kg']} kg")
+    c = s.get("collision", {})
+    if c:
+        print(f"  collision: {c['piece_count']} convex pieces, hull volume "
+              f"{c['hull_volume_over_solid']:.3f} x solid, max reach into windows "
+              f"{c['max_window_intrusion_mm']} mm")
+    print("  window kind   points length_mm width_mm radial_mm fillet_mm kappa_max_1/mm z_mm")
+    for w in s["windows"]:
+        print(f"  {w['index']:>6} {w['kind']:<6} {w['points']:>6} {w['length_mm']:>9.1f} "
+              f"{w['width_mm']:>8.1f} {w['radial_size_mm']:>9.1f} {w['fillet_mm']:>9.1f} "
+              f"{w['max_curvature_per_mm']:>14.3f} "
+              f"{w['z_range_mm'][0]:.1f}..{w['z_range_mm'][1]:.1f}")
+    return 0
+
+
+def _run_scan(args: argparse.Namespace) -> int:
+    import open3d as o3d
+
+    from drakedeburr.hub.model import load_hub
+    from drakedeburr.hub.scan import simulate_scan
+    from drakedeburr.units import m_from_mm
+
+    hub = load_hub(args.hub)
+    cloud = simulate_scan(hub, sigma=m_from_mm(args.sigma_mm), spacing=m_from_mm(args.spacing_mm),
+                          seed=args.seed)
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(cloud.p_S))
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    if not o3d.io.write_point_cloud(str(args.output), pcd):
+        raise OSError(f"could not write {args.output}")
+    print(f"{len(cloud.p_S)} points (hub frame H, metres) -> {args.output}")
+    return 0
+
+
+def register(subparsers) -> None:
+    """Add ``drakedeburr hub {generate,list,info,scan}``."""
+    hub = subparsers.add_parser("hub", help="parametric hub models: generate, list, info, scan")
+    sub = hub.add_subparsers(dest="hub_command", metavar="HUB_COMMAND")
+    sub.required = True
+
+    p = sub.add_parser("generate", help="generate hub model assets (deterministic)")
+    p.add_argument("names", nargs="*", help="bundled hub names (or folders under --out)")
+    p.add_argument("--all", action="store_true", help="every bundled hub")
+    p.add_argument("--spec", help="a hub.yaml to generate (into --out/<name>)")
+    p.add_argument("--out", help="parent folder of the hub folders (default: bundled models/hubs)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(_run=_run_generate)
+
+    p = sub.add_parser("list", help="list hub models")
+    p.add_argument("--dir", help="folder of hub folders (default: bundled models/hubs)")
+    p.set_defaults(_run=_run_list)
+
+    p = sub.add_parser("info", help="window table and model figures of one hub")
+    p.add_argument("hub", help="bundled hub name or hub folder")
+    p.add_argument("--json", action="store_true", help="print summary.json")
+    p.set_defaults(_run=_run_info)
+
+    p = sub.add_parser("scan", help="write a simulated scan point cloud (PLY/PCD, metres, H)")
+    p.add_argument("hub", help="bundled hub name or hub folder")
+    p.add_argument("output", help="output point-cloud file (.ply, .pcd, .xyz)")
+    p.add_argument("--sigma-mm", type=float, default=0.05, help="noise sigma [mm]")
+    p.add_argument("--spacing-mm", type=float, default=1.0, help="mean point spacing [mm]")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(_run=_run_scan)

@@ -1,0 +1,155 @@
+"""Load a generated hub model folder: spec, mesh, ground-truth window edges, collision, SDF.
+
+A hub folder (``models/hubs/<name>/`` or one written by ``drakedeburr hub generate --out``)
+holds ``hub.yaml``, ``hub.obj``, ``edges.npz``, ``summary.json``, ``hub.sdf`` and
+``collision/piece_NNN.obj``. See docs/hub.md.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr.errors import InputError
+from drakedeburr.hub.spec import HubSpec, load_spec
+from drakedeburr.hub.types import WindowEdge
+
+__all__ = ["HubModel", "load_hub", "resolve_hub_dir", "read_obj"]
+
+
+@dataclass(frozen=True, eq=False)
+class HubModel:
+    """A generated hub, everything in the hub frame H, metres.
+
+    Attributes:
+        name: hub name (folder name / spec name).
+        dir: the hub folder.
+        spec: the HubSpec it was generated from.
+        vertices_H: (V, 3) mesh vertices [m] in H.
+        faces: (F, 3) int triangle indices, outward (counter-clockwise) winding.
+        windows: ground-truth window edges, index order (CCW about +Z_H from +X_H).
+        collision_paths: the convex collision pieces (OBJ, metres, frame H).
+        sdf_path: ``hub.sdf`` (model ``hub``, link ``hub`` whose body frame is H).
+        mesh_path: ``hub.obj``.
+        summary: the generator's summary (``summary.json``: mass, window sizes, collision
+            quality).
+    """
+
+    name: str
+    dir: Path
+    spec: HubSpec
+    vertices_H: np.ndarray
+    faces: np.ndarray
+    windows: tuple[WindowEdge, ...]
+    collision_paths: tuple[Path, ...]
+    sdf_path: Path
+    mesh_path: Path
+    summary: dict
+
+    @functools.cached_property
+    def trimesh(self):
+        """The mesh as a ``trimesh.Trimesh`` (not processed: vertex order kept)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices_H, self.faces, process=False)
+
+    @property
+    def large_windows(self) -> tuple[WindowEdge, ...]:
+        return tuple(w for w in self.windows if w.kind == "large")
+
+    @property
+    def small_windows(self) -> tuple[WindowEdge, ...]:
+        return tuple(w for w in self.windows if w.kind == "small")
+
+    def window_center_H(self, index: int) -> np.ndarray:
+        """(3,) a point [m] on the axis-parallel line through the middle of window ``index``:
+        the point of the window's outline plane farthest from its edge, at the edge's mean z."""
+        info = self.summary["windows"][index]
+        xy = np.asarray(info["center_xy_mm"], float) * 1e-3
+        return np.array([xy[0], xy[1], float(np.mean(self.windows[index].p_HE[:, 2]))])
+
+
+def read_obj(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) and triangles (F, 3) of a triangle-only OBJ (as written by the generator).
+
+    Written by hand: trimesh's loader merges/reorders vertices, the ground-truth loops refer to
+    the exact vertex coordinates.
+    """
+    text = Path(path).read_text()
+    v_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("v ")]
+    f_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("f ")]
+    V = np.array(" ".join(v_lines).split(), float).reshape(-1, 3)
+    try:
+        F = np.array(" ".join(f_lines).split(), np.int64).reshape(-1, 3) - 1
+    except ValueError as exc:
+        raise InputError(f"{path}: only plain triangle faces 'f a b c' are supported") from exc
+    return V, F
+
+
+def resolve_hub_dir(name_or_dir: str | Path) -> Path:
+    """A hub folder from a bundled name (``h5_split``), a folder, or a file inside it."""
+    path = Path(name_or_dir)
+    if path.is_file() and path.name in ("hub.yaml", "hub.sdf", "hub.obj", "edges.npz"):
+        path = path.parent
+    if path.is_dir():
+        if not (path / "hub.yaml").is_file():
+            raise FileNotFoundError(f"{path}: not a hub model folder (no hub.yaml)")
+        return path.resolve()
+    from drakedeburr.resources import hub_dir
+
+    return hub_dir(str(name_or_dir))
+
+
+def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
+    with zipfile.ZipFile(path) as zf:
+        names = set(zf.namelist())
+
+    data = np.load(path, allow_pickle=False)
+    kinds = [str(k) for k in data["kinds"]]
+    if len(kinds) != n_windows:
+        raise InputError(f"{path}: {len(kinds)} windows, the spec says {n_windows}")
+    out = []
+    for i, kind in enumerate(kinds):
+        keys = [f"w{i}_{k}" for k in ("p_HE", "t_H", "n_wall_H", "n_face_H")]
+        missing = [k for k in keys if k + ".npy" not in names]
+        if missing:
+            raise InputError(f"{path}: window {i}: missing arrays {missing}")
+        out.append(WindowEdge(index=i, kind=kind, p_HE=data[keys[0]], t_H=data[keys[1]],
+                              n_wall_H=data[keys[2]], n_face_H=data[keys[3]]))
+    return tuple(out)
+
+
+def load_hub(name_or_dir: str | Path) -> HubModel:
+    """Load a generated hub model.
+
+    Args:
+        name_or_dir: a bundled hub name (see ``drakedeburr hub list``), a hub folder, or a file
+            in it (``hub.yaml``, ``hub.sdf``).
+
+    Returns:
+        The HubModel (mesh, ground-truth windows, collision pieces, SDF path).
+
+    Raises:
+        FileNotFoundError: no such hub, or its generated files are missing (message says how to
+            generate them).
+        InputError: a file is malformed.
+    """
+    d = resolve_hub_dir(name_or_dir)
+    spec = load_spec(d / "hub.yaml")
+    needed = ("hub.obj", "edges.npz", "summary.json", "hub.sdf")
+    missing = [f for f in needed if not (d / f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{d}: hub model not generated ({', '.join(missing)} missing); "
+                                f"run: drakedeburr hub generate {spec.name} --out {d.parent}")
+    V, F = read_obj(d / "hub.obj")
+    summary = json.loads((d / "summary.json").read_text())
+    windows = _read_edges(d / "edges.npz", spec.window_count)
+    pieces = tuple(sorted((d / "collision").glob("piece_*.obj")))
+    return HubModel(name=spec.name, dir=d, spec=spec, vertices_H=V, faces=F, windows=windows,
+                    collision_paths=pieces, sdf_path=d / "hub.sdf", mesh_path=d / "hub.obj",
+                    summary=summary)

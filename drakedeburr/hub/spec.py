@@ -1,0 +1,312 @@
+"""HubSpec: the parameters of a parametric car-wheel hub, with YAML round trip and validation.
+
+All fields are SI (metres, radians). The YAML file ``models/hubs/<name>/hub.yaml`` speaks the
+industry's millimetres and degrees (keys end in ``_mm`` / ``_deg``); conversion happens here
+only, through :mod:`drakedeburr.units`.
+
+Geometry in the hub frame H (origin on the hub axis at the centre of the front face, +Z along the
+axle out of the visible face):
+
+* the **face plate** is a disc of thickness ``face_thickness`` whose front surface is
+  ``z = z_face(r)``: flat (z = 0) for r <= ``dish_inner_radius``, rising smoothly (C1
+  smoothstep) to ``dish_depth`` at ``dish_outer_radius`` and flat beyond. A positive
+  ``dish_depth`` gives the usual concave wheel (centre recessed behind the rim lip).
+* **windows** are the through-openings between the spokes inside the annulus
+  ``window_inner_radius < r < window_outer_radius``; their convex corners are rounded with
+  ``fillet_radius`` (``fillet_radius_small`` for the small windows of split spokes). Window side
+  walls are parallel to the hub axis (no draft).
+* **spokes**: ``spoke_count`` spokes of style ``straight`` (tapered from ``spoke_width`` at the
+  window inner radius to ``spoke_width_outer`` at the outer radius), ``curved`` (the same band
+  swept by ``spoke_sweep`` about the axis between the inner and outer window radius) or
+  ``split`` (a stem up to ``split_radius`` that forks into two arms of width
+  ``spoke_width_outer`` reaching ``+-split_angle`` about the stem at the window outer radius;
+  the opening between the two arms is a *small* window, the one between neighbouring spokes a
+  *large* window).
+* the **rim** is a barrel (outer diameter ``rim_barrel_diameter``, wall ``rim_thickness``,
+  axial width ``rim_width``) with a front flange (outer diameter ``rim_outer_diameter``) whose
+  top stands ``rim_lip_height`` proud of the face edge; a back flange closes the barrel.
+* the **hub pad** is a boss of radius ``hub_pad_radius`` and depth ``hub_pad_depth`` behind the
+  face with the centre bore and ``bolt_count`` bolt holes on the bolt circle.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import yaml
+
+from drakedeburr.errors import InputError
+from drakedeburr.units import deg_from_rad, m_from_mm, mm_from_m, rad_from_deg
+
+__all__ = ["SpokeStyle", "HubSpec", "load_spec", "spec_to_yaml", "spec_from_mapping"]
+
+SpokeStyle = Literal["straight", "curved", "split"]
+
+# fields given in the YAML in millimetres / degrees (key gets the suffix)
+_ANGLE_FIELDS = ("spoke_sweep", "split_angle")
+_PLAIN_FIELDS = ("name", "description", "spoke_count", "spoke_style", "bolt_count",
+                 "density")
+
+
+@dataclass(frozen=True)
+class HubSpec:
+    """Parameters of one parametric hub. SI units: metres, radians, kg/m^3.
+
+    See the module docstring for the meaning of each group of fields.
+    """
+
+    name: str
+    description: str = ""
+    spoke_count: int = 5
+    spoke_style: SpokeStyle = "straight"
+    # rim
+    rim_outer_diameter: float = 0.470  # front flange outer diameter
+    rim_barrel_diameter: float = 0.432  # barrel outer diameter (17 in bead seat)
+    rim_thickness: float = 0.006  # barrel wall
+    rim_width: float = 0.190  # axial length of the barrel (7.5 in)
+    rim_lip_height: float = 0.006  # flange top above the face edge
+    rim_flange_thickness: float = 0.012  # axial thickness of the front/back flanges
+    # face
+    face_thickness: float = 0.020
+    dish_depth: float = 0.030
+    dish_inner_radius: float = 0.085
+    dish_outer_radius: float = 0.200
+    # windows and spokes
+    window_inner_radius: float = 0.085
+    window_outer_radius: float = 0.180
+    spoke_width: float = 0.040  # at window_inner_radius
+    spoke_width_outer: float = 0.034  # at window_outer_radius (also the arm width of split)
+    spoke_sweep: float = 0.0  # curved: angular sweep of the centre line [rad]
+    split_radius: float = 0.120  # split: radius where the stem forks
+    split_angle: float = math.radians(12.0)  # split: arms' half-spread at window_outer_radius
+    fillet_radius: float = 0.010  # large windows
+    fillet_radius_small: float = 0.004  # small windows (split style)
+    # centre
+    center_bore_diameter: float = 0.0571
+    bolt_count: int = 5
+    bolt_circle_diameter: float = 0.1143
+    bolt_hole_diameter: float = 0.015
+    hub_pad_radius: float = 0.080
+    hub_pad_depth: float = 0.030
+    # meshing and material
+    mesh_edge_length: float = 0.008  # refinement of the face before dishing
+    edge_sample_spacing: float = 0.0005  # max spacing of window-edge points
+    density: float = 2700.0  # aluminium [kg/m^3]
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def rim_barrel_inner_radius(self) -> float:
+        return 0.5 * self.rim_barrel_diameter - self.rim_thickness
+
+    @property
+    def spoke_phase(self) -> float:
+        """Angle of spoke 0 about +Z_H [rad]: chosen so window 0 is the first large window CCW
+        from +X_H (for split spokes the windows alternate large, small, large, ...)."""
+        return -math.pi / (2 * self.spoke_count) if self.spoke_style == "split" else 0.0
+
+    @property
+    def window_count(self) -> int:
+        return self.spoke_count * (2 if self.spoke_style == "split" else 1)
+
+    def z_face(self, r):
+        """Front-face height z_face(r) [m] at radius r [m] (scalar or array)."""
+        import numpy as np
+
+        u = np.clip((np.asarray(r, float) - self.dish_inner_radius)
+                    / (self.dish_outer_radius - self.dish_inner_radius), 0.0, 1.0)
+        return self.dish_depth * u * u * (3.0 - 2.0 * u)
+
+    def dz_face_dr(self, r):
+        """d z_face / d r [-] at radius r [m]."""
+        import numpy as np
+
+        span = self.dish_outer_radius - self.dish_inner_radius
+        u = (np.asarray(r, float) - self.dish_inner_radius) / span
+        inside = (u > 0.0) & (u < 1.0)
+        return np.where(inside, self.dish_depth * 6.0 * u * (1.0 - u) / span, 0.0)
+
+    # --------------------------------------------------------------- validation
+    def validate(self, source: str = "") -> HubSpec:
+        """Check the parameters; raise InputError naming the field. Returns self."""
+        where = f"{source}: " if source else ""
+        where += f"hub {self.name!r}: "
+
+        def bad(field: str, msg: str) -> InputError:
+            return InputError(f"{where}field {field!r}: {msg}")
+
+        if not self.name or any(c in self.name for c in "/\\ "):
+            raise bad("name", "must be a non-empty identifier without spaces or slashes")
+        if self.spoke_style not in ("straight", "curved", "split"):
+            raise bad("spoke_style", f"must be straight, curved or split, got {self.spoke_style!r}")
+        if not isinstance(self.spoke_count, int) or not 3 <= self.spoke_count <= 12:
+            raise bad("spoke_count", f"must be an integer 3..12, got {self.spoke_count!r}")
+        if not isinstance(self.bolt_count, int) or not 0 <= self.bolt_count <= 10:
+            raise bad("bolt_count", f"must be an integer 0..10, got {self.bolt_count!r}")
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.type in ("float",) and not (isinstance(v, int | float) and math.isfinite(v)):
+                raise bad(f.name, f"must be a finite number, got {v!r}")
+        positive = ("rim_outer_diameter", "rim_barrel_diameter", "rim_thickness", "rim_width",
+                    "rim_flange_thickness", "face_thickness", "window_inner_radius",
+                    "window_outer_radius", "spoke_width", "spoke_width_outer", "fillet_radius",
+                    "fillet_radius_small", "center_bore_diameter", "hub_pad_radius",
+                    "mesh_edge_length", "edge_sample_spacing", "density", "dish_outer_radius")
+        for name in positive:
+            if getattr(self, name) <= 0:
+                raise bad(name, f"must be > 0, got {getattr(self, name)!r}")
+        for name in ("rim_lip_height", "hub_pad_depth", "dish_inner_radius"):
+            if getattr(self, name) < 0:
+                raise bad(name, f"must be >= 0, got {getattr(self, name)!r}")
+        if self.edge_sample_spacing > 0.002:
+            raise bad("edge_sample_spacing", "must be <= 2 mm")
+        if self.mesh_edge_length > 0.02:
+            raise bad("mesh_edge_length", "must be <= 20 mm (the dish would be faceted)")
+        if self.rim_outer_diameter <= self.rim_barrel_diameter:
+            raise bad("rim_outer_diameter", "must exceed rim_barrel_diameter (flange)")
+        if self.rim_thickness >= 0.25 * self.rim_barrel_diameter:
+            raise bad("rim_thickness", "too thick for the barrel diameter")
+        if self.window_outer_radius <= self.window_inner_radius:
+            raise bad("window_outer_radius", "must exceed window_inner_radius")
+        if self.window_outer_radius > self.rim_barrel_inner_radius - 0.005:
+            raise bad("window_outer_radius",
+                      f"must stay >= 5 mm inside the barrel (inner radius "
+                      f"{mm_from_m(self.rim_barrel_inner_radius):.1f} mm)")
+        if self.hub_pad_radius > self.window_inner_radius:
+            raise bad("hub_pad_radius", "the boss behind the face must not reach under the windows"
+                      " (hub_pad_radius <= window_inner_radius)")
+        if self.dish_inner_radius < self.hub_pad_radius:
+            raise bad("dish_inner_radius", "must be >= hub_pad_radius (the pad is flat)")
+        if self.dish_outer_radius <= self.dish_inner_radius:
+            raise bad("dish_outer_radius", "must exceed dish_inner_radius")
+        if self.dish_outer_radius > self.rim_barrel_inner_radius:
+            raise bad("dish_outer_radius", "must not exceed the barrel inner radius")
+        span = self.dish_outer_radius - self.dish_inner_radius
+        if abs(self.dish_depth) * 1.5 / span > 1.5:
+            raise bad("dish_depth", "face slope above 56 deg; the dish is too deep for its span")
+        if self.rim_width < self.face_thickness + abs(self.dish_depth) + self.hub_pad_depth:
+            pass  # a shallow rim is allowed; the pad may stand out at the back
+        # bore, bolts and pad
+        if self.center_bore_diameter / 2 >= self.bolt_circle_diameter / 2 - self.bolt_hole_diameter:
+            raise bad("center_bore_diameter", "bore reaches the bolt holes")
+        if self.bolt_count:
+            if self.bolt_hole_diameter <= 0:
+                raise bad("bolt_hole_diameter", "must be > 0")
+            if self.bolt_circle_diameter / 2 + self.bolt_hole_diameter > self.hub_pad_radius:
+                raise bad("bolt_circle_diameter", "bolt holes must lie inside the hub pad")
+            pitch = self.bolt_circle_diameter * math.sin(math.pi / self.bolt_count)
+            if self.bolt_count > 1 and pitch < 1.5 * self.bolt_hole_diameter:
+                raise bad("bolt_hole_diameter", "bolt holes overlap each other")
+        radial = self.window_outer_radius - self.window_inner_radius
+        if 2 * self.fillet_radius + 0.002 > radial:
+            raise bad("fillet_radius", "larger than half the radial size of the windows")
+        if self.fillet_radius_small > self.fillet_radius:
+            raise bad("fillet_radius_small", "must not exceed fillet_radius")
+        # spokes: the gap between spokes at the window inner radius must hold a window
+        n = self.spoke_count
+        gap_in = 2 * self.window_inner_radius * math.sin(math.pi / n) - self.spoke_width
+        gap_out = 2 * self.window_outer_radius * math.sin(math.pi / n) - self.spoke_width_outer
+        if self.spoke_style == "split":
+            # two arms per spoke share the pitch at the outer radius
+            arm_gap = 2 * self.window_outer_radius * math.sin(self.split_angle) \
+                - self.spoke_width_outer
+            gap_out = 2 * self.window_outer_radius * math.sin(math.pi / n - self.split_angle) \
+                - self.spoke_width_outer
+            if not 0 < self.split_angle < math.pi / n:
+                raise bad("split_angle", f"must be in (0, {deg_from_rad(math.pi / n):.1f} deg)")
+            if not self.window_inner_radius < self.split_radius < self.window_outer_radius:
+                raise bad("split_radius", "must lie between the window inner and outer radius")
+            if arm_gap < 2 * self.fillet_radius_small + 0.002:
+                raise bad("spoke_width_outer", "arms of a split spoke too wide for split_angle: "
+                          "no room for the small window")
+        if gap_in < 2 * self.fillet_radius + 0.002:
+            raise bad("spoke_width", f"too wide for {n} spokes at the window inner radius: the "
+                      f"gap {mm_from_m(gap_in):.1f} mm cannot hold a window with "
+                      f"{mm_from_m(self.fillet_radius):.1f} mm fillets")
+        if gap_out < 2 * self.fillet_radius + 0.002:
+            raise bad("spoke_width_outer", f"too wide for {n} spokes at the window outer radius")
+        if abs(self.spoke_sweep) > math.radians(60):
+            raise bad("spoke_sweep", "must be within +-60 deg")
+        return self
+
+
+# --------------------------------------------------------------------------- YAML
+def _yaml_key(field: str) -> str:
+    if field in _PLAIN_FIELDS:
+        return field
+    return field + ("_deg" if field in _ANGLE_FIELDS else "_mm")
+
+
+def spec_to_mapping(spec: HubSpec) -> dict:
+    """HubSpec -> dict in the YAML's units (mm, deg), field order kept."""
+    out: dict = {}
+    for f in dataclasses.fields(spec):
+        v = getattr(spec, f.name)
+        if f.name in _PLAIN_FIELDS:
+            out[f.name] = v
+        elif f.name in _ANGLE_FIELDS:
+            out[_yaml_key(f.name)] = _short(deg_from_rad(v), lambda d, v=v: rad_from_deg(d) == v)
+        else:
+            out[_yaml_key(f.name)] = _short(mm_from_m(v), lambda d, v=v: m_from_mm(d) == v)
+    return out
+
+
+def _short(value: float, exact) -> float:
+    """The shortest decimal rounding of ``value`` that converts back exactly (YAML round trip)."""
+    for digits in range(0, 17):
+        cand = round(value, digits)
+        if exact(cand):
+            return cand
+    return value
+
+
+def spec_to_yaml(spec: HubSpec) -> str:
+    """The hub.yaml text of a spec (deterministic)."""
+    head = ("# drakedeburr parametric hub (see docs/hub.md). Lengths in mm, angles in deg.\n"
+            "# Regenerate the assets with: drakedeburr hub generate " + spec.name + "\n")
+    return head + yaml.safe_dump(spec_to_mapping(spec), sort_keys=False, default_flow_style=False)
+
+
+def spec_from_mapping(data: dict, source: str = "") -> HubSpec:
+    """dict in the YAML's units -> validated HubSpec. Unknown keys raise InputError."""
+    if not isinstance(data, dict):
+        raise InputError(f"{source}: expected a mapping of HubSpec fields")
+    by_key = {_yaml_key(f.name): f for f in dataclasses.fields(HubSpec)}
+    kwargs = {}
+    for key, value in data.items():
+        if key in ("window_summary", "generated"):
+            continue  # informative sections written by the generator
+        if key not in by_key:
+            raise InputError(f"{source}: unknown hub field {key!r}; known: {sorted(by_key)}")
+        f = by_key[key]
+        if f.name in ("spoke_count", "bolt_count"):
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise InputError(f"{source}: field {key!r} must be an integer, got {value!r}")
+        elif f.name in ("name", "description", "spoke_style"):
+            value = str(value)
+        elif f.name in _PLAIN_FIELDS:
+            value = float(value)
+        else:
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise InputError(f"{source}: field {key!r} must be a number, got {value!r}")
+            value = rad_from_deg(float(value)) if f.name in _ANGLE_FIELDS else m_from_mm(
+                float(value))
+        kwargs[f.name] = value
+    if "name" not in kwargs:
+        raise InputError(f"{source}: hub spec needs a 'name'")
+    return HubSpec(**kwargs).validate(source)
+
+
+def load_spec(path: str | Path) -> HubSpec:
+    """Read a hub.yaml (or a hub folder holding one) into a validated HubSpec."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "hub.yaml"
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML: {exc}") from exc
+    return spec_from_mapping(data, str(path))
