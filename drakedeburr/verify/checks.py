@@ -28,6 +28,7 @@ import datetime as _dt
 import logging
 import time as _time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -234,6 +235,57 @@ def _tool_paths(plan) -> dict:
     return {int(t.window_index): t for t in tp}
 
 
+@dataclass(frozen=True, eq=False)
+class _WindowRef:
+    """What a window's cut is checked against: CL points, local frames, the box, and which
+    CL point each target aims at. From the plan's ToolPath, or - when the plan carries none -
+    from the hub's ground truth (nearest edge point to each target's tool point)."""
+
+    p_HC: np.ndarray
+    R_HL: np.ndarray
+    bounds: object
+    cl_of: dict
+    tool_path: object = None
+    source: str = "ToolPath"
+
+
+def _window_ref(w, targets, tool_path, edge, params) -> _WindowRef | None:
+    ks = [k for k, t in enumerate(targets) if t.window_index == w and t.segment == "cut"]
+    if tool_path is not None:
+        cl_of = {k: int(targets[k].cl_index) for k in range(len(targets))
+                 if targets[k].window_index == w and targets[k].cl_index >= 0}
+        bounds = getattr(tool_path, "bounds", None) or (
+            params.bounds_large if edge.kind == "large" else params.bounds_small)
+        return _WindowRef(np.asarray(tool_path.p_HC, float), np.asarray(tool_path.R_HL, float),
+                          bounds, cl_of, tool_path)
+    if edge is None or edge.t_H is None or edge.n_wall_H is None or not ks:
+        return None
+    from scipy.spatial import cKDTree
+
+    p_E = np.asarray(edge.p_HE, float)
+    # the targets of the cut loop (the one before the first cut target starts the loop)
+    loop = [ks[0] - 1] + ks if ks[0] >= 1 else ks
+    p_T = np.array([targets[k].X_HT[:3, 3] for k in loop])
+    _, C = _closed_polyline_distance(p_T, p_E)
+    _, v = cKDTree(p_E).query(C)
+    T = edge.t_H[v] / np.linalg.norm(edge.t_H[v], axis=1, keepdims=True)
+    B = np.cross(T, edge.n_wall_H[v])
+    B /= np.linalg.norm(B, axis=1, keepdims=True)
+    Nn = np.cross(B, T)
+    # a closed loop ends on its first point: one CL point for both
+    unique, cl_of = [], {}
+    for i, k in enumerate(loop):
+        j = next((u for u, c in enumerate(unique) if np.linalg.norm(C[c] - C[i]) < 1e-6), None)
+        if j is None:
+            unique.append(i)
+            j = len(unique) - 1
+        cl_of[k] = j
+    sel = np.asarray(unique)
+    bounds = params.bounds_large if edge.kind == "large" else params.bounds_small
+    return _WindowRef(C[sel], np.stack([Nn, T, B], axis=2)[sel], bounds, cl_of, None,
+                      "hub edge (the plan carries no ToolPath)")
+
+
 def _validate(plan) -> None:
     traj = plan.trajectory
     t, q, qd = (np.asarray(traj.t, float), np.asarray(traj.q, float), np.asarray(traj.qd, float))
@@ -388,6 +440,8 @@ def verify_plan(
     win_all = np.array([segments[i].window_index for i in seg_index], int)
     N = len(ts_all)
 
+    seg_k = np.full(N, -1)  # program move (index of the target it ends at) of each sample
+
     # ---------------------------------------------------------------- FK twice + distances
     probe = DistanceProbe(cell, tol.query_distance)
     from pydrake.multibody.tree import JacobianWrtVariable
@@ -422,11 +476,13 @@ def verify_plan(
                      "distances")
 
     def where(i):
+        """Worst-location fields of sample i: its window, time and the target its move ends at
+        (the linear move it lies on, else its segment's last target)."""
         i = int(i)
         s = segments[seg_index[i]]
-        a, b = s.target_range
+        k = int(seg_k[i]) if seg_k[i] >= 0 else s.target_range[1] - 1
         return {"window": int(s.window_index), "time": float(ts_all[i]),
-                "target_index": int(min(max(b - 1, 0), len(targets) - 1))}
+                "target_index": int(min(max(k, 0), len(targets) - 1))}
 
     items.append(CheckItem(
         "fk_agreement", fk_diff <= tol.fk_match, fk_diff, tol.fk_match, "m", "<=",
@@ -464,7 +520,6 @@ def verify_plan(
     prog_to_traj = 0.0
     prog_worst = None
     contact = np.full((N, 3), np.nan)   # executed contact point C in H (cut samples)
-    seg_k = np.full(N, -1)               # program move index (target index it ends at)
     seg_f = np.full(N, np.nan)
     for si, s in enumerate(segments):
         a, b = s.target_range
@@ -522,14 +577,17 @@ def verify_plan(
     # ---------------------------------------------------------------- edge, cone, windows
     cut_windows = sorted({s.window_index for s in segments if s.kind == "cut"})
     missing = [w for w in windows_hub if w not in cut_windows]
+    refs = {w: _window_ref(w, targets, tool_paths.get(w), edge_of.get(w), params)
+            for w in cut_windows}
     cl_missing = {}
     for w in cut_windows:
-        tp = tool_paths.get(w)
-        if tp is None:
-            cl_missing[w] = "no ToolPath"
+        ref = refs[w]
+        if ref is None:
+            cl_missing[w] = "neither a ToolPath nor ground-truth edge frames"
             continue
-        have = {t.cl_index for t in targets if t.window_index == w and t.segment == "cut"}
-        lost = sorted(set(range(len(tp.p_HC))) - have)
+        have = {ref.cl_of[k] for k, t in enumerate(targets)
+                if t.window_index == w and t.segment in ("approach", "cut") and k in ref.cl_of}
+        lost = sorted(set(range(len(ref.p_HC))) - have)
         if lost:
             cl_missing[w] = f"CL points {lost[:5]}{'...' if len(lost) > 5 else ''} not targeted"
     unknown = [w for w in cut_windows if w not in edge_of]
@@ -558,8 +616,8 @@ def verify_plan(
     from scipy.spatial import cKDTree
 
     for w in cut_windows:
-        tp = tool_paths.get(w)
-        if tp is None or w not in edge_of:
+        ref = refs[w]
+        if ref is None or w not in edge_of:
             continue
         edge = np.asarray(edge_of[w].p_HE, float)
         tree = cKDTree(edge)
@@ -568,12 +626,12 @@ def verify_plan(
             continue
         k1 = seg_k[idx]
         k0 = k1 - 1
-        cl0 = np.array([targets[k].cl_index for k in k0])
-        cl1 = np.array([targets[k].cl_index for k in k1])
-        if np.any(cl0 < 0) or np.any(cl1 < 0):
+        if any(k not in ref.cl_of for k in np.concatenate([k0, k1])):
             continue
+        cl0 = np.array([ref.cl_of[k] for k in k0])
+        cl1 = np.array([ref.cl_of[k] for k in k1])
         f = seg_f[idx]
-        p_HC = np.asarray(tp.p_HC, float)
+        p_HC = ref.p_HC
 
         def p_TC(k, cl, p_HC=p_HC):
             X = np.asarray(targets[k].X_HT)
@@ -598,18 +656,15 @@ def verify_plan(
         jc = int(np.argmax(dc))
         coverage[w] = (float(dc[jc]), jc)
         # cone: executed axis in the interpolated local frame
-        R_HL = np.asarray(tp.R_HL, float)
-        R_loc = _lerp_frames(R_HL[cl0], R_HL[cl1], f)
+        R_loc = _lerp_frames(ref.R_HL[cl0], ref.R_HL[cl1], f)
         axis_H = -R[:, :, 2]
         tA, tB = _theta_from_axis(R_loc, axis_H)
         theta_A[idx], theta_B[idx] = tA, tB
-        bounds = getattr(tp, "bounds", None) or (
-            params.bounds_large if edge_of[w].kind == "large" else params.bounds_small)
-        lo, hi = bounds.theta_min, bounds.theta_max
+        lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
         cone_margin[idx] = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])
         cone_per_window[w] = {"theta_A_min": float(tA.min()), "theta_A_max": float(tA.max()),
                               "theta_B_min": float(tB.min()), "theta_B_max": float(tB.max()),
-                              "bounds": [lo, hi]}
+                              "bounds": [lo, hi], "reference": ref.source}
         sc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p_all[idx], axis=0),
                                                              axis=1))])
         s_cut[idx] = sc
@@ -656,18 +711,19 @@ def verify_plan(
     # theta statistics at the targets (Tab. 3-6 style), recomputed from the executed poses
     stats = {}
     for w in cut_windows:
-        tp = tool_paths.get(w)
-        if tp is None:
+        ref = refs[w]
+        if ref is None:
             continue
         ks = [k for k, t in enumerate(targets) if t.window_index == w and t.segment == "cut"
-              and t.cl_index >= 0]
-        cl = np.array([targets[k].cl_index for k in ks])
+              and k in ref.cl_of]
+        cl = np.array([ref.cl_of[k] for k in ks])
         if not len(ks):
             continue
         axis = -X_HT_t[ks, :3, 2]
-        tA, tB = _theta_from_axis(np.asarray(tp.R_HL, float)[cl], axis)
-        dA = float(np.abs(tA - np.asarray(tp.theta_A)[cl]).max())
-        dB = float(np.abs(tB - np.asarray(tp.theta_B)[cl]).max())
+        tA, tB = _theta_from_axis(ref.R_HL[cl], axis)
+        tp = ref.tool_path
+        dA = float(np.abs(tA - np.asarray(tp.theta_A)[cl]).max()) if tp is not None else None
+        dB = float(np.abs(tB - np.asarray(tp.theta_B)[cl]).max()) if tp is not None else None
 
         def describe(v):
             m = float(np.mean(v))
@@ -676,7 +732,8 @@ def verify_plan(
                     "cv": float(np.std(v) / abs(m)) if m else None}
 
         stats[w] = {"theta_A": describe(tA), "theta_B": describe(tB),
-                    "max_diff_from_tool_path_rad": max(dA, dB)}
+                    "max_diff_from_tool_path_rad": None if dA is None else max(dA, dB),
+                    "reference": ref.source}
     items.append(CheckItem(
         "theta_statistics", True, None, None, "rad", "info", required=False,
         detail="theta_A/theta_B of the executed axis at the CL targets (source Tab. 3-6)",
@@ -865,10 +922,10 @@ def verify_plan(
     cl_stats = {}
     worst_h, worst_hw, worst_l, worst_lw = 0.0, None, 0.0, None
     for w in cut_windows:
-        tp = tool_paths.get(w)
-        if tp is None or w not in edge_of:
+        ref = refs[w]
+        if ref is None or w not in edge_of:
             continue
-        p = np.asarray(tp.p_HC, float)
+        p = ref.p_HC
         edge = np.asarray(edge_of[w].p_HE, float)
         chords = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         _, vi = cKDTree(edge).query(p)
@@ -894,7 +951,9 @@ def verify_plan(
     items.append(CheckItem(
         "cl_chord_error", bool(cl_stats) and worst_h <= params.delta_max, worst_h,
         params.delta_max, "m", "<=", window=worst_hw,
-        detail="largest distance of the true edge from a chord between consecutive CL points",
+        detail="largest distance of the true edge from a chord between consecutive CL points"
+               + ("" if all(r is None or r.tool_path is not None for r in refs.values()) else
+                  " (CL points inferred from the targets: the plan carries no ToolPath)"),
         per_window=cl_stats))
     items.append(CheckItem(
         "cl_chord_length", bool(cl_stats) and worst_l <= params.l_max + 1e-12, worst_l,
