@@ -154,3 +154,20 @@ def test_point_segment_distances_against_brute_force():
     d2, c = mut._closed_polyline_distance(q, loop)
     dd, _, _ = mut._point_segment(q, loop, np.roll(loop, -1, axis=0))
     assert np.allclose(d2, dd, atol=1e-12)
+
+
+def test_plan_without_tool_path_uses_hub_edges():
+    """A plan that carries no ToolPath is still checked against the true edge (the CL points
+    are inferred from the targets, the local frames from the hub's ground truth)."""
+    plan = faults.replace(vs.good_plan(), tool_path=None)
+    report = vs.verify(plan)
+    for name in ("windows", "edge_deviation", "edge_coverage", "burr_engagement",
+                 "cl_chord_length"):
+        assert report.item(name).passed, report.item(name)
+    cone = report.item("cone")
+    assert cone.value is not None
+    assert all(v["reference"].startswith("hub edge") for v in cone.per_window.values())
+    # the inferred contact points (nearest edge point to T) stay on the true edge
+    assert report.item("edge_deviation").value <= report.settings["tolerances"]["edge_deviation"]
+    # the fixed-axis plan leaves the source's default box [0.26, 0.44]: named by the cone check
+    assert "cone" in report.failed
