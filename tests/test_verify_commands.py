@@ -33,3 +33,8 @@ def test_verify_bad_input_exits_2(tmp_path):
     assert main(["-q", "verify", "no_such_cell/no_such_hub"]) == 2
     assert main(["-q", "verify", str(tmp_path / "missing.stl")]) == 2
     assert main(["-q", "verify", "tool_in_hand/h5_straight", "--windows", "zero"]) == 2
+
+
+def test_verify_all_bad_input_exits_2(tmp_path):
+    assert main(["-q", "verify-all", str(tmp_path / "no_catalogue")]) == 2
+    assert main(["-q", "verify-all", str(tmp_path)]) == 2  # a folder without hubs
