@@ -1,13 +1,17 @@
 """Signed distances of a cell at many configurations, with the closest pair named.
 
-Why not ``QueryObject.ComputeSignedDistancePairwiseClosestPoints``: with a hub made of ~750
-convex pieces its broad phase costs ~10 ms per configuration here, while the narrow-phase
-query of one pair (``ComputeSignedDistancePairClosestPoints``) costs ~7 us. So candidate pairs
-are culled in numpy first (bounding sphere of each moving geometry against the world AABB of
-each fixed geometry, spheres against spheres for moving pairs), then measured exactly by Drake.
-Collision filters of the scene graph are honoured (``inspector.CollisionFiltered``).
+Two implementations, giving the same answers (tested):
 
-Pairs are classified:
+* ``"pairwise"`` (default): the scene graph's
+  ``QueryObject.ComputeSignedDistancePairwiseClosestPoints(query_distance)``, its results
+  classified by geometry;
+* ``"culled"``: candidate pairs culled in numpy (each moving body's geometry boxes, in the
+  body frame, against the bounding spheres of fixed geometry; spheres for moving pairs), then
+  ``ComputeSignedDistancePairClosestPoints`` pair by pair. It was 2-3x faster with the first
+  hub models (~750 convex pieces); with the merged pieces (~450) Drake's broad phase is as fast
+  or faster (benchmarks/RESULTS.md), so it is kept as the cross-check.
+
+Collision filters of the scene graph are honoured. Pairs are classified:
     * ``"burr"``: burr head vs hub, the process contact (handled by its own limits);
     * ``"self"``: both geometries move with the robot and neither is the hub;
     * ``"clearance"``: every other unfiltered pair (robot/tool/held hub vs cell and hub).
@@ -66,11 +70,15 @@ class DistanceProbe:
     Args:
         cell: the cell (freshly loaded by the verifier).
         query_distance: pairs farther apart than this are not measured [m].
+        method: "pairwise" (Drake's broad phase) or "culled" (see module docstring).
     """
 
-    def __init__(self, cell, query_distance: float) -> None:
+    def __init__(self, cell, query_distance: float, method: str = "pairwise") -> None:
         from pydrake.geometry import Role
 
+        if method not in ("pairwise", "culled"):
+            raise ValueError(f"method must be 'pairwise' or 'culled', got {method!r}")
+        self.method = method
         self.cell = cell
         self.query_distance = float(query_distance)
         self.context = cell.diagram.CreateDefaultContext()
@@ -130,6 +138,8 @@ class DistanceProbe:
         # pair classes, cached: -2 unknown, -1 filtered, 0 clearance, 1 self, 2 burr
         self._kind_mf = np.full((len(self.moving), len(self.fixed)), -2, np.int8)
         self._kind_mm = np.full((len(self.moving), len(self.moving)), -2, np.int8)
+        self._kind_ids: dict[tuple[int, int], int] = {}
+        self._by_value = {g.get_value(): g for g in ids}
 
     def _label(self, g) -> str:
         plant = self.cell.plant
@@ -156,6 +166,29 @@ class DistanceProbe:
 
     def measure(self, q: np.ndarray) -> PairDistances:
         """Smallest distance per class at joints ``q`` [rad] (see module docstring)."""
+        if self.method == "culled":
+            return self._measure_culled(q)
+        self.cell.plant.SetPositions(self.plant_context, q)
+        query = self.port.Eval(self.sg_context)
+        best = {0: (np.inf, None, None), 1: (np.inf, None, None), 2: (np.inf, None, None)}
+        for r in query.ComputeSignedDistancePairwiseClosestPoints(self.query_distance):
+            va, vb = r.id_A.get_value(), r.id_B.get_value()
+            kind = self._kind_ids.get((va, vb))
+            if kind is None:
+                kind = self._kind_ids[(va, vb)] = self._classify(r.id_A, r.id_B)
+            if kind >= 0 and r.distance < best[kind][0]:
+                best[kind] = (float(r.distance), va, vb)
+
+        def named(k):
+            d, va, vb = best[k]
+            if va is None:
+                return d, ("", "")
+            return d, (self.names[self._by_value[va]], self.names[self._by_value[vb]])
+
+        (c, cp), (sd, sp), (b, bp) = named(0), named(1), named(2)
+        return PairDistances(c, cp, sd, sp, b, bp)
+
+    def _measure_culled(self, q: np.ndarray) -> PairDistances:
         plant = self.cell.plant
         plant.SetPositions(self.plant_context, q)
         d_max = self.query_distance
@@ -189,7 +222,7 @@ class DistanceProbe:
                 if kind < 0:
                     continue
                 d = query.ComputeSignedDistancePairClosestPoints(a, b).distance
-                if d < best[kind][0]:
+                if d <= d_max and d < best[kind][0]:
                     best[kind] = (float(d), (self.names[a], self.names[b]))
         return PairDistances(best[0][0], best[0][1], best[1][0], best[1][1], best[2][0],
                              best[2][1])
