@@ -63,6 +63,9 @@ class Tolerances:
     dense_step: float = 0.5e-3  # [m] tool travel between dense re-check samples
     fk_match: float = 1e-9  # [m] model FK vs analytic FK
     on_surface: float = 1e-6  # [m] edge loops on the mesh surface
+    registration_inlier_distance: float = 0.3e-3  # [m] scan point counts as on the hub model
+    registration_fitness_min: float = 0.95  # [-] share of scan points on the model to accept
+    registration_rmse_max: float = 0.1e-3  # [m] RMS point-to-model distance of those inliers
     orientation_match: float = 1e-3  # [rad] trajectory vs program tool orientation (verify)
     wrist_margin: float = 0.15  # [rad] smallest |J5| allowed (J5 = 0 is the wrist singularity)
     min_manipulability: float = 1e-4  # [-] |det J| of the flange Jacobian (advisory)

@@ -65,3 +65,12 @@ def test_lazy_public_api():
     assert drakedeburr.ProcessParameters().grinding_speed == pytest.approx(0.150)
     with pytest.raises(AttributeError):
         drakedeburr.does_not_exist  # noqa: B018
+
+
+def test_atomic_write_gives_normal_permissions(tmp_path):
+    import os
+
+    f = io_mut.atomic_write_text(tmp_path / "r.html", "x")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (f.stat().st_mode & 0o777) == (0o666 & ~umask)

@@ -40,7 +40,7 @@ def test_tool_on_a_robot_flange_reaches_the_hole(tmp_path):
     urdf = tmp_path / "toy.urdf"
     urdf.write_text(ROBOT_URDF)
     meshcat = Meshcat()
-    scene = mut.build_tool_scene(meshcat, robot_urdf=urdf)
+    scene = mut.build_tool_scene(meshcat, robot_model=urdf)
     plant = scene.plant
     ctx = plant.GetMyMutableContextFromRoot(scene.context)
     robot_q = np.array([0.4])
@@ -64,3 +64,26 @@ def test_tool_on_a_robot_flange_reaches_the_hole(tmp_path):
     p_H = X_WH_any.inverse().multiply(X_WC_any.multiply(p_C.T)).T
     assert np.allclose(p_H[:, 2], 0, atol=1e-12)
     assert np.allclose(np.linalg.norm(p_H[:, :2], axis=1), 0.003, atol=1e-12)
+
+
+def test_tool_on_the_irb1600_flange_matches_analytic_fk():
+    """The Cutting Tool on the real robot model: TCP = OPW FK(q) * X_FC * home point."""
+    from pydrake.geometry import Meshcat
+    from pydrake.math import RigidTransform
+
+    from drakedeburr.laser.kinematics import inverse_kinematics
+    from drakedeburr.post.opw import IRB1600_10_120, fk_opw
+    from drakedeburr.resources import model_path
+
+    meshcat = Meshcat()
+    scene = mut.build_tool_scene(meshcat, robot_model=model_path("robots/irb1600_10_120.sdf"))
+    g = scene.geometry
+    q_servo, _ = inverse_kinematics(g, g.p_CHome)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        q_robot = rng.uniform(-1.0, 1.0, 6)
+        scene.set_servo_angles(q_servo[0], q_robot)
+        X_WF = RigidTransform(fk_opw(IRB1600_10_120, q_robot))
+        X_WTcp = X_WF.multiply(mut.default_X_FC()).multiply(
+            RigidTransform([g.p_CHome[0], g.p_CHome[1], 0.080]))
+        assert np.allclose(scene.tcp_in_world(), X_WTcp.translation(), atol=1e-9)

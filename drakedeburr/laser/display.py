@@ -1,8 +1,8 @@
 """Meshcat display of the Cutting Tool (alone or on the robot flange) and of a cut.
 
-``robot_urdf`` mounts the tool on a robot: the tool base C is welded to the robot's
+``robot_model`` mounts the tool on a robot: the tool base C is welded to the robot's
 ``flange`` frame with ``X_FC`` (default: C origin 60 mm out along the flange z axis, beam
-along flange z). The robot model (``models/robots/irb1600_10_120.urdf``) comes from the cell
+along flange z). The robot model (``models/robots/irb1600_10_120.sdf``) comes from the cell
 stage; without it the tool is shown standalone at ``X_WC``.
 """
 
@@ -76,7 +76,7 @@ class ToolScene:
 
 
 def build_tool_scene(meshcat, geometry: FiveBarGeometry | None = None,
-                     robot_urdf: str | Path | None = None, flange_frame: str = "flange",
+                     robot_model: str | Path | None = None, flange_frame: str = "flange",
                      X_FC=None, X_WC=None) -> ToolScene:
     """Diagram with the tool (optionally on a robot flange) drawn in ``meshcat``."""
     from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Role
@@ -90,11 +90,11 @@ def build_tool_scene(meshcat, geometry: FiveBarGeometry | None = None,
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
     robot = None
-    if robot_urdf is not None:
+    if robot_model is not None:
         parser = Parser(plant)
         add_package_to(parser.package_map())
-        (robot,) = parser.AddModels(str(robot_urdf))
-        base = plant.get_body(plant.GetBodyIndices(robot)[0])  # the URDF's root link
+        (robot,) = parser.AddModels(str(robot_model))
+        base = plant.get_body(plant.GetBodyIndices(robot)[0])  # the model's root body (URDF base_link or SDF base)
         plant.WeldFrames(plant.world_frame(), base.body_frame())
         parent = plant.GetFrameByName(flange_frame, robot)
         tool = add_cutting_tool(plant, g, parent, X_FC if X_FC is not None else default_X_FC())

@@ -141,11 +141,15 @@ def main() -> None:
 
     from drakedeburr.laser.display import animate_hole, build_tool_scene
 
+    from drakedeburr.resources import model_path
+
     meshcat = Meshcat()
-    scene = build_tool_scene(meshcat, g)
+    # the Cutting Tool on the IRB1600's flange (robot_model=None shows the tool alone)
+    scene = build_tool_scene(meshcat, g, robot_model=model_path("robots/irb1600_10_120.sdf"))
     prog = plan_hole(Keyhole(head_diameter=0.012, slot_width=0.005, slot_length=0.010,
                              lead_in=0.003), spacing=0.2e-3)
-    animate_hole(scene, prog, meshcat, fps=100.0 if args.test_mode else 500.0)
+    robot_q = np.array([0.0, 0.3, 0.2, 0.0, -0.5, 0.0])  # robot holds still while the tool cuts
+    animate_hole(scene, prog, meshcat, fps=100.0 if args.test_mode else 500.0, robot_q=robot_q)
     (out / "cutting_tool.html").write_text(meshcat.StaticHtml())
     (out / "holes.json").write_text(json.dumps(report, indent=2))
     print(f"outputs in {out}")

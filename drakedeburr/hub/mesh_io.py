@@ -1,0 +1,90 @@
+"""Hub mesh import (STL/OBJ/PLY via trimesh) with unit detection and validation.
+
+A car wheel is 0.3-0.9 m across. A mesh whose largest extent is above ``_MM_THRESHOLD`` is
+read as millimetres and scaled to metres; the choice is logged and returned.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr.errors import InputError
+
+__all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES"]
+
+log = logging.getLogger(__name__)
+
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+_MM_THRESHOLD = 5.0  # a wheel larger than 5 "units" is in millimetres (5 m wheels don't exist)
+_PLAUSIBLE_SIZE_M = (0.05, 2.0)  # [m] largest extent after conversion
+
+
+@dataclass(frozen=True, eq=False)
+class LoadedMesh:
+    """A triangle mesh in metres.
+
+    Attributes:
+        mesh: trimesh.Trimesh with merged vertices, in metres, in the file's own frame M.
+        source: the file path.
+        unit: "m" or "mm": what the file was detected to be in.
+        watertight: whether the mesh is closed.
+    """
+
+    mesh: object
+    source: Path
+    unit: str
+    watertight: bool
+
+
+def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
+    """Load a hub mesh and convert it to metres.
+
+    Args:
+        path: STL, OBJ or PLY file.
+        unit: "m" or "mm" to force the unit; None detects it from the size.
+
+    Raises:
+        FileNotFoundError: no such file.
+        InputError: unsupported suffix, unreadable file, no triangles, non-finite vertices,
+            or an implausible size for a wheel.
+    """
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(f"{path}: unsupported mesh type {path.suffix!r}; use STL, OBJ or PLY")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=True)
+    except Exception as exc:  # trimesh raises many kinds; name the file
+        raise InputError(f"{path}: cannot read mesh: {exc}") from exc
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise InputError(f"{path}: no triangles found")
+    if not np.isfinite(mesh.vertices).all():
+        bad = int(np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))[0])
+        raise InputError(f"{path}: vertex {bad} is not finite")
+    mesh.merge_vertices()
+    size = float(mesh.extents.max())
+    if unit is None:
+        unit = "mm" if size > _MM_THRESHOLD else "m"
+        log.info("%s: largest extent %.4g -> read as %s", path.name, size,
+                 "millimetres" if unit == "mm" else "metres")
+    elif unit not in ("m", "mm"):
+        raise InputError(f"unit must be 'm' or 'mm', got {unit!r}")
+    if unit == "mm":
+        mesh.apply_scale(1e-3)
+    size_m = float(mesh.extents.max())
+    if not _PLAUSIBLE_SIZE_M[0] <= size_m <= _PLAUSIBLE_SIZE_M[1]:
+        raise InputError(
+            f"{path}: largest extent {size_m:.4g} m (read as {unit}) is not a wheel's size "
+            f"({_PLAUSIBLE_SIZE_M[0]}-{_PLAUSIBLE_SIZE_M[1]} m); pass unit='m' or 'mm'"
+        )
+    watertight = bool(mesh.is_watertight)
+    if not watertight:
+        log.info("%s: mesh is not watertight (%d faces)", path.name, len(mesh.faces))
+    return LoadedMesh(mesh=mesh, source=path, unit=unit, watertight=watertight)

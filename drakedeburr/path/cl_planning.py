@@ -1,0 +1,515 @@
+"""Cutter-location (CL) point planners on a closed EdgeCurve (source §1.2 and §3.1).
+
+Every planner has the same interface, ``plan_cl(curve, method=..., params=...) -> ClPath``:
+
+``proposed``
+    The source's method, step by step (§1.2, Fig. 3): curvature of the initial CL points;
+    K-means on curvature with K chosen by the elbow of the SSE curve (eq. 3); clusters ranked
+    by centroid: the top cluster is "near max curvature" (kept), the bottom one "low
+    curvature" (chord-length / chord-height walk with L_max and delta_max, eq. 2), clusters in
+    between "near median" (sorted by curvature descending, every other point kept); the kept
+    points re-sorted by their original index. It selects a *subset of the initial points* and
+    checks its thresholds only inside the low-curvature walk, as the source does; its other
+    segments are not bounded (the metrics show by how much).
+``isoparametric``
+    Equal steps of arc length (the source uses the initial points' accumulated arc length as
+    the parameter). The source does not say how it picks the step; we take the fewest equal
+    steps for which every segment has true chord height <= delta_max and chord <= L_max.
+``equal_chord_height``
+    The classic baseline: march along the curve, each next point as far as the true chord
+    height allows (delta_max); no length cap.
+``adaptive`` (ours)
+    Optimal segmentation of the closed curve on a fine arc-length grid (step L_max/64) by
+    dynamic programming: every segment must keep chord <= L_max and chord height <= delta_max;
+    for every point count from the fewest feasible up to ``count_budget`` (default: the
+    proposed method's count) the DP finds the plan with the smallest sum of squared chords
+    (the most even chords for that count); the plan with the smallest all-pairs c_v (then
+    neighbour c_v) is returned. Each plan is re-checked against the TRUE chord height on the
+    spline before it is accepted. When the budget is infeasible (the proposed method broke
+    its own thresholds) the fewest feasible points are returned.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.distance import pdist
+
+from drakedeburr.config import ProcessParameters
+from drakedeburr.errors import InputError
+from drakedeburr.hub.types import WindowKind
+from drakedeburr.path.edge_curve import EdgeCurve
+from drakedeburr.path.metrics import cl_metrics
+from drakedeburr.path.types import ClPath
+
+__all__ = [
+    "PlannerParams",
+    "METHODS",
+    "plan_cl",
+    "plan_all",
+    "kmeans_sse",
+    "elbow_k",
+    "cluster_roles",
+    "every_other_by_curvature",
+    "chord_walk",
+    "proposed_indices",
+]
+
+log = logging.getLogger(__name__)
+
+METHODS: tuple[str, ...] = ("proposed", "isoparametric", "equal_chord_height", "adaptive")
+
+# relative safety margin between the sampled chord height used while planning and the refined
+# one reported by the metrics (sampling underestimates a smooth maximum by < 5e-4 relative)
+_SAMPLED_MARGIN = 5e-3
+# start points tried by the adaptive DP (each is one DP pass)
+N_STARTS = 5
+
+
+@dataclass(frozen=True)
+class PlannerParams:
+    """Thresholds of the CL planners (defaults: source §3.1 via ProcessParameters).
+
+    Attributes:
+        l_max: max chord length between CL points [m] (10 mm).
+        delta_max: max chord-height error [m] (0.12 mm).
+        k_max: largest K tried by the elbow method.
+        seed: random state of K-means.
+        count_budget: ``adaptive`` only: max point count (None: the proposed method's count).
+    """
+
+    l_max: float = ProcessParameters.l_max
+    delta_max: float = ProcessParameters.delta_max
+    k_max: int = 8
+    seed: int = 0
+    count_budget: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (self.l_max > 0 and self.delta_max > 0):
+            raise InputError(f"planner thresholds must be > 0: l_max={self.l_max}, "
+                             f"delta_max={self.delta_max}")
+        if self.k_max < 1:
+            raise InputError(f"k_max must be >= 1, got {self.k_max}")
+
+
+# ---------------------------------------------------------------------------------------------
+# proposed method, one function per step (each unit-tested)
+# ---------------------------------------------------------------------------------------------
+def kmeans_sse(kappa: np.ndarray, k_max: int, seed: int = 0) -> tuple[np.ndarray, list]:
+    """K-means (scikit-learn) on the curvature values for K = 1..k_max (eq. 3).
+
+    Args:
+        kappa: (N,) curvature values [1/m].
+        k_max: largest K (clipped to the number of distinct values).
+        seed: random state.
+
+    Returns:
+        sse: (K,) within-cluster sum of squares for K = 1..K; labels: list of (N,) arrays.
+    """
+    from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_limits
+
+    x = np.asarray(kappa, float).reshape(-1, 1)
+    k_max = max(1, min(k_max, len(np.unique(np.round(x[:, 0], 12)))))
+    sse, labels = [], []
+    # a few hundred 1-D values: OpenMP threads only add start-up cost (measured 8 s vs 0.3 s
+    # for K = 1..8 on a loaded 2-core machine), so run single-threaded
+    with threadpool_limits(1):
+        for k in range(1, k_max + 1):
+            km = KMeans(n_clusters=k, n_init=10, random_state=seed).fit(x)
+            sse.append(float(km.inertia_))
+            labels.append(km.labels_.copy())
+    return np.array(sse), labels
+
+
+def elbow_k(sse: np.ndarray) -> int:
+    """The elbow of an SSE-versus-K curve (K = 1, 2, ...): the point farthest below the line
+    from the first to the last point, both axes normalised to [0, 1] ("kneedle").
+
+    Returns 1 when the SSE is already ~0 at K = 1 (all curvatures equal) or only K = 1 exists.
+    """
+    sse = np.asarray(sse, float)
+    if len(sse) < 3 or sse[0] <= 1e-12 * max(1.0, abs(sse).max()):
+        return 1 if len(sse) < 2 or sse[0] <= 1e-12 * max(1.0, abs(sse).max()) else 2
+    x = np.linspace(0.0, 1.0, len(sse))
+    y = (sse - sse[-1]) / max(sse[0] - sse[-1], 1e-300)
+    return int(np.argmax((1.0 - x) - y)) + 1
+
+
+def cluster_roles(kappa: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Role of every point from its cluster: 2 near max, 1 near median, 0 low curvature.
+
+    Clusters are ranked by their mean curvature: the top one is "near max", the bottom one
+    "low", all in between "near median". One cluster: everything is "low" (the walk alone).
+
+    Returns:
+        (N,) int roles.
+    """
+    kappa = np.asarray(kappa, float)
+    ids = np.unique(labels)
+    roles = np.zeros(len(kappa), int)
+    if len(ids) == 1:
+        return roles
+    order = ids[np.argsort([kappa[labels == i].mean() for i in ids])]
+    for rank, cid in enumerate(order):
+        roles[labels == cid] = 2 if rank == len(order) - 1 else (0 if rank == 0 else 1)
+    return roles
+
+
+def every_other_by_curvature(idx: np.ndarray, kappa: np.ndarray) -> np.ndarray:
+    """Near-median step: sort the points by curvature descending, keep every other one
+    (the 1st, 3rd, ...). Ties keep the original order (stable sort).
+
+    Args:
+        idx: (n,) indices of the near-median points.
+        kappa: (N,) curvature of all points.
+
+    Returns:
+        kept indices (in curvature-descending order).
+    """
+    idx = np.asarray(idx, int)
+    order = idx[np.argsort(-kappa[idx], kind="stable")]
+    return order[::2]
+
+
+def chord_walk(curve: EdgeCurve, u: np.ndarray, l_max: float, delta_max: float) -> np.ndarray:
+    """Low-curvature step: walk the points in order from the first one (the start); drop the
+    next point while both the chord length and the chord-height error (eq. 2) from the start
+    stay below their thresholds; otherwise keep it and make it the new start.
+
+    Args:
+        curve: the edge curve (chords and eq.-2 chord heights are measured on it).
+        u: (n,) increasing parameters of the low-curvature points.
+
+    Returns:
+        (k,) positions into ``u`` of the kept points (the first point is always kept).
+    """
+    u = np.asarray(u, float)
+    if len(u) == 0:
+        return np.zeros(0, int)
+    kept = [0]
+    start = 0
+    for j in range(1, len(u)):
+        l = float(curve.chord_length(u[start], u[j]))
+        d = float(curve.chord_height_circle(u[start], u[j])[0])
+        if l < l_max and d < delta_max:
+            continue
+        kept.append(j)
+        start = j
+    return np.array(kept, int)
+
+
+def proposed_indices(curve: EdgeCurve, params: PlannerParams) -> dict:
+    """The source's planner on the initial points ``curve.u_data``; all intermediate results.
+
+    Returns:
+        dict with ``kappa`` (N,), ``sse`` (K,), ``k`` (elbow), ``labels`` (N,), ``roles`` (N,),
+        ``kept`` (sorted indices into the initial points).
+    """
+    u = curve.u_data
+    kappa = curve.curvature(u)
+    sse, labels = kmeans_sse(kappa, params.k_max, params.seed)
+    k = elbow_k(sse)
+    lab = labels[k - 1]
+    roles = cluster_roles(kappa, lab)
+    keep_max = np.flatnonzero(roles == 2)
+    keep_med = every_other_by_curvature(np.flatnonzero(roles == 1), kappa)
+    low = np.flatnonzero(roles == 0)
+    keep_low = low[chord_walk(curve, u[low], params.l_max, params.delta_max)]
+    kept = np.sort(np.concatenate([keep_max, keep_med, keep_low]))
+    return {"kappa": kappa, "sse": sse, "k": k, "labels": lab, "roles": roles, "kept": kept}
+
+
+def _plan_proposed(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    return curve.u_data[proposed_indices(curve, params)["kept"]]
+
+
+# ---------------------------------------------------------------------------------------------
+# baselines and ours
+# ---------------------------------------------------------------------------------------------
+def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
+                 length_cap: bool = True) -> bool:
+    u_next = np.roll(u, -1)
+    u_next[-1] += 1.0
+    if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
+        return False
+    d = curve.chord_height(u, u_next, samples=_samples_for(curve, u, u_next), refine=False)
+    return bool((d <= params.delta_max * (1.0 - _SAMPLED_MARGIN)).all())
+
+
+def _samples_for(curve: EdgeCurve, u0, u1) -> int:
+    """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
+    0.25 mm of the longest arc, 48..600."""
+    arc = float(np.max(curve.arc_length(u0, u1)))
+    return int(np.clip(arc / 0.25e-3, 48, 600))
+
+
+def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    n = max(4, int(np.ceil(curve.length / params.l_max)))
+    while True:
+        u = curve.u_from_arc(np.arange(n) * curve.length / n)
+        if _segments_ok(curve, u, params):
+            return u
+        n += max(1, n // 50)
+
+
+def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
+    L = curve.length
+    s, out = 0.0, [0.0]
+    # a step can never exceed the length of the rest of the loop
+    while True:
+        rest = L - s
+        if _ch(curve, s, rest) <= target and _ch(curve, s, rest, refine=True) <= params.delta_max:
+            break
+        lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
+        # grow a bracket geometrically, then shrink it with guesses from the model
+        # h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of the target
+        step = min(rest, 1e-3)
+        while step < rest:
+            h = _ch(curve, s, step)
+            if h > target:
+                hi, h_hi = step, h
+                break
+            lo, h_lo, step = step, h, step * 2.0
+        for _ in range(40):
+            if h_lo >= 0.998 * target or hi - lo < 1e-7:
+                break
+            guess = hi * np.sqrt(target / h_hi) if np.isfinite(h_hi) else 0.5 * (lo + hi)
+            width = hi - lo
+            guess = float(np.clip(guess, lo + 0.05 * width, hi - 0.05 * width))
+            h = _ch(curve, s, guess)
+            if h > target:
+                hi, h_hi = guess, h
+            else:
+                lo, h_lo = guess, h
+        # the search used sampled chord heights; confirm the step with the refined one
+        while lo > 1e-6 and _ch(curve, s, lo, refine=True) > params.delta_max:
+            lo *= 0.995
+        s += lo
+        out.append(s)
+    return curve.u_from_arc(np.array(out))
+
+
+def _ch(curve: EdgeCurve, s: float, step: float, refine: bool = False) -> float:
+    u0 = curve.u_from_arc(s)
+    u1 = curve.u_from_arc(s + step)
+    if s + step >= curve.length - 1e-12 or u1 <= u0:
+        u1 = u1 + 1.0
+    return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
+                                    refine=refine)[0])
+
+
+def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
+    """For a closed grid of curve points p (G, 3): chord (G, R) and sampled chord height
+    (G, R) of the segment from grid point i to i + r (r = 1..R): the max distance of the grid
+    points between them from the chord. Rows stop (inf) at the first r whose segment breaks
+    chord <= l_max or height <= delta (longer segments from the same start break them too)."""
+    G = len(p)
+    chord = np.full((G, reach), np.inf)
+    height = np.full((G, reach), np.inf)
+    alive = np.arange(G)
+    for r in range(1, reach + 1):
+        a = p[alive]
+        b = p[(alive + r) % G]
+        c = np.linalg.norm(b - a, axis=1)
+        h = np.zeros(len(alive))
+        if r > 1:
+            # squared distance of the inner points to the segment, without (n, r-1, 3)
+            # temporaries beyond ap: |ap|^2 - 2 t ap.ab + t^2 |ab|^2, t clipped to [0, 1]
+            ap = p[(alive[:, None] + np.arange(1, r)) % G] - a[:, None, :]  # (n, r-1, 3)
+            ab = b - a
+            L2 = np.maximum(c * c, 1e-300)[:, None]
+            dot = np.einsum("nkj,nj->nk", ap, ab)
+            t = np.clip(dot / L2, 0.0, 1.0)
+            d2 = np.einsum("nkj,nkj->nk", ap, ap) - 2 * t * dot + t * t * L2
+            h = np.sqrt(np.maximum(d2.max(1), 0.0))
+        chord[alive, r - 1] = c
+        height[alive, r - 1] = h
+        alive = alive[(c <= l_max) & (h <= delta)]
+        if len(alive) == 0:
+            break
+    return chord, height
+
+
+def _feasible(chord: np.ndarray, height: np.ndarray, l_max: float, delta: float):
+    """(chord with inf where infeasible, ok): ok[i, r] = every segment from i up to i + r
+    keeps chord <= l_max and height <= delta (prefix-closed, like the true constraint)."""
+    ok = np.logical_and.accumulate((chord <= l_max) & (height <= delta), axis=1)
+    return np.where(ok, chord, np.inf), ok
+
+
+def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enough: int = 0):
+    """Shortest-path layers over the closed grid from ``start`` back to it: best[k][j] = min
+    sum of squared chords of k feasible segments from start to j (j in 0..G, G = back at
+    start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable."""
+    G, R = chord.shape
+    roll = (np.arange(G + 1) + start) % G  # position j on the unrolled loop -> grid index
+    cost = np.where(ok, chord**2, np.inf)
+    j = np.arange(G + 1)
+    i = j[:, None] - np.arange(1, R + 1)[None, :]  # (G+1, R) segment start on the unrolled loop
+    valid = i >= 0
+    i_c = np.where(valid, i, 0)
+    seg_cost = np.where(valid, cost[roll[i_c], np.arange(R)[None, :]], np.inf)
+    best = np.full((k_max + 1, G + 1), np.inf)
+    arg = np.zeros((k_max + 1, G + 1), int)
+    best[0, 0] = 0.0
+    for k in range(1, k_max + 1):
+        cand = best[k - 1][i_c] + seg_cost
+        r_best = np.argmin(cand, axis=1)
+        best[k] = cand[j, r_best]
+        arg[k] = r_best + 1
+        if k >= k_enough and np.isfinite(best[k, G]):  # the budget and the fewest are covered
+            return best[: k + 1], arg[: k + 1]
+    return best, arg
+
+
+def _backtrack(arg: np.ndarray, k: int, G: int) -> np.ndarray:
+    pos, out = G, []
+    for layer in range(k, 0, -1):
+        pos -= arg[layer, pos]
+        out.append(pos)
+    return np.array(out[::-1])
+
+
+def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
+    """Ours: optimal CL points on a fine arc-length grid by dynamic programming.
+
+    Every segment must pass chord <= L_max and the grid-sampled chord height <= delta_max
+    (grid step L_max/64; with a margin of 0.3 %, tightened until the plan passes the TRUE chord
+    height on the spline). Among such plans: the fewest points
+    N_min (lexicographically first), then for each count N from N_min up to the budget
+    (default: the proposed method's count) the plan minimising the sum of squared chords,
+    i.e. the most uniform chords for that count; the count with the smallest c_v is returned.
+    A few start points on the grid are tried. Written by hand: no library solves this
+    constrained 1-D segmentation.
+    """
+    step = min(params.l_max / 64.0, curve.length / 400.0)
+    G = max(64, int(np.ceil(curve.length / step)))
+    u_grid = curve.u_from_arc(np.arange(G) * curve.length / G)
+    p = curve.position(u_grid)
+    reach = min(G - 1, int(np.ceil(1.25 * params.l_max / (curve.length / G))))
+    n_lo = max(3, int(np.ceil(curve.length / params.l_max)))
+    budget = params.count_budget
+    if budget is None:
+        budget = len(_plan_proposed(curve, params))
+    k_max = max(budget, 3 * n_lo) + 2
+    chords, heights = _chords_and_heights(p, reach, params.l_max, params.delta_max)
+    # the grid samples the chord height (slightly low): plans are re-checked on the spline,
+    # best first; the margin is tightened only if none passes
+    for margins in ((1.0, 0.997), (0.99, 0.97), (0.94, 0.9)):
+        cands = []
+        for margin in margins:
+            chord, ok = _feasible(chords, heights, params.l_max, params.delta_max * margin)
+            km = k_max
+            found = _dp_candidates(curve, u_grid, chord, ok, budget, km)
+            while not found and km < G:  # sharp corners need more points than guessed
+                km = min(G, 3 * km)
+                found = _dp_candidates(curve, u_grid, chord, ok, budget, km)
+            cands += found
+        for _, u in sorted(cands, key=lambda c: c[0]):
+            if _true_ok(curve, u, params):
+                return u
+    log.warning("adaptive: no plan on the grid passes the spline check; using isoparametric")
+    return _plan_isoparametric(curve, params)
+
+
+def _dp_candidates(curve, u_grid, chord, ok, budget, k_max) -> list:
+    """(key, u) for every start and every count from the fewest up to the budget; key sorts
+    within-budget plans by all-pairs c_v (the source's Tab. 2 figure), then neighbour c_v;
+    over-budget ones by count."""
+    G = len(u_grid)
+    out = []
+    for start in np.linspace(0, G, N_STARTS, endpoint=False).astype(int) % G:
+        best, arg = _dp_layers(chord, ok, int(start), k_max, k_enough=budget)
+        finite = np.flatnonzero(np.isfinite(best[:, G]))
+        if len(finite) == 0:
+            continue
+        for n in finite[finite <= max(budget, int(finite[0]))]:
+            u = np.sort(u_grid[(_backtrack(arg, int(n), G) + start) % G])
+            d = pdist(curve.position(u))
+            key = (n > budget, n if n > budget else 0, float(d.std() / d.mean()),
+                   _neighbour_cv(curve, u))
+            out.append((key, u))
+    return out
+
+
+def _true_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams) -> bool:
+    u_next = np.roll(u, -1)
+    u_next[-1] += 1.0
+    return bool((curve.chord_length(u, u_next) <= params.l_max).all()
+                and (curve.chord_height(u, u_next) <= params.delta_max).all())
+
+
+def _neighbour_cv(curve: EdgeCurve, u: np.ndarray) -> float:
+    u_next = np.roll(u, -1)
+    u_next[-1] += 1.0
+    d = curve.chord_length(u, u_next)
+    return float(d.std() / d.mean())
+
+
+_PLANNERS: dict[str, Callable[[EdgeCurve, PlannerParams], np.ndarray]] = {
+    "proposed": _plan_proposed,
+    "isoparametric": _plan_isoparametric,
+    "equal_chord_height": _plan_equal_chord_height,
+    "adaptive": _plan_adaptive,
+}
+
+
+def plan_cl(
+    curve: EdgeCurve,
+    method: str = "proposed",
+    params: PlannerParams | None = None,
+    *,
+    window_index: int = 0,
+    kind: WindowKind = "large",
+) -> ClPath:
+    """Plan CL points on one closed edge curve.
+
+    Args:
+        curve: the fitted window edge (frame H, metres).
+        method: one of ``METHODS``.
+        params: thresholds (default: L_max = 10 mm, delta_max = 0.12 mm).
+        window_index, kind: copied into the ClPath.
+
+    Returns:
+        ClPath with points in edge order and ``metrics`` from :func:`cl_metrics`.
+
+    Raises:
+        InputError: unknown method.
+    """
+    if method not in _PLANNERS:
+        raise InputError(f"unknown CL planning method {method!r}; choose from {', '.join(METHODS)}")
+    params = params or PlannerParams()
+    u = np.sort(np.mod(np.asarray(_PLANNERS[method](curve, params), float), 1.0))
+    metrics = cl_metrics(curve, u)
+    metrics["method"] = method
+    return ClPath(
+        window_index=window_index,
+        kind=kind,
+        method=method,
+        u=u,
+        p_HC=curve.position(u),
+        t_H=curve.tangent(u),
+        kappa=curve.curvature(u),
+        arc_length=curve.arc_length(u),
+        total_length=curve.length,
+        metrics=metrics,
+    )
+
+
+def plan_all(curve: EdgeCurve, params: PlannerParams | None = None, *, window_index: int = 0,
+             kind: WindowKind = "large", methods=METHODS) -> dict[str, ClPath]:
+    """Run several planners on one curve; ``adaptive`` gets the proposed count as budget."""
+    params = params or PlannerParams()
+    out: dict[str, ClPath] = {}
+    for m in methods:
+        p = params
+        if m == "adaptive" and params.count_budget is None and "proposed" in out:
+            p = PlannerParams(params.l_max, params.delta_max, params.k_max, params.seed,
+                              count_budget=len(out["proposed"]))
+        out[m] = plan_cl(curve, m, p, window_index=window_index, kind=kind)
+    return out

@@ -1,0 +1,248 @@
+"""EdgeCurve: a closed NURBS (periodic B-spline) fit of one window edge (source §1.1, eqs. 1-2).
+
+The source fits a NURBS curve (eq. 1) through the equidistant "initial CL points" of a window
+edge with accumulated chord-length parameterisation. A NURBS curve whose weights are all 1 *is*
+a B-spline, and a fit through points has no reason to use other weights, so we use SciPy's
+interpolating B-spline (``scipy.interpolate.make_interp_spline``) with periodic boundary
+conditions. The source writes a clamped knot vector; on a closed loop that leaves a C0 seam at
+the start point, so we use the periodic form (C2 everywhere, the seam is invisible).
+
+Shape features (all SI, derivatives analytic from the spline):
+    position C(u), unit tangent T(u), curvature kappa(u) = |C' x C''| / |C'|^3,
+    arc length s(u), chord length l(u0, u1) = |C(u1) - C(u0)|,
+    circle-approximated chord-height error (eq. 2): delta = R - sqrt(R^2 - (l/2)^2),
+    and the true chord-height error: max distance of the arc C([u0, u1]) from the chord.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import BSpline, make_interp_spline
+from scipy.optimize import minimize_scalar
+
+from drakedeburr.errors import InputError
+
+__all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters"]
+
+# samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
+_GAUSS_ORDER = 8
+# samples per segment for the true chord height before the local refinement
+_CHORD_SAMPLES = 48
+
+
+def chord_parameters(p: np.ndarray) -> np.ndarray:
+    """Accumulated chord-length parameters of a closed polyline.
+
+    Args:
+        p: (N, 3) points, first point not repeated.
+
+    Returns:
+        (N + 1,) parameters in [0, 1]; the last one (= 1) belongs to the closing point p[0].
+    """
+    d = np.linalg.norm(np.diff(np.vstack([p, p[:1]]), axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(d)])
+    return s / s[-1]
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeCurve:
+    """A closed, periodic cubic B-spline C(u), u in [0, 1), through the initial CL points.
+
+    Attributes:
+        spline: the periodic scipy BSpline, maps u -> (3,) point in the data frame [m].
+        u_data: (N,) parameters of the fitted (initial) points, increasing from 0.
+        p_data: (N, 3) the fitted points [m] (frame of the input, H for window edges).
+        s_table: (K,) arc length [m] at the parameters ``u_table`` (monotone, s(1) = length).
+        u_table: (K,) parameters of the arc-length table.
+        length: total length of the closed curve [m].
+    """
+
+    spline: BSpline
+    u_data: np.ndarray
+    p_data: np.ndarray
+    u_table: np.ndarray
+    s_table: np.ndarray
+    length: float
+
+    # ----- evaluation ---------------------------------------------------------------------
+    def position(self, u) -> np.ndarray:
+        """C(u): (..., 3) points [m] for parameters u (any shape; wrapped into [0, 1))."""
+        return self.spline(np.mod(u, 1.0))
+
+    def derivative(self, u, order: int = 1) -> np.ndarray:
+        """d^k C / du^k at u: (..., 3)."""
+        return self.spline(np.mod(u, 1.0), nu=order)
+
+    def tangent(self, u) -> np.ndarray:
+        """Unit tangent T(u): (..., 3), in the direction of increasing u."""
+        d1 = self.derivative(u, 1)
+        return d1 / np.linalg.norm(d1, axis=-1, keepdims=True)
+
+    def curvature(self, u) -> np.ndarray:
+        """kappa(u) = |C' x C''| / |C'|^3 [1/m]; same shape as u."""
+        d1 = self.derivative(u, 1)
+        d2 = self.derivative(u, 2)
+        return np.linalg.norm(np.cross(d1, d2), axis=-1) / np.linalg.norm(d1, axis=-1) ** 3
+
+    # ----- arc length ---------------------------------------------------------------------
+    def arc_length(self, u0, u1=None) -> np.ndarray:
+        """Arc length [m] from u0 to u1 going forward (wrapping through u = 1 if u1 < u0).
+
+        With one argument: arc length from u = 0 to u (u in [0, 1]).
+        """
+        if u1 is None:
+            return self._s(np.asarray(u0, float))
+        u0 = np.asarray(u0, float)
+        u1 = np.asarray(u1, float)
+        s = self._s(np.mod(u1, 1.0)) - self._s(np.mod(u0, 1.0))
+        s = np.where(s < 0, s + self.length, s)
+        # a full turn (u1 = u0 + 1) is the whole length, not zero
+        return np.where((u1 - u0) >= 1.0 - 1e-15, self.length, s)
+
+    def _s(self, u: np.ndarray) -> np.ndarray:
+        # exact within a span: Gauss-Legendre on the table span holding u
+        u = np.clip(u, 0.0, 1.0)
+        i = np.clip(np.searchsorted(self.u_table, u, side="right") - 1, 0, len(self.u_table) - 2)
+        a = self.u_table[i]
+        x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+        h = (u - a)[..., None]
+        t = a[..., None] + (x + 1.0) * 0.5 * h
+        speed = np.linalg.norm(self.spline(t, nu=1), axis=-1)
+        return self.s_table[i] + 0.5 * (speed * w).sum(-1) * h[..., 0]
+
+    def u_from_arc(self, s) -> np.ndarray:
+        """Parameter u at arc length s [m] from u = 0 (s wrapped into [0, length))."""
+        s = np.mod(np.asarray(s, float), self.length)
+        u = np.interp(s, self.s_table, self.u_table)
+        for _ in range(4):  # Newton on s(u) - s = 0; ds/du = |C'(u)|
+            u = u - (self._s(u) - s) / np.linalg.norm(self.spline(u, nu=1), axis=-1)
+            u = np.clip(u, 0.0, 1.0)
+        return u
+
+    # ----- chords -------------------------------------------------------------------------
+    def chord_length(self, u0, u1) -> np.ndarray:
+        """|C(u1) - C(u0)| [m]."""
+        return np.linalg.norm(self.position(u1) - self.position(u0), axis=-1)
+
+    def mean_curvature(self, u0, u1) -> np.ndarray:
+        """Mean curvature over the arc [u0, u1] (forward): turning angle / arc length [1/m].
+
+        This is the curvature of the circle that turns as much as the arc does; its inverse is
+        the "mean curvature radius R" of eq. (2).
+        """
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        u1 = np.atleast_1d(np.asarray(u1, float))
+        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
+        x, w = np.polynomial.legendre.leggauss(16)
+        t = u0[:, None] + (x + 1.0) * 0.5 * (u1 - u0)[:, None]
+        d1 = self.derivative(t, 1)
+        d2 = self.derivative(t, 2)
+        speed = np.linalg.norm(d1, axis=-1)
+        kappa = np.linalg.norm(np.cross(d1, d2), axis=-1) / speed**3
+        turn = 0.5 * (kappa * speed * w).sum(-1) * (u1 - u0)
+        length = 0.5 * (speed * w).sum(-1) * (u1 - u0)
+        return turn / np.maximum(length, 1e-300)
+
+    def chord_height_circle(self, u0, u1) -> np.ndarray:
+        """Chord-height error of eq. (2): delta = R - sqrt(R^2 - (l/2)^2) [m].
+
+        R = 1 / mean curvature of the arc [u0, u1]. Where the chord is longer than the
+        circle's diameter (l/2 >= R) the formula has no value; we return R + (l/2 - R),
+        i.e. at least l/2, which always fails any sensible threshold.
+        """
+        l_half = 0.5 * np.atleast_1d(self.chord_length(u0, u1))
+        kbar = self.mean_curvature(u0, u1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(kbar > 0, 1.0 / kbar, np.inf)
+            inside = l_half < r
+            # R - sqrt(R^2 - h^2) = h^2 / (R + sqrt(R^2 - h^2)): stable for large R
+            delta = np.where(inside, l_half**2 / (r + np.sqrt(np.maximum(r**2 - l_half**2, 0))),
+                             l_half)
+        return delta
+
+    def chord_height(self, u0, u1, samples: int = _CHORD_SAMPLES, refine: bool = True):
+        """True chord-height error: max distance of the arc C([u0, u1]) from the chord [m].
+
+        Measured on the fitted curve: dense samples, then a bounded scalar search around the
+        worst sample. Distance is to the chord *segment*.
+
+        Args:
+            u0, u1: scalars or (M,) arrays; the arc runs forward from u0 to u1 (wrapping).
+            samples: samples per arc before the refinement.
+            refine: run the local 1-D maximisation (accurate to ~1e-12 m).
+
+        Returns:
+            (M,) chord heights [m].
+        """
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        u1 = np.atleast_1d(np.asarray(u1, float))
+        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
+        a = self.position(u0)
+        b = self.position(u1)
+        t = np.linspace(0.0, 1.0, samples + 1)
+        uu = u0[:, None] + t * (u1 - u0)[:, None]
+        d = _dist_to_segment(self.position(uu), a[:, None, :], b[:, None, :])
+        if not refine:
+            return d.max(axis=1)
+        out = np.empty(len(u0))
+        k = np.argmax(d, axis=1)
+        for m in range(len(u0)):
+            lo = uu[m, max(k[m] - 1, 0)]
+            hi = uu[m, min(k[m] + 1, samples)]
+            if hi - lo <= 0:
+                out[m] = d[m, k[m]]
+                continue
+            res = minimize_scalar(
+                lambda x, m=m: -_dist_to_segment(self.position(x), a[m], b[m]),
+                bounds=(lo, hi), method="bounded", options={"xatol": 1e-13 * (1 + hi)},
+            )
+            out[m] = max(d[m, k[m]], -float(res.fun))
+        return out
+
+
+def _dist_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    L2 = np.maximum((ab * ab).sum(-1, keepdims=True), 1e-300)
+    t = np.clip(((p - a) * ab).sum(-1, keepdims=True) / L2, 0.0, 1.0)
+    return np.linalg.norm(p - (a + t * ab), axis=-1)
+
+
+def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
+    """Fit a closed cubic B-spline (NURBS with unit weights) through a closed polyline.
+
+    Accumulated chord-length parameterisation, periodic end conditions (the loop is closed).
+
+    Args:
+        p: (N, 3) points of the closed loop [m], in order, first point not repeated; N >= 5.
+        name: for error messages (e.g. "window 2").
+
+    Returns:
+        The EdgeCurve, with ``u_data`` the parameters of the points.
+
+    Raises:
+        InputError: too few points, non-finite values, or repeated consecutive points.
+    """
+    p = np.asarray(p, float)
+    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 5:
+        raise InputError(f"{name}: need (N >= 5, 3) loop points, got shape {p.shape}")
+    if not np.isfinite(p).all():
+        bad = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
+        raise InputError(f"{name}: point {bad} is not finite: {p[bad]}")
+    if np.linalg.norm(p[0] - p[-1]) < 1e-12:
+        p = p[:-1]  # tolerate a repeated closing point
+    seg = np.linalg.norm(np.diff(np.vstack([p, p[:1]]), axis=0), axis=1)
+    if (seg < 1e-9 * seg.sum()).any():
+        bad = int(np.flatnonzero(seg < 1e-9 * seg.sum())[0])
+        raise InputError(f"{name}: points {bad} and {(bad + 1) % len(p)} coincide")
+    u = chord_parameters(p)
+    spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    # arc-length table on the data parameters (Gauss-Legendre per span)
+    x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+    t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
+    speed = np.linalg.norm(spline(t, nu=1), axis=-1)
+    ds = 0.5 * (speed * w).sum(-1) * np.diff(u)
+    s_table = np.concatenate([[0.0], np.cumsum(ds)])
+    return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
+                     length=float(s_table[-1]))

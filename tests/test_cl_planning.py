@@ -1,0 +1,186 @@
+import numpy as np
+import pytest
+
+import drakedeburr.path.cl_planning as mut
+from drakedeburr.errors import InputError
+from drakedeburr.path.edge_curve import fit_edge_curve
+from drakedeburr.path.metrics import segment_figures
+from drakedeburr.path.synthetic import hub_like_window
+
+PARAMS = mut.PlannerParams()
+
+
+@pytest.fixture(scope="module")
+def windows():
+    """Hub-like synthetic loops (large and small, conical face) until bundled hubs land."""
+    return {k: fit_edge_curve(hub_like_window(k, n)) for k, n in (("large", 182), ("small", 63))}
+
+
+@pytest.fixture(scope="module")
+def planned(windows):
+    return {k: mut.plan_all(c, PARAMS, kind=k) for k, c in windows.items()}
+
+
+def test_elbow_picks_three_separated_clusters():
+    rng = np.random.default_rng(0)
+    kappa = np.concatenate([rng.normal(10, 0.5, 60), rng.normal(60, 0.5, 30),
+                            rng.normal(150, 0.5, 10)])
+    sse, labels = mut.kmeans_sse(kappa, 8, seed=0)
+    assert np.all(np.diff(sse) <= 1e-9 * sse[0])
+    assert mut.elbow_k(sse) == 3
+    roles = mut.cluster_roles(kappa, labels[2])
+    np.testing.assert_array_equal(roles, np.r_[np.zeros(60), np.ones(30), 2 * np.ones(10)])
+
+
+def test_elbow_constant_curvature_is_one_cluster():
+    assert mut.elbow_k(np.array([0.0, 0.0, 0.0])) == 1
+    assert mut.elbow_k(np.array([100.0, 1.0, 0.5, 0.4, 0.3])) == 2
+
+
+def test_every_other_by_curvature_descending():
+    kappa = np.array([5.0, 9.0, 1.0, 7.0, 3.0, 8.0])
+    kept = mut.every_other_by_curvature(np.arange(6), kappa)
+    # descending: 1 (9), 5 (8), 3 (7), 0 (5), 4 (3), 2 (1) -> keep 1st, 3rd, 5th
+    np.testing.assert_array_equal(kept, [1, 3, 4])
+
+
+def test_chord_walk_on_circle_keeps_every_kth():
+    # circle R = 50 mm, points every 1 mm of arc: circle chord height grows as l^2 / 8R;
+    # delta_max = 0.12 mm allows l < 2 sqrt(2 R d) = 6.93 mm; the walk drops points while the
+    # chord from the start stays below, keeps the first that is not: every 7th point.
+    R = 0.05
+    n = int(round(2 * np.pi * R / 1e-3))
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    c = fit_edge_curve(np.c_[R * np.cos(th), R * np.sin(th), np.zeros(n)])
+    kept = mut.chord_walk(c, c.u_data[:60], l_max=0.010, delta_max=0.12e-3)
+    np.testing.assert_array_equal(kept, np.arange(0, 60, 7))
+    # with a length cap of 4.5 mm the cap binds first: every 5th point (chord 4.998 mm)
+    kept = mut.chord_walk(c, c.u_data[:60], l_max=4.5e-3, delta_max=0.12e-3)
+    np.testing.assert_array_equal(kept, np.arange(0, 60, 5))
+
+
+def test_proposed_composes_its_steps(windows):
+    c = windows["large"]
+    r = mut.proposed_indices(c, PARAMS)
+    assert r["k"] == mut.elbow_k(r["sse"])
+    roles = r["roles"]
+    kept = set(r["kept"].tolist())
+    # all near-max points kept; half (rounded up) of the near-median points kept
+    assert set(np.flatnonzero(roles == 2)) <= kept
+    n_med = int((roles == 1).sum())
+    assert len(kept & set(np.flatnonzero(roles == 1))) == (n_med + 1) // 2
+    # kept indices sorted, unique, subset of the initial points
+    assert np.all(np.diff(r["kept"]) > 0)
+    path = mut.plan_cl(c, "proposed")
+    np.testing.assert_allclose(path.u, c.u_data[r["kept"]])
+
+
+@pytest.mark.parametrize("kind", ["large", "small"])
+def test_thresholds_on_every_segment(windows, planned, kind):
+    c = windows[kind]
+    for method, path in planned[kind].items():
+        seg = segment_figures(c, path.u)
+        # points lie on the curve and in edge order
+        assert np.all(np.diff(path.u) > 0)
+        np.testing.assert_allclose(path.p_HC, c.position(path.u), atol=1e-15)
+        if method in ("isoparametric", "adaptive"):
+            assert seg["chord_height"].max() <= PARAMS.delta_max, method
+            assert seg["chord"].max() <= PARAMS.l_max + 1e-12, method
+        if method == "equal_chord_height":
+            assert seg["chord_height"].max() <= PARAMS.delta_max
+            # each step is as long as the tolerance allows: all but the closing one use
+            # >= 90 % of delta_max
+            assert np.all(seg["chord_height"][:-1] >= 0.9 * PARAMS.delta_max)
+        assert path.metrics["count"] == len(path.u)
+        assert path.metrics["max_chord_height_m"] == pytest.approx(seg["chord_height"].max())
+
+
+@pytest.mark.parametrize("kind", ["large", "small"])
+def test_adaptive_against_baselines(planned, kind):
+    m = {k: p.metrics for k, p in planned[kind].items()}
+    # fewer points than the isoparametric baseline at the same guarantees
+    assert m["adaptive"]["count"] < 0.6 * m["isoparametric"]["count"]
+    # more uniform than the equal-chord-height baseline (neighbour distances)
+    assert m["adaptive"]["cv"] < m["equal_chord_height"]["cv"]
+
+
+def test_isoparametric_is_uniform_in_arc_length(windows):
+    c = windows["small"]
+    path = mut.plan_cl(c, "isoparametric")
+    arcs = np.diff(np.r_[path.arc_length, c.length])
+    np.testing.assert_allclose(arcs, c.length / len(arcs), rtol=1e-9)
+
+
+def test_unknown_method_and_bad_params(windows):
+    with pytest.raises(InputError, match="unknown CL planning method 'fast'"):
+        mut.plan_cl(windows["small"], "fast")
+    with pytest.raises(InputError, match="thresholds must be > 0"):
+        mut.PlannerParams(l_max=0.0)
+
+
+def test_adaptive_on_large_window_beats_proposed(planned):
+    m = {k: p.metrics for k, p in planned["large"].items()}
+    # same or fewer points than the source's method, all thresholds held, more uniform
+    assert m["adaptive"]["count"] <= m["proposed"]["count"]
+    assert m["adaptive"]["cv"] < m["proposed"]["cv"]
+
+
+def test_adaptive_fewest_points_not_above_a_greedy_march(windows):
+    """With no count budget the DP returns its fewest points; an independent greedy march
+    (farthest next point that keeps true chord height and L_max) can't need fewer."""
+    c = windows["small"]
+    fewest = mut.plan_cl(c, "adaptive", mut.PlannerParams(count_budget=1))
+    s_grid = np.linspace(0, c.length, 1500, endpoint=False)
+    u_grid = c.u_from_arc(s_grid)
+    i, count = 0, 0
+    while i < len(u_grid):
+        j = i + 1
+        while j < len(u_grid):
+            u1 = u_grid[j + 1] if j + 1 < len(u_grid) else 1.0
+            if (c.chord_length(u_grid[i], u1) > PARAMS.l_max
+                    or c.chord_height(u_grid[i], u1)[0] > PARAMS.delta_max):
+                break
+            j += 1
+        i, count = j, count + 1
+    assert np.ceil(c.length / PARAMS.l_max) <= len(fewest) <= count
+    seg = segment_figures(c, fewest.u)
+    assert seg["chord_height"].max() <= PARAMS.delta_max
+
+
+def _bundled_shapes():
+    """(hub, window) of distinct window shapes of the bundled hubs: the windows of a hub are
+    rotated copies of one large (and one small) shape. To keep the suite short three shapes
+    are checked here (split large + small, curved); benchmarks/bench_path.py checks every
+    window of every bundled hub and prints any threshold violation."""
+    try:
+        from drakedeburr.resources import hub_names
+
+        names = hub_names()
+    except FileNotFoundError:
+        return []
+    return [(n, i) for n, i in (("h5_split", 0), ("h5_split", 1), ("h6_curved", 0))
+            if n in names]
+
+
+@pytest.mark.parametrize("name,index", _bundled_shapes())
+def test_thresholds_on_bundled_windows(name, index):
+    hub_model = pytest.importorskip("drakedeburr.hub.model")
+    from drakedeburr.path.table import windows_from_source
+
+    windows, _ = windows_from_source(name)
+    w = windows[index]
+    c = fit_edge_curve(w.p_HE)
+    paths = mut.plan_all(c, PARAMS, kind=w.kind, window_index=w.index)
+    for method, path in paths.items():
+        seg = segment_figures(c, path.u)
+        if method in ("isoparametric", "adaptive"):
+            assert seg["chord_height"].max() <= PARAMS.delta_max, method
+            assert seg["chord"].max() <= PARAMS.l_max + 1e-12, method
+        if method == "equal_chord_height":
+            assert seg["chord_height"].max() <= PARAMS.delta_max
+        if method == "proposed":  # subset of the initial points; the walk's own segments
+            assert np.isin(path.u, c.u_data).all()
+    m = {k: p.metrics for k, p in paths.items()}
+    assert m["adaptive"]["count"] < m["isoparametric"]["count"]
+    assert m["adaptive"]["cv"] < m["proposed"]["cv"]
+    del hub_model

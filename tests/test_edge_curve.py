@@ -1,0 +1,80 @@
+import numpy as np
+import pytest
+
+import drakedeburr.path.edge_curve as mut
+from drakedeburr.errors import InputError
+
+
+def _circle(R=0.05, n=3000, phase=0.3):
+    th = phase + np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.c_[R * np.cos(th), R * np.sin(th), np.full(n, 0.01)]
+
+
+def _ellipse_equal_arc(a, b, n):
+    th = np.linspace(0, 2 * np.pi, 200001)
+    xy = np.c_[a * np.cos(th), b * np.sin(th)]
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
+    t = np.interp(np.linspace(0, s[-1], n, endpoint=False), s, th)
+    return t, np.c_[a * np.cos(t), b * np.sin(t), np.zeros(n)]
+
+
+def test_circle_curvature_length_chords():
+    R = 0.05
+    c = mut.fit_edge_curve(_circle(R))
+    u = np.random.default_rng(0).uniform(0, 1, 200)
+    np.testing.assert_allclose(c.curvature(u), 1 / R, rtol=1e-6)
+    assert c.length == pytest.approx(2 * np.pi * R, rel=1e-9)
+    t = c.tangent(u)
+    np.testing.assert_allclose(np.linalg.norm(t, axis=1), 1.0, rtol=1e-12)
+    p = c.position(u)
+    # tangent is perpendicular to the radius and CCW about +z
+    np.testing.assert_allclose((t[:, :2] * p[:, :2]).sum(1), 0, atol=1e-8)
+    assert (p[:, 0] * t[:, 1] - p[:, 1] * t[:, 0] > 0).all()
+    for u0, u1 in ((0.1, 0.13), (0.95, 0.02), (0.2, 0.45)):
+        ang = ((u1 - u0) % 1.0) * 2 * np.pi
+        l = 2 * R * np.sin(ang / 2)
+        sag = R - np.sqrt(R * R - l * l / 4)
+        assert c.chord_length(u0, u1) == pytest.approx(l, rel=1e-6)
+        assert c.chord_height(u0, u1)[0] == pytest.approx(sag, rel=1e-6)
+        assert c.chord_height_circle(u0, u1)[0] == pytest.approx(sag, rel=1e-6)
+        assert c.arc_length(u0, u1) == pytest.approx(R * ang, rel=1e-6)
+
+
+def test_ellipse_curvature_and_true_chord_height():
+    a, b = 0.08, 0.03
+    th, p = _ellipse_equal_arc(a, b, 20000)
+    # the samples themselves sit at the exact parameters th (the fit interpolates them)
+    c = mut.fit_edge_curve(p)
+    kex = a * b / (a**2 * np.sin(th) ** 2 + b**2 * np.cos(th) ** 2) ** 1.5
+    idx = np.arange(0, 20000, 241)
+    np.testing.assert_allclose(c.curvature(c.u_data[idx]), kex[idx], rtol=1e-6)
+    # chord across the flat side end to end: from (a, 0) to (-a, 0) the arc's max distance
+    # from the chord is b (at the top)
+    i0, i1 = 0, 10000
+    assert th[i1] == pytest.approx(np.pi, abs=1e-3)
+    x1 = c.position(c.u_data[i1])
+    assert x1[0] == pytest.approx(-a, rel=1e-6)
+    assert c.chord_height(c.u_data[i0], c.u_data[i1])[0] == pytest.approx(b, rel=1e-6)
+
+
+def test_arc_length_inverse_and_wrap():
+    c = mut.fit_edge_curve(_circle(0.04, 400))
+    s = np.random.default_rng(0).uniform(0, c.length, 50)
+    np.testing.assert_allclose(c.arc_length(c.u_from_arc(s)), s, atol=1e-12)
+    assert c.arc_length(0.7, 0.2) + c.arc_length(0.2, 0.7) == pytest.approx(c.length, rel=1e-12)
+
+
+def test_fit_interpolates_and_rejects_bad_input():
+    p = _circle(0.05, 64)
+    c = mut.fit_edge_curve(p)
+    np.testing.assert_allclose(c.position(c.u_data), p, atol=1e-12)
+    with pytest.raises(InputError, match="need"):
+        mut.fit_edge_curve(p[:3])
+    q = p.copy()
+    q[5] = np.nan
+    with pytest.raises(InputError, match="point 5 is not finite"):
+        mut.fit_edge_curve(q, name="window 1")
+    q = p.copy()
+    q[8] = q[7]
+    with pytest.raises(InputError, match="points 7 and 8 coincide"):
+        mut.fit_edge_curve(q)

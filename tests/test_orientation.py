@@ -1,0 +1,230 @@
+"""Orientation models and solvers on synthetic windows with analytic frames."""
+
+import numpy as np
+import pytest
+from orient_geometry import cl_from_loop, rounded_rect_loop
+from pydrake.math import RigidTransform, RotationMatrix
+from scipy.spatial.transform import Rotation
+
+import drakedeburr.orientation.orient as mut
+from drakedeburr.config import ProcessParameters
+from drakedeburr.errors import InputError
+from drakedeburr.frames.local_frames import (
+    R_HL_from_normals,
+    angles_from_axis_H,
+    axis_from_angles,
+)
+from drakedeburr.orientation.exact import projected_gradient_norm, solve_exact
+from drakedeburr.orientation.models import make_problem
+from drakedeburr.orientation.pso import PsoOptions
+from drakedeburr.orientation.smoothing import gaussian_smooth_mirror
+from drakedeburr.orientation.stats import angle_statistics, axis_turning
+
+
+def _window(kind="large", dish=3.0, n=90, size=(0.03, 0.02, 0.006), index=0):
+    """A rounded-rectangle window on a dished face z = dish (x^2 + y^2) [m]."""
+    p, t, n_wall, kappa, s = rounded_rect_loop(*size, n)
+    p[:, 2] = dish * (p[:, 0] ** 2 + p[:, 1] ** 2)
+    # tangent of the lifted curve; the wall normal stays horizontal
+    t = np.roll(p, -1, 0) - np.roll(p, 1, 0)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    return cl_from_loop(p, t, kappa, s, index, kind), n_wall
+
+
+WINDOWS = [_window("large", 3.0, 90, (0.03, 0.02, 0.006), 0),
+           _window("small", 5.0, 50, (0.015, 0.01, 0.004), 1),
+           _window("large", 0.0, 70, (0.025, 0.012, 0.008), 2)]
+
+
+def _problem(cl, n, model="axis", w2nd=0.0):
+    b = ProcessParameters().bounds_large if cl.kind == "large" else ProcessParameters().bounds_small
+    return make_problem(model, cl.p_HC, R_HL_from_normals(cl.t_H, n), b.theta_min, b.theta_max,
+                        second_difference_weight=w2nd, name=f"window {cl.window_index}")
+
+
+def test_paper_model_is_degenerate_any_constant_pair_is_optimal():
+    cl, n = WINDOWS[0]
+    prob = _problem(cl, n, "paper")
+    rng = np.random.default_rng(0)
+    for a, b in rng.uniform(0.26, 0.44, (5, 2)):
+        assert prob.objective(np.tile([a, b], prob.m)) == 0.0
+    rep = solve_exact(prob)
+    assert rep.objective == 0.0 and rep.success
+    # ... yet the real tool axis turns wherever the edge turns
+    turn = axis_turning(cl.p_HC, prob.axes(rep.x))
+    assert turn.max() > 50.0  # [rad/m] around the 6 mm corners
+
+
+def test_paper_model_objective_matches_eq_11_by_hand():
+    cl, n = WINDOWS[1]
+    prob = _problem(cl, n, "paper")
+    x = np.random.default_rng(1).uniform(0.09, 0.26, prob.n_vars)
+    th = x.reshape(-1, 2)
+    total = 0.0
+    for i in range(1, len(th)):  # eq. 11: i = 2..n, open
+        d = np.linalg.norm(cl.p_HC[i] - cl.p_HC[i - 1])
+        total += np.sqrt(0.6 * ((th[i, 0] - th[i - 1, 0]) / d) ** 2
+                         + 0.4 * ((th[i, 1] - th[i - 1, 1]) / d) ** 2)
+    assert prob.objective(x) == pytest.approx(total, rel=1e-12)
+
+
+@pytest.mark.parametrize("w2nd", [0.0, 1e-5])
+def test_axis_model_gradient_matches_finite_differences(w2nd):
+    cl, n = WINDOWS[1]
+    prob = _problem(cl, n, "axis", w2nd)
+    x = np.random.default_rng(2).uniform(0.09, 0.26, prob.n_vars)
+    g = prob.gradient(x)
+    h = 1e-6
+    for k in np.random.default_rng(3).choice(prob.n_vars, 12, replace=False):
+        e = np.zeros(prob.n_vars)
+        e[k] = h
+        fd = (prob.objective(x + e) - prob.objective(x - e)) / (2 * h)
+        assert g[k] == pytest.approx(fd, rel=1e-5, abs=1e-6)
+    # objective by hand: sum |a_j - a_i|^2 / d over the closed loop
+    a = prob.axes(x)
+    d = np.linalg.norm(np.roll(cl.p_HC, -1, 0) - cl.p_HC, axis=1)
+    first = (np.linalg.norm(np.roll(a, -1, 0) - a, axis=1) ** 2 / d).sum()
+    if w2nd == 0.0:
+        assert prob.objective(x) == pytest.approx(first, rel=1e-12)
+    else:
+        assert prob.objective(x) > first
+
+
+@pytest.mark.parametrize("index", range(len(WINDOWS)))
+def test_exact_beats_pso_holds_bounds_and_is_locally_optimal(index):
+    cl, n = WINDOWS[index]
+    prob = _problem(cl, n, "axis")
+    exact = mut.solve_problem(prob, "exact")
+    pso = mut.solve_problem(prob, "pso", mut.OrientOptions(pso=PsoOptions(iterations=100)))
+    assert exact.success, exact.message
+    assert exact.objective <= pso.objective
+    assert exact.objective <= pso.info["objective_raw"]
+    th = exact.x.reshape(-1, 2)
+    assert np.all(th >= prob.theta_min - 1e-9) and np.all(th <= prob.theta_max + 1e-9)
+    assert projected_gradient_norm(prob, exact.x) < 1e-5 * np.abs(prob.gradient(prob.lower)).max()
+    # feasible random perturbations never decrease the objective (re-check of optimality)
+    rng = np.random.default_rng(index)
+    f0 = exact.objective
+    for scale in (1e-4, 1e-3, 1e-2):
+        xs = np.clip(exact.x + rng.normal(0, scale, (200, prob.n_vars)), prob.lower, prob.upper)
+        assert prob.objective(xs).min() >= f0 * (1 - 1e-9)
+    # and better than the naive constant choices (box centre, corners)
+    for c in (prob.theta_min, 0.5 * (prob.theta_min + prob.theta_max), prob.theta_max):
+        assert f0 <= prob.objective(np.full(prob.n_vars, c))
+
+
+def test_exact_warm_start_converges_to_the_same_optimum():
+    cl, n = WINDOWS[0]
+    prob = _problem(cl, n, "axis")
+    cold = solve_exact(prob)
+    warm = solve_exact(prob, x0=cold.x)
+    lower = solve_exact(prob, x0=prob.lower)
+    assert warm.iterations <= 2
+    assert warm.objective == pytest.approx(cold.objective, rel=1e-9)
+    assert lower.objective == pytest.approx(cold.objective, rel=1e-6)
+
+
+def test_smoothing_is_gaussian_with_mirror_padding():
+    rng = np.random.default_rng(0)
+    v = rng.uniform(0.26, 0.44, 40)
+    sigma = 2.0
+    out = gaussian_smooth_mirror(v, sigma)
+    # second implementation: mirror-pad (d c b | a b c d | c b a) and convolve
+    radius = int(4 * sigma + 0.5)
+    k = np.exp(-0.5 * (np.arange(-radius, radius + 1) / sigma) ** 2)
+    k /= k.sum()
+    padded = np.pad(v, radius, mode="reflect")  # numpy "reflect" excludes the edge sample
+    np.testing.assert_allclose(out, np.convolve(padded, k, mode="valid"), atol=1e-12)
+    assert out.min() >= v.min() and out.max() <= v.max()
+    np.testing.assert_allclose(gaussian_smooth_mirror(np.full(9, 0.3), 2.0), 0.3)
+
+
+def test_statistics_like_tables_3_6():
+    th_a = np.array([0.3, 0.4, 0.35, 0.3])
+    th_b = np.array([0.2, 0.2, 0.2, 0.2])
+    p = np.array([[0, 0, 0], [1e-3, 0, 0], [1e-3, 1e-3, 0], [0, 1e-3, 0.0]])
+    ax = np.tile([0, 0, 1.0], (4, 1))
+    ax[1] = [np.sin(0.01), 0, np.cos(0.01)]
+    s = angle_statistics(th_a, th_b, p, ax)
+    assert s["theta_A"]["max"] == 0.4 and s["theta_A"]["min"] == 0.3
+    assert s["theta_A"]["variance"] == pytest.approx(np.var(th_a))
+    assert s["theta_A"]["cv"] == pytest.approx(np.std(th_a) / np.mean(th_a))
+    assert s["theta_B"]["variance"] == 0.0
+    assert s["axis_turn_rad_per_mm"]["max"] == pytest.approx(0.01)
+    assert s["axis_turn_deg_per_mm"]["max"] == pytest.approx(np.degrees(0.01))
+    assert s["axis_turn_total_deg"] == pytest.approx(np.degrees(0.02))
+
+
+def test_tool_path_is_consistent_and_follows_the_hub_pose():
+    cl, n = WINDOWS[0]
+    X_WH = RigidTransform(RotationMatrix.MakeZRotation(0.7), [0.8, -0.1, 0.3])
+    tp = mut.orient_window(cl, n, X_WH=X_WH)
+    assert tp.success and len(tp) == len(cl)
+    assert tp.depth_of_cut == ProcessParameters().depth_of_cut_large
+    # independent re-check: angles -> axis through the frames, and back
+    a, b = angles_from_axis_H(tp.R_HL, tp.axis_H)
+    np.testing.assert_allclose(a, tp.theta_A, atol=1e-12)
+    np.testing.assert_allclose(b, tp.theta_B, atol=1e-12)
+    np.testing.assert_allclose(tp.R_HT[:, :, 2], tp.axis_H, atol=1e-12)
+    np.testing.assert_allclose(tp.ijk_H, -tp.axis_H)
+    assert tp.admissible(tp.axis_W).all()
+    np.testing.assert_allclose(tp.p_WC, X_WH.multiply(cl.p_HC.T).T, atol=1e-15)
+    # every axis inside the inner cone is admissible; the outer cone contains the box corners
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        v = rng.normal(size=3)
+        v -= (v @ np.array([0, 0, 1.0])) * np.array([0, 0, 1.0])
+        v /= np.linalg.norm(v)
+        ang = tp.cone_half_angle * rng.uniform(0, 1)
+        local = np.cos(ang) * np.array([0, 0, 1.0]) + np.sin(ang) * v
+        c = 0.5 * (tp.bounds.theta_min + tp.bounds.theta_max)
+        # rotate the sample from +z onto the cone axis (same in every local frame)
+        rot, _ = Rotation.align_vectors([axis_from_angles(c, c)], [[0, 0, 1.0]])
+        axis_H = np.einsum("mij,j->mi", tp.R_HL, rot.apply(local))
+        np.testing.assert_allclose(np.arccos(np.clip(np.einsum("ij,ij->i", axis_H, tp.cone_axis_H),
+                                                     -1, 1)), ang, atol=1e-9)
+        assert tp.admissible((X_WH.rotation().matrix() @ axis_H.T).T, tol=1e-12).all()
+    corners = axis_from_angles(np.array([0.26, 0.26, 0.44, 0.44]),
+                               np.array([0.26, 0.44, 0.26, 0.44]))
+    ang = np.arccos(np.clip(corners @ axis_from_angles(0.35, 0.35), -1, 1))
+    assert ang.max() <= tp.cone_outer_half_angle + 1e-12
+    moved = tp.with_hub_pose(RigidTransform([0.01, 0, 0]))
+    np.testing.assert_allclose(moved.p_WC, cl.p_HC + [0.01, 0, 0], atol=1e-15)
+    assert moved.objective == tp.objective
+
+
+def test_pso_solver_and_paper_model_pipeline_run_with_smoothing():
+    cl, n = WINDOWS[1]
+    tp = mut.orient_window(cl, n, model="paper", solver="pso",
+                           options=mut.OrientOptions(pso=PsoOptions(iterations=50)))
+    assert "Gaussian smoothing" in tp.message
+    assert np.all((tp.theta_A >= 0.09) & (tp.theta_A <= 0.26))
+    assert tp.objective >= 0.0
+    assert tp.stats["theta_A"]["max"] <= 0.26
+
+
+def test_bad_inputs_are_named():
+    cl, n = WINDOWS[0]
+    with pytest.raises(InputError, match="window 0: n_H has shape"):
+        mut.orient_window(cl, n[:-1])
+    with pytest.raises(InputError, match="unknown orientation model 'nope'"):
+        mut.orient_window(cl, n, model="nope")
+    with pytest.raises(InputError, match="unknown solver 'magic'"):
+        mut.orient_window(cl, n, solver="magic")
+
+
+def test_axis_model_hessian_matches_finite_differences_of_the_gradient():
+    cl, n = WINDOWS[1]
+    prob = _problem(cl, n, "axis", 1e-5)
+    x = np.random.default_rng(5).uniform(0.09, 0.26, prob.n_vars)
+    f, g, H_gn, _ = prob.derivatives(x)
+    H = prob.hessian(x)
+    assert f == pytest.approx(prob.objective(x), rel=1e-12)
+    h = 1e-6
+    for k in np.random.default_rng(6).choice(prob.n_vars, 8, replace=False):
+        e = np.zeros(prob.n_vars)
+        e[k] = h
+        fd = (prob.gradient(x + e) - prob.gradient(x - e)) / (2 * h)
+        np.testing.assert_allclose(H[:, k], fd, rtol=1e-5, atol=1e-5 * np.abs(H).max())
+    J = prob.residual_jacobian(x)
+    np.testing.assert_allclose(H_gn, 2 * J.T @ J, atol=1e-10 * np.abs(H_gn).max())
