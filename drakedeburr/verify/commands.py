@@ -78,6 +78,13 @@ def _run_verify(args: argparse.Namespace) -> int:
         plan = _load_plan(rest[0])
     else:
         scenario, hub = rest
+        if Path(hub).suffix.lower() in _MESH_SUFFIXES:
+            from drakedeburr.errors import InputError
+
+            raise InputError(
+                f"{hub}: a bare mesh has no Drake hub model (hub.sdf with convex collision "
+                "pieces), which planning and the clearance checks need; no stage builds one "
+                "from a mesh yet. Use a generated hub folder or a bundled hub name.")
         plan = make_plan(scenario, hub, args.planner, windows, params,
                          progress=tqdm_progress("plan"))
     kwargs = {}
