@@ -74,11 +74,14 @@ def main() -> None:
         base.setdefault("cut", row[1])
         print(f"{label:<44}{row[0]:>12.2f}{row[1]:>10.2f}{row[1] / base['cut']:>13.2f}")
 
-    print("\n## 3. verify-all speed-up (reference plans, window 0, tool-in-hand)")
     hubs = ["h5_straight", "h5_split"] if args.quick else \
         ["h5_straight", "h5_deepdish", "h5_split", "h6_curved"]
-    opts = {"scenarios": ["tool_in_hand"], "planner": "reference", "windows": [0],
-            "quick": args.quick, "grinding_speed": 0.075}
+    scope = "window 0" if args.quick else "all windows"
+    print(f"\n## 3. verify-all speed-up (reference plans of {scope}, tool-in-hand, "
+          f"{len(hubs)} hubs)")
+    opts = {"scenarios": ["tool_in_hand"], "planner": "reference",
+            "windows": [0] if args.quick else None, "quick": args.quick,
+            "grinding_speed": 0.075}
     times = {}
     for workers in (1, 2):
         with tempfile.TemporaryDirectory() as tmp:

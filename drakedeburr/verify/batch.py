@@ -78,6 +78,15 @@ def make_plan(scenario: str, hub: str, planner: str, windows, params, progress=N
     raise InputError(f"unknown planner {planner!r} (plan_hub or reference)")
 
 
+def _single_threaded() -> None:
+    """Pool initializer: one BLAS/OpenMP thread per worker process (the workers already run in
+    parallel; nested threads would oversubscribe the cores)."""
+    import os
+
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
 def run_job(job: BatchJob) -> dict:
     """Plan + verify one hub; never raises (errors become a row with ``error``)."""
     from drakedeburr.config import ProcessParameters, Tolerances
@@ -180,7 +189,8 @@ def verify_all(
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                 initializer=_single_threaded) as pool:
             for fut in as_completed([pool.submit(run_job, j) for j in jobs]):
                 done(fut.result())
         executor = f"processes({workers})"
