@@ -78,13 +78,7 @@ def make_plan(scenario: str, hub: str, planner: str, windows, params, progress=N
     raise InputError(f"unknown planner {planner!r} (plan_hub or reference)")
 
 
-def _single_threaded() -> None:
-    """Pool initializer: one BLAS/OpenMP thread per worker process (the workers already run in
-    parallel; nested threads would oversubscribe the cores)."""
-    import os
-
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
+_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def run_job(job: BatchJob) -> dict:
@@ -186,13 +180,24 @@ def verify_all(
         executor = "dask"
     elif workers > 1:
         import multiprocessing
+        import os
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                 initializer=_single_threaded) as pool:
-            for fut in as_completed([pool.submit(run_job, j) for j in jobs]):
-                done(fut.result())
+        # one BLAS/OpenMP thread per worker: the workers are the parallelism (nested threads
+        # oversubscribe the cores); spawned children inherit the environment at start
+        saved = {v: os.environ.get(v) for v in _THREAD_VARS}
+        os.environ.update({v: "1" for v in _THREAD_VARS})
+        try:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+                for fut in as_completed([pool.submit(run_job, j) for j in jobs]):
+                    done(fut.result())
+        finally:
+            for v, old in saved.items():
+                if old is None:
+                    os.environ.pop(v, None)
+                else:
+                    os.environ[v] = old
         executor = f"processes({workers})"
     else:
         for j in jobs:
