@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -219,47 +218,6 @@ def _interp_pose(X0: np.ndarray, X1: np.ndarray, f: np.ndarray) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True, eq=False)
-class _StandInToolPath:
-    """The fields of ``drakedeburr.orientation.types.ToolPath`` the verifier reads (used when
-    the orientation stage is not installed)."""
-
-    window_index: int
-    kind: str
-    cl_path: object
-    X_WH: object
-    p_HC: np.ndarray
-    R_HL: np.ndarray
-    axis_H: np.ndarray
-    theta_A: np.ndarray
-    theta_B: np.ndarray
-    bounds: OrientationBounds
-    cone_axis_H: np.ndarray
-    cone_half_angle: float
-    cone_outer_half_angle: float
-    depth_of_cut: float
-    model: str = ""
-    solver: str = ""
-    objective: float = 0.0
-    success: bool = True
-    solve_seconds: float = 0.0
-    stats: dict = field(default_factory=dict)
-    message: str = ""
-
-
-def _cone_half_angles(box: OrientationBounds, samples: int = 64) -> tuple[float, float]:
-    """(inner, outer) half-angles [rad] of cones about the box-centre axis (sampled box edge)."""
-    lo, hi = box.theta_min, box.theta_max
-    c = 0.5 * (lo + hi)
-    s = np.linspace(lo, hi, samples)
-    a = np.concatenate([s, s, np.full(samples, lo), np.full(samples, hi)])
-    b = np.concatenate([np.full(samples, lo), np.full(samples, hi), s, s])
-    v = np.stack([np.sin(a) * np.cos(b), -np.sin(b), np.cos(a) * np.cos(b)], axis=1)
-    axis_c = np.array([np.sin(c) * np.cos(c), -np.sin(c), np.cos(c) * np.cos(c)])
-    ang = np.arccos(np.clip(v @ axis_c, -1.0, 1.0))
-    return float(ang.min() - (hi - lo) / (samples - 1)), float(ang.max())
-
-
 def reference_plan(
     scenario: str = "tool_in_hand",
     hub: str = "h5_straight",
@@ -313,12 +271,9 @@ def reference_plan(
     from drakedeburr.cell.station import load_cell
     from drakedeburr.cell.tools import BURR
     from drakedeburr.hub.model import load_hub
+    from drakedeburr.orientation.orient import cone_half_angles
+    from drakedeburr.orientation.types import ToolPath
     from drakedeburr.path.types import ClPath
-
-    try:  # the orientation stage's ToolPath when installed, else a stand-in with its fields
-        from drakedeburr.orientation.types import ToolPath
-    except ImportError:
-        ToolPath = _StandInToolPath  # noqa: N806
 
     cell = load_cell(scenario, hub)
     hub_model = load_hub(hub)
@@ -441,7 +396,7 @@ def reference_plan(
         mid = 0.5 * (box.theta_min + box.theta_max)
         cone_L = np.array([np.sin(mid) * np.cos(mid), -np.sin(mid), np.cos(mid) * np.cos(mid)])
         cone_axis_H = R_HL @ cone_L
-        inner, outer = _cone_half_angles(box)
+        inner, outer = cone_half_angles(box)
         depth = params.depth_of_cut_large if edge.kind == "large" else params.depth_of_cut_small
 
         seg = np.linalg.norm(np.diff(np.vstack([edge.p_HE, edge.p_HE[:1]]), axis=0), axis=1)
