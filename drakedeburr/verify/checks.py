@@ -689,8 +689,9 @@ def verify_plan(
         margin = np.minimum(engage + tol.edge_deviation, hi_lim - engage)
         i_g = int(np.nanargmin(margin))
         items.append(CheckItem(
-            "burr_engagement", float(margin[i_g]) >= 0, float(engage[i_g]), float(hi_lim[i_g]),
-            "m", "<=", **where(i_g),
+            "burr_engagement", float(margin[i_g]) >= 0, float(engage[i_g]),
+            float(hi_lim[i_g]) if engage[i_g] >= 0 else -tol.edge_deviation, "m",
+            "<=" if engage[i_g] >= 0 else ">=", **where(i_g),
             detail=f"edge point's depth inside the burr cone (normal to the flank) must lie in "
                    f"[-{tol.edge_deviation * 1e3:.2f}, depth of cut + "
                    f"{tol.edge_deviation * 1e3:.2f}] mm; range "
@@ -933,7 +934,11 @@ def verify_plan(
         m = len(edge)
         for i in range(len(p)):
             i0, i1 = vi[i], vi[(i + 1) % len(p)]
+            # the edge between two neighbouring CL points is the shorter way round the loop
+            # (the CL points may run either way along the loop)
             span = (i1 - i0) % m
+            if span > m - span:
+                i0, span = i1, m - span
             pts = edge[(i0 + np.arange(span + 1)) % m]
             a_, b_ = p[i], p[(i + 1) % len(p)]
             ab = b_ - a_
