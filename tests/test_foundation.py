@@ -74,3 +74,10 @@ def test_atomic_write_gives_normal_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert (f.stat().st_mode & 0o777) == (0o666 & ~umask)
+
+
+def test_every_public_name_resolves():
+    """Each name re-exported at the top level exists in the module it is mapped to."""
+    for name in drakedeburr.__all__:
+        if name != "__version__":
+            assert getattr(drakedeburr, name) is not None, name

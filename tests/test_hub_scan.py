@@ -107,7 +107,21 @@ def test_view_direction_is_respected(hub):
     assert back.n_S[:, 2].mean() < -0.3
 
 
+def test_scan_in_a_moved_frame(hub):
+    rng = np.random.default_rng(0)
+    a = rng.uniform(-math.pi, math.pi)
+    X = np.eye(4)
+    X[:3, :3] = [[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]]
+    X[:3, 3] = rng.uniform(-5e-3, 5e-3, 3)
+    ref = mut.simulate_scan(hub, spacing=5e-3, seed=2, with_normals=True)
+    moved = mut.simulate_scan(hub, spacing=5e-3, seed=2, with_normals=True, X_SH=X)
+    np.testing.assert_allclose(moved.p_S, ref.p_S @ X[:3, :3].T + X[:3, 3], atol=1e-15)
+    np.testing.assert_allclose(moved.n_S, ref.n_S @ X[:3, :3].T, atol=1e-15)
+    assert moved.meta["frame"] == "S"
+
+
 @pytest.mark.parametrize("kwargs, match", [
+    ({"X_SH": np.diag([1.0, 1.0, -1.0, 1.0])}, "X_SH"),
     ({"sigma": -1.0}, "sigma"),
     ({"spacing": 0.0}, "spacing"),
     ({"view_dir": (0, 0, 0)}, "view_dir"),

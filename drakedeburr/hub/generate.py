@@ -5,7 +5,8 @@ in every file written):
 
 1. 2-D window outlines (``CrossSection``): the annulus between the window radii minus the spoke
    bands; each connected component is one window. Its convex corners are rounded by an
-   opening (offset by -f then +f with round joins), which gives exact circular fillets.
+   opening (offset by -f then +f with round joins), which gives exact circular fillets; a
+   closing with ``blend_radius`` then rounds reflex corners (tangent-continuous outline).
    Straight stretches are subdivided so that no outline segment exceeds ~1 mm; arcs are
    segmented so that their chord sag stays below 2 um.
 2. The face plate (disc minus windows) is extruded as a 1 mm slab, refined to
@@ -54,7 +55,6 @@ log = logging.getLogger(__name__)
 GENERATOR_VERSION = 1
 ARC_SAG_MM = 0.002  # chord sag of arcs in the window outlines [mm]
 ARC_MAX_STEP = math.radians(2.0)  # and at most this angle per arc segment
-REFLEX_RADIUS_MM = 3.0  # rounding of reflex (concave) outline corners
 MAX_TURN = math.radians(2.5)  # largest turn between consecutive outline segments
 RIM_SAG_MM = 0.02  # chord sag of the rim, pad, bore and bolt-hole circles [mm]
 LINE_STEP_MM = 1.0  # max outline segment on straight stretches [mm]
@@ -198,7 +198,7 @@ def build_window_outlines(spec: HubSpec) -> list[_Window]:
         opened = opened.offset(f, JoinType.Round, 2.0, seg)
         # closing rounds the reflex corners that the opening keeps (e.g. where a curved spoke's
         # side meets the fillet), so the whole edge is tangent-continuous
-        c = min(f, REFLEX_RADIUS_MM)
+        c = min(f, spec.blend_radius * 1e3)
         opened = opened.offset(c, JoinType.Round, 2.0, _segments(c)).offset(
             -c, JoinType.Round, 2.0, _segments(c))
         polys = opened.to_polygons()
@@ -349,6 +349,23 @@ def _dished_plate(spec: HubSpec, windows: list[_Window]):
     return plate
 
 
+def _rings(spec: HubSpec):
+    """The axisymmetric parts [mm]: hub pad ``(r_out, z0, z1)`` (None without a pad) and the rim
+    rings ``(r_in, r_out, z0, z1)``: barrel, front flange (lip) and back flange."""
+    t = spec.face_thickness * 1e3
+    pad_depth = spec.hub_pad_depth * 1e3
+    pad = (spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5) if pad_depth > 0 else None
+    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
+    z_back = z_lip - spec.rim_width * 1e3
+    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
+    rb_in = spec.rim_barrel_inner_radius * 1e3
+    rf = 0.5 * spec.rim_outer_diameter * 1e3
+    tf = spec.rim_flange_thickness * 1e3
+    rims = [(rb_in, rb_out, z_back, z_lip), (rb_out - 0.5, rf, z_lip - tf, z_lip),
+            (rb_out - 0.5, rf, z_back, z_back + tf)]
+    return pad, rims
+
+
 def build_solid(spec: HubSpec, windows: list[_Window], *, holes: bool = True):
     """The hub solid as a manifold3d Manifold in millimetres (frame H)."""
     from manifold3d import Manifold
@@ -357,18 +374,10 @@ def build_solid(spec: HubSpec, windows: list[_Window], *, holes: bool = True):
     plate = _dished_plate(spec, windows)
     pad_depth = spec.hub_pad_depth * 1e3
     parts = [plate]
-    if pad_depth > 0:
-        parts.append(_tube(0.0, spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5))
-    # rim: barrel, front flange (lip) and back flange
-    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
-    z_back = z_lip - spec.rim_width * 1e3
-    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
-    rb_in = spec.rim_barrel_inner_radius * 1e3
-    rf = 0.5 * spec.rim_outer_diameter * 1e3
-    tf = spec.rim_flange_thickness * 1e3
-    parts.append(_tube(rb_in, rb_out, z_back, z_lip))
-    parts.append(_tube(rb_out - 0.5, rf, z_lip - tf, z_lip))
-    parts.append(_tube(rb_out - 0.5, rf, z_back, z_back + tf))
+    pad, rims = _rings(spec)
+    if pad is not None:
+        parts.append(_tube(0.0, *pad))
+    parts.extend(_tube(*ring) for ring in rims)
     from manifold3d import OpType
 
     solid = Manifold.batch_boolean(parts, OpType.Add)
@@ -452,7 +461,7 @@ def _loops_from_mesh(spec: HubSpec, windows: list[_Window], V_m: np.ndarray,
         tan /= np.linalg.norm(tan, axis=1, keepdims=True)
         out.append({"index": w.index, "kind": w.kind, "p_HE": p, "t_H": tan,
                     "n_wall_H": n_wall, "n_face_H": n_face, "fillet_m": w.fillet_mm * 1e-3,
-                    "poly_xy_m": xy})
+                    "poly_xy_m": xy, "vertices_m": P})
     return out
 
 
@@ -470,10 +479,10 @@ def window_center_xy(poly_xy: np.ndarray, grid: int = 80) -> np.ndarray:
     return cand[int(np.argmax(d))]
 
 
-def _curvature(p: np.ndarray) -> np.ndarray:
-    """Discrete curvature [1/m] of a closed polyline from circumscribed circles of triples."""
-    a = np.roll(p, 1, axis=0)
-    c = np.roll(p, -1, axis=0)
+def _curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
+    """Discrete curvature [1/m] of a closed polyline: circle through points i-k, i, i+k."""
+    a = np.roll(p, k, axis=0)
+    c = np.roll(p, -k, axis=0)
     ab, bc, ca = np.linalg.norm(p - a, axis=1), np.linalg.norm(c - p, axis=1), np.linalg.norm(
         a - c, axis=1)
     cross = np.linalg.norm(np.cross(p - a, c - a), axis=1)
@@ -623,23 +632,14 @@ def _plate_pieces(spec: HubSpec, plate, probes: _Probes, progress: Progress = No
 def _collision_pieces(spec: HubSpec, windows: list[_Window], progress: Progress = None) -> list:
     """Convex pieces (hull vertex arrays [mm]) covering the hub: plate by quadtree + merging,
     pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
-    t = spec.face_thickness * 1e3
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = _dished_plate(spec, windows) - _tube(0.0, bore_r, -1e3, 1e3)
     pieces = _plate_pieces(spec, plate, _Probes(spec, windows), progress)
-    pad_depth = spec.hub_pad_depth * 1e3
-    if pad_depth > 0:
-        pieces += _sector_hulls(bore_r, spec.hub_pad_radius * 1e3, -t - pad_depth, -t + 0.5,
-                                COLL_SAG_MM, spec.spoke_phase)
-    z_lip = (spec.z_face(spec.dish_outer_radius) + spec.rim_lip_height) * 1e3
-    z_back = z_lip - spec.rim_width * 1e3
-    rb_out = 0.5 * spec.rim_barrel_diameter * 1e3
-    rb_in = spec.rim_barrel_inner_radius * 1e3
-    rf = 0.5 * spec.rim_outer_diameter * 1e3
-    tf = spec.rim_flange_thickness * 1e3
-    pieces += _sector_hulls(rb_in, rb_out, z_back, z_lip, COLL_SAG_MM, 0.0)
-    pieces += _sector_hulls(rb_out - 0.5, rf, z_lip - tf, z_lip, COLL_SAG_MM, 0.0)
-    pieces += _sector_hulls(rb_out - 0.5, rf, z_back, z_back + tf, COLL_SAG_MM, 0.0)
+    pad, rims = _rings(spec)
+    if pad is not None:
+        pieces += _sector_hulls(bore_r, *pad, COLL_SAG_MM, spec.spoke_phase)
+    for ring in rims:
+        pieces += _sector_hulls(*ring, COLL_SAG_MM, 0.0)
     return pieces
 
 
@@ -841,7 +841,10 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
     win_summary = []
     for lp in loops:
         p = lp["p_HE"]
-        kappa = _curvature(p)
+        # curvature over chords of ~0.6 of the smallest radius (fillet or blend): consecutive
+        # points are collinear between outline vertices and would give spikes
+        r_min = min(lp["fillet_m"], spec.blend_radius)
+        kappa = _curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
         c_xy = window_center_xy(lp["poly_xy_m"])
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         win_summary.append({

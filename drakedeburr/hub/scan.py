@@ -55,7 +55,7 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
                   max_edge_distance: float | None = None, distance: float = 0.8,
                   tilt: float = math.radians(25.0), n_tilted: int = 4,
                   max_incidence: float = math.radians(80.0),
-                  with_normals: bool = False) -> ScanCloud:
+                  with_normals: bool = False, X_SH: np.ndarray | None = None) -> ScanCloud:
     """Simulate a merged multi-view structured-light scan of ``hub`` in its frame H.
 
     Args:
@@ -75,10 +75,13 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
             direction to the scanner is below this [rad].
         with_normals: put the true (noise-free) surface normals in ``n_S``; otherwise ``n_S`` is
             None like a real scanner's output.
+        X_SH: optional (4, 4) homogeneous pose of H in the scan frame S (e.g. the hub turned
+            and shifted on its fixture, for registration tests); points and normals are returned
+            in S. Default: S = H.
 
     Returns:
-        ScanCloud with ``p_S`` (N, 3) [m] in H; ``meta`` holds the parameters, the number of
-        points and ``views_H`` (scanner positions).
+        ScanCloud with ``p_S`` (N, 3) [m] in S (= H unless ``X_SH``); ``meta`` holds the
+        parameters, the number of points and ``views_H`` (scanner positions in H).
 
     Raises:
         InputError: invalid arguments.
@@ -178,8 +181,18 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
     p, nrm = p[seen], nrm[seen]
     if sigma > 0:
         p = p + rng.normal(0.0, sigma, size=p.shape)
+    frame = "H"
+    if X_SH is not None:
+        X = np.asarray(X_SH, float)
+        R = X[:3, :3] if X.shape == (4, 4) else None
+        if R is None or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+            raise InputError("simulate_scan: X_SH must be a (4, 4) rigid transform")
+        p = p @ R.T + X[:3, 3]
+        nrm = nrm @ R.T
+        frame = "S"
     log.debug("simulate_scan %s: %d points (%d candidates)", hub.name, len(p), n)
-    meta = {"sigma": sigma, "spacing": spacing, "seed": seed, "frame": "H",
+    meta = {"sigma": sigma, "spacing": spacing, "seed": seed, "frame": frame,
+            "X_SH": None if X_SH is None else np.asarray(X_SH, float).tolist(),
             "view_dir": [float(x) for x in _unit(view_dir)], "views_H": views.tolist(),
             "partial": None if partial is None else [float(x) for x in partial],
             "max_edge_distance": max_edge_distance, "count": int(len(p)), "hub": hub.name}

@@ -13,8 +13,10 @@ axle out of the visible face):
   ``dish_depth`` gives the usual concave wheel (centre recessed behind the rim lip).
 * **windows** are the through-openings between the spokes inside the annulus
   ``window_inner_radius < r < window_outer_radius``; their convex corners are rounded with
-  ``fillet_radius`` (``fillet_radius_small`` for the small windows of split spokes). Window side
-  walls are parallel to the hub axis (no draft).
+  ``fillet_radius`` (``fillet_radius_small`` for the small windows of split spokes); reflex
+  corners (where a split spoke forks, or a curved spoke's side meets a fillet) are blended with
+  ``blend_radius`` (at most the window's fillet radius). Window side walls are parallel to the
+  hub axis (no draft).
 * **spokes**: ``spoke_count`` spokes of style ``straight`` (tapered from ``spoke_width`` at the
   window inner radius to ``spoke_width_outer`` at the outer radius), ``curved`` (the same band
   swept by ``spoke_sweep`` about the axis between the inner and outer window radius) or
@@ -85,6 +87,7 @@ class HubSpec:
     split_angle: float = math.radians(12.0)  # split: arms' half-spread at window_outer_radius
     fillet_radius: float = 0.010  # large windows
     fillet_radius_small: float = 0.004  # small windows (split style)
+    blend_radius: float = 0.005  # reflex (concave) outline corners, e.g. where a split spoke forks
     # centre
     center_bore_diameter: float = 0.0571
     bolt_count: int = 5
@@ -153,7 +156,8 @@ class HubSpec:
         positive = ("rim_outer_diameter", "rim_barrel_diameter", "rim_thickness", "rim_width",
                     "rim_flange_thickness", "face_thickness", "window_inner_radius",
                     "window_outer_radius", "spoke_width", "spoke_width_outer", "fillet_radius",
-                    "fillet_radius_small", "center_bore_diameter", "hub_pad_radius",
+                    "fillet_radius_small", "blend_radius", "center_bore_diameter",
+                    "hub_pad_radius",
                     "mesh_edge_length", "edge_sample_spacing", "density", "dish_outer_radius")
         for name in positive:
             if getattr(self, name) <= 0:

@@ -38,6 +38,11 @@ class CartesianTarget:
         speed: TCP speed of the linear move that ends here [m/s] (relative speed of tool and
             hub in the workpiece-in-hand cell).
         zone: blending radius at this target [m] (0 = fine point).
+        motion: how the controller reaches this target: "linear" (MoveL / LIN / L, tool point
+            on a straight line, orientation slerped) or "joint" (MoveJ / PTP / J; the joint
+            path between the targets is in ``Plan.trajectory``). Added by the planner.
+        p_HC: (3,) the edge (CL) point this target cuts, in H [m], or None.
+        n_H: (3,) unit inner normal at that edge point (out of the material), or None.
     """
 
     window_index: int
@@ -48,6 +53,9 @@ class CartesianTarget:
     q: np.ndarray
     speed: float
     zone: float = 0.0
+    motion: Literal["linear", "joint"] = "linear"
+    p_HC: np.ndarray | None = None
+    n_H: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)

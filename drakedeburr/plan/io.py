@@ -1,0 +1,195 @@
+"""Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``), joint CSV, robot program.
+
+Folder layout (format version 1, written atomically file by file, ``plan.json`` last so a
+folder with a ``plan.json`` is complete):
+
+* ``arrays.npz``: trajectory ``t`` (K,), ``q`` (K, 6), ``qd`` (K, 6); target arrays ``X_HT``
+  (N, 4, 4), ``X_WF`` (N, 4, 4), ``q_targets`` (N, 6), ``p_HC`` (N, 3) and ``n_H`` (N, 3) (NaN
+  where a target has none); ``X_WH`` (4, 4). SI units.
+* ``plan.json``: ``format``, ``version``, scenario, hub, mode, per-target scalars, segments,
+  failures, meta. The ToolPath objects are not stored (``tool_path`` is None after loading).
+
+The joint CSV is for people and controllers that take joint streams: ``t_s, q1_deg .. q6_deg``
+(degrees at the boundary, :mod:`drakedeburr.units`).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr._io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from drakedeburr.errors import InputError
+from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
+from drakedeburr.units import deg_from_rad
+
+__all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv",
+           "program_from_plan"]
+
+PLAN_FORMAT = "drakedeburr-plan"
+PLAN_VERSION = 1
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def save_plan(plan: Plan, path: str | Path) -> Path:
+    """Write a plan folder (created if needed). Returns the folder."""
+    folder = Path(path)
+    folder.mkdir(parents=True, exist_ok=True)
+    n = len(plan.targets)
+    nan3 = np.full(3, np.nan)
+    arrays = dict(
+        t=plan.trajectory.t, q=plan.trajectory.q, qd=plan.trajectory.qd,
+        X_HT=np.array([tg.X_HT for tg in plan.targets]).reshape(n, 4, 4),
+        X_WF=np.array([tg.X_WF for tg in plan.targets]).reshape(n, 4, 4),
+        q_targets=np.array([tg.q for tg in plan.targets]).reshape(n, 6),
+        p_HC=np.array([nan3 if tg.p_HC is None else tg.p_HC for tg in plan.targets]).reshape(n, 3),
+        n_H=np.array([nan3 if tg.n_H is None else tg.n_H for tg in plan.targets]).reshape(n, 3),
+        X_WH=np.asarray(plan.X_WH, float),
+    )
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    atomic_write_bytes(folder / "arrays.npz", buf.getvalue())
+    doc = dict(
+        format=PLAN_FORMAT, version=PLAN_VERSION, scenario=plan.scenario, hub=plan.hub,
+        mode=plan.mode,
+        targets=[dict(window_index=tg.window_index, segment=tg.segment, cl_index=tg.cl_index,
+                      speed=tg.speed, zone=tg.zone, motion=tg.motion) for tg in plan.targets],
+        segments=[dict(window_index=s.window_index, kind=s.kind,
+                       target_range=list(s.target_range), t_range=list(s.t_range))
+                  for s in plan.segments],
+        failures=_jsonable(list(plan.failures)),
+        meta=_jsonable(plan.meta),
+    )
+    atomic_write_json(folder / "plan.json", doc, indent=1)
+    return folder
+
+
+def load_plan(path: str | Path) -> Plan:
+    """Read a plan folder written by :func:`save_plan` (or its ``plan.json``).
+
+    Raises:
+        FileNotFoundError: no plan there. InputError: wrong format or version.
+    """
+    folder = Path(path)
+    if folder.name == "plan.json":
+        folder = folder.parent
+    doc_path = folder / "plan.json"
+    if not doc_path.is_file():
+        raise FileNotFoundError(f"no plan at {folder} (missing plan.json)")
+    try:
+        doc = json.loads(doc_path.read_text())
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{doc_path}: not valid JSON ({exc})") from exc
+    if doc.get("format") != PLAN_FORMAT:
+        raise InputError(f"{doc_path}: not a drakedeburr plan (format {doc.get('format')!r})")
+    if doc.get("version") != PLAN_VERSION:
+        raise InputError(f"{doc_path}: plan version {doc.get('version')} is not supported "
+                         f"(this drakedeburr reads version {PLAN_VERSION})")
+    npz_path = folder / "arrays.npz"
+    if not npz_path.is_file():
+        raise FileNotFoundError(f"{folder}: missing arrays.npz")
+    with np.load(npz_path) as a:
+        arr = {k: a[k] for k in a.files}
+    if len(doc["targets"]) != len(arr["q_targets"]):
+        raise InputError(f"{folder}: {len(doc['targets'])} targets in plan.json but "
+                         f"{len(arr['q_targets'])} in arrays.npz")
+    targets = []
+    for i, t in enumerate(doc["targets"]):
+        p, n = arr["p_HC"][i], arr["n_H"][i]
+        targets.append(CartesianTarget(
+            window_index=int(t["window_index"]), segment=t["segment"], cl_index=int(t["cl_index"]),
+            X_HT=arr["X_HT"][i], X_WF=arr["X_WF"][i], q=arr["q_targets"][i],
+            speed=float(t["speed"]), zone=float(t["zone"]), motion=t.get("motion", "linear"),
+            p_HC=None if np.any(np.isnan(p)) else p, n_H=None if np.any(np.isnan(n)) else n))
+    segments = tuple(PlanSegment(window_index=int(s["window_index"]), kind=s["kind"],
+                                 target_range=tuple(s["target_range"]),
+                                 t_range=tuple(s["t_range"])) for s in doc["segments"])
+    return Plan(scenario=doc["scenario"], hub=doc["hub"], mode=doc["mode"], X_WH=arr["X_WH"],
+                targets=tuple(targets), segments=segments,
+                trajectory=JointTrajectory(t=arr["t"], q=arr["q"], qd=arr["qd"]),
+                tool_path=None, failures=tuple(doc["failures"]), meta=doc["meta"])
+
+
+def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Path:
+    """Joint CSV ``t_s,q1_deg,...,q6_deg``: the trajectory knots, or samples every ``dt`` [s]."""
+    tr = plan.trajectory
+    if dt is None:
+        t, q = tr.t, tr.q
+    else:
+        t = np.arange(0.0, tr.duration + 0.5 * dt, dt)
+        t[-1] = min(t[-1], tr.t[-1])
+        q = tr.value(t)
+    rows = ["t_s,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg"]
+    qd = deg_from_rad(np.asarray(q))
+    rows += [f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row)
+             for ti, row in zip(t, qd, strict=True)]
+    return atomic_write_text(path, "\n".join(rows) + "\n")
+
+
+def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_reason: str = "",
+                      include_transitions: bool = True):
+    """The Cartesian program of a plan as a :class:`drakedeburr.post.program.RobotProgram`.
+
+    Tool-in-hand: the program's tool is T on the flange (``X_FT``), its work object the hub
+    frame H, each move the TCP pose ``X_WT``. Workpiece-in-hand (stationary tool): the moving
+    "tool" is the hub frame H in the gripper (``X_FH``), the work object is the fixed tool
+    frame T (the virtual TCP), each move the hub pose ``X_WH``; the controller must be told the
+    tool is stationary (ABB: ``robhold TRUE`` tooldata / ``ufprog FALSE`` wobj), noted in the
+    header.
+
+    Args:
+        plan: the plan. name: program name.
+        flag, flag_reason: header warning (e.g. "FORCED" when verification failed); empty:
+            FORCED when the plan has failures, else UNVERIFIED (tool mode, post's rule).
+        include_transitions: keep home/transition joint moves (else cuts, approach, retract).
+    """
+    X_FT = np.asarray(plan.meta["X_FT"], float)
+    notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
+             f"cycle time {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records")
+    targets = [tg for tg in plan.targets
+               if include_transitions or tg.segment not in ("home", "transition")]
+    if plan.mode == "tool":
+        # the post stage's converter (tool-in-hand) with the plan's own tool transform
+        from dataclasses import replace
+
+        from drakedeburr.post.plan_program import program_from_plan as _post_program
+
+        extra = dict(flag=flag, flag_reason=flag_reason) if flag else {}
+        return _post_program(replace(plan, targets=tuple(targets)), name, X_FT, notes=notes,
+                             source=f"drakedeburr plan {plan.hub}", **extra)
+    from drakedeburr.post.program import JOINT, LINEAR, RobotProgram
+
+    # workpiece in hand: the moving "tool" is the hub frame in the gripper
+    X_FH = np.asarray(plan.meta["X_FH"], float)
+    X_WT_fixed = np.asarray(plan.meta["X_WT"], float)
+    comments, prev = [], None
+    for tg in targets:
+        label = (tg.segment, tg.window_index)
+        comments.append("" if label == prev else
+                        tg.segment + (f" window {tg.window_index}" if tg.window_index >= 0 else ""))
+        prev = label
+    return RobotProgram.from_poses(
+        name, np.array([np.asarray(tg.X_WF) @ X_FH for tg in targets]),
+        np.array([tg.q for tg in targets]), speed=[tg.speed for tg in targets],
+        zone=[tg.zone for tg in targets],
+        move_type=[JOINT if tg.motion == "joint" else LINEAR for tg in targets],
+        comments=comments, X_FT=X_FH, X_WO=X_WT_fixed, source=f"drakedeburr plan {plan.hub}",
+        flag=flag, flag_reason=flag_reason,
+        notes=notes + ("workpiece in hand: the tool data is the hub held by the robot; the work "
+                       "object is the stationary spindle (set robhold/ufprog accordingly)",))

@@ -1,0 +1,242 @@
+"""Cell kinematics for planning: the fixed transforms of a cell, analytic IK and clearance.
+
+Both cells are one code path. What differs is which of the tool frame T and the hub frame H
+rides on the flange F:
+
+* tool-in-hand (``mode="tool"``): ``X_FT`` is fixed (spindle on the flange), ``X_WH`` is fixed
+  (hub on the fixture); ``X_WF = X_WH X_HT X_FT^-1``.
+* workpiece-in-hand (``mode="workpiece"``): ``X_FH`` is fixed (hub in the gripper), ``X_WT`` is
+  fixed (spindle stand, the virtual TCP); ``X_WF = X_WT X_HT^-1 X_FH^-1``.
+
+The planner thinks in the process pose ``X_HT`` (tool relative to hub); this module turns it
+into flange poses and joints (analytic OPW IK from :mod:`drakedeburr.post.opw_ik`, checked
+against Drake's FK in the tests) and measures clearance with the burr-head/hub pair filtered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics"]
+
+
+@dataclass(frozen=True, eq=False)
+class CellKinematics:
+    """Fixed transforms of a cell and the robot's analytic kinematics.
+
+    Attributes:
+        mode: "tool" or "workpiece".
+        X_FT: (4, 4) tool in flange [m] (tool mode; identity placeholder otherwise).
+        X_WH: (4, 4) hub in world [m] (tool mode; hub pose at ``q_home`` otherwise).
+        X_FH: (4, 4) hub in flange [m] (workpiece mode).
+        X_WT: (4, 4) tool in world [m] (workpiece mode; tool pose at ``q_home`` otherwise).
+        robot: ``drakedeburr.post.opw_ik.RobotKinematics`` with the cell's joint limits.
+        q_lower, q_upper: (6,) joint limits [rad]; v_max, a_max: (6,) [rad/s], [rad/s^2].
+        q_home: (6,) [rad].
+    """
+
+    mode: str
+    X_FT: np.ndarray
+    X_WH: np.ndarray
+    X_FH: np.ndarray
+    X_WT: np.ndarray
+    robot: object
+    q_lower: np.ndarray
+    q_upper: np.ndarray
+    v_max: np.ndarray
+    a_max: np.ndarray
+    q_home: np.ndarray
+
+    def X_WF_from_X_HT(self, X_HT: np.ndarray) -> np.ndarray:
+        """(..., 4, 4) process poses -> (..., 4, 4) flange poses in world [m]."""
+        X_HT = np.asarray(X_HT, float)
+        if self.mode == "tool":
+            return self.X_WH @ X_HT @ np.linalg.inv(self.X_FT)
+        return self.X_WT @ _inv(X_HT) @ np.linalg.inv(self.X_FH)
+
+    def X_HT_from_X_WF(self, X_WF: np.ndarray) -> np.ndarray:
+        """(..., 4, 4) flange poses -> (..., 4, 4) process poses X_HT [m]."""
+        X_WF = np.asarray(X_WF, float)
+        if self.mode == "tool":
+            return np.linalg.inv(self.X_WH) @ X_WF @ self.X_FT
+        return _inv(X_WF @ self.X_FH) @ self.X_WT
+
+    def fk_flange(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints [rad] -> (..., 4, 4) X_WF (analytic)."""
+        from drakedeburr.post.opw import fk_opw
+
+        return fk_opw(self.robot.opw, np.asarray(q, float))
+
+    def X_HT_from_q(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints -> (..., 4, 4) tool pose relative to the hub."""
+        return self.X_HT_from_X_WF(self.fk_flange(q))
+
+    def X_WT_from_q(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints -> (..., 4, 4) tool pose in world."""
+        if self.mode == "tool":
+            return self.fk_flange(q) @ self.X_FT
+        X = np.broadcast_to(self.X_WT, np.shape(q)[:-1] + (4, 4))
+        return np.array(X)
+
+    def X_WH_from_q(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints -> (..., 4, 4) hub pose in world."""
+        if self.mode == "workpiece":
+            return self.fk_flange(q) @ self.X_FH
+        return np.array(np.broadcast_to(self.X_WH, np.shape(q)[:-1] + (4, 4)))
+
+    def within_limits(self, q: np.ndarray, slack: float = 1e-9) -> np.ndarray:
+        q = np.asarray(q, float)
+        return np.all((q >= self.q_lower - slack) & (q <= self.q_upper + slack), axis=-1)
+
+    def ik_all(self, X_WF: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All analytic IK branches of flange poses.
+
+        Args:
+            X_WF: (N, 4, 4) flange poses [m].
+
+        Returns:
+            q (N, 8, 6) [rad] wrapped to (-pi, pi] (NaN where unreachable) and branch signs
+            (8, 3) (shoulder, elbow, wrist).
+        """
+        from drakedeburr.post.opw_ik import ik_opw
+
+        sols = ik_opw(self.robot.opw, np.asarray(X_WF, float).reshape(-1, 4, 4))
+        return sols.q, sols.branch
+
+    def branch_of(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints -> (..., 3) branch signs (shoulder, elbow, wrist)."""
+        from drakedeburr.post.opw_ik import arm_branches
+
+        return arm_branches(self.robot.opw, q)
+
+    def track(self, X_WF: np.ndarray, q_start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joints along a dense flange-pose sequence keeping ``q_start``'s branch.
+
+        At each pose the solution of the same (shoulder, elbow, wrist) branch is taken and
+        every joint is unwrapped by 2*pi toward the previous sample (no 2*pi jumps).
+
+        Args:
+            X_WF: (N, 4, 4) flange poses [m].
+            q_start: (6,) joints of the robot just before the first pose [rad].
+
+        Returns:
+            q (N, 6) [rad] (NaN rows where the branch does not reach) and ok (N,) bool
+            (reached, inside joint limits).
+        """
+        q_all, branches = self.ik_all(X_WF)
+        b0 = self.branch_of(q_start)
+        match = np.flatnonzero(np.all(branches == b0[None], axis=1))
+        n = q_all.shape[0]
+        q_out = np.full((n, 6), np.nan)
+        ok = np.zeros(n, bool)
+        q_prev = np.asarray(q_start, float)
+        for i in range(n):
+            cand = q_all[i, match]
+            cand = cand[~np.any(np.isnan(cand), axis=1)]
+            if cand.size == 0:
+                continue
+            # unwrap every joint toward the previous sample
+            cand = q_prev + np.mod(cand - q_prev + np.pi, 2 * np.pi) - np.pi
+            j = int(np.argmin(np.abs(cand - q_prev).sum(axis=1)))
+            q_out[i] = cand[j]
+            ok[i] = bool(self.within_limits(cand[j]))
+            q_prev = cand[j]
+        return q_out, ok
+
+
+def _inv(X: np.ndarray) -> np.ndarray:
+    X = np.asarray(X, float)
+    out = np.zeros_like(X)
+    R = X[..., :3, :3]
+    Rt = np.swapaxes(R, -1, -2)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, X[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def cell_kinematics(cell) -> CellKinematics:
+    """Fixed transforms of a loaded :class:`drakedeburr.cell.Cell` (read at ``q_home``)."""
+    from drakedeburr.post.opw_ik import IRB1600_10_120_ROBOT, JointLimits, RobotKinematics
+
+    q = np.asarray(cell.q_home, float)
+    X_WF = cell.X_WF(q).GetAsMatrix4()
+    X_WT = cell.X_WT(q).GetAsMatrix4()
+    X_WH = cell.X_WH(q).GetAsMatrix4()
+    X_FW = np.linalg.inv(X_WF)
+    robot = RobotKinematics(
+        opw=IRB1600_10_120_ROBOT.opw,
+        limits=JointLimits(lower=tuple(map(float, cell.q_lower)),
+                           upper=tuple(map(float, cell.q_upper))),
+        vendor=IRB1600_10_120_ROBOT.vendor, name=IRB1600_10_120_ROBOT.name)
+    return CellKinematics(
+        mode=cell.mode, X_FT=X_FW @ X_WT, X_WH=X_WH, X_FH=X_FW @ X_WH, X_WT=X_WT, robot=robot,
+        q_lower=np.array(cell.q_lower), q_upper=np.array(cell.q_upper),
+        v_max=np.minimum(-np.array(cell.v_lower), np.array(cell.v_upper)),
+        a_max=np.minimum(-np.array(cell.a_lower), np.array(cell.a_upper)),
+        q_home=q.copy())
+
+
+@dataclass(eq=False)
+class ClearanceChecker:
+    """Signed distances of a cell with the burr-head/hub (process contact) pair filtered.
+
+    Owns one diagram context whose scene-graph collision filters exclude the burr head against
+    the hub (``SceneGraph.collision_filter_manager(context)``); every other pair counts. Used
+    by the IK (its plant context carries the filter into MinimumDistanceLowerBoundConstraint)
+    and by the dense checks.
+    """
+
+    cell: object
+    context: object = field(init=False)
+    plant_context: object = field(init=False)
+    _sg_context: object = field(init=False)
+
+    def __post_init__(self) -> None:
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+
+        c = self.cell
+        self.context = c.diagram.CreateDefaultContext()
+        self._sg_context = c.scene_graph.GetMyContextFromRoot(self.context)
+        c.scene_graph.collision_filter_manager(self._sg_context).Apply(
+            CollisionFilterDeclaration().ExcludeBetween(
+                GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
+        self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
+
+    def min_distance(self, q: np.ndarray,
+                     max_distance: float = 0.01) -> tuple[float, tuple[str, str]]:
+        """Smallest signed distance [m] at ``q`` (capped at ``max_distance``) and its pair."""
+        c = self.cell
+        c.plant.SetPositions(self.plant_context, np.asarray(q, float))
+        query = c.scene_graph.get_query_output_port().Eval(self._sg_context)
+        best, pair = float(max_distance), ("", "")
+        for d in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
+            if d.distance < best:
+                best, pair = float(d.distance), (d.id_A, d.id_B)
+        if pair[0] == "":
+            return best, pair
+        inspector = query.inspector()
+        return best, (self._label(inspector, pair[0]), self._label(inspector, pair[1]))
+
+    def _label(self, inspector, gid) -> str:
+        body = self.cell.plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
+        model = self.cell.plant.GetModelInstanceName(body.model_instance())
+        return f"{model}::{body.name()}/{inspector.GetName(gid)}"
+
+    def distance_constraint(self, bound: float, influence: float):
+        """A ``MinimumDistanceLowerBoundConstraint`` on this context (built once per bound:
+        building one enumerates every collision pair, ~0.1 s with a detailed hub)."""
+        key = (round(bound, 9), round(influence, 9))
+        cache = self.__dict__.setdefault("_constraints", {})
+        if key not in cache:
+            from pydrake.multibody.inverse_kinematics import MinimumDistanceLowerBoundConstraint
+
+            cache[key] = MinimumDistanceLowerBoundConstraint(
+                self.cell.plant, bound, self.plant_context, None, influence)
+        return cache[key]
+
+    def min_distances(self, q: np.ndarray, max_distance: float = 0.01) -> np.ndarray:
+        """(N,) smallest signed distance [m] for each row of ``q`` (N, 6), capped."""
+        return np.array([self.min_distance(row, max_distance)[0] for row in np.atleast_2d(q)])

@@ -1,0 +1,501 @@
+"""The planner: window targets -> cone-constrained IK -> executed motion -> timed Plan.
+
+Per window (in order):
+
+1. tool-point targets from the CL points (:mod:`drakedeburr.plan.targets`);
+2. Drake IK at every CL target (:mod:`drakedeburr.plan.ik`): the freedom (axis inside the
+   cone, spin about it) exists only there;
+3. the loop closed back to the first target; the executed linear/slerp motion sampled every
+   ``dense_step`` of tool travel and solved by the analytic IK on the window's configuration
+   (:mod:`drakedeburr.plan.interpolate`), each sample checked for clearance and joint jumps;
+4. approach and retract along the tool axis, a joint move from the previous window (or home)
+   (:mod:`drakedeburr.plan.transitions`);
+5. timing: 150 mm/s along the window, 450 mm/s between windows, 600 mm/s home, within the
+   joint limits (:mod:`drakedeburr.plan.timing`).
+
+Both cells are the same code: only :class:`CellKinematics` knows which of T and H rides on
+the flange.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from drakedeburr.config import ProcessParameters, Tolerances
+from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
+from drakedeburr.plan.interpolate import track_poses
+from drakedeburr.plan.io import _jsonable
+from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
+from drakedeburr.plan.smoothing import smooth_orientations
+from drakedeburr.plan.targets import contact_geometry, tool_point_H
+from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
+from drakedeburr.plan.transitions import approach_pose, joint_move
+from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
+from drakedeburr.plan.window_targets import WindowTargets
+
+__all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
+
+log = logging.getLogger(__name__)
+
+Progress = Callable[[int, int, str], None] | None
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Planner settings (process speeds come from ``params``).
+
+    Attributes:
+        params: process parameters (speeds, depth of cut, bounds).
+        ik: per-target IK settings.
+        dense_step: tool travel between dense samples of the executed motion [m].
+        approach_distance: approach/retract length along the tool axis [m].
+        approach_speed: TCP speed of approach/retract [m/s].
+        tcp_acceleration: TCP path acceleration cap [m/s^2] (ramps at start/end of moves).
+        joint_step: joint-space sample spacing of joint moves [rad].
+        max_joint_jump: largest joint change allowed between dense samples [rad] (a flip or a
+            2*pi turn shows as ~1-6 rad; fast wrist motion at corners reaches ~0.05).
+        windows: indices of the windows to plan (None = all), in this order.
+        orientation_sigma: Gaussian width (in targets) of the orientation smoothing.
+        fit_spacings: knot spacings [m] of the least-squares joint spline, widest first.
+        fit_tolerance: largest tool deviation [m] the joint-spline fit may cause.
+        min_clearance: acceptance bound on every dense sample [m] (burr head/hub excepted).
+        contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
+            3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
+        window_attempts: distinct start configurations tried when a window's IK fails.
+    """
+
+    params: ProcessParameters = field(default_factory=ProcessParameters)
+    ik: IkOptions = field(default_factory=IkOptions)
+    dense_step: float = 1e-3
+    approach_distance: float = 15e-3
+    approach_speed: float = 0.05
+    tcp_acceleration: float = 3.0
+    joint_step: float = 0.02
+    max_joint_jump: float = 0.2
+    windows: tuple[int, ...] | None = None
+    orientation_sigma: float = 2.0
+    fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3)
+    fit_tolerance: float = 0.02e-3
+    min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
+    contact_radius: float | None = 2.25e-3
+    window_attempts: int = 4
+
+
+@dataclass
+class _Stretch:
+    kind: str
+    window_index: int
+    timed: TimedPath
+    targets: list
+
+
+def _limits(kin: CellKinematics, v_cap: float, options: PlanOptions) -> TimingLimits:
+    return TimingLimits(v_cap=v_cap, a_cap=options.tcp_acceleration,
+                        v_max=tuple(kin.v_max), a_max=tuple(kin.a_max))
+
+
+def _time_cartesian(kin, q, s, X, v_cap, options) -> tuple[TimedPath, float]:
+    """Timed Cartesian stretch with the widest joint-spline fit whose tool deviation from the
+    commanded samples stays within ``options.fit_tolerance``; returns it and that deviation."""
+    limits = _limits(kin, v_cap, options)
+    for spacing in (*options.fit_spacings, None):
+        timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing)
+        dev = float(np.max(np.linalg.norm(kin.X_HT_from_q(timed.q)[:, :3, 3] - X[:, :3, 3],
+                                          axis=1)))
+        if dev <= options.fit_tolerance or spacing is None:
+            return timed, dev
+    raise AssertionError("unreachable")
+
+
+def _time_joint(kin, q, s, v_cap, options) -> TimedPath:
+    p = kin.X_HT_from_q(q)[:, :3, 3]
+    return time_path(s, q, p, _limits(kin, v_cap, options))
+
+
+def _target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None) -> CartesianTarget:
+    q = np.asarray(q, float)
+    return CartesianTarget(window_index=window, segment=seg, cl_index=cl,
+                           X_HT=kin.X_HT_from_q(q), X_WF=kin.fk_flange(q), q=q.copy(),
+                           speed=float(speed), zone=0.0, motion=motion,
+                           p_HC=None if p_HC is None else np.asarray(p_HC, float),
+                           n_H=None if n_H is None else np.asarray(n_H, float))
+
+
+def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, options: PlanOptions,
+                 failures: list, progress: Progress
+                 ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
+    """Approach, cut and retract of one window; None when the window cannot be planned."""
+    params = options.params
+    r_c, lift = contact_geometry(options.contact_radius)
+    m = len(wt)
+    # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
+    # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
+    loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
+    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[loop]
+    t0 = time.perf_counter()
+    # window-level retries: the start configuration (J4/J6 turns, spin) decides whether the
+    # wrist can follow the whole loop inside its limits; try the best few distinct seeds
+    seeds = seed_by_spin(kin, checker, p_HT[0], wt.axis_H[0], wt.t_H[0], q_from, options.ik,
+                         count=options.window_attempts) or [None]
+    wik, best_score = None, 0
+    for attempt, q_first in enumerate(seeds):
+        trial = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
+                                wt.cone_half_angle, wt.t_H[loop], q_from,
+                                window_index=wt.window_index, options=options.ik,
+                                progress=progress, q_first=q_first)
+        # the executed motion between the targets must stay on the branch and inside the
+        # joint limits too (J4 winds around a loop): a cheap analytic pre-check
+        reached = np.flatnonzero(~np.any(np.isnan(trial.q), axis=1))
+        dense_ok = bool(len(reached) > 1 and np.all(track_poses(
+            kin, trial.X_HT[reached], trial.q[reached[0]], options.dense_step).ok))
+        score = len(trial.failures) + (0 if dense_ok else 10 * (m + 1))
+        if wik is None or score < best_score:
+            wik, best_score = trial, score
+        if score == 0:
+            break
+        log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
+                 "another", wt.window_index, attempt, len(trial.failures),
+                 "ok" if dense_ok else "leaves the limits")
+    t_ik = time.perf_counter() - t0
+    for rec in wik.failures:
+        failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})
+    good = np.flatnonzero(~np.any(np.isnan(wik.q), axis=1))
+    if len(good) < (m + 1) // 2 or 0 not in good:
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="window",
+                             reason=f"IK reached only {len(good)} of {m + 1} targets; "
+                                    "window skipped"))
+        return None
+    order = loop[good]
+    X_ik = wik.X_HT[good]
+    X_cut = smooth_orientations(X_ik, wt.cone_axis_H[order], wt.cone_half_angle,
+                                options.orientation_sigma)
+    t1 = time.perf_counter()
+    # track the executed motion; where smoothing cost clearance, keep the IK orientation of the
+    # targets around the offending samples and track again
+    reverted = np.zeros(len(order), bool)
+    for _ in range(4):
+        cut = track_poses(kin, X_cut, wik.q[good[0]], options.dense_step)
+        dist = np.full(len(cut.s), np.inf)
+        for k in range(len(cut.s)):
+            if cut.ok[k]:
+                dist[k] = checker.min_distance(cut.q[k], options.min_clearance + 1e-3)[0]
+        low = np.flatnonzero(dist < options.min_clearance)
+        if low.size == 0 or options.orientation_sigma <= 0:
+            break
+        seg = np.searchsorted(cut.target_index, low)
+        near = np.concatenate([seg - 2, seg - 1, seg, seg + 1])
+        fix = np.unique(np.clip(near, 0, len(order) - 1))
+        fix = fix[~reverted[fix]]
+        if fix.size == 0:
+            break
+        X_cut[fix] = X_ik[fix]
+        reverted[fix] = True
+    jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
+    for k in np.flatnonzero(~(jumps <= options.max_joint_jump)):
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
+                             reason=f"joint jump {float(jumps[k]):.3g} rad between dense samples"))
+    for k in np.flatnonzero(~cut.ok):
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
+                             reason="dense sample unreachable on the window's configuration"))
+    if not np.all(cut.ok):
+        return None
+    for k in np.flatnonzero(dist < options.min_clearance):
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
+                             reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
+    dmin = float(np.min(dist))
+    t_dense = time.perf_counter() - t1
+    # approach and retract along the tool axis
+    X0, Xe = X_cut[0], X_cut[-1]
+    app = track_poses(kin, np.stack([X0, approach_pose(X0, options.approach_distance)]),
+                      cut.q[0], options.dense_step)
+    ret = track_poses(kin, np.stack([Xe, approach_pose(Xe, options.approach_distance)]),
+                      cut.q[-1], options.dense_step)
+    for name, d in (("approach", app), ("retract", ret)):
+        if not np.all(d.ok):
+            failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
+                                 reason=f"{name} unreachable on the window's configuration"))
+            return None
+        dd = min(checker.min_distance(q, options.min_clearance + 1e-3)[0] for q in d.q[1:])
+        if dd < options.min_clearance:
+            failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
+                                 reason=f"{name} clearance {dd * 1e3:.2f} mm"))
+    q_app = app.q[::-1]
+    X_app = app.X_HT[::-1]
+    s_app = app.s[-1] - app.s[::-1]
+    t2 = time.perf_counter()
+    timed_app, _ = _time_cartesian(kin, q_app, s_app, X_app, options.approach_speed, options)
+    timed_cut, fit_dev = _time_cartesian(kin, cut.q, cut.s, cut.X_HT, params.grinding_speed,
+                                         options)
+    timed_ret, _ = _time_cartesian(kin, ret.q, ret.s, ret.X_HT, options.approach_speed, options)
+    t_time = time.perf_counter() - t2
+    w = wt.window_index
+    q_targets = cut.q[cut.target_index]
+    cut_targets = [_target(kin, q_targets[j], w, "cut", int(i), params.grinding_speed, "linear",
+                           wt.p_HC[i], wt.n_H[i]) for j, i in enumerate(order)]
+    stretches = [
+        _Stretch("approach", w, timed_app, [_target(kin, q_app[-1], w, "approach", int(good[0]),
+                                                    options.approach_speed, "linear",
+                                                    wt.p_HC[good[0]], wt.n_H[good[0]])]),
+        _Stretch("cut", w, timed_cut, cut_targets[1:]),
+        _Stretch("retract", w, timed_ret, [_target(kin, ret.q[-1], w, "retract", -1,
+                                                   options.approach_speed, "linear")]),
+    ]
+    q_deg = np.degrees(cut.q)
+    v_cut = timed_cut.v_tcp[1:-1]
+    band = params.grinding_speed * 0.05
+    stats = dict(
+        window=w, kind=wt.kind, cl_points=len(wt), reached=int(len(good)),
+        edge_length_m=float(np.sum(np.linalg.norm(np.diff(np.vstack([wt.p_HC, wt.p_HC[:1]]),
+                                                          axis=0), axis=1))),
+        tool_travel_m=float(cut.s[-1]), dense_samples=int(len(cut.s)),
+        cut_seconds=float(timed_cut.t[-1]),
+        j4_range_deg=float(np.ptp(q_deg[:, 3])), j5_range_deg=float(np.ptp(q_deg[:, 4])),
+        j6_range_deg=float(np.ptp(q_deg[:, 5])),
+        min_abs_j5_deg=float(np.min(np.abs(q_deg[:, 4]))),
+        min_clearance_m=float(dmin), smoothing_reverted_targets=int(reverted.sum()),
+        speed_in_band_fraction=float(np.mean(np.abs(v_cut - params.grinding_speed) <= band))
+        if len(v_cut) else 0.0,
+        ik_seconds=t_ik, dense_seconds=t_dense, timing_seconds=t_time, ik=wik.stats,
+        joint_fit_deviation_m=fit_dev,
+        orientation_smoothing_rad=float(np.max(_angle(X_ik, X_cut))),
+        q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets.tolist(),
+        cl_order=[int(i) for i in order])
+    return stretches, stats, q_app[0]
+
+
+def _angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
+    """(M,) rotation angle between paired poses [rad]."""
+    c = (np.einsum("mij,mij->m", Xa[:, :3, :3], Xb[:, :3, :3]) - 1.0) / 2.0
+    return np.arccos(np.clip(c, -1.0, 1.0))
+
+
+def _joint_stretch(cell, kin, checker, q0, q1, v_cap, kind, options, failures, label) -> _Stretch:
+    mv = joint_move(cell, kin, checker, q0, q1, min_distance=options.ik.min_distance,
+                    step=options.joint_step)
+    if not mv.ok:
+        failures.append(dict(window=-1, cl_index=-1, stage=kind,
+                             reason=f"{label}: no collision-free joint move found "
+                                    f"(clearance {mv.clearance * 1e3:.2f} mm, {mv.method})"))
+    s = mv.s if mv.s[-1] > 0 else np.linspace(0.0, 1e-9, len(mv.s))
+    if len(mv.q) < 2 or mv.s[-1] <= 0:
+        timed = TimedPath(t=np.zeros(1), q=mv.q[:1], qd=np.zeros((1, 6)), sdot=np.zeros(1),
+                          v_tcp=np.zeros(1))
+    else:
+        timed = _time_joint(kin, mv.q, s, v_cap, options)
+    return _Stretch(kind, -1, timed, [_target(kin, q1, -1, kind, -1, v_cap, "joint")]), mv
+
+
+def plan_windows(
+    cell,
+    windows: Sequence[WindowTargets],
+    *,
+    scenario: str = "",
+    hub: str = "",
+    options: PlanOptions = PlanOptions(),
+    progress: Progress = None,
+) -> Plan:
+    """Plan the given windows of a loaded cell, from home and back.
+
+    Args:
+        cell: :class:`drakedeburr.cell.Cell` (tool- or workpiece-in-hand).
+        windows: the windows' targets, in execution order.
+        scenario, hub: names recorded in the plan.
+        options: planner settings.
+        progress: optional callback (done, total, label) per window.
+
+    Returns:
+        Plan; ``failures`` lists every point/move that failed (empty when all planned).
+    """
+    t_start = time.perf_counter()
+    kin = cell_kinematics(cell)
+    checker = ClearanceChecker(cell)
+    params = options.params
+    failures: list[dict] = []
+    stretches: list[_Stretch] = []
+    window_stats = []
+    q_cur = kin.q_home.copy()
+    home = _target(kin, q_cur, -1, "home", -1, params.home_speed, "joint")
+    n = len(windows)
+    transition_seconds = 0.0
+    for k, wt in enumerate(windows):
+        if progress is not None:
+            progress(k, n, f"window {wt.window_index}")
+        res = _plan_window(cell, kin, checker, wt, q_cur, options, failures, None)
+        if res is None:
+            continue
+        win_stretches, stats, q_app0 = res
+        speed = params.home_speed if not stretches else params.window_switch_speed
+        kind = "home" if not stretches else "transition"
+        t0 = time.perf_counter()
+        js, mv = _joint_stretch(cell, kin, checker, q_cur, q_app0, speed, kind, options, failures,
+                                f"to window {wt.window_index}")
+        transition_seconds += time.perf_counter() - t0
+        stats["transition_method"] = mv.method
+        stretches.append(js)
+        stretches.extend(win_stretches)
+        window_stats.append(stats)
+        q_cur = win_stretches[-1].timed.q[-1]
+    t0 = time.perf_counter()
+    js, mv = _joint_stretch(cell, kin, checker, q_cur, kin.q_home, params.home_speed, "home",
+                            options, failures, "return home")
+    transition_seconds += time.perf_counter() - t0
+    stretches.append(js)
+    if progress is not None:
+        progress(n, n, "done")
+    planned = {s["window"] for s in window_stats}
+    for wt in windows:
+        if wt.window_index not in planned:
+            log.warning("window %d not planned", wt.window_index)
+    return _assemble(cell, kin, stretches, home, window_stats, failures, scenario, hub, windows,
+                     options, dict(total_seconds=time.perf_counter() - t_start,
+                                   transition_seconds=transition_seconds))
+
+
+def _assemble(cell, kin, stretches, home, window_stats, failures, scenario, hub, windows, options,
+              timings) -> Plan:
+    t_all, q_all, qd_all = [np.zeros(1)], [kin.q_home[None]], [np.zeros((1, 6))]
+    targets = [home]
+    segments = []
+    t_off = 0.0
+    for st in stretches:
+        tp = st.timed
+        first = len(targets)
+        targets.extend(st.targets)
+        if len(tp.t) > 1:
+            t_all.append(t_off + tp.t[1:])
+            q_all.append(tp.q[1:])
+            qd_all.append(tp.qd[1:])
+        t_end = t_off + float(tp.t[-1])
+        segments.append(PlanSegment(window_index=st.window_index, kind=st.kind,
+                                    target_range=(first, len(targets)), t_range=(t_off, t_end)))
+        t_off = t_end
+    t = np.concatenate(t_all)
+    q = np.concatenate(q_all)
+    qd = np.concatenate(qd_all)
+    keep = np.concatenate([[True], np.diff(t) > 1e-9])  # zero-length stretches
+    traj = JointTrajectory(t=t[keep], q=q[keep], qd=qd[keep])
+    params = options.params
+    edge_total = sum(s["tool_travel_m"] for s in window_stats)
+    cut_time = sum(s["cut_seconds"] for s in window_stats)
+    seg_time = {}
+    for sgm in segments:
+        seg_time[sgm.kind] = seg_time.get(sgm.kind, 0.0) + sgm.t_range[1] - sgm.t_range[0]
+    meta = dict(
+        version=1,
+        planner="drakedeburr.plan",
+        contact_radius_m=contact_geometry(options.contact_radius)[0],
+        contact_lift_m=contact_geometry(options.contact_radius)[1],
+        X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
+        windows=window_stats,
+        window_sources=[w.source for w in windows],
+        depth_of_cut={str(w.window_index): w.depth_of_cut for w in windows},
+        cycle_seconds=traj.duration,
+        segment_seconds=seg_time,
+        cutting_seconds=cut_time,
+        physical_cut_seconds=edge_total / params.grinding_speed,
+        cut_time_ratio=cut_time / (edge_total / params.grinding_speed) if edge_total else None,
+        timings=timings,
+        options=_jsonable(asdict(options)),
+    )
+    tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
+                                                           for w in windows) else None
+    return Plan(scenario=str(scenario), hub=str(hub), mode=cell.mode, X_WH=kin.X_WH.copy(),
+                targets=tuple(targets), segments=tuple(segments), trajectory=traj,
+                tool_path=tool_paths, failures=tuple(failures), meta=meta)
+
+
+def window_targets_for_hub(hub_model, *, source: str = "auto",
+                           params: ProcessParameters | None = None,
+                           windows: Sequence[int] | None = None,
+                           progress: Progress = None) -> list[WindowTargets]:
+    """Targets of a hub's windows: hub edges -> CL points -> orientation (-> WindowTargets).
+
+    Args:
+        hub_model: ``drakedeburr.hub.HubModel``.
+        source: "toolpath" (path + orientation stages), "edges" (ground-truth edges with a fixed
+            tilt, no upstream stages), or "auto" (toolpath when those stages are installed and
+            give usable axes, else edges).
+        windows: window indices (default all).
+    """
+    params = params or ProcessParameters()
+    chosen = [w for w in hub_model.windows if windows is None or w.index in set(windows)]
+    out = []
+    for k, edge in enumerate(chosen):
+        if progress is not None:
+            progress(k, len(chosen), f"targets window {edge.index}")
+        wt = None
+        if source in ("toolpath", "auto"):
+            try:
+                wt = WindowTargets.from_tool_path(_tool_path(edge, params))
+            except (ImportError, ValueError) as exc:
+                if source == "toolpath":
+                    raise
+                log.warning("window %d: orientation stage unusable (%s); using the edge with a "
+                            "fixed tilt", edge.index, exc)
+        if wt is None:
+            wt = WindowTargets.from_window_edge(edge, params=params)
+        out.append(wt)
+    if progress is not None:
+        progress(len(chosen), len(chosen), "targets")
+    return out
+
+
+def _tool_path(edge, params: ProcessParameters):
+    """CL points and tool axes of one window by the path and orientation stages."""
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.orientation.orient import orient_window
+    from drakedeburr.path import fit_edge_curve, plan_cl
+
+    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+    cl = plan_cl(curve, window_index=edge.index, kind=edge.kind)
+    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
+    return orient_window(cl, edge.n_wall_H[nearest], params=params)
+
+
+def plan_hub(
+    scenario: str = "tool_in_hand",
+    hub: str | None = None,
+    mode: str | None = None,
+    *,
+    source: str = "auto",
+    options: PlanOptions = PlanOptions(),
+    progress: Progress = None,
+) -> Plan:
+    """Plan a whole hub end to end: hub -> CL -> orientation -> IK -> timed Plan.
+
+    Args:
+        scenario: bundled scenario name or path; ``mode`` "tool"/"workpiece" picks the bundled
+            ``tool_in_hand``/``workpiece_in_hand`` scenario instead.
+        hub: bundled hub name or folder (default: the first bundled hub).
+        source: where the tool axes come from (see :func:`window_targets_for_hub`).
+        options: planner settings (``options.windows`` limits the windows).
+        progress: callback (done, total, label).
+
+    Returns:
+        The Plan (check ``plan.failures``).
+    """
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.errors import InputError
+    from drakedeburr.hub import load_hub
+
+    if mode is not None:
+        if mode not in ("tool", "workpiece"):
+            raise InputError(f"mode must be 'tool' or 'workpiece', got {mode!r}")
+        scenario = "tool_in_hand" if mode == "tool" else "workpiece_in_hand"
+    cell = load_cell(scenario, hub)
+    hub_name = hub if hub is not None else cell.hub_sdf.parent.name
+    hub_model = load_hub(cell.hub_sdf.parent)
+    t0 = time.perf_counter()
+    wts = window_targets_for_hub(hub_model, source=source, params=options.params,
+                                 windows=options.windows)
+    t_targets = time.perf_counter() - t0
+    plan = plan_windows(cell, wts, scenario=str(scenario), hub=str(hub_name), options=options,
+                        progress=progress)
+    plan.meta["timings"]["targets_seconds"] = t_targets
+    return plan

@@ -1,0 +1,178 @@
+"""Moves that do not cut: approach/retract along the tool axis, joint moves between windows and
+home, each checked for collision; a joint move that collides is repaired with Drake's
+``KinematicTrajectoryOptimization`` (minimum-distance constraints at sparse samples, joint
+velocity/acceleration bounds everywhere, warm-started from the straight joint line through a
+lifted via point).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
+
+__all__ = ["JointMove", "approach_pose", "joint_move", "check_joint_samples"]
+
+log = logging.getLogger(__name__)
+
+
+def approach_pose(X_HT: np.ndarray, distance: float) -> np.ndarray:
+    """The pose ``distance`` [m] back along the tool axis (toward the spindle) from ``X_HT``."""
+    X = np.array(X_HT, float)
+    X[:3, 3] = X[:3, 3] - distance * X[:3, 2]
+    return X
+
+
+@dataclass(frozen=True, eq=False)
+class JointMove:
+    """A collision-checked joint-space move.
+
+    Attributes:
+        q: (N, 6) dense joint samples [rad] from start to goal.
+        s: (N,) joint-space arc length [rad].
+        clearance: minimum distance along it [m] (capped).
+        method: "straight", "via" or "kto".
+        ok: clearance >= bound at every sample and joints in limits.
+        info: solver details.
+    """
+
+    q: np.ndarray
+    s: np.ndarray
+    clearance: float
+    method: str
+    ok: bool
+    info: dict = field(default_factory=dict)
+
+
+def _densify(q_way: np.ndarray, step: float) -> np.ndarray:
+    out = [q_way[:1]]
+    for a, b in zip(q_way[:-1], q_way[1:], strict=True):
+        n = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
+        f = np.linspace(0, 1, n + 1)[1:, None]
+        out.append(a + f * (b - a))
+    return np.concatenate(out)
+
+
+def check_joint_samples(checker: ClearanceChecker, q: np.ndarray, bound: float) -> float:
+    """Minimum clearance [m] over joint samples (stops early below ``bound``)."""
+    best = np.inf
+    for row in q:
+        d = checker.min_distance(row, bound + 1e-3)[0]
+        best = min(best, d)
+        if d < bound:
+            break
+    return float(best)
+
+
+def _arc(q: np.ndarray) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+
+
+def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndarray,
+               q1: np.ndarray, *, min_distance: float = 2e-3, step: float = 0.01,
+               lift: float = 0.08) -> JointMove:
+    """A collision-free joint move from ``q0`` to ``q1``.
+
+    Tries, in order: the straight joint line; lines through via points (the mid-pose lifted
+    by ``lift`` and 2.5 ``lift`` along the hub's face normal, both ends lifted, home; solved by
+    the analytic IK); KinematicTrajectoryOptimization warm-started from the first via path.
+
+    Args:
+        q0, q1: (6,) joints [rad]. step: joint-space sample spacing [rad].
+        min_distance: clearance bound [m]; lift: via-point lift [m].
+    """
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    q = _densify(np.stack([q0, q1]), step)
+    d = check_joint_samples(checker, q, min_distance)
+    if d >= min_distance:
+        return JointMove(q=q, s=_arc(q), clearance=d, method="straight", ok=True)
+    # via points, in order of preference: the lifted mid-pose at growing heights, both ends
+    # lifted, home
+    candidates = []
+    for h in (lift, 2.5 * lift):
+        v = _via(kin, q0, q1, h)
+        if v is not None:
+            candidates.append(np.vstack([q0, v, q1]))
+    a, b = _lifted(kin, q0, 2.5 * lift), _lifted(kin, q1, 2.5 * lift)
+    if a is not None and b is not None:
+        candidates.append(np.vstack([q0, a, b, q1]))
+    candidates.append(np.vstack([q0, kin.q_home, q1]))
+    for way in candidates:
+        q = _densify(way, step)
+        d = check_joint_samples(checker, q, min_distance)
+        if d >= min_distance:
+            return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
+                             info=dict(via_points=len(way) - 2))
+    guess = candidates[0] if candidates else np.stack([q0, q1])
+    q_kto, info = _kto(cell, checker, q0, q1, guess, min_distance)
+    if q_kto is not None:
+        q = _densify(q_kto, step)
+        d = check_joint_samples(checker, q, min_distance)
+        return JointMove(q=q, s=_arc(q), clearance=d, method="kto", ok=d >= min_distance,
+                         info=info)
+    return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=False, info=info)
+
+
+def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
+    """Joints of the pose at ``q`` lifted by ``lift`` along +Z_H (same branch)."""
+    X = kin.X_HT_from_q(q)
+    X[2, 3] += lift
+    qq, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q)
+    return qq[0] if ok[0] else None
+
+
+def _via(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, lift: float) -> np.ndarray | None:
+    """Joints of the mid-pose lifted by ``lift`` along +Z_H (same branch as q0)."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    X0, X1 = kin.X_HT_from_q(q0), kin.X_HT_from_q(q1)
+    X = np.eye(4)
+    ends = Rotation.from_matrix(np.stack([X0[:3, :3], X1[:3, :3]]))
+    X[:3, :3] = Slerp([0, 1], ends)(0.5).as_matrix()
+    X[:3, 3] = 0.5 * (X0[:3, 3] + X1[:3, 3])
+    X[2, 3] = max(X0[2, 3], X1[2, 3]) + lift
+    q, ok = kin.track(kin.X_WF_from_X_HT(X[None]), 0.5 * (q0 + q1))
+    return q[0] if ok[0] else None
+
+
+def _kto(cell, checker: ClearanceChecker, q0: np.ndarray, q1: np.ndarray, guess: np.ndarray,
+         min_distance: float, num_control_points: int = 12, num_collision_samples: int = 25):
+    from pydrake.multibody.inverse_kinematics import MinimumDistanceLowerBoundConstraint
+    from pydrake.planning import KinematicTrajectoryOptimization
+    from pydrake.solvers import SnoptSolver, SolverOptions
+    from pydrake.trajectories import BsplineTrajectory, PiecewisePolynomial
+
+    kto = KinematicTrajectoryOptimization(6, num_control_points, spline_order=4)
+    prog = kto.get_mutable_prog()
+    kto.AddDurationCost(1.0)
+    kto.AddPathLengthCost(1.0)
+    kto.AddPositionBounds(cell.q_lower, cell.q_upper)
+    kto.AddVelocityBounds(cell.v_lower, cell.v_upper)
+    kto.AddDurationConstraint(0.2, 20.0)
+    kto.AddPathPositionConstraint(q0, q0, 0.0)
+    kto.AddPathPositionConstraint(q1, q1, 1.0)
+    kto.AddPathVelocityConstraint(np.zeros(6), np.zeros(6), 0.0)
+    kto.AddPathVelocityConstraint(np.zeros(6), np.zeros(6), 1.0)
+    constraint = MinimumDistanceLowerBoundConstraint(cell.plant, min_distance + 1e-3,
+                                                     checker.plant_context, None, 0.01)
+    keep = [constraint]  # the program holds raw references: keep the constraint alive
+    for r in np.linspace(0.0, 1.0, num_collision_samples)[1:-1]:
+        kto.AddPathPositionConstraint(constraint, float(r))
+    times = np.linspace(0.0, 1.0, len(guess))
+    init = PiecewisePolynomial.FirstOrderHold(times, guess.T)
+    basis = kto.basis()
+    cps = np.array([init.value(t).ravel() for t in np.linspace(0, 1, num_control_points)]).T
+    kto.SetInitialGuess(BsplineTrajectory(basis, list(cps.T[:, :, None])))
+    opts = SolverOptions()
+    opts.SetOption(SnoptSolver().solver_id(), "Major iterations limit", 300)
+    result = SnoptSolver().Solve(prog, None, opts)
+    info = dict(kto_success=bool(result.is_success()), kto_solver=result.get_solver_id().name())
+    if not result.is_success():
+        log.info("KTO transition repair did not converge")
+    traj = kto.ReconstructTrajectory(result)
+    keep.clear()
+    ts = np.linspace(traj.start_time(), traj.end_time(), 200)
+    return np.array([traj.value(t).ravel() for t in ts]), info

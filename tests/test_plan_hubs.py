@@ -1,0 +1,30 @@
+"""Every bundled hub plans in both cells (whole hubs: slow). Tool axes from the ground-truth
+edges with the stand-in tilt (see docs/plan.md for the orientation-stage axes)."""
+
+import numpy as np
+import pytest
+
+from drakedeburr.resources import hub_names
+
+HUBS = hub_names()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["tool", "workpiece"])
+@pytest.mark.parametrize("hub", HUBS)
+def test_whole_hub_plans_in_both_cells(hub, mode):
+    from drakedeburr.hub import load_hub
+    from drakedeburr.plan.planner import plan_hub
+
+    plan = plan_hub(hub=hub, mode=mode, source="edges")
+    assert plan.failures == ()
+    planned = [w["window"] for w in plan.meta["windows"]]
+    assert planned == [w.index for w in load_hub(hub).windows]
+    tr = plan.trajectory
+    tt = np.linspace(0, tr.duration, 20000)
+    qd = tr.derivative(tt)
+    v_max = np.array([3.1416, 3.1416, 3.2289, 6.7195, 6.9813, 8.0285])  # irb1600 model limits
+    assert np.all(np.abs(qd) <= v_max * (1 + 1e-6))
+    for w in plan.meta["windows"]:
+        assert w["min_clearance_m"] >= 2e-3
+        assert w["joint_fit_deviation_m"] <= 0.05e-3

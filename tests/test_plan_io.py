@@ -1,0 +1,88 @@
+import numpy as np
+import pytest
+
+import drakedeburr.plan.io as mut
+from drakedeburr.errors import InputError
+from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
+
+
+def _plan(failures=()):
+    from drakedeburr.post.opw import IRB1600_10_120, fk_opw
+
+    rng = np.random.default_rng(0)
+    q = np.array([[0, 0.3, -0.2, 0.1, 0.8, 0.2], [0.1, 0.35, -0.25, 0.15, 0.7, 0.3],
+                  [0.12, 0.36, -0.26, 0.2, 0.72, 0.35]])
+    X_FT = np.eye(4)
+    X_FT[:3, 3] = [0.1, 0, 0.25]
+    X_WH = np.eye(4)
+    X_WH[:3, 3] = [0.75, 0, -0.3]
+    targets = []
+    for i, qi in enumerate(q):
+        X_WF = fk_opw(IRB1600_10_120, qi)
+        targets.append(CartesianTarget(
+            window_index=-1 if i == 0 else 0, segment="home" if i == 0 else "cut",
+            cl_index=i - 1, X_HT=np.linalg.inv(X_WH) @ X_WF @ X_FT, X_WF=X_WF, q=qi,
+            speed=0.15, motion="joint" if i == 0 else "linear",
+            p_HC=None if i == 0 else rng.normal(size=3),
+            n_H=None if i == 0 else np.array([1.0, 0, 0])))
+    traj = JointTrajectory(t=np.array([0.0, 1.0, 2.0]), q=q, qd=np.zeros((3, 6)))
+    meta = dict(X_FT=X_FT.tolist(), X_FH=np.eye(4).tolist(), X_WT=np.eye(4).tolist(), windows=[],
+                note=np.float64(1.5))
+    return Plan(scenario="tool_in_hand", hub="h", mode="tool", X_WH=X_WH, targets=tuple(targets),
+                segments=(PlanSegment(-1, "home", (0, 1), (0.0, 1.0)),
+                          PlanSegment(0, "cut", (1, 3), (1.0, 2.0))),
+                trajectory=traj, failures=tuple(failures), meta=meta)
+
+
+def test_save_load_round_trip(tmp_path):
+    plan = _plan(failures=({"window": 0, "cl_index": 3, "stage": "ik", "reason": "x"},))
+    mut.save_plan(plan, tmp_path / "p")
+    back = mut.load_plan(tmp_path / "p")
+    np.testing.assert_array_equal(back.trajectory.q, plan.trajectory.q)
+    assert back.targets[0].p_HC is None and back.targets[0].motion == "joint"
+    np.testing.assert_array_equal(back.targets[2].p_HC, plan.targets[2].p_HC)
+    assert [s.t_range for s in back.segments] == [(0.0, 1.0), (1.0, 2.0)]
+    assert back.failures[0]["cl_index"] == 3 and back.meta["note"] == 1.5
+
+
+def test_load_rejects_other_versions(tmp_path):
+    import json
+
+    mut.save_plan(_plan(), tmp_path)
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    doc["version"] = 99
+    (tmp_path / "plan.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="version 99"):
+        mut.load_plan(tmp_path)
+    with pytest.raises(FileNotFoundError, match="plan.json"):
+        mut.load_plan(tmp_path / "nothing")
+
+
+def test_joint_csv_in_degrees(tmp_path):
+    path = mut.write_joint_csv(_plan(), tmp_path / "j.csv")
+    data = np.loadtxt(path, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(data[:, 1:], np.degrees(_plan().trajectory.q), atol=1e-6)
+    assert path.read_text().startswith("t_s,q1_deg")
+
+
+def test_program_from_plan_is_consistent_and_writes(tmp_path):
+    from drakedeburr.post.writers import write_program
+
+    prog = mut.program_from_plan(_plan(), "Deburr")
+    assert np.max(prog.consistency_error()) < 1e-6  # the writers accept 1e-6
+    assert [m.move_type for m in prog.moves] == ["joint", "linear", "linear"]
+    text = write_program(prog, tmp_path / "d.mod", "rapid")[0].read_text()
+    assert "MoveL" in text and "MoveJ" in text
+
+
+def test_export_cli_refuses_failed_plan_unless_forced(tmp_path):
+    from drakedeburr.cli import main
+
+    mut.save_plan(_plan(failures=({"window": 0, "cl_index": 1, "stage": "ik", "reason": "x"},)),
+                  tmp_path / "p")
+    out = tmp_path / "d.mod"
+    assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out)]) == 2
+    assert not out.exists()
+    args = ["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out), "--force"]
+    assert main(args) == 0
+    assert "FORCED" in out.read_text()

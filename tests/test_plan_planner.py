@@ -1,0 +1,124 @@
+"""Planner tests on a stretch of one window in both cells, re-checked with Drake's FK and the
+cell's own distance queries (independent of the planner's analytic IK and its checker)."""
+
+import numpy as np
+import pytest
+
+import drakedeburr.plan.planner as mut
+from drakedeburr.config import Tolerances
+from drakedeburr.plan.window_targets import WindowTargets
+from drakedeburr.resources import hub_names
+
+pytestmark = pytest.mark.skipif(not hub_names(), reason="no bundled hub models")
+TOL = Tolerances()
+
+
+@pytest.fixture(scope="module", params=["tool_in_hand", "workpiece_in_hand"])
+def planned(request):
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
+
+    hub = DEFAULT_HUB
+    cell = load_cell(request.param, hub)
+    edge = load_hub(hub).windows[0]
+    wt = WindowTargets.from_window_edge(edge).stretch(0, 16)
+    plan = mut.plan_windows(cell, [wt], scenario=request.param, hub=hub)
+    return cell, wt, plan
+
+
+def _dist_to_polyline(p, poly):
+    a, b = poly[:-1], poly[1:]
+    ab = b - a
+    f = np.clip(np.einsum("kj,nkj->nk", ab, p[:, None] - a[None]) / np.sum(ab * ab, 1), 0, 1)
+    closest = a[None] + f[:, :, None] * ab[None]
+    return np.min(np.linalg.norm(p[:, None] - closest, axis=2), axis=1)
+
+
+def test_plan_has_no_failures_and_the_expected_structure(planned):
+    cell, wt, plan = planned
+    assert plan.failures == ()
+    assert [s.kind for s in plan.segments] == ["home", "approach", "cut", "retract", "home"]
+    cut = [t for t in plan.targets if t.segment == "cut"]
+    assert [t.cl_index for t in cut] == list(range(1, len(wt)))
+    assert plan.targets[0].motion == "joint" and cut[0].motion == "linear"
+    assert np.all(np.diff(plan.trajectory.t) > 0)
+    np.testing.assert_allclose(plan.trajectory.q[0], cell.q_home)
+    np.testing.assert_allclose(plan.trajectory.q[-1], cell.q_home, atol=1e-12)
+
+
+def test_targets_agree_with_drake_fk(planned):
+    cell, wt, plan = planned
+    for tg in plan.targets:
+        np.testing.assert_allclose(cell.X_HT(tg.q).GetAsMatrix4(), tg.X_HT, atol=1e-9)
+        np.testing.assert_allclose(cell.X_WF(tg.q).GetAsMatrix4(), tg.X_WF, atol=1e-9)
+
+
+def test_dense_recheck_of_the_cut(planned):
+    cell, wt, plan = planned
+    seg = next(s for s in plan.segments if s.kind == "cut")
+    tg = plan.targets[seg.target_range[0] - 1:seg.target_range[1]]  # approach end + cut targets
+    poly = np.array([t.X_HT[:3, 3] for t in tg])
+    length = np.sum(np.linalg.norm(np.diff(poly, axis=0), axis=1))
+    tt = np.linspace(*seg.t_range, int(length / TOL.dense_step) * 4)
+    q = plan.trajectory.value(tt)
+    X = np.array([cell.X_HT(qi).GetAsMatrix4() for qi in q])
+    p = X[:, :3, 3]
+    step = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    assert step.max() <= TOL.dense_step
+    # tool point on the commanded linear path
+    assert _dist_to_polyline(p, poly).max() <= TOL.path_deviation
+    # the edge point it implies is on the true edge (within chord error + 0.05 mm)
+    from drakedeburr.plan.targets import edge_point_from_tool_pose
+
+    k = np.argmin(np.linalg.norm(p[:, None] - poly[None], axis=2), axis=1)
+    n = np.array([t.n_H if t.n_H is not None else tg[1].n_H for t in tg])[k]
+    e = edge_point_from_tool_pose(X, n, wt.depth_of_cut, plan.meta["contact_radius_m"],
+                                  plan.meta["contact_lift_m"])
+    edge = np.array([t.p_HC if t.p_HC is not None else tg[1].p_HC for t in tg])
+    assert _dist_to_polyline(e, edge).max() <= TOL.edge_deviation
+    # axis inside the cone of the nearest target
+    axis = -X[:, :3, 2]
+    cone = wt.cone_axis_H[np.clip([tg[i].cl_index for i in k], 0, None)]
+    ang = np.arccos(np.clip(np.sum(axis * cone, 1), -1, 1))
+    assert ang.max() <= wt.cone_half_angle + 0.01
+    # clearance (cell's own query, burr head/hub contact ignored) on every 8th sample
+    d = [cell.min_distance(qi, max_distance=0.01)[0] for qi in q[::8]]
+    assert min(d) >= TOL.min_clearance - 1e-5
+    # TCP speed never above 150 mm/s (+ numerical slack)
+    v = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(tt)
+    assert v.max() <= 0.150 * (1 + TOL.speed_band)
+
+
+def test_joint_limits_are_respected_densely(planned):
+    cell, _, plan = planned
+    tr = plan.trajectory
+    tt = np.linspace(0, tr.duration, 4000)
+    q, qd = tr.value(tt), tr.derivative(tt)
+    assert np.all(q >= cell.q_lower - 1e-9) and np.all(q <= cell.q_upper + 1e-9)
+    assert np.all(np.abs(qd) <= cell.v_upper * (1 + 1e-6))
+    qdd = tr.derivative(tt, 2)
+    assert np.all(np.abs(qdd) <= cell.a_upper * 1.05)
+
+
+def test_one_configuration_per_window(planned):
+    from drakedeburr.plan.kinematics import cell_kinematics
+
+    cell, _, plan = planned
+    kin = cell_kinematics(cell)
+    seg = next(s for s in plan.segments if s.kind == "cut")
+    tr = plan.trajectory
+    sel = (tr.t >= seg.t_range[0]) & (tr.t <= seg.t_range[1])
+    branches = kin.branch_of(tr.q[sel])
+    assert np.all(branches == branches[0])
+    assert np.max(np.abs(np.diff(tr.q[sel], axis=0))) < 0.05  # no 2*pi turns
+
+
+def test_unreachable_window_is_reported_not_raised(planned):
+    cell, wt, _ = planned
+    far = WindowTargets(window_index=7, kind="large", p_HC=wt.p_HC + [5.0, 0, 0], t_H=wt.t_H,
+                        n_H=wt.n_H, axis_H=wt.axis_H, cone_axis_H=wt.cone_axis_H,
+                        cone_half_angle=wt.cone_half_angle, depth_of_cut=wt.depth_of_cut,
+                        closed=False)
+    plan = mut.plan_windows(cell, [far])
+    assert any(f["window"] == 7 and f["stage"] == "window" for f in plan.failures)
+    assert [s.kind for s in plan.segments] == ["home"]

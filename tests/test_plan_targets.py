@@ -1,0 +1,69 @@
+import numpy as np
+import pytest
+
+import drakedeburr.plan.targets as mut
+
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def test_upright_burr_cuts_a_45_degree_chamfer_of_leg_d():
+    # edge along +Y at the origin; material at x < 0 and z < 0; N = +X into the opening
+    burr_r, d = 3e-3, 1.5e-3
+    C = np.zeros((1, 3))
+    n = np.array([[1.0, 0.0, 0.0]])
+    axis = np.array([[0.0, 0.0, 1.0]])  # upright: spindle above
+    p_T = mut.tool_point_H(C, n, axis, d, burr_r)
+    # the cone flank (45 deg) through the contact circle at T's height: radius r at height z
+    # above T is r_c + z (it widens toward the spindle)
+    def flank_x(z):  # x of the flank on the material side at height z over the face
+        return p_T[0, 0] - (burr_r + (z - p_T[0, 2]))
+    assert flank_x(0.0) == pytest.approx(-d, abs=1e-12)  # meets the face d into the material
+    # and the side wall (x = 0) at depth d below the face
+    z_wall = p_T[0, 2] + (p_T[0, 0] - burr_r)  # flank_x(z) = 0
+    assert z_wall == pytest.approx(-d, abs=1e-12)
+
+
+def test_edge_point_inverts_tool_point_for_tilted_axes():
+    rng = np.random.default_rng(0)
+    C = rng.normal(size=(50, 3)) * 0.1
+    n = _unit(rng.normal(size=(50, 3)))
+    axis = _unit(n * rng.uniform(0.1, 0.5, (50, 1)) + np.array([0, 0, 1.0]))
+    p_T = mut.tool_point_H(C, n, axis, 1.2e-3, 3e-3)
+    t = _unit(np.cross(n, [0, 0, 1.0]))
+    X = mut.X_HT_from_axis(p_T, axis, t, rng.uniform(-np.pi, np.pi, 50))
+    np.testing.assert_allclose(mut.edge_point_from_tool_pose(X, n, 1.2e-3, 3e-3), C, atol=1e-12)
+
+
+def test_X_HT_from_axis_is_a_rotation_with_z_along_minus_axis_and_spin_recovered():
+    rng = np.random.default_rng(0)
+    axis = _unit(rng.normal(size=(20, 3)))
+    t = _unit(rng.normal(size=(20, 3)))
+    spin = rng.uniform(-3, 3, 20)
+    X = mut.X_HT_from_axis(np.zeros((20, 3)), axis, t, spin)
+    R = X[:, :3, :3]
+    np.testing.assert_allclose(np.einsum("nji,njk->nik", R, R), np.broadcast_to(np.eye(3), R.shape),
+                               atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
+    np.testing.assert_allclose(R[:, :, 2], -axis, atol=1e-12)
+    np.testing.assert_allclose(mut.spin_of(X, t), spin, atol=1e-12)
+
+
+def test_cutting_lower_on_the_flank_lifts_the_tool_but_keeps_the_chamfer():
+    from drakedeburr.cell.tools import BURR
+
+    r, lift = mut.contact_geometry(2.25e-3)
+    assert lift == pytest.approx((BURR.contact_radius - r) / np.tan(BURR.cone_half_angle))
+    d = 1.5e-3
+    n = np.array([[1.0, 0.0, 0.0]])
+    axis = np.array([[0.0, 0.0, 1.0]])
+    p_T = mut.tool_point_H(np.zeros((1, 3)), n, axis, d, r, lift)
+    assert p_T[0, 2] == pytest.approx(lift)
+    # flank radius at height z (measured from T along the axis toward the spindle): r_c + z
+    z_face = -p_T[0, 2]
+    assert p_T[0, 0] - (BURR.contact_radius + z_face) == pytest.approx(-d, abs=1e-12)
+    X = mut.X_HT_from_axis(p_T, axis, np.array([[0.0, 1.0, 0.0]]))
+    np.testing.assert_allclose(mut.edge_point_from_tool_pose(X, n, d, r, lift), 0.0, atol=1e-15)
+    with pytest.raises(ValueError, match="flank"):
+        mut.contact_geometry(1.0)

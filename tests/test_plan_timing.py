@@ -1,0 +1,53 @@
+import numpy as np
+
+import drakedeburr.plan.timing as mut
+from drakedeburr.plan.types import JointTrajectory
+
+V_MAX = (3.0, 3.0, 3.0, 6.0, 6.0, 7.0)
+A_MAX = (10.0, 10.0, 10.0, 20.0, 20.0, 25.0)
+
+
+def _line(n=400, length=0.2, rate=(0.5, 0.2, 0.1, 2.0, 1.0, 3.0)):
+    s = np.linspace(0.0, length, n)
+    q = np.outer(s, rate)
+    p = np.stack([s, np.zeros(n), np.zeros(n)], 1)
+    return s, q, p
+
+
+def test_straight_path_cruises_at_the_cap_with_ramps_and_rests_at_both_ends():
+    s, q, p = _line()
+    lim = mut.TimingLimits(v_cap=0.15, a_cap=3.0, v_max=V_MAX, a_max=A_MAX)
+    tp = mut.time_path(s, q, p, lim)
+    assert tp.v_tcp[0] == 0.0 and tp.v_tcp[-1] == 0.0
+    assert np.all(tp.v_tcp <= 0.15 + 1e-12)
+    assert np.mean(np.abs(tp.v_tcp - 0.15) <= 0.0075) > 0.95
+    # ramp length v^2 / (2 a)
+    ramp = 0.15 ** 2 / (2 * 3.0)
+    cruise = s[(s > ramp + 1e-3) & (s < s[-1] - ramp - 1e-3)]
+    assert np.allclose(np.interp(cruise, s, tp.v_tcp), 0.15, atol=1e-9)
+    # duration = cruise + two ramps
+    expected = (s[-1] - 2 * ramp) / 0.15 + 2 * 0.15 / 3.0
+    assert abs(tp.t[-1] - expected) < 0.01 * expected
+
+
+def test_joint_speed_limit_slows_the_path_and_is_respected_densely():
+    s, q, p = _line(rate=(0.5, 0.2, 0.1, 60.0, 1.0, 3.0))  # J4 60 rad/m: 9 rad/s at 150 mm/s
+    lim = mut.TimingLimits(v_cap=0.15, a_cap=3.0, v_max=V_MAX, a_max=A_MAX)
+    tp = mut.time_path(s, q, p, lim)
+    traj = JointTrajectory(t=tp.t, q=tp.q, qd=tp.qd)
+    tt = np.linspace(0, traj.duration, 5000)
+    qd = traj.derivative(tt)
+    assert np.all(np.abs(qd) <= np.asarray(V_MAX) * (1 + 1e-6))
+    assert tp.v_tcp.max() < 0.15 * 0.95  # limited by J4, not the cap
+    qdd = traj.derivative(tt, 2)
+    assert np.all(np.abs(qdd) <= np.asarray(A_MAX) * 1.0001)
+
+
+def test_least_squares_fit_rounds_kinks_but_stays_close():
+    s = np.linspace(0, 0.03, 121)
+    q = np.zeros((121, 6))
+    q[:, 3] = np.abs(s - 0.015) * 5.0  # a kink in J4
+    f = mut.joint_spline(s, q, fit_spacing=4e-3)
+    # a cubic rounding a slope change of 10 rad/m over one knot span: ~ 10 * 4 mm / 8
+    assert np.max(np.abs(f(s) - q)) < 1.2 * 10.0 * 4e-3 / 8
+    assert np.max(np.abs(f(s, 2))) < 0.5 * np.max(np.abs(mut.joint_spline(s, q)(s, 2)))
