@@ -22,9 +22,8 @@ COARSE = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1, "joint_mo
 
 @functools.cache
 def cell_and_hub():
-    from drakedeburr.hub.model import load_hub
-
     from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub.model import load_hub
 
     return load_cell(SCENARIO, HUB), load_hub(HUB)
 
@@ -40,10 +39,11 @@ def verify(plan, coarse: bool = True, **kwargs):
     from drakedeburr.verify.checks import verify_plan
 
     cell, hub = cell_and_hub()
+    params = kwargs.pop("params", PARAMS) or ProcessParameters()  # None: the process defaults
     options = dict(COARSE) if coarse else {}
     options.update(kwargs)
     options.setdefault("expected_windows", list(WINDOWS))
-    return verify_plan(plan, params=PARAMS, cell=cell, hub_model=hub, **options)
+    return verify_plan(plan, params=params, cell=cell, hub_model=hub, **options)
 
 
 @functools.cache
