@@ -1,0 +1,175 @@
+"""CLI: ``drakedeburr verify`` and ``drakedeburr verify-all``.
+
+``verify TARGET`` where TARGET is
+  * a saved plan (folder or file, read with ``drakedeburr.plan.io.load_plan``),
+  * ``SCENARIO/HUB`` (bundled names, e.g. ``tool_in_hand/h5_straight``) or a hub folder, or
+  * a hub mesh file (``.stl``/``.obj``/``.ply``: handed to the planner, which must import it);
+for a hub or mesh the hub is planned first, then verified. Exit 0 pass, 1 fail, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+_MESH_SUFFIXES = (".stl", ".obj", ".ply")
+
+
+def _windows(text: str | None) -> list[int] | None:
+    if not text:
+        return None
+    from drakedeburr.errors import InputError
+
+    try:
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError as exc:
+        raise InputError(f"--windows: expected comma-separated integers, got {text!r}") from exc
+
+
+def _resolve_target(target: str, scenario: str | None):
+    """-> ("plan", path) or ("hub", scenario, hub)."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.resources import hub_names, scenario_names
+
+    path = Path(target)
+    if path.suffix.lower() in _MESH_SUFFIXES:
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no such hub mesh file")
+        return ("hub", scenario or "tool_in_hand", str(path))
+    if path.is_dir() and (path / "hub.yaml").is_file():
+        return ("hub", scenario or "tool_in_hand", str(path))
+    if path.exists():
+        return ("plan", path)
+    parts = target.split("/")
+    if len(parts) == 2 and parts[0] in scenario_names():
+        return ("hub", parts[0], parts[1])
+    if target in hub_names():
+        return ("hub", scenario or "tool_in_hand", target)
+    raise InputError(f"{target!r} is neither a plan, a hub folder or mesh file, nor "
+                     f"SCENARIO/HUB with SCENARIO in {scenario_names()} (hubs: {hub_names()})")
+
+
+def _load_plan(path: Path):
+    from drakedeburr.errors import InputError
+
+    try:
+        from drakedeburr.plan.io import load_plan
+    except ImportError as exc:
+        raise InputError(f"{path}: reading saved plans needs drakedeburr.plan.io.load_plan "
+                         "(planning stage)") from exc
+    return load_plan(path)
+
+
+def _run_verify(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.config import ProcessParameters, Tolerances
+    from drakedeburr.verify.batch import make_plan
+    from drakedeburr.verify.checks import verify_plan
+    from drakedeburr.verify.report import write_report_json
+
+    params = ProcessParameters() if args.grinding_speed is None else ProcessParameters(
+        grinding_speed=args.grinding_speed * 1e-3)
+    windows = _windows(args.windows)
+    kind, *rest = _resolve_target(args.target, args.scenario)
+    if kind == "plan":
+        plan = _load_plan(rest[0])
+    else:
+        scenario, hub = rest
+        if Path(hub).suffix.lower() in _MESH_SUFFIXES:
+            from drakedeburr.errors import InputError
+
+            raise InputError(
+                f"{hub}: a bare mesh has no Drake hub model (hub.sdf with convex collision "
+                "pieces), which planning and the clearance checks need; no stage builds one "
+                "from a mesh yet. Use a generated hub folder or a bundled hub name.")
+        plan = make_plan(scenario, hub, args.planner, windows, params,
+                         progress=tqdm_progress("plan"))
+    kwargs = {}
+    if args.quick:
+        kwargs = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1,
+                  "joint_move_step": 10e-3}
+    report = verify_plan(plan, params=params, expected_windows=windows,
+                         progress=tqdm_progress("verify"), **kwargs)
+    out_json = Path(args.json) if args.json else None
+    if out_json is None and args.out:
+        out_json = Path(args.out) / "report.json"
+    if out_json is not None:
+        write_report_json(report, out_json)
+        log.info("wrote %s", out_json)
+    out_html = Path(args.html) if args.html else (Path(args.out) / "report.html" if args.out
+                                                 else None)
+    if out_html is not None:
+        from drakedeburr.verify.html import meshcat_replay_html, write_report_html
+
+        replay = None if args.no_replay else meshcat_replay_html(plan)
+        write_report_html(report, out_html, replay_html=replay)
+        log.info("wrote %s", out_html)
+    width = max(len(i.name) for i in report.items)
+    for it in report.items:
+        mark = "PASS" if it.passed else ("FAIL" if it.required else "miss")
+        value = "" if it.value is None else f"{it.value:.4g} {it.unit}"
+        limit = "" if it.limit is None else f"{it.comparison} {it.limit:.4g}"
+        where = "" if it.window is None else f" [window {it.window}" + (
+            f", t={it.time:.3f} s" if it.time is not None else "") + "]"
+        pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
+        print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
+    print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
+    return 0 if report.passed else 1
+
+
+def _run_verify_all(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.verify.batch import summary_markdown, verify_all
+
+    scenarios = args.scenario or ["tool_in_hand", "workpiece_in_hand"]
+    summary = verify_all(
+        args.hubs, args.out, scenarios=scenarios, workers=args.workers,
+        scheduler=args.scheduler, planner=args.planner, windows=_windows(args.windows),
+        quick=args.quick, html=args.html,
+        grinding_speed=None if args.grinding_speed is None else args.grinding_speed * 1e-3,
+        progress=tqdm_progress("verify-all"))
+    print(summary_markdown(summary), end="")
+    return 0 if summary["passed"] else 1
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--planner", choices=("plan_hub", "reference"), default="plan_hub",
+                   help="who plans a hub before verification: the planning stage (default) or "
+                        "the verifier's reference plan (fixed axis, for testing the verifier)")
+    p.add_argument("--windows", help="comma-separated window indices to plan and expect "
+                                     "(default: all windows of the hub)")
+    p.add_argument("--quick", action="store_true",
+                   help="coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate")
+    p.add_argument("--grinding-speed", type=float, default=None, metavar="MM_PER_S",
+                   help="process speed [mm/s] (default: config, 150)")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "verify", help="re-check a plan densely and independently (plan first for a hub)",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("target", help="plan folder/file, SCENARIO/HUB, hub folder or mesh file")
+    p.add_argument("--scenario", help="cell for a hub folder/mesh (default tool_in_hand)")
+    p.add_argument("--json", help="write the JSON report here")
+    p.add_argument("--html", help="write the self-contained HTML report here")
+    p.add_argument("-o", "--out", help="folder for report.json and report.html")
+    p.add_argument("--no-replay", action="store_true", help="HTML without the Meshcat replay")
+    _common(p)
+    p.set_defaults(_run=_run_verify)
+
+    p = subparsers.add_parser(
+        "verify-all", help="verify every hub model of a catalogue (parallel / Dask)",
+        description="Plan and verify every hub folder (*/hub.yaml) under HUBS in each cell; "
+                    "write OUT/summary.json, OUT/summary.md and one report per hub.")
+    p.add_argument("hubs", help="catalogue folder, e.g. models/hubs")
+    p.add_argument("-o", "--out", default="verify-all", help="output folder")
+    p.add_argument("--scenario", action="append",
+                   help="cell(s) to verify in (repeatable; default: both bundled cells)")
+    p.add_argument("-j", "--workers", type=int, default=1, help="local processes")
+    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
+    p.add_argument("--html", action="store_true", help="also write report.html per hub")
+    _common(p)
+    p.set_defaults(_run=_run_verify_all)

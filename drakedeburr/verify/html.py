@@ -1,0 +1,253 @@
+"""Self-contained HTML report: pass/fail table, plots (inline SVG) and the Meshcat replay.
+
+One file, no network: the plots are matplotlib SVG written into the page, the replay is
+Drake's ``Meshcat.StaticHtml()`` (a complete HTML document with the Meshcat client inlined)
+placed in an ``<iframe srcdoc=...>``.
+"""
+
+from __future__ import annotations
+
+import html
+import io
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr._io import atomic_write_text
+from drakedeburr.verify.report import VerificationReport, report_dict
+
+__all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html"]
+
+log = logging.getLogger(__name__)
+
+_KIND_NAMES = {0: "home", 1: "transition", 2: "approach", 3: "cut", 4: "retract"}
+
+
+def _svg(fig) -> str:
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg", bbox_inches="tight")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    text = buf.getvalue()
+    return text[text.index("<svg"):]  # drop the XML prolog and DOCTYPE
+
+
+def report_figures(report: VerificationReport) -> dict[str, str]:
+    """The report's plots as inline SVG strings, keyed by a short id.
+
+    Ids: ``theta`` (theta_A/theta_B along each window's cut), ``joints`` (joint angles vs
+    time), ``speed`` (TCP speed vs time), ``clearance`` (distances vs time), ``deviation``
+    (path and edge deviation vs time).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams["svg.hashsalt"] = "drakedeburr"  # deterministic SVG ids
+    s = report.series
+    t = s["t"]
+    tol = report.settings["tolerances"]
+    out = {}
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.2), sharey=True)
+    cut = s["kind"] == 3
+    for w in sorted(set(s["window"][cut].tolist())):
+        m = cut & (s["window"] == w)
+        axes[0].plot(s["s_cut"][m] * 1e3, s["theta_A"][m], lw=1, label=f"window {w}")
+        axes[1].plot(s["s_cut"][m] * 1e3, s["theta_B"][m], lw=1, label=f"window {w}")
+    cone = next((i for i in report.items if i.name == "cone"), None)
+    for ax, name in zip(axes, ("theta_A", "theta_B"), strict=True):
+        if cone is not None:
+            for info in cone.per_window.values():
+                for b in info.get("bounds", []):
+                    ax.axhline(b, color="0.6", lw=0.6, ls="--")
+        ax.set_xlabel("tool travel along the window [mm]")
+        ax.set_title(f"{name} of the executed axis [rad]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    out["theta"] = _svg(fig)
+
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    for j in range(s["q"].shape[1]):
+        ax.plot(t, np.degrees(s["q"][:, j]), lw=1, label=f"J{j + 1}")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("joint angle [deg]")
+    ax.legend(ncol=6, fontsize=7)
+    ax.grid(alpha=0.3)
+    out["joints"] = _svg(fig)
+
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    ax.plot(t, s["speed"] * 1e3, lw=0.8, color="C0", label="TCP speed")
+    v_g = report.settings.get("grinding_speed", 0.15)
+    for f in (1 - tol["speed_band"], 1 + tol["speed_band"]):
+        ax.axhline(v_g * f * 1e3, color="C3", lw=0.6, ls="--")
+    ax.fill_between(t, 0, (cut * 1.0) * s["speed"].max() * 1e3 * 1.05, color="C2", alpha=0.08,
+                    step="mid", label="cutting")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("tool speed relative to the hub [mm/s]")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    out["speed"] = _svg(fig)
+
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    cap = report.settings["tolerances"]["query_distance"]
+    for key, label in (("clearance", "robot/tool to hub and cell"), ("self", "robot to itself"),
+                       ("burr", "burr head to hub")):
+        v = np.where(np.isfinite(s[key]), s[key], cap)
+        ax.plot(t, v * 1e3, lw=0.8, label=label)
+    ax.axhline(tol["min_clearance"] * 1e3, color="C3", lw=0.6, ls="--", label="min clearance")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"signed distance [mm] (capped at {cap * 1e3:.0f})")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    out["clearance"] = _svg(fig)
+
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    ax.plot(t, s["path_dev"] * 1e3, ".", ms=1.5, label="T vs program")
+    ax.plot(t, s["edge_dev"] * 1e3, ".", ms=1.5, label="contact vs true edge")
+    ax.axhline(tol["path_deviation"] * 1e3, color="C0", lw=0.6, ls="--")
+    ax.axhline(tol["edge_deviation"] * 1e3, color="C1", lw=0.6, ls="--")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("deviation [mm]")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    out["deviation"] = _svg(fig)
+    return out
+
+
+def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
+                        max_frames: int = 600) -> str | None:
+    """Drake's static Meshcat page replaying the plan's trajectory, or None when the viz
+    stage is not available (message logged)."""
+    try:
+        from drakedeburr.viz import scene
+    except ImportError as exc:  # pragma: no cover - depends on the viz stage being installed
+        log.warning("no Meshcat replay: %s", exc)
+        return None
+    if cell is None:
+        from drakedeburr.cell.station import load_cell
+
+        cell = load_cell(plan.scenario, plan.hub)
+    meshcat = scene.get_meshcat(new=True)
+    try:
+        scene.publish_cell(meshcat, cell, plan.trajectory.q[0])
+        if hub_model is not None:
+            scene.publish_edge_loops(meshcat, [w.p_HE for w in hub_model.windows],
+                                     cell.X_WH(cell.q_home))
+        n = int(min(max_frames, max(2, plan.trajectory.duration * fps)))
+        times = np.linspace(0.0, plan.trajectory.duration, n)
+        scene.animate_cell(meshcat, cell, times, plan.trajectory.value(times),
+                           frames_per_second=n / max(plan.trajectory.duration, 1e-9))
+        return meshcat.StaticHtml()
+    finally:
+        del meshcat
+
+
+def _fmt(v, unit: str) -> str:
+    if v is None:
+        return "&ndash;"
+    if unit == "m":
+        return f"{v * 1e3:.4g} mm"
+    if unit == "m/s":
+        return f"{v * 1e3:.4g} mm/s"
+    if unit == "rad":
+        return f"{v:.4g} rad ({np.degrees(v):.3g}&deg;)"
+    return f"{v:.4g} {html.escape(unit)}"
+
+
+_CSS = """
+body { font-family: system-ui, sans-serif; margin: 1.5em; color: #222; }
+h1 { font-size: 1.4em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
+.verdict { font-size: 1.3em; font-weight: bold; padding: .3em .8em; display: inline-block; }
+.pass { background: #d8f5d8; color: #175217; } .fail { background: #f8d7d7; color: #7a1212; }
+.adv { background: #fff3cd; color: #6b5100; }
+table { border-collapse: collapse; font-size: .85em; }
+td, th { border: 1px solid #ccc; padding: .25em .5em; vertical-align: top; text-align: left; }
+figure { margin: .5em 0 1.5em; } figure svg { max-width: 100%; height: auto; }
+iframe { width: 100%; height: 600px; border: 1px solid #ccc; }
+"""
+
+
+def report_html(report: VerificationReport, *, replay_html: str | None = None) -> str:
+    """The HTML page (see module docstring)."""
+    doc = report_dict(report)
+    figs = report_figures(report)
+    rows = []
+    for it in report.items:
+        cls = "pass" if it.passed else ("fail" if it.required else "adv")
+        verdict = "PASS" if it.passed else ("FAIL" if it.required else "MISS")
+        where = []
+        if it.window is not None:
+            where.append(f"window {it.window}")
+        if it.time is not None:
+            where.append(f"t = {it.time:.3f} s")
+        if it.target_index is not None:
+            where.append(f"target {it.target_index}")
+        if it.pair:
+            where.append(" &harr; ".join(html.escape(p) for p in it.pair))
+        rows.append(
+            f'<tr class="item" data-name="{html.escape(it.name)}">'
+            f'<td class="{cls}">{verdict}</td><td>{html.escape(it.name)}'
+            f'{"" if it.required else " (advisory)"}</td>'
+            f"<td>{_fmt(it.value, it.unit)}</td><td>{html.escape(it.comparison)} "
+            f"{_fmt(it.limit, it.unit)}</td><td>{'<br>'.join(where)}</td>"
+            f"<td>{html.escape(it.detail)}</td></tr>")
+    info = doc["plan"]
+    verdict = ("<span class='verdict pass'>PASSED</span>" if report.passed else
+               f"<span class='verdict fail'>FAILED: {html.escape(', '.join(report.failed))}"
+               "</span>")
+    titles = {"theta": "Tool axis angles along the path", "joints": "Joint angles",
+              "speed": "TCP speed", "clearance": "Clearance", "deviation": "Deviation"}
+    figures = "\n".join(
+        f'<h2>{titles[k]}</h2><figure class="plot" id="plot-{k}">{svg}</figure>'
+        for k, svg in figs.items())
+    if replay_html:
+        replay = ('<h2>Replay (Meshcat)</h2><iframe id="replay" title="Meshcat replay" '
+                  f'srcdoc="{html.escape(replay_html, quote=True)}"></iframe>')
+    else:
+        replay = "<h2>Replay (Meshcat)</h2><p>not included</p>"
+    per_window = []
+    for it in report.items:
+        if it.per_window and it.name in ("theta_statistics", "j4_j6_range", "tcp_speed_band",
+                                         "cl_chord_error"):
+            per_window.append(f"<h3>{html.escape(it.name)}</h3><pre>"
+                              f"{html.escape(_pretty(doc, it.name))}</pre>")
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>drakedeburr verification: {html.escape(str(info['hub']))}</title>
+<style>{_CSS}</style></head>
+<body>
+<h1>Verification of the plan for hub {html.escape(str(info['hub']))}
+({html.escape(str(info['scenario']))}, {html.escape(str(info['mode']))}-in-hand)</h1>
+<p>{verdict}</p>
+<p>{info['targets']} targets, {info['segments']} segments, {info['knots']} knots,
+cycle {info['duration_s']:.3f} s, windows {info['windows']} of {info['expected_windows']};
+{report.settings['samples']} samples. Schema {html.escape(doc['schema'])};
+run {html.escape(str(report.run.get('timestamp', '')))}.</p>
+<h2>Checks</h2>
+<table id="checks"><thead><tr><th></th><th>check</th><th>measured</th><th>limit</th>
+<th>worst location</th><th>detail</th></tr></thead><tbody>
+{''.join(rows)}
+</tbody></table>
+{figures}
+<h2>Per window</h2>
+{''.join(per_window)}
+{replay}
+</body></html>
+"""
+
+
+def _pretty(doc: dict, name: str) -> str:
+    import json
+
+    item = next(i for i in doc["items"] if i["name"] == name)
+    return json.dumps(item["per_window"], indent=1, sort_keys=True)
+
+
+def write_report_html(report: VerificationReport, path: str | Path, *,
+                      replay_html: str | None = None) -> Path:
+    """Write ``report.html`` atomically."""
+    return atomic_write_text(Path(path), report_html(report, replay_html=replay_html))

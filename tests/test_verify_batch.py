@@ -1,0 +1,57 @@
+"""verify-all: local process pool and a Dask LocalCluster give the same verdicts."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import drakedeburr.verify.batch as mut
+
+HUBS = ["h5_straight", "h5_split"]
+OPTIONS = {"scenarios": ["tool_in_hand"], "planner": "reference", "windows": [0],
+           "quick": True, "grinding_speed": 0.075}
+
+
+def test_process_pool_then_dask_cluster(tmp_path):
+    pool = mut.verify_all(HUBS, tmp_path / "pool", workers=2, **OPTIONS)
+    assert pool["executor"] == "processes(2)"
+    assert [r["hub"] for r in pool["rows"]] == sorted(HUBS)
+    for r in pool["rows"]:
+        assert r["error"] is None, r
+        doc = json.loads((tmp_path / "pool" / "tool_in_hand" / r["hub"] / "report.json")
+                         .read_text())
+        assert doc["passed"] == r["passed"]
+        assert doc["summary"]["failed"] == r["failed"]
+    assert (tmp_path / "pool" / "summary.md").read_text().startswith("| scenario | hub |")
+    summary = json.loads((tmp_path / "pool" / "summary.json").read_text())
+    assert summary["passed"] == all(r["passed"] for r in pool["rows"])
+
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        dask = mut.verify_all(HUBS[:1], tmp_path / "dask", scheduler=client, **OPTIONS)
+    assert dask["executor"] == "dask"
+    a = next(r for r in pool["rows"] if r["hub"] == HUBS[0])
+    b = dask["rows"][0]
+    assert (a["passed"], a["failed"], a["samples"]) == (b["passed"], b["failed"], b["samples"])
+    same = [(tmp_path / d / "tool_in_hand" / HUBS[0] / "report.json").read_text()
+            for d in ("pool", "dask")]
+    strip = [json.dumps({k: v for k, v in json.loads(t).items() if k != "run"}) for t in same]
+    assert strip[0] == strip[1]
+
+
+def test_hub_folders_and_errors(tmp_path):
+    from drakedeburr.errors import InputError
+    from drakedeburr.resources import hubs_dir
+
+    names = [p.name for p in mut.hub_folders(hubs_dir())]
+    assert names == sorted(names) and "h5_straight" in names
+    with pytest.raises(FileNotFoundError, match="no such hub catalogue"):
+        mut.hub_folders(tmp_path / "nope")
+    with pytest.raises(InputError, match="no hub model folders"):
+        mut.hub_folders(tmp_path)
+    row = mut.run_job(mut.BatchJob("tool_in_hand", "no_such_hub", str(tmp_path / "x"),
+                                   planner="reference"))
+    assert row["error"] and not row["passed"]

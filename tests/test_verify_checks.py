@@ -1,0 +1,173 @@
+"""verify_plan: a good plan passes; injected faults fail with the right item named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import verify_support as vs
+
+import drakedeburr.verify.checks as mut
+from drakedeburr.errors import InputError
+from drakedeburr.plan.types import JointTrajectory
+from drakedeburr.verify import faults
+from drakedeburr.verify.report import report_json
+
+
+def test_good_plan_passes_dense():
+    report = vs.good_report()
+    assert report.passed, report.failed
+    names = [i.name for i in report.items]
+    for required in ("path_deviation", "edge_deviation", "cone", "clearance", "self_collision",
+                     "burr_contact", "joint_position", "joint_velocity", "joint_acceleration",
+                     "tcp_speed_band", "tcp_speed_max", "wrist_singularity", "windows",
+                     "fk_agreement", "cl_chord_error", "configuration"):
+        assert required in names
+    tol = report.settings["tolerances"]
+    assert report.item("path_deviation").value <= tol["path_deviation"]
+    assert report.item("fk_agreement").value <= 1e-9
+    # dense: every 0.5 mm of tool travel on the cuts
+    s = report.series
+    cut = s["kind"] == 3
+    for w in vs.WINDOWS:
+        p = s["p_HT"][cut & (s["window"] == w)]
+        assert np.linalg.norm(np.diff(p, axis=0), axis=1).max() <= tol["dense_step"] + 1e-9
+
+
+def test_clearance_matches_drake_pairwise_query():
+    """Second implementation: the cell's own broad-phase query at the worst sample."""
+    report = vs.good_report()
+    cell, _ = vs.cell_and_hub()
+    item = report.item("clearance")
+    q = vs.good_plan().trajectory.value(item.time)
+    d, pair = cell.min_distance(q, max_distance=0.05)
+    # cell.min_distance mixes self and environment pairs: it can only be smaller
+    assert d <= item.value + 1e-12
+    if "hub::" in pair[0] + pair[1] or "fixture::" in pair[0] + pair[1]:
+        assert d == pytest.approx(item.value, abs=1e-12)
+
+
+def test_json_is_deterministic_apart_from_run():
+    from drakedeburr.config import Tolerances
+
+    plan = vs.good_plan()
+    coarser = {"tolerances": Tolerances(dense_step=5e-3), "time_step": 0.5}
+    a = vs.verify(plan, **coarser)
+    b = vs.verify(plan, **coarser)
+    assert a.passed and b.passed
+    assert report_json(a, include_run=False) == report_json(b, include_run=False)
+    assert '"run"' in report_json(a)
+
+
+def test_knot_shifted_into_hub_fails_contact_and_deviation():
+    plan = vs.good_plan()
+    cell, _ = vs.cell_and_hub()
+    k = faults.cut_knot_index(plan, window=0)
+    bad = faults.shift_knot_into_hub(plan, k, depth=0.005, cell=cell)
+    report = vs.verify(bad)
+    assert not report.passed
+    for name in ("path_deviation", "burr_contact"):
+        assert name in report.failed
+    item = report.item("burr_contact")
+    assert "hub::" in item.pair[1] and "burr_head" in item.pair[0]
+    assert item.window == 0
+    tk = plan.trajectory.t
+    assert abs(item.time - tk[k]) <= tk[k + 1] - tk[k - 1]
+    assert report.item("path_deviation").value == pytest.approx(0.005, rel=0.05)
+
+
+def test_velocity_fault_names_joint_velocity():
+    plan = vs.good_plan()
+    si = next(i for i, s in enumerate(plan.segments) if s.kind == "transition")
+    bad = faults.speed_up_segment(plan, si, factor=4.0)
+    report = vs.verify(bad)
+    assert "joint_velocity" in report.failed
+    item = report.item("joint_velocity")
+    seg = bad.segments[si]
+    assert seg.t_range[0] <= item.time <= seg.t_range[1]
+    assert item.value > 1.0
+
+
+def test_axis_out_of_cone_names_cone():
+    from drakedeburr.verify.synthetic import reference_plan
+
+    plan = reference_plan(vs.SCENARIO, vs.HUB, [0], params=vs.PARAMS, axis_tilt={0: -0.5})
+    report = vs.verify(plan, expected_windows=[0])
+    assert "cone" in report.failed
+    item = report.item("cone")
+    assert item.window == 0 and item.value < -0.02
+
+
+def test_dropped_window_names_window():
+    plan = vs.good_plan()
+    bad = faults.drop_window(plan, 1)
+    report = vs.verify(bad)
+    assert "windows" in report.failed
+    item = report.item("windows")
+    assert item.window == 1 and "[1]" in item.detail
+    assert report.item("structure").passed
+
+
+def test_malformed_plan_is_input_error():
+    plan = vs.good_plan()
+    t = plan.trajectory.t.copy()
+    t[5] = t[4]
+    bad = faults.replace(plan, trajectory=JointTrajectory(t=t, q=plan.trajectory.q,
+                                                          qd=plan.trajectory.qd))
+    with pytest.raises(InputError, match="strictly increasing at knot 5"):
+        mut.verify_plan(bad)
+
+
+def test_spline_extremes_are_exact():
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.uniform(0.05, 0.3, 12))
+    t -= t[0]
+    traj = JointTrajectory(t=t, q=rng.normal(0, 1, (12, 6)), qd=rng.normal(0, 2, (12, 6)))
+    ext = mut._spline_extremes(traj)
+    tt = np.linspace(t[0], t[-1], 200001)
+    for key, order in (("q", 0), ("qd", 1), ("qdd", 2)):
+        dense = traj.value(tt) if order == 0 else traj.derivative(tt, order)
+        vals = ext[key][0]
+        # the candidates bound every sample, and the sampled extremes come close to them
+        top, bottom = vals.max(axis=(0, 1)), vals.min(axis=(0, 1))
+        scale = np.abs(dense).max(axis=0)
+        assert np.all(top >= dense.max(axis=0) - 1e-9 * scale)
+        assert np.all(bottom <= dense.min(axis=0) + 1e-9 * scale)
+        assert np.allclose(top, dense.max(axis=0), rtol=0, atol=1e-3 * scale.max())
+        assert np.allclose(bottom, dense.min(axis=0), rtol=0, atol=1e-3 * scale.max())
+
+
+def test_point_segment_distances_against_brute_force():
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(50, 3))
+    a = rng.normal(size=(7, 3))
+    b = a + rng.normal(size=(7, 3))
+    d, k, f = mut._point_segment(p, a, b)
+    s = np.linspace(0, 1, 2001)
+    pts = a[:, None] + s[None, :, None] * (b - a)[:, None]  # (7, 2001, 3)
+    for i in range(len(p)):
+        best = np.linalg.norm(pts - p[i], axis=2).min()
+        assert d[i] == pytest.approx(best, abs=1e-5)
+        assert np.linalg.norm(p[i] - (a[k[i]] + f[i] * (b[k[i]] - a[k[i]]))) == pytest.approx(d[i])
+    loop = np.c_[np.cos(np.linspace(0, 2 * np.pi, 200, endpoint=False)),
+                 np.sin(np.linspace(0, 2 * np.pi, 200, endpoint=False)), np.zeros(200)]
+    q = rng.normal(size=(30, 3)) * 0.3 + np.array([0.8, 0, 0])
+    d2, c = mut._closed_polyline_distance(q, loop)
+    dd, _, _ = mut._point_segment(q, loop, np.roll(loop, -1, axis=0))
+    assert np.allclose(d2, dd, atol=1e-12)
+
+
+def test_plan_without_tool_path_uses_hub_edges():
+    """A plan that carries no ToolPath is still checked against the true edge (the CL points
+    are inferred from the targets, the local frames from the hub's ground truth)."""
+    plan = faults.replace(vs.good_plan(), tool_path=None)
+    report = vs.verify(plan)
+    for name in ("windows", "edge_deviation", "edge_coverage", "burr_engagement",
+                 "cl_chord_length"):
+        assert report.item(name).passed, report.item(name)
+    cone = report.item("cone")
+    assert cone.value is not None
+    assert all(v["reference"].startswith("hub edge") for v in cone.per_window.values())
+    # the inferred contact points (nearest edge point to T) stay on the true edge
+    assert report.item("edge_deviation").value <= report.settings["tolerances"]["edge_deviation"]
+    # the fixed-axis plan leaves the source's default box [0.26, 0.44]: named by the cone check
+    assert "cone" in report.failed

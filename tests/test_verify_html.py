@@ -1,0 +1,92 @@
+"""report.html: self-contained, renders in headless Chromium without console errors, plots
+present. Needs the Debian packages chromium + chromium-driver and selenium (PyPI); without
+them the browser test fails (set DRAKEDEBURR_SKIP_BROWSER_TEST=1 to skip it locally)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+import verify_support as vs
+
+import drakedeburr.verify.html as mut
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+DRIVER = shutil.which("chromedriver")
+
+
+@pytest.fixture(scope="module")
+def report_file(tmp_path_factory):
+    plan = vs.good_plan()
+    report = vs.good_report()
+    cell, hub = vs.cell_and_hub()
+    replay = mut.meshcat_replay_html(plan, cell, hub, max_frames=120)
+    path = tmp_path_factory.mktemp("html") / "report.html"
+    mut.write_report_html(report, path, replay_html=replay)
+    return path, report
+
+
+def test_html_is_self_contained(report_file):
+    path, report = report_file
+    text = path.read_text()
+    assert text.startswith("<!DOCTYPE html>")
+    for key in ("theta", "joints", "speed", "clearance", "deviation"):
+        assert f'id="plot-{key}"><svg' in text
+    assert text.count('class="item"') == len(report.items)
+    assert 'iframe id="replay"' in text and "srcdoc=" in text
+    # nothing fetched from outside the file: no http(s) src/href attributes
+    for attr in ('src="http', "src='http", 'href="http', "href='http"):
+        assert attr not in text.split('srcdoc="')[0]
+
+
+def test_html_renders_in_headless_chromium(report_file):
+    # CI must run this test: missing tools are a failure, unless explicitly allowed
+    if CHROMIUM is None or DRIVER is None:
+        if os.environ.get("DRAKEDEBURR_SKIP_BROWSER_TEST"):
+            pytest.skip("DRAKEDEBURR_SKIP_BROWSER_TEST set and no chromium/chromedriver")
+        pytest.fail("needs the Debian packages chromium and chromium-driver "
+                    "(apt-get install -y chromium chromium-driver)")
+    try:
+        from selenium import webdriver
+    except ImportError:
+        pytest.fail("needs selenium from PyPI (pip install 'drakedeburr[dev]')")
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.by import By
+
+    path, report = report_file
+    profile = tempfile.mkdtemp(prefix="drakedeburr-chromium-")
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                 "--no-first-run", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage",
+                 f"--user-data-dir={profile}"):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(DRIVER), options=options)
+    try:
+        driver.set_page_load_timeout(120)
+        driver.get(Path(path).resolve().as_uri())
+        assert "verification" in driver.title
+        rows = driver.find_elements(By.CSS_SELECTOR, "#checks tr.item")
+        assert len(rows) == len(report.items)
+        for key in ("theta", "joints", "speed", "clearance", "deviation"):
+            svg = driver.find_element(By.CSS_SELECTOR, f"#plot-{key} svg")
+            size = svg.size
+            assert size["width"] > 100 and size["height"] > 50, (key, size)
+        frame = driver.find_element(By.ID, "replay")
+        assert frame.size["height"] > 100
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        assert not errors, errors
+        # control: the same probe does see a console error
+        bad = Path(profile) / "bad.html"
+        bad.write_text("<!DOCTYPE html><html><body><script>throw new Error('probe')"
+                       "</script></body></html>")
+        driver.get(bad.as_uri())
+        assert any("probe" in e["message"] for e in driver.get_log("browser"))
+    finally:
+        driver.quit()
+        shutil.rmtree(profile, ignore_errors=True)

@@ -1,0 +1,31 @@
+"""The planning stage's own plan of one window, verified (slow: plans with Drake IK).
+
+Whatever the verdict, the certificate must be complete and self-consistent: both FKs agree,
+the program and the structure are read correctly, every window expected is cut, and the JSON
+is reproducible.
+"""
+
+from __future__ import annotations
+
+import pytest
+import verify_support as vs
+
+from drakedeburr.verify.report import report_json
+
+
+@pytest.mark.slow
+def test_plan_hub_window_is_verified():
+    from drakedeburr.plan.planner import PlanOptions, plan_hub
+
+    plan = plan_hub(vs.SCENARIO, vs.HUB, options=PlanOptions(windows=(0,)))
+    a = vs.verify(plan, expected_windows=[0], params=None)
+    for name in ("structure", "fk_agreement", "target_consistency", "windows", "rest_at_ends",
+                 "configuration"):
+        assert a.item(name).passed, a.item(name)
+    assert a.item("path_deviation").value is not None
+    assert a.item("clearance").pair is not None
+    # the verifier reads the planner's own ToolPath (CL points on the edge)
+    assert all(v.get("reference") == "ToolPath"
+               for v in a.item("cone").per_window.values())
+    b = vs.verify(plan, expected_windows=[0], params=None)
+    assert report_json(a, include_run=False) == report_json(b, include_run=False)
