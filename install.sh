@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
 # Set up drakedeburr on a fresh Debian/Ubuntu machine:
-#   1. system libraries open3d's wheel links against (libusb-1.0, libGL, libEGL),
+#   1. system libraries open3d's wheel links against (libusb-1.0, libGL, libEGL), and
+#      headless Chromium + its driver for the verification report's browser test,
 #   2. a virtual environment .venv with drakedeburr and its dependencies (editable install).
-# Usage: bash install.sh [--no-system] [--venv DIR]
+# Usage: bash install.sh [--no-system] [--no-browser] [--venv DIR]
 set -euo pipefail
 cd "$(dirname "$0")"
 
 VENV=.venv
 SYSTEM=1
+BROWSER=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --no-system) SYSTEM=0 ;;
+    --no-browser) BROWSER=0 ;;
     --venv) VENV="$2"; shift ;;
     *) echo "install.sh: unknown option $1" >&2; exit 2 ;;
   esac
@@ -19,6 +22,7 @@ done
 
 if [ "$SYSTEM" = 1 ]; then
   pkgs="libusb-1.0-0 libgl1 libegl1"
+  [ "$BROWSER" = 1 ] && pkgs="$pkgs chromium chromium-driver"
   missing=""
   for p in $pkgs; do dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"; done
   if [ -n "$missing" ]; then

@@ -34,6 +34,7 @@ import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.errors import InputError
+from drakedeburr.frames.local_frames import R_HL_from_normals, angles_from_axis_H
 from drakedeburr.verify.report import CheckItem, VerificationReport
 
 __all__ = ["verify_plan", "LINEAR_KINDS"]
@@ -128,13 +129,6 @@ def _lerp_frames(R0: np.ndarray, R1: np.ndarray, f: np.ndarray) -> np.ndarray:
     sign = np.sign(np.linalg.det(R0))
     B = sign[:, None] * np.cross(Nv, T)
     return np.stack([Nv, T, B], axis=2)
-
-
-def _theta_from_axis(R_HL: np.ndarray, axis_H: np.ndarray):
-    """(theta_A, theta_B) [rad] of tool axes (tip -> spindle) in local frames [N, T, B]."""
-    a = np.einsum("nji,nj->ni", R_HL, axis_H)
-    a = a / np.linalg.norm(a, axis=1, keepdims=True)
-    return np.arctan2(a[:, 0], a[:, 2]), np.arcsin(np.clip(-a[:, 1], -1.0, 1.0))
 
 
 # ----------------------------------------------------------------------------- spline extremes
@@ -268,10 +262,8 @@ def _window_ref(w, targets, tool_path, edge, params) -> _WindowRef | None:
     p_T = np.array([targets[k].X_HT[:3, 3] for k in loop])
     _, C = _closed_polyline_distance(p_T, p_E)
     _, v = cKDTree(p_E).query(C)
-    T = edge.t_H[v] / np.linalg.norm(edge.t_H[v], axis=1, keepdims=True)
-    B = np.cross(T, edge.n_wall_H[v])
-    B /= np.linalg.norm(B, axis=1, keepdims=True)
-    Nn = np.cross(B, T)
+    # the project's one definition of the local frames (frames.local_frames, right-handed)
+    R_HL = R_HL_from_normals(edge.t_H[v], edge.n_wall_H[v], name=f"window {w}")
     # a closed loop ends on its first point: one CL point for both
     unique, cl_of = [], {}
     for i, k in enumerate(loop):
@@ -282,7 +274,7 @@ def _window_ref(w, targets, tool_path, edge, params) -> _WindowRef | None:
         cl_of[k] = j
     sel = np.asarray(unique)
     bounds = params.bounds_large if edge.kind == "large" else params.bounds_small
-    return _WindowRef(C[sel], np.stack([Nn, T, B], axis=2)[sel], bounds, cl_of, None,
+    return _WindowRef(C[sel], R_HL[sel], bounds, cl_of, None,
                       "hub edge (the plan carries no ToolPath)")
 
 
@@ -657,8 +649,7 @@ def verify_plan(
         coverage[w] = (float(dc[jc]), jc)
         # cone: executed axis in the interpolated local frame
         R_loc = _lerp_frames(ref.R_HL[cl0], ref.R_HL[cl1], f)
-        axis_H = -R[:, :, 2]
-        tA, tB = _theta_from_axis(R_loc, axis_H)
+        tA, tB = angles_from_axis_H(R_loc, R[:, :, 2])  # the executed +Z_T
         theta_A[idx], theta_B[idx] = tA, tB
         lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
         cone_margin[idx] = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])
@@ -720,8 +711,7 @@ def verify_plan(
         cl = np.array([ref.cl_of[k] for k in ks])
         if not len(ks):
             continue
-        axis = -X_HT_t[ks, :3, 2]
-        tA, tB = _theta_from_axis(ref.R_HL[cl], axis)
+        tA, tB = angles_from_axis_H(ref.R_HL[cl], X_HT_t[ks, :3, 2])
         tp = ref.tool_path
         dA = float(np.abs(tA - np.asarray(tp.theta_A)[cl]).max()) if tp is not None else None
         dB = float(np.abs(tB - np.asarray(tp.theta_B)[cl]).max()) if tp is not None else None

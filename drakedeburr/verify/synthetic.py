@@ -31,6 +31,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
+from drakedeburr.frames.local_frames import (
+    R_HL_from_normals,
+    angles_from_axis_H,
+    axis_from_angles,
+)
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 
 __all__ = ["reference_plan", "greedy_cl_indices", "solve_pose_newton"]
@@ -366,23 +371,20 @@ def reference_plan(
         p_HC = edge.p_HE[idx]
         t_H = edge.t_H[idx] / np.linalg.norm(edge.t_H[idx], axis=1, keepdims=True)
         n_H = edge.n_wall_H[idx]
-        B = np.cross(t_H, n_H)
-        B /= np.linalg.norm(B, axis=1, keepdims=True)
-        N = np.cross(B, t_H)
-        R_HL = np.stack([N, t_H, B], axis=2)
+        # the project's local frames and angle convention (drakedeburr.frames.local_frames)
+        R_HL = R_HL_from_normals(t_H, n_H, name=f"window {w}")
+        N = R_HL[:, :, 0]
         if theta is not None and w in theta:
             # the source's way: fixed angles in the local frame (the axis swings with it)
             box = bounds or (params.bounds_large if edge.kind == "large" else params.bounds_small)
             a, b = theta[w]
-            axis_L = np.array([np.sin(a) * np.cos(b), -np.sin(b), np.cos(a) * np.cos(b)])
-            axis_H = R_HL @ axis_L
+            up_H = -(R_HL @ axis_from_angles(a, b))  # tip -> spindle
             th_A, th_B = np.full(len(idx), a), np.full(len(idx), b)
         else:
             # one fixed axis per window: no swing, so the joints stay slow at any feed
-            axis_H = np.tile(np.asarray(fixed_axis_H, float) / np.linalg.norm(fixed_axis_H),
-                             (len(idx), 1))
-            loc = np.einsum("mji,mj->mi", R_HL, axis_H)
-            th_A, th_B = np.arctan2(loc[:, 0], loc[:, 2]), np.arcsin(-loc[:, 1])
+            up_H = np.tile(np.asarray(fixed_axis_H, float) / np.linalg.norm(fixed_axis_H),
+                           (len(idx), 1))
+            th_A, th_B = angles_from_axis_H(R_HL, -up_H)
             if bounds is not None:
                 box = bounds
             else:
@@ -392,10 +394,9 @@ def reference_plan(
             if tilt:
                 from scipy.spatial.transform import Rotation
 
-                axis_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(axis_H)
+                up_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(up_H)
         mid = 0.5 * (box.theta_min + box.theta_max)
-        cone_L = np.array([np.sin(mid) * np.cos(mid), -np.sin(mid), np.cos(mid) * np.cos(mid)])
-        cone_axis_H = R_HL @ cone_L
+        cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
         inner, outer = cone_half_angles(box)
         depth = params.depth_of_cut_large if edge.kind == "large" else params.depth_of_cut_small
 
@@ -409,7 +410,7 @@ def reference_plan(
 
         tool_paths[w] = ToolPath(
             window_index=w, kind=edge.kind, cl_path=cl, X_WH=RigidTransform(X_WH), p_HC=p_HC,
-            R_HL=R_HL, axis_H=axis_H, theta_A=th_A, theta_B=th_B,
+            R_HL=R_HL, axis_H=-up_H, theta_A=th_A, theta_B=th_B,
             bounds=box, cone_axis_H=cone_axis_H, cone_half_angle=inner,
             cone_outer_half_angle=outer, depth_of_cut=depth, model="reference",
             solver="none", objective=0.0, success=True, solve_seconds=0.0, stats={},
@@ -418,7 +419,7 @@ def reference_plan(
         # tool poses at the CL points: spin by parallel transport (no twist about the axis),
         # starting from the hub direction spin_H; the edge touches the flank at radius
         # contact_radius (T sits on the axis at that circle's height)
-        z_T = -axis_H
+        z_T = -up_H
         X_HT = np.tile(np.eye(4), (len(idx), 1, 1))
         x = spin_H.copy()
         apex = BURR.apex_offset
@@ -439,9 +440,9 @@ def reference_plan(
         X_close = X_HT[0].copy()
         X_close[:3, :3] = np.column_stack([x, np.cross(z_T[0], x), z_T[0]])
         X_up = X_HT[0].copy()
-        X_up[:3, 3] += retract * axis_H[0]
+        X_up[:3, 3] += retract * up_H[0]
         X_end_up = X_close.copy()
-        X_end_up[:3, 3] += retract * axis_H[0]
+        X_end_up[:3, 3] += retract * up_H[0]
 
         # joint move to above the first CL point
         k0 = len(targets)
