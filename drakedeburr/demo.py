@@ -1,39 +1,160 @@
 """``drakedeburr demo``: the main job on the bundled default hub.
 
-Runs every pipeline stage that exists on the default hub and writes its outputs to a folder.
+hub model -> window edges -> CL points (four planners, the paper's Tab. 1-2 style table) ->
+inner-side normals and tool orientation -> Drake plan (cone-constrained IK, executed motion,
+timing) -> independent verification (JSON + HTML report) -> robot program (ABB RAPID) and a
+Meshcat replay. The program is written only when verification passes, unless ``force`` is
+given, and then its header says so.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import logging
+import time
+from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["DEFAULT_HUB", "register", "run_demo"]
+__all__ = ["DEFAULT_SCENARIO", "register", "run_demo"]
 
 log = logging.getLogger(__name__)
 
-DEFAULT_HUB = "h5_straight"
+DEFAULT_SCENARIO = "tool_in_hand"
+
+Progress = Callable[[int, int, str], None] | None
 
 
-def run_demo(out_dir: Path, hub: str = DEFAULT_HUB, test_mode: bool = False) -> dict:
-    """Run the chain on ``hub``; returns a summary mapping of what was written."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    summary: dict = {"hub": hub, "outputs": {}}
-    log.info("demo: hub %s -> %s", hub, out_dir)
+def _default_hub() -> str:
+    from drakedeburr.hub import DEFAULT_HUB
+
+    return DEFAULT_HUB
+
+
+def run_demo(
+    out_dir: str | Path,
+    hub: str | None = None,
+    scenario: str = DEFAULT_SCENARIO,
+    *,
+    test_mode: bool = False,
+    force: bool = False,
+    program_format: str = "rapid",
+    progress: Progress = None,
+) -> dict:
+    """Run the whole chain on ``hub`` in ``scenario`` and write every output to ``out_dir``.
+
+    Args:
+        out_dir: output folder (created).
+        hub: bundled hub name (default: the bundled default hub).
+        scenario: bundled scenario name or YAML path.
+        test_mode: plan and verify only the first window (CI).
+        force: write the robot program even if verification fails (the header says FORCED).
+        program_format: "rapid", "krl" or "ls".
+        progress: optional callback (done, total, label) for the planning stage.
+
+    Returns:
+        Summary mapping: hub, scenario, passed, timings [s] and ``outputs`` (name -> path).
+    """
+    from drakedeburr._io import atomic_write_json
+    from drakedeburr.path import cl_table
+    from drakedeburr.plan import (
+        PlanOptions,
+        plan_hub,
+        program_from_plan,
+        save_plan,
+        write_joint_csv,
+    )
+    from drakedeburr.post import write_program
+    from drakedeburr.verify import verify_plan, write_report_html, write_report_json
+    from drakedeburr.verify.html import meshcat_replay_html
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    hub = hub or _default_hub()
+    outputs: dict[str, str] = {}
+    timings: dict[str, float] = {}
+
+    t0 = time.perf_counter()
+    log.info("demo 1/4: CL points on every window of %s (four planners)", hub)
+    table = cl_table(hub)
+    outputs["cl_table"] = str(atomic_write_json(out / "cl_table.json", table))
+    timings["cl_points"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    windows = (0,) if test_mode else None
+    log.info("demo 2/4: planning %s in %s (%s)", hub, scenario,
+             "window 0 only (test mode)" if test_mode else "all windows")
+    plan = plan_hub(scenario, hub, options=PlanOptions(windows=windows), progress=progress)
+    outputs["plan"] = str(save_plan(plan, out / "plan"))
+    outputs["joints_csv"] = str(write_joint_csv(plan, out / "joints.csv"))
+    timings["plan"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    log.info("demo 3/4: independent verification")
+    report = verify_plan(plan, expected_windows=list(windows) if windows else None)
+    outputs["report_json"] = str(write_report_json(report, out / "report.json"))
+    replay = meshcat_replay_html(plan)
+    outputs["report_html"] = str(write_report_html(report, out / "report.html",
+                                                   replay_html=replay))
+    timings["verify"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    suffix = {"rapid": "mod", "krl": "src", "ls": "ls"}[program_format]
+    program_path = out / f"deburr_{hub}.{suffix}"
+    if report.passed or force:
+        flag = "" if report.passed else "FORCED"
+        reason = "" if report.passed else "verification FAILED; written because --force was given"
+        prog = program_from_plan(plan, f"Deburr_{hub}", flag=flag, flag_reason=reason,
+                                 verified=report.passed)
+        outputs["program"] = str(write_program(prog, program_path, program_format))
+        log.info("demo 4/4: %s program %s%s", program_format, program_path,
+                 "" if report.passed else " (FORCED: verification failed)")
+    else:
+        log.warning("demo 4/4: verification failed; no robot program written (use --force)")
+    timings["program"] = time.perf_counter() - t0
+
+    summary = {
+        "hub": hub,
+        "scenario": scenario,
+        "test_mode": test_mode,
+        "passed": bool(report.passed),
+        "plan_failures": len(plan.failures),
+        "windows_planned": sorted({s.window_index for s in plan.segments
+                                   if s.window_index >= 0}),
+        "cycle_seconds": plan.trajectory.duration,
+        "timings_s": timings,
+        "outputs": outputs,
+    }
+    atomic_write_json(out / "summary.json", summary)
+    outputs["summary"] = str(out / "summary.json")
     return summary
 
 
 def _run(args: argparse.Namespace) -> int:
-    summary = run_demo(Path(args.out), hub=args.hub, test_mode=args.test_mode)
+    from drakedeburr.cli import tqdm_progress
+
+    summary = run_demo(Path(args.out), hub=args.hub, scenario=args.scenario,
+                       test_mode=args.test_mode, force=args.force,
+                       program_format=args.format, progress=tqdm_progress("plan"))
+    print(json.dumps({k: summary[k] for k in ("hub", "scenario", "passed", "plan_failures",
+                                               "cycle_seconds")}, indent=2))
     for name, path in summary["outputs"].items():
         print(f"{name}: {path}")
-    return 0
+    return 0 if summary["passed"] else 1
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("demo", help="run the whole chain on the bundled default hub")
-    p.add_argument("--hub", default=DEFAULT_HUB, help="bundled hub name (default %(default)s)")
+    p = subparsers.add_parser(
+        "demo", help="run the whole chain on the bundled default hub",
+        description="hub -> CL points -> orientation -> Drake plan -> verification report -> "
+                    "robot program + Meshcat replay, written to --out")
+    p.add_argument("--hub", default=None, help="bundled hub name (default: the default hub)")
+    p.add_argument("--scenario", default=DEFAULT_SCENARIO,
+                   help="bundled scenario or YAML path (default %(default)s)")
     p.add_argument("--out", default="out/demo", help="output folder (default %(default)s)")
-    p.add_argument("--test-mode", action="store_true", help="shrink the work (CI)")
+    p.add_argument("--format", default="rapid", choices=("rapid", "krl", "ls"),
+                   help="robot program format (default %(default)s)")
+    p.add_argument("--force", action="store_true",
+                   help="write the program even if verification fails (header says FORCED)")
+    p.add_argument("--test-mode", action="store_true", help="first window only (CI)")
     p.set_defaults(_run=_run)

@@ -55,15 +55,15 @@ def test_angle_definition_matches_rotations_and_documented_signs():
 
     rng = np.random.default_rng(1)
     for a, b in rng.uniform(-1, 1, (20, 2)):
-        # intrinsic: first about Y by theta_A, then about the new X by theta_B
-        R = Rotation.from_euler("YX", [a, b]).as_matrix()
+        # intrinsic: first about Y by -theta_A, then about the new X by theta_B
+        R = Rotation.from_euler("YX", [-a, b]).as_matrix()
         np.testing.assert_allclose(mut.axis_from_angles(a, b), R[:, 2], atol=1e-12)
     v = mut.axis_from_angles(0.3, 0.0)
-    assert v[0] > 0  # positive theta_A tilts the tip toward N (the opening)
+    assert v[0] < 0  # positive theta_A: tip toward the material (-N), spindle over the opening
     v = mut.axis_from_angles(0.0, 0.3)
     assert v[1] < 0  # positive theta_B tilts the tip back against the feed (T): top leads
     # the source's "angle between axis and normal" is pi/2 - theta_A for theta_B = 0
-    np.testing.assert_allclose(np.arccos(mut.axis_from_angles(0.3, 0.0)[0]), np.pi / 2 - 0.3)
+    np.testing.assert_allclose(np.arccos(-mut.axis_from_angles(0.3, 0.0)[0]), np.pi / 2 - 0.3)
 
 
 def test_axis_jacobian_matches_finite_differences():

@@ -27,7 +27,7 @@ first), dbar_i = (d_{i-1} + d_i)/2 and w2 [m^2] an optional second-difference we
 The hub is rigid, so the change is the same in the world frame W and in H. For small turns
 |axis_{k+1} - axis_k| is the turning angle, so J ~ integral of (d angle/ds)^2 ds: what the
 robot's wrist feels. Both sums are sums of squares of residuals r(x); the exact solver uses
-this (Gauss-Newton / sequential convex QPs).
+this (Gauss-Newton Hessian, banded projected Newton).
 """
 
 from __future__ import annotations
@@ -183,9 +183,10 @@ class OrientationProblem:
         a, b = th[:, 0], th[:, 1]
         sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
         z = np.zeros_like(a)
-        d_aa = np.stack([-sa * cb, z, -ca * cb], axis=-1)
-        d_ab = np.stack([-ca * sb, z, sa * sb], axis=-1)
-        d_bb = np.stack([-sa * cb, sb, -ca * cb], axis=-1)
+        # second derivatives of axis_from_angles = (-sin a cos b, -sin b, cos a cos b)
+        d_aa = np.stack([sa * cb, z, -ca * cb], axis=-1)
+        d_ab = np.stack([ca * sb, z, sa * sb], axis=-1)
+        d_bb = np.stack([sa * cb, sb, -ca * cb], axis=-1)
         H_L = np.stack([np.stack([d_aa, d_ab], -1), np.stack([d_ab, d_bb], -1)], -1)
         R = self.R_HL
         axes_H = np.einsum("mij,mj->mi", R, axis_from_angles(a, b))

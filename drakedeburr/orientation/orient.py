@@ -83,14 +83,16 @@ def solve_problem(prob: OrientationProblem, solver: SolverName = "exact",
         msg = f"PSO {options.pso.particles} particles x {options.pso.iterations} iterations"
     else:
         raise InputError(f"{prob.name}: unknown solver {solver!r}; use 'exact' or 'pso'")
-    info["objective_raw"] = float(prob.objective(x))
+    objective = float(rep.objective if solver == "exact" else pr.objective)  # of x, unsmoothed
+    info["objective_raw"] = objective
     if smooth:
         th = gaussian_smooth_mirror(x.reshape(prob.m, 2), options.smooth_sigma)
         x = np.clip(th.reshape(-1), prob.lower, prob.upper)
         msg += f"; Gaussian smoothing (mirror padding, sigma {options.smooth_sigma:g} points)"
+        objective = float(prob.objective(x))
     elapsed = time.perf_counter() - t0
     success = success and bool(prob.in_bounds(x).all())
-    return SolveReport(x, float(prob.objective(x)), solver, success, elapsed, it, msg, info)
+    return SolveReport(x, objective, solver, success, elapsed, it, msg, info)
 
 
 def cone_half_angles(bounds: OrientationBounds, samples: int = 64) -> tuple[float, float]:

@@ -85,7 +85,7 @@ class ToolPath:
 
     @property
     def R_HT(self) -> np.ndarray:
-        """(M, 3, 3) preferred tool orientations in H: R_HL @ R_y(theta_A) @ R_x(theta_B)."""
+        """(M, 3, 3) preferred tool orientations in H: R_HL @ R_y(-theta_A) @ R_x(theta_B)."""
         return np.einsum("mij,mjk->mik", self.R_HL, R_LT_from_angles(self.theta_A, self.theta_B))
 
     @property

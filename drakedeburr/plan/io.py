@@ -143,7 +143,7 @@ def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Pa
 
 
 def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_reason: str = "",
-                      include_transitions: bool = True):
+                      include_transitions: bool = True, verified: bool = False):
     """The Cartesian program of a plan as a :class:`drakedeburr.post.program.RobotProgram`.
 
     Tool-in-hand: the program's tool is T on the flange (``X_FT``), its work object the hub
@@ -158,6 +158,7 @@ def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_
         flag, flag_reason: header warning (e.g. "FORCED" when verification failed); empty:
             FORCED when the plan has failures, else UNVERIFIED (tool mode, post's rule).
         include_transitions: keep home/transition joint moves (else cuts, approach, retract).
+        verified: the plan passed verification (otherwise the header says UNVERIFIED).
     """
     X_FT = np.asarray(plan.meta["X_FT"], float)
     notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
@@ -172,9 +173,12 @@ def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_
 
         extra = dict(flag=flag, flag_reason=flag_reason) if flag else {}
         return _post_program(replace(plan, targets=tuple(targets)), name, X_FT, notes=notes,
-                             source=f"drakedeburr plan {plan.hub}", **extra)
+                             source=f"drakedeburr plan {plan.hub}", verified=verified, **extra)
     from drakedeburr.post.program import JOINT, LINEAR, RobotProgram
 
+    if not flag and not verified:
+        flag, flag_reason = (("FORCED", "the plan has failure records") if plan.failures else
+                             ("UNVERIFIED", "the plan was not verified"))
     # workpiece in hand: the moving "tool" is the hub frame in the gripper
     X_FH = np.asarray(plan.meta["X_FH"], float)
     X_WT_fixed = np.asarray(plan.meta["X_WT"], float)
