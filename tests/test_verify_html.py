@@ -90,3 +90,17 @@ def test_html_renders_in_headless_chromium(report_file):
     finally:
         driver.quit()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def test_envelope_keeps_extremes():
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    x = np.arange(50000.0)
+    y = rng.normal(size=50000)
+    y[12345] = 40.0
+    y[40000:40010] = np.nan
+    xe, ye = mut._envelope(x, y, n=500)
+    assert len(xe) <= 1000
+    assert np.nanmax(ye) == 40.0 and np.nanmin(ye) == np.nanmin(y)
+    assert np.all(np.diff(xe) > 0)

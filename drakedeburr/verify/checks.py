@@ -214,6 +214,7 @@ class _Kinematics:
 
 # ----------------------------------------------------------------------------- the verifier
 def _target_motion(target) -> str:
+    """"linear" or "joint": the target's ``motion`` (plan contract), else by segment kind."""
     motion = getattr(target, "motion", None)
     if motion in ("linear", "joint"):
         return motion

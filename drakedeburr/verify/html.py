@@ -34,6 +34,27 @@ def _svg(fig) -> str:
     return text[text.index("<svg"):]  # drop the XML prolog and DOCTYPE
 
 
+def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, np.ndarray]:
+    """At most ~2n points of (x, y) keeping each bin's minimum and maximum (NaN-aware), so a
+    plot of tens of thousands of samples stays small and still shows every extreme."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) <= 2 * n:
+        return x, y
+    edges = np.linspace(0, len(x), n + 1).astype(int)
+    xs, ys = [], []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        seg = y[a:b]
+        if not np.isfinite(seg).any():
+            xs.append(x[a])
+            ys.append(np.nan)
+            continue
+        i, j = np.nanargmin(seg), np.nanargmax(seg)
+        for k in sorted({i, j}):
+            xs.append(x[a + k])
+            ys.append(seg[k])
+    return np.asarray(xs), np.asarray(ys)
+
+
 def report_figures(report: VerificationReport) -> dict[str, str]:
     """The report's plots as inline SVG strings, keyed by a short id.
 
@@ -56,8 +77,8 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     cut = s["kind"] == 3
     for w in sorted(set(s["window"][cut].tolist())):
         m = cut & (s["window"] == w)
-        axes[0].plot(s["s_cut"][m] * 1e3, s["theta_A"][m], lw=1, label=f"window {w}")
-        axes[1].plot(s["s_cut"][m] * 1e3, s["theta_B"][m], lw=1, label=f"window {w}")
+        axes[0].plot(*_envelope(s["s_cut"][m] * 1e3, s["theta_A"][m]), lw=1, label=f"window {w}")
+        axes[1].plot(*_envelope(s["s_cut"][m] * 1e3, s["theta_B"][m]), lw=1, label=f"window {w}")
     cone = next((i for i in report.items if i.name == "cone"), None)
     for ax, name in zip(axes, ("theta_A", "theta_B"), strict=True):
         if cone is not None:
@@ -72,7 +93,7 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
 
     fig, ax = plt.subplots(figsize=(10, 3.2))
     for j in range(s["q"].shape[1]):
-        ax.plot(t, np.degrees(s["q"][:, j]), lw=1, label=f"J{j + 1}")
+        ax.plot(*_envelope(t, np.degrees(s["q"][:, j])), lw=1, label=f"J{j + 1}")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("joint angle [deg]")
     ax.legend(ncol=6, fontsize=7)
@@ -80,11 +101,12 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     out["joints"] = _svg(fig)
 
     fig, ax = plt.subplots(figsize=(10, 3.2))
-    ax.plot(t, s["speed"] * 1e3, lw=0.8, color="C0", label="TCP speed")
+    ax.plot(*_envelope(t, s["speed"] * 1e3), lw=0.8, color="C0", label="TCP speed")
     v_g = report.settings.get("grinding_speed", 0.15)
     for f in (1 - tol["speed_band"], 1 + tol["speed_band"]):
         ax.axhline(v_g * f * 1e3, color="C3", lw=0.6, ls="--")
-    ax.fill_between(t, 0, (cut * 1.0) * s["speed"].max() * 1e3 * 1.05, color="C2", alpha=0.08,
+    tc, fc = _envelope(t, cut * 1.0)
+    ax.fill_between(tc, 0, fc * s["speed"].max() * 1e3 * 1.05, color="C2", alpha=0.08,
                     step="mid", label="cutting")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("tool speed relative to the hub [mm/s]")
@@ -97,7 +119,7 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     for key, label in (("clearance", "robot/tool to hub and cell"), ("self", "robot to itself"),
                        ("burr", "burr head to hub")):
         v = np.where(np.isfinite(s[key]), s[key], cap)
-        ax.plot(t, v * 1e3, lw=0.8, label=label)
+        ax.plot(*_envelope(t, v * 1e3), lw=0.8, label=label)
     ax.axhline(tol["min_clearance"] * 1e3, color="C3", lw=0.6, ls="--", label="min clearance")
     ax.set_xlabel("time [s]")
     ax.set_ylabel(f"signed distance [mm] (capped at {cap * 1e3:.0f})")
@@ -106,8 +128,8 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     out["clearance"] = _svg(fig)
 
     fig, ax = plt.subplots(figsize=(10, 3.2))
-    ax.plot(t, s["path_dev"] * 1e3, ".", ms=1.5, label="T vs program")
-    ax.plot(t, s["edge_dev"] * 1e3, ".", ms=1.5, label="contact vs true edge")
+    ax.plot(*_envelope(t, s["path_dev"] * 1e3), ".", ms=1.5, label="T vs program")
+    ax.plot(*_envelope(t, s["edge_dev"] * 1e3), ".", ms=1.5, label="contact vs true edge")
     ax.axhline(tol["path_deviation"] * 1e3, color="C0", lw=0.6, ls="--")
     ax.axhline(tol["edge_deviation"] * 1e3, color="C1", lw=0.6, ls="--")
     ax.set_xlabel("time [s]")

@@ -297,9 +297,12 @@ def reference_plan(
         return cell.X_WF(q).GetAsMatrix4()
 
     def add_target(window, kind, cl_index, X_HT, q, speed):
+        # home and transition targets are reached by joint moves (MoveAbsJ / PTP / J)
         targets.append(CartesianTarget(window_index=window, segment=kind, cl_index=cl_index,
                                        X_HT=np.asarray(X_HT, float), X_WF=X_WF(q),
-                                       q=np.asarray(q, float).copy(), speed=float(speed)))
+                                       q=np.asarray(q, float).copy(), speed=float(speed),
+                                       motion="joint" if kind in ("home", "transition")
+                                       else "linear"))
 
     def append_knots(t, q, qd):
         t0 = knots_t[-1] if knots_t else 0.0
