@@ -113,6 +113,43 @@ def test_exact_beats_pso_holds_bounds_and_is_locally_optimal(index):
         assert f0 <= prob.objective(np.full(prob.n_vars, c))
 
 
+@pytest.mark.parametrize("w2nd", [0.0, 1e-5])
+def test_exact_solver_internal_model_matches_the_problem(w2nd):
+    """The exact solver's fast banded model (its own trig tables) must be the problem's model:
+    objective, gradient and Hessian-vector products against models.py at random angles (a
+    stale copy of an older theta_A sign once made it optimise a different problem)."""
+    from drakedeburr.orientation.exact import _BandedAxisModel
+
+    cl, n = WINDOWS[0]
+    prob = _problem(cl, n, "axis", w2nd)
+    fast = _BandedAxisModel(prob)
+    rng = np.random.default_rng(4)
+    for x in rng.uniform(-0.5, 0.6, (3, prob.n_vars)):
+        f, g, _, curv, J = fast.derivatives(x)
+        assert f == pytest.approx(prob.objective(x), rel=1e-12)
+        assert fast.objective(x) == pytest.approx(prob.objective(x), rel=1e-12)
+        np.testing.assert_allclose(g, prob.gradient(x), rtol=0, atol=1e-9 * np.abs(g).max())
+        H = prob.hessian(x)
+        v = rng.normal(size=prob.n_vars)
+        np.testing.assert_allclose(fast.hess_vec(J, curv, v), H @ v, rtol=0,
+                                   atol=1e-9 * np.abs(H @ v).max())
+
+
+@pytest.mark.parametrize("index", range(len(WINDOWS)))
+def test_exact_from_the_bounds_reaches_the_same_kkt_point_quickly(index):
+    cl, n = WINDOWS[index]
+    prob = _problem(cl, n, "axis")
+    ref = solve_exact(prob)
+    scale = np.abs(prob.gradient(prob.lower)).max()
+    for x0 in (prob.lower, prob.upper):
+        rep = solve_exact(prob, x0=x0)
+        assert rep.success, rep.message
+        assert projected_gradient_norm(prob, rep.x) < 1e-5 * scale
+        assert rep.objective == pytest.approx(ref.objective, rel=1e-9)
+        # active-set refinement: not one bound variable released per Newton step
+        assert rep.iterations <= 10
+
+
 def test_exact_warm_start_converges_to_the_same_optimum():
     cl, n = WINDOWS[0]
     prob = _problem(cl, n, "axis")
