@@ -34,9 +34,15 @@ def test_cloud_normals_match_the_analytic_wall_normals(plate):
     assert np.all(np.einsum("ij,ij->i", est.n_wall_H, n_true) > 0.9)
     # the other face is the front face, pointing out of the material (+Z)
     assert np.all(est.n_face_H[:, 2] > 0.99)
-    # both fitting methods were used, as the source prescribes
-    assert {"quadric", "plane"} == set(est.method)
-    assert np.array_equal(np.array(est.method) == "quadric", cl.kappa > 120.0)
+    # both fitting methods were used, as the source prescribes: key points (kappa > 0.12 1/mm)
+    # get the quadric; the others a RANSAC plane, unless that plane was rejected as not
+    # describing the surface at the CL point (open3d's RANSAC runs multi-threaded, so which
+    # few points hit that fallback can vary from run to run; the error bounds above cannot)
+    method = np.array(est.method)
+    key = cl.kappa > 120.0
+    assert np.all(method[key] == "quadric")
+    assert set(method[~key]) <= {"plane", "quadric (plane rejected)"}
+    assert np.mean(method[~key] == "plane") >= 0.8
     assert est.source_sign_disagreements.size == 0  # convex window: the source's test agrees
 
 
