@@ -69,6 +69,18 @@ _EXPORTS: dict[str, str] = {
     "publish_cell": "drakedeburr.viz",
     "publish_edge_loops": "drakedeburr.viz",
     "write_static_html": "drakedeburr.viz",
+    "plan_hub": "drakedeburr.plan",
+    "PlanOptions": "drakedeburr.plan",
+    "Plan": "drakedeburr.plan",
+    "save_plan": "drakedeburr.plan",
+    "load_plan": "drakedeburr.plan",
+    "program_from_plan": "drakedeburr.plan",
+    "verify_plan": "drakedeburr.verify",
+    "VerificationReport": "drakedeburr.verify",
+    "verify_all": "drakedeburr.verify",
+    "write_report_json": "drakedeburr.verify",
+    "write_report_html": "drakedeburr.verify",
+    "run_demo": "drakedeburr.demo",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]
