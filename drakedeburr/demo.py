@@ -106,7 +106,8 @@ def run_demo(
         reason = "" if report.passed else "verification FAILED; written because --force was given"
         prog = program_from_plan(plan, f"Deburr_{hub}", flag=flag, flag_reason=reason,
                                  verified=report.passed)
-        outputs["program"] = str(write_program(prog, program_path, program_format))
+        written = write_program(prog, program_path, program_format)  # KRL: .src and .dat
+        outputs["program"] = str(written[0])
         log.info("demo 4/4: %s program %s%s", program_format, program_path,
                  "" if report.passed else " (FORCED: verification failed)")
     else:

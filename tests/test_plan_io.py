@@ -86,3 +86,25 @@ def test_export_cli_refuses_failed_plan_unless_forced(tmp_path):
     args = ["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out), "--force"]
     assert main(args) == 0
     assert "FORCED" in out.read_text()
+
+
+def test_workpiece_in_hand_program_uses_the_hub_as_tool_and_says_so(tmp_path):
+    """Stationary spindle: the program moves the hub frame H (tool data X_FH) relative to the
+    fixed tool frame T (work object); joints reproduce those poses; header says UNVERIFIED."""
+    from dataclasses import replace
+
+    from drakedeburr.post.writers import write_program
+
+    X_FH = np.eye(4)
+    X_FH[:3, 3] = [0.0, 0.0, 0.24]
+    X_WT = np.eye(4)
+    X_WT[:3, 3] = [0.75, 0.0, 0.05]
+    plan = _plan()
+    plan = replace(plan, mode="workpiece", meta=dict(plan.meta, X_FH=X_FH.tolist(),
+                                                     X_WT=X_WT.tolist()))
+    prog = mut.program_from_plan(plan, "DeburrWp")
+    assert np.max(prog.consistency_error()) < 1e-6
+    np.testing.assert_allclose(prog.X_FT, X_FH)
+    np.testing.assert_allclose(prog.X_WO, X_WT)
+    text = write_program(prog, tmp_path / "w.mod", "rapid")[0].read_text()
+    assert "UNVERIFIED" in text and "robhold" in text
