@@ -31,7 +31,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -60,11 +60,16 @@ class IkOptions:
         joint_weights: (6,) weights of the ``q - q_prev`` cost.
         trust_region: max joint change from the previous target [rad].
         snopt_major_iterations: SNOPT major iteration cap; ipopt_max_iterations: IPOPT's.
-        retries: re-seeded attempts after SNOPT and IPOPT both fail: first from the axis of
-            most clearance in the cone (distance-active at once), then by the spin sweep.
+        retries: re-seeded attempts after SNOPT and IPOPT both fail: from the axis of most
+            clearance in the cone (distance-active at once), the same with the bare clearance
+            bound (``min_distance_floor``), then the spin sweep with that bound.
         min_wrist: keep |J5| at least this far from the wrist singularity (seeds, and a bound
             in every solve on the side of the window's wrist branch) [rad].
         spin_samples: spins tried by the seed sweep.
+        min_distance_floor: the clearance bound of the last retry [m] (the acceptance bound):
+            ``min_distance`` carries a small margin so that the straight moves between targets
+            keep 2 mm; where the cone leaves no room for the margin (a few fillet points) the
+            target takes the bare bound and the dense check of the executed motion decides.
     """
 
     position_tolerance: float = 1e-6
@@ -75,9 +80,10 @@ class IkOptions:
     trust_region: float = 0.35
     snopt_major_iterations: int = 100
     ipopt_max_iterations: int = 50
-    retries: int = 2
+    retries: int = 3
     min_wrist: float = 0.25
     spin_samples: int = 36
+    min_distance_floor: float = 2.0e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -350,10 +356,13 @@ def solve_window_ik(
         best = None
         for attempt in range(options.retries + 1):
             start_with_distance = False
+            # from the second retry on, ask only for the acceptance bound, not the margin
+            opts = options if attempt < 2 else replace(
+                options, min_distance=min(options.min_distance, options.min_distance_floor))
             if attempt > 0:
                 n_retry += 1
                 reseed = None
-                if attempt == 1 and i_prev >= 0:
+                if attempt in (1, 2) and i_prev >= 0:
                     # where the preferred axis is too close to the hub (concave fillets), seed
                     # from the axis in the cone with the most clearance, distance-active at once
                     reseed = _clearance_seed(kin, checker, X_out[i_prev], p_HT[i],
@@ -372,21 +381,21 @@ def solve_window_ik(
                     n_fallback += 1
                 success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
                                           pref_axis_H[i], anchor, q_seed, with_distance, solver,
-                                          options, lift)
-                good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options, lift)
+                                          opts, lift)
+                good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts, lift)
                 dist = checker.min_distance(q, reach)[0]
-                if good and dist < options.min_distance - 1e-5 and not with_distance:
+                if good and dist < opts.min_distance - 1e-5 and not with_distance:
                     # lazy collision constraint: re-solve with it from this solution
                     with_distance = True
                     n_dist += 1
                     success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
-                                              pref_axis_H[i], anchor, q, True, solver, options,
+                                              pref_axis_H[i], anchor, q, True, solver, opts,
                                               lift)
-                    good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options,
+                    good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts,
                                                  lift)
                     dist = checker.min_distance(q, reach)[0]
                 best = (q, X, dist, err, ang)
-                if good and dist >= options.min_distance - 1e-5:
+                if good and dist >= opts.min_distance - 1e-5:
                     done = True
                     break
             if done:

@@ -44,6 +44,10 @@ log = logging.getLogger(__name__)
 
 Progress = Callable[[int, int, str], None] | None
 
+# numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
+# few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
+_DISTANCE_SLACK = 1e-6
+
 
 @dataclass(frozen=True)
 class PlanOptions:
@@ -197,7 +201,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         for k in range(len(cut.s)):
             if cut.ok[k]:
                 dist[k] = checker.min_distance(cut.q[k], options.min_clearance + 1e-3)[0]
-        low = np.flatnonzero(dist < options.min_clearance)
+        low = np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK)
         if low.size == 0 or options.orientation_sigma <= 0:
             break
         seg = np.searchsorted(cut.target_index, low)
@@ -217,7 +221,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                              reason="dense sample unreachable on the window's configuration"))
     if not np.all(cut.ok):
         return None
-    for k in np.flatnonzero(dist < options.min_clearance):
+    for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
                              reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
     dmin = float(np.min(dist))
@@ -234,7 +238,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                                  reason=f"{name} unreachable on the window's configuration"))
             return None
         dd = min(checker.min_distance(q, options.min_clearance + 1e-3)[0] for q in d.q[1:])
-        if dd < options.min_clearance:
+        if dd < options.min_clearance - _DISTANCE_SLACK:
             failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
                                  reason=f"{name} clearance {dd * 1e3:.2f} mm"))
     q_app = app.q[::-1]
