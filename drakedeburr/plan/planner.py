@@ -89,7 +89,7 @@ class PlanOptions:
     fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3, 1e-3)
     fit_tolerance: float = 0.03e-3
     min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
-    contact_radius: float | None = 1.7e-3
+    contact_radius: float | None = 1.6e-3
     window_attempts: int = 4
     orientation_sigma_length: float | None = 2e-3
 

@@ -22,9 +22,10 @@ the true edge): ``C = p_HT - r_c u + d N``.
 
 Cutting lower on the flank (a circle of radius r < r_c, :func:`contact_geometry`) raises T by
 ``lift = (r_c - r) / tan(alpha)`` along the axis: ``p_HT = C - d N + r u + lift a``. The planner
-uses r = 1.7 mm by default (``PlanOptions.contact_radius``): it lifts the burr shank 1.3 mm,
+uses r = 1.6 mm by default (``PlanOptions.contact_radius``): it lifts the burr shank 1.4 mm,
 which it needs for 2 mm clearance over the face with the orientation stage's lead angle
-(docs/plan.md), and still exceeds the 1.5 mm depth of cut.
+(docs/plan.md); it only just exceeds the 1.5 mm depth of cut (the chamfer's bottom is cut near
+the apex - a trade-off documented in docs/plan.md).
 
 The offset is computed with the preferred axis of the ToolPath; the IK ties the circle's centre
 ``Q = C - d N + r u`` (not T) to its target and may tilt the axis inside the cone about it,
