@@ -13,17 +13,49 @@ pytestmark = pytest.mark.skipif(not hub_names(), reason="no bundled hub models")
 TOL = Tolerances()
 
 
-@pytest.fixture(scope="module", params=["tool_in_hand", "workpiece_in_hand"])
+def _fillet_stretch(wt: WindowTargets, count: int = 36) -> WindowTargets:
+    """The ``count`` CL points around the sharpest turn of the edge (a window corner fillet)."""
+    turn = np.arccos(np.clip(np.sum(wt.t_H * np.roll(wt.t_H, -1, axis=0), 1), -1, 1))
+    seg = np.linalg.norm(np.roll(wt.p_HC, -1, axis=0) - wt.p_HC, axis=1)
+    curvature = turn / np.maximum(seg, 1e-4)
+    start = int(np.clip(np.argmax(curvature) - count // 2, 0, len(wt) - count))
+    return wt.stretch(start, start + count)
+
+
+@pytest.fixture(scope="module", params=[("tool_in_hand", "edges"), ("workpiece_in_hand", "edges"),
+                                        ("tool_in_hand", "toolpath"),
+                                        ("workpiece_in_hand", "toolpath")],
+                ids=lambda p: f"{p[0]}-{p[1]}")
 def planned(request):
+    """A stretch of window 0 planned in one cell: 16 CL points of the ground-truth-edge
+    stand-in, or 36 CL points of the real chain (path + orientation stage ToolPath) around the
+    window's sharpest fillet."""
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import DEFAULT_HUB, load_hub
 
+    scenario, source = request.param
     hub = DEFAULT_HUB
-    cell = load_cell(request.param, hub)
-    edge = load_hub(hub).windows[0]
-    wt = WindowTargets.from_window_edge(edge).stretch(0, 16)
-    plan = mut.plan_windows(cell, [wt], scenario=request.param, hub=hub)
+    cell = load_cell(scenario, hub)
+    if source == "edges":
+        edge = load_hub(hub).windows[0]
+        wt = WindowTargets.from_window_edge(edge).stretch(0, 16)
+    else:
+        full = mut.window_targets_for_hub(load_hub(hub), source="toolpath", windows=[0])[0]
+        assert full.tool_path is not None
+        wt = _fillet_stretch(full)
+    plan = mut.plan_windows(cell, [wt], scenario=scenario, hub=hub)
     return cell, wt, plan
+
+
+def _segment_and_fraction(p, poly):
+    """For each point of p (N, 3): the index of the nearest polyline segment and the fraction
+    along it."""
+    a, b = poly[:-1], poly[1:]
+    ab = b - a
+    f = np.clip(np.einsum("kj,nkj->nk", ab, p[:, None] - a[None]) / np.sum(ab * ab, 1), 0, 1)
+    closest = a[None] + f[:, :, None] * ab[None]
+    k = np.argmin(np.linalg.norm(p[:, None] - closest, axis=2), axis=1)
+    return k, f[np.arange(len(p)), k]
 
 
 def _dist_to_polyline(p, poly):
@@ -76,9 +108,13 @@ def test_dense_recheck_of_the_cut(planned):
                                   plan.meta["contact_lift_m"])
     edge = np.array([t.p_HC if t.p_HC is not None else tg[1].p_HC for t in tg])
     assert _dist_to_polyline(e, edge).max() <= TOL.edge_deviation
-    # axis inside the cone of the nearest target
+    # axis inside the cone, the cone axis interpolated along each linear move like the axis
     axis = -X[:, :3, 2]
-    cone = wt.cone_axis_H[np.clip([tg[i].cl_index for i in k], 0, None)]
+    seg_k, frac = _segment_and_fraction(p, poly)
+    cl = np.clip([t.cl_index for t in tg], 0, None)
+    c0, c1 = wt.cone_axis_H[cl[seg_k]], wt.cone_axis_H[cl[seg_k + 1]]
+    cone = (1 - frac)[:, None] * c0 + frac[:, None] * c1
+    cone /= np.linalg.norm(cone, axis=1, keepdims=True)
     ang = np.arccos(np.clip(np.sum(axis * cone, 1), -1, 1))
     assert ang.max() <= wt.cone_half_angle + 0.01
     # clearance (cell's own query, burr head/hub contact ignored) on every 8th sample
@@ -122,3 +158,29 @@ def test_unreachable_window_is_reported_not_raised(planned):
     plan = mut.plan_windows(cell, [far])
     assert any(f["window"] == 7 and f["stage"] == "window" for f in plan.failures)
     assert [s.kind for s in plan.segments] == ["home"]
+
+
+def test_toolpath_cone_is_the_smallest_cone_containing_the_theta_box(planned):
+    """The IK cone of a ToolPath window (docs/plan.md, "From the theta box to the IK cone"):
+    centred on the box centre, just wide enough to hold the box's four corner axes."""
+    from drakedeburr.frames.local_frames import axis_H_from_angles
+
+    _, wt, _ = planned
+    tp = wt.tool_path
+    if tp is None:
+        pytest.skip("stand-in targets have no theta box")
+    lo, hi = tp.bounds.theta_min, tp.bounds.theta_max
+    m = len(tp)
+    corner_angles = []
+    for a, b in [(lo, lo), (lo, hi), (hi, lo), (hi, hi)]:
+        z = axis_H_from_angles(tp.R_HL, np.full(m, a), np.full(m, b))  # +Z_T
+        corner_angles.append(np.arccos(np.clip(np.sum(-z * -np.asarray(tp.cone_axis_H), 1),
+                                               -1, 1)))
+    corner_angles = np.array(corner_angles)
+    assert wt.cone_half_angle == pytest.approx(tp.cone_outer_half_angle)
+    assert corner_angles.max() <= wt.cone_half_angle + 1e-6
+    assert corner_angles.max() >= wt.cone_half_angle - 1e-3
+    # the inner mapping stays available and is strictly narrower
+    inner = WindowTargets.from_tool_path(tp, cone_mapping="inner")
+    assert inner.cone_half_angle == pytest.approx(tp.cone_half_angle)
+    assert inner.cone_half_angle < wt.cone_half_angle

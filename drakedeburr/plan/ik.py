@@ -31,7 +31,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -60,23 +60,30 @@ class IkOptions:
         joint_weights: (6,) weights of the ``q - q_prev`` cost.
         trust_region: max joint change from the previous target [rad].
         snopt_major_iterations: SNOPT major iteration cap; ipopt_max_iterations: IPOPT's.
-        retries: re-seeded attempts after SNOPT and IPOPT both fail.
+        retries: re-seeded attempts after SNOPT and IPOPT both fail: from the axis of most
+            clearance in the cone (distance-active at once), the same with the bare clearance
+            bound (``min_distance_floor``), then the spin sweep with that bound.
         min_wrist: keep |J5| at least this far from the wrist singularity (seeds, and a bound
             in every solve on the side of the window's wrist branch) [rad].
         spin_samples: spins tried by the seed sweep.
+        min_distance_floor: the clearance bound of the last retry [m] (the acceptance bound):
+            ``min_distance`` carries a small margin so that the straight moves between targets
+            keep 2 mm; where the cone leaves no room for the margin (a few fillet points) the
+            target takes the bare bound and the dense check of the executed motion decides.
     """
 
     position_tolerance: float = 1e-6
-    min_distance: float = 2.0e-3
+    min_distance: float = 2.05e-3
     influence_distance: float = 2e-3
     axis_weight: float = 10.0
     joint_weights: tuple[float, ...] = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
     trust_region: float = 0.35
     snopt_major_iterations: int = 100
     ipopt_max_iterations: int = 50
-    retries: int = 1
+    retries: int = 3
     min_wrist: float = 0.25
     spin_samples: int = 36
+    min_distance_floor: float = 2.0e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,9 +187,35 @@ def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
     X = np.eye(4)
     X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, np.cross(z, x), z, p_HT
     q, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q_prev)
-    if not ok[0] or np.max(np.abs(q[0] - q_prev)) > 0.3:
+    if not ok[0] or np.max(np.abs(q[0] - q_prev)) > 0.6:
         return q_prev
     return q[0]
+
+
+def _clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
+                    p_HT: np.ndarray, cone_axis_H: np.ndarray, half_angle: float,
+                    pref_axis_H: np.ndarray, q_prev: np.ndarray, reach: float,
+                    samples: int = 12, lift: float = 0.0) -> np.ndarray | None:
+    """Analytic seed at the axis of most clearance among the preferred axis, the cone axis and
+    ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
+    ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
+    c = cone_axis_H / np.linalg.norm(cone_axis_H)
+    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(c, e1)
+    th = 0.8 * half_angle
+    phis = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    axes = [pref_axis_H, c] + [np.cos(th) * c + np.sin(th) * (np.cos(f) * e1 + np.sin(f) * e2)
+                               for f in phis]
+    best, best_d = None, -np.inf
+    for a in axes:
+        q = _analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
+        if q is q_prev:
+            continue
+        d = checker.min_distance(q, reach)[0]
+        if d > best_d:
+            best, best_d = q, d
+    return best
 
 
 def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
@@ -202,12 +235,15 @@ def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
 
 def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H: np.ndarray,
                  half_angle: float, pref_axis_H: np.ndarray, q_prev: np.ndarray, q_seed: np.ndarray,
-                 with_distance: bool, solver, options: IkOptions) -> tuple[bool, np.ndarray]:
+                 with_distance: bool, solver, options: IkOptions,
+                 lift: float = 0.0) -> tuple[bool, np.ndarray]:
     from pydrake.multibody.inverse_kinematics import InverseKinematics
 
     ik = InverseKinematics(cell.plant, checker.plant_context, with_joint_limits=True)
     tol = options.position_tolerance
-    ik.AddPositionConstraint(cell.tool_frame, np.zeros(3), cell.hub_frame, p_HT - tol, p_HT + tol)
+    # the constrained point: on the burr axis, ``lift`` from T toward the tip (+Z_T)
+    ik.AddPositionConstraint(cell.tool_frame, np.array([0.0, 0.0, lift]), cell.hub_frame,
+                             p_HT - tol, p_HT + tol)
     down_T = np.array([0.0, 0.0, -1.0])  # the tool axis (tip -> spindle) is -Z_T
     ik.AddAngleBetweenVectorsConstraint(cell.hub_frame, cone_axis_H, cell.tool_frame, down_T,
                                         0.0, half_angle)
@@ -235,10 +271,11 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H:
 
 
 def _recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray,
-             half_angle: float, options: IkOptions) -> tuple[bool, float, float, np.ndarray]:
+             half_angle: float, options: IkOptions,
+             lift: float = 0.0) -> tuple[bool, float, float, np.ndarray]:
     """Independent check of a solution with the analytic FK: (ok, position error, cone angle)."""
     X = kin.X_HT_from_q(q)
-    err = float(np.linalg.norm(X[:3, 3] - p_HT))
+    err = float(np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HT))
     ang = float(np.arccos(np.clip(-X[:3, 2] @ cone_axis_H, -1.0, 1.0)))
     ok = (err <= 10 * options.position_tolerance and ang <= half_angle + 1e-6
           and bool(kin.within_limits(q)))
@@ -260,6 +297,7 @@ def solve_window_ik(
     options: IkOptions = IkOptions(),
     progress: Callable[[int, int, str], None] | None = None,
     q_first: np.ndarray | None = None,
+    lift: float = 0.0,
 ) -> WindowIk:
     """IK at every CL target of one window, warm-started along the path.
 
@@ -273,6 +311,12 @@ def solve_window_ik(
         q_ref: (6,) joints the robot comes from (configuration preference) [rad].
         window_index: for failure records.
         q_first: seed of the first target (default: the spin sweep's best).
+        lift: the constrained point is on the burr axis ``lift`` [m] from T toward the tip
+            (the centre of the cutting circle, :func:`targets.contact_geometry`), and ``p_HT``
+            are its targets. Constraining that point rather than T keeps the implied edge point
+            where it belongs when the IK tilts the axis inside the cone (T would carry the
+            cutting circle off by ``lift * tilt``), and tilting about it swings the shank away
+            from the face more per radian.
 
     Returns:
         WindowIk; failures are listed per point (``{"window", "cl_index", "stage", "reason",
@@ -292,12 +336,14 @@ def solve_window_ik(
     n_dist = n_fallback = n_retry = 0
     reach = options.min_distance + options.influence_distance
     t0 = time.perf_counter()
+    p_T_pref = p_HT + lift * pref_axis_H  # T itself at the preferred axis (seeds)
     q_prev = None
     i_prev = -1
     for i in range(m):
         if q_prev is None:
             q_seed = (q_first if q_first is not None and i == 0 else
-                      seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], q_ref, options))
+                      seed_by_spin(kin, checker, p_T_pref[i], pref_axis_H[i], t_H[i], q_ref,
+                                   options))
             if q_seed is None:
                 failures.append(dict(window=window_index, cl_index=i, stage="ik",
                                      reason="no IK branch reaches the first target"))
@@ -305,36 +351,51 @@ def solve_window_ik(
             anchor = q_seed
         else:
             anchor = q_prev
-            q_seed = _analytic_seed(kin, X_out[i_prev], p_HT[i], pref_axis_H[i], q_prev)
+            q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev)
         done = False
         best = None
         for attempt in range(options.retries + 1):
+            start_with_distance = False
+            # from the second retry on, ask only for the acceptance bound, not the margin
+            opts = options if attempt < 2 else replace(
+                options, min_distance=min(options.min_distance, options.min_distance_floor))
             if attempt > 0:
                 n_retry += 1
-                reseed = seed_by_spin(kin, checker, p_HT[i], pref_axis_H[i], t_H[i], anchor,
-                                      options)
+                reseed = None
+                if attempt in (1, 2) and i_prev >= 0:
+                    # where the preferred axis is too close to the hub (concave fillets), seed
+                    # from the axis in the cone with the most clearance, distance-active at once
+                    reseed = _clearance_seed(kin, checker, X_out[i_prev], p_HT[i],
+                                             cone_axis_H[i], half, pref_axis_H[i], q_prev,
+                                             reach, lift=lift)
+                    start_with_distance = reseed is not None
+                if reseed is None:
+                    reseed = seed_by_spin(kin, checker, p_T_pref[i], pref_axis_H[i], t_H[i],
+                                          anchor, options)
                 if reseed is None:
                     break
                 q_seed = reseed
-            with_distance = False
+            with_distance = start_with_distance
             for s_idx, solver in enumerate(solvers):
                 if s_idx > 0:
                     n_fallback += 1
                 success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
                                           pref_axis_H[i], anchor, q_seed, with_distance, solver,
-                                          options)
-                good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options)
+                                          opts, lift)
+                good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts, lift)
                 dist = checker.min_distance(q, reach)[0]
-                if good and dist < options.min_distance - 1e-5 and not with_distance:
+                if good and dist < opts.min_distance - 1e-5 and not with_distance:
                     # lazy collision constraint: re-solve with it from this solution
                     with_distance = True
                     n_dist += 1
                     success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
-                                              pref_axis_H[i], anchor, q, True, solver, options)
-                    good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, options)
+                                              pref_axis_H[i], anchor, q, True, solver, opts,
+                                              lift)
+                    good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts,
+                                                 lift)
                     dist = checker.min_distance(q, reach)[0]
                 best = (q, X, dist, err, ang)
-                if good and dist >= options.min_distance - 1e-5:
+                if good and dist >= opts.min_distance - 1e-5:
                     done = True
                     break
             if done:

@@ -44,6 +44,10 @@ log = logging.getLogger(__name__)
 
 Progress = Callable[[int, int, str], None] | None
 
+# numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
+# few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
+_DISTANCE_SLACK = 1e-6
+
 
 @dataclass(frozen=True)
 class PlanOptions:
@@ -67,6 +71,9 @@ class PlanOptions:
         contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
             3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
         window_attempts: distinct start configurations tried when a window's IK fails.
+        orientation_sigma_length: Gaussian width [m] of the orientation smoothing in tool
+            travel (None: ``orientation_sigma`` in targets). The path stage spaces CL points
+            unevenly, so a width in targets would not mean a width the wrist feels.
     """
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
@@ -79,11 +86,12 @@ class PlanOptions:
     max_joint_jump: float = 0.2
     windows: tuple[int, ...] | None = None
     orientation_sigma: float = 2.0
-    fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3)
-    fit_tolerance: float = 0.02e-3
+    fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3, 1e-3)
+    fit_tolerance: float = 0.03e-3
     min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
-    contact_radius: float | None = 2.25e-3
+    contact_radius: float | None = 1.6e-3
     window_attempts: int = 4
+    orientation_sigma_length: float | None = 2e-3
 
 
 @dataclass
@@ -136,7 +144,9 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
     # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
     loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
-    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[loop]
+    # the IK ties the centre of the cutting circle (``lift`` below T on the axis) to its target
+    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)[loop]
+    p_HT = p_HQ + lift * wt.axis_H[loop]
     t0 = time.perf_counter()
     # window-level retries: the start configuration (J4/J6 turns, spin) decides whether the
     # wrist can follow the whole loop inside its limits; try the best few distinct seeds
@@ -144,13 +154,13 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                          count=options.window_attempts) or [None]
     wik, best_score = None, 0
     for attempt, q_first in enumerate(seeds):
-        trial = solve_window_ik(cell, kin, checker, p_HT, wt.axis_H[loop], wt.cone_axis_H[loop],
+        trial = solve_window_ik(cell, kin, checker, p_HQ, wt.axis_H[loop], wt.cone_axis_H[loop],
                                 wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=options.ik,
-                                progress=progress, q_first=q_first)
+                                progress=progress, q_first=q_first, lift=lift)
         # the executed motion between the targets must stay on the branch and inside the
         # joint limits too (J4 winds around a loop): a cheap analytic pre-check
-        reached = np.flatnonzero(~np.any(np.isnan(trial.q), axis=1))
+        reached = np.flatnonzero(trial.ok)
         dense_ok = bool(len(reached) > 1 and np.all(track_poses(
             kin, trial.X_HT[reached], trial.q[reached[0]], options.dense_step).ok))
         score = len(trial.failures) + (0 if dense_ok else 10 * (m + 1))
@@ -164,7 +174,8 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     t_ik = time.perf_counter() - t0
     for rec in wik.failures:
         failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})
-    good = np.flatnonzero(~np.any(np.isnan(wik.q), axis=1))
+    # only the targets that met every constraint (a failed point's row holds its best attempt)
+    good = np.flatnonzero(wik.ok)
     if len(good) < (m + 1) // 2 or 0 not in good:
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="window",
                              reason=f"IK reached only {len(good)} of {m + 1} targets; "
@@ -172,8 +183,14 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         return None
     order = loop[good]
     X_ik = wik.X_HT[good]
-    X_cut = smooth_orientations(X_ik, wt.cone_axis_H[order], wt.cone_half_angle,
-                                options.orientation_sigma)
+    if options.orientation_sigma_length:
+        s_ik = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(X_ik[:, :3, 3], axis=0),
+                                                               axis=1))])
+        X_cut = smooth_orientations(X_ik, wt.cone_axis_H[order], wt.cone_half_angle,
+                                    options.orientation_sigma_length, s=s_ik)
+    else:
+        X_cut = smooth_orientations(X_ik, wt.cone_axis_H[order], wt.cone_half_angle,
+                                    options.orientation_sigma)
     t1 = time.perf_counter()
     # track the executed motion; where smoothing cost clearance, keep the IK orientation of the
     # targets around the offending samples and track again
@@ -184,7 +201,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         for k in range(len(cut.s)):
             if cut.ok[k]:
                 dist[k] = checker.min_distance(cut.q[k], options.min_clearance + 1e-3)[0]
-        low = np.flatnonzero(dist < options.min_clearance)
+        low = np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK)
         if low.size == 0 or options.orientation_sigma <= 0:
             break
         seg = np.searchsorted(cut.target_index, low)
@@ -204,7 +221,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                              reason="dense sample unreachable on the window's configuration"))
     if not np.all(cut.ok):
         return None
-    for k in np.flatnonzero(dist < options.min_clearance):
+    for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
                              reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
     dmin = float(np.min(dist))
@@ -221,7 +238,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                                  reason=f"{name} unreachable on the window's configuration"))
             return None
         dd = min(checker.min_distance(q, options.min_clearance + 1e-3)[0] for q in d.q[1:])
-        if dd < options.min_clearance:
+        if dd < options.min_clearance - _DISTANCE_SLACK:
             failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
                                  reason=f"{name} clearance {dd * 1e3:.2f} mm"))
     q_app = app.q[::-1]
@@ -246,6 +263,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                                                    options.approach_speed, "linear")]),
     ]
     q_deg = np.degrees(cut.q)
+    box_share = _box_share(wt, order, q_targets, kin)
     v_cut = timed_cut.v_tcp[1:-1]
     band = params.grinding_speed * 0.05
     stats = dict(
@@ -257,7 +275,8 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         j4_range_deg=float(np.ptp(q_deg[:, 3])), j5_range_deg=float(np.ptp(q_deg[:, 4])),
         j6_range_deg=float(np.ptp(q_deg[:, 5])),
         min_abs_j5_deg=float(np.min(np.abs(q_deg[:, 4]))),
-        min_clearance_m=float(dmin), smoothing_reverted_targets=int(reverted.sum()),
+        min_clearance_m=float(dmin), axis_in_theta_box_fraction=box_share,
+        smoothing_reverted_targets=int(reverted.sum()),
         speed_in_band_fraction=float(np.mean(np.abs(v_cut - params.grinding_speed) <= band))
         if len(v_cut) else 0.0,
         ik_seconds=t_ik, dense_seconds=t_dense, timing_seconds=t_time, ik=wik.stats,
@@ -266,6 +285,22 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets.tolist(),
         cl_order=[int(i) for i in order])
     return stretches, stats, q_app[0]
+
+
+def _box_share(wt: WindowTargets, order: np.ndarray, q: np.ndarray,
+               kin: CellKinematics) -> float | None:
+    """Share of the cut targets whose planned tool axis keeps both angles inside the
+    orientation stage's (theta_A, theta_B) box (the exact test, ``ToolPath.admissible``); the
+    IK cone is the smallest cone containing the box, so its rim admits a little more."""
+    tp = wt.tool_path
+    if tp is None or len(tp) != len(wt) or not hasattr(tp, "bounds"):
+        return None  # no ToolPath, or a stretch of one
+    from drakedeburr.frames.local_frames import angles_from_axis_H
+
+    z_H = kin.X_HT_from_q(q)[:, :3, 2]  # +Z_T (spindle -> tip), the ToolPath convention
+    a, b = angles_from_axis_H(np.asarray(tp.R_HL)[order], z_H)
+    lo, hi = tp.bounds.theta_min - 1e-9, tp.bounds.theta_max + 1e-9
+    return float(np.mean((a >= lo) & (a <= hi) & (b >= lo) & (b <= hi)))
 
 
 def _angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
@@ -418,8 +453,9 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
     Args:
         hub_model: ``drakedeburr.hub.HubModel``.
         source: "toolpath" (path + orientation stages), "edges" (ground-truth edges with a fixed
-            tilt, no upstream stages), or "auto" (toolpath when those stages are installed and
-            give usable axes, else edges).
+            tilt, no upstream stages), or "auto" (the toolpath chain; the edges stand-in only
+            when the upstream stages cannot be imported, with a logged warning - a ToolPath
+            that is wrong raises, as with "toolpath").
         windows: window indices (default all).
     """
     params = params or ProcessParameters()
@@ -432,11 +468,11 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
         if source in ("toolpath", "auto"):
             try:
                 wt = WindowTargets.from_tool_path(_tool_path(edge, params))
-            except (ImportError, ValueError) as exc:
+            except ImportError as exc:
                 if source == "toolpath":
                     raise
-                log.warning("window %d: orientation stage unusable (%s); using the edge with a "
-                            "fixed tilt", edge.index, exc)
+                log.warning("window %d: path/orientation stage unavailable (%s); using the "
+                            "ground-truth edge with a fixed tilt instead", edge.index, exc)
         if wt is None:
             wt = WindowTargets.from_window_edge(edge, params=params)
         out.append(wt)

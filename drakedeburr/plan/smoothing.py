@@ -20,13 +20,18 @@ __all__ = ["smooth_orientations"]
 
 
 def smooth_orientations(X_HT: np.ndarray, cone_axis_H: np.ndarray, cone_half_angle: float,
-                        sigma: float = 2.0) -> np.ndarray:
+                        sigma: float = 2.0, s: np.ndarray | None = None) -> np.ndarray:
     """Gaussian-smoothed orientations of a sequence of tool poses, positions kept.
 
     Args:
         X_HT: (M, 4, 4) tool poses in H [m].
         cone_axis_H: (M, 3) cone axes (tip -> spindle); cone_half_angle: [rad].
-        sigma: kernel width in targets (0 = no smoothing).
+        sigma: kernel width (0 = no smoothing): in targets, or, when ``s`` is given, in the
+            units of ``s``.
+        s: (M,) arc length of the targets [m] (optional). CL points from the path stage are
+            spaced unevenly (0.1 mm on fillets to 10 mm on straight stretches): a kernel in
+            targets then smooths 0.2 mm on one stretch and 20 mm on the next, while the wrist
+            feels the turning per unit length.
 
     Returns:
         (M, 4, 4) poses with smoothed rotations; every axis (-Z_T) within the cone.
@@ -38,7 +43,12 @@ def smooth_orientations(X_HT: np.ndarray, cone_axis_H: np.ndarray, cone_half_ang
     for i in range(1, len(quat)):  # one hemisphere, continuous
         if quat[i] @ quat[i - 1] < 0:
             quat[i] = -quat[i]
-    quat = gaussian_filter1d(quat, sigma, axis=0, mode="nearest")
+    if s is None:
+        quat = gaussian_filter1d(quat, sigma, axis=0, mode="nearest")
+    else:
+        s = np.asarray(s, float)
+        w = np.exp(-0.5 * ((s[:, None] - s[None, :]) / sigma) ** 2)
+        quat = (w @ quat) / np.sum(w, axis=1, keepdims=True)
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
     # back into the cone where smoothing pushed an axis out
     c = np.asarray(cone_axis_H, float)

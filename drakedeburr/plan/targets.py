@@ -22,12 +22,15 @@ the true edge): ``C = p_HT - r_c u + d N``.
 
 Cutting lower on the flank (a circle of radius r < r_c, :func:`contact_geometry`) raises T by
 ``lift = (r_c - r) / tan(alpha)`` along the axis: ``p_HT = C - d N + r u + lift a``. The planner
-uses r = 2.25 mm by default (``PlanOptions.contact_radius``): it lifts the burr shank 0.75 mm,
-which it needs for 2 mm clearance over the face, and still exceeds the 1.5 mm depth of cut.
+uses r = 1.6 mm by default (``PlanOptions.contact_radius``): it lifts the burr shank 1.4 mm,
+which it needs for 2 mm clearance over the face with the orientation stage's lead angle
+(docs/plan.md); it only just exceeds the 1.5 mm depth of cut (the chamfer's bottom is cut near
+the apex - a trade-off documented in docs/plan.md).
 
-The offset is computed with the preferred axis of the ToolPath; the IK may tilt the axis inside
-the cone, which moves the implied edge point by at most ``r_c * (1 - cos(tilt))`` plus the
-tilt of u; :func:`edge_point_from_tool_pose` gives the exact implied point for any pose.
+The offset is computed with the preferred axis of the ToolPath; the IK ties the circle's centre
+``Q = C - d N + r u`` (not T) to its target and may tilt the axis inside the cone about it,
+which moves the implied edge point only through the tilt of u (``r * |du|``);
+:func:`edge_point_from_tool_pose` gives the exact implied point for any pose.
 """
 
 from __future__ import annotations

@@ -83,7 +83,8 @@ class WindowTargets:
                        source=f"{self.source} [CL {start}..{stop - 1}]")
 
     @classmethod
-    def from_tool_path(cls, tool_path, *, face_normal_H: np.ndarray | None = None) -> WindowTargets:
+    def from_tool_path(cls, tool_path, *, face_normal_H: np.ndarray | None = None,
+                       cone_mapping: str = "outer") -> WindowTargets:
         """From the orientation stage's ToolPath (``drakedeburr.orientation.ToolPath``).
 
         Args:
@@ -92,6 +93,11 @@ class WindowTargets:
                 (spindle -> tip, the ToolPath convention) and are flipped here.
             face_normal_H: (3,) outward normal of the visible face (default +Z_H): the tool
                 axes must point to that side (the burr comes from the front).
+            cone_mapping: which cone stands for the (theta_A, theta_B) box in the IK and in the
+                verification (both use the same one): "outer" (default) the smallest cone about
+                the box centre containing the whole box (``cone_outer_half_angle``), "inner"
+                the largest cone inside it (``cone_half_angle``). See docs/plan.md, "From the
+                theta box to the IK cone".
 
         Raises:
             InputError: axes pointing into the hub (names the window and point).
@@ -102,6 +108,9 @@ class WindowTargets:
         # the ToolPath's axis_H / cone_axis_H are +Z_T (spindle -> tip); ours point tip -> spindle
         axis = -_unit(np.asarray(tp.axis_H, float))
         cone = -_unit(np.asarray(tp.cone_axis_H, float))
+        if cone_mapping not in ("outer", "inner"):
+            raise InputError(f"cone_mapping must be 'outer' or 'inner', got {cone_mapping!r}")
+        half = float(tp.cone_outer_half_angle if cone_mapping == "outer" else tp.cone_half_angle)
         bad = np.flatnonzero(axis @ face <= 0.0)
         if bad.size:
             raise InputError(f"ToolPath of window {tp.window_index}: tool axis (tip -> spindle) "
@@ -111,7 +120,7 @@ class WindowTargets:
         return cls(window_index=int(tp.window_index), kind=str(tp.kind),
                    p_HC=np.asarray(tp.p_HC, float), t_H=_unit(np.asarray(tp.R_HL)[:, :, 1]),
                    n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), axis_H=axis, cone_axis_H=cone,
-                   cone_half_angle=float(tp.cone_half_angle), depth_of_cut=float(tp.depth_of_cut),
+                   cone_half_angle=half, depth_of_cut=float(tp.depth_of_cut),
                    source=f"ToolPath ({getattr(tp, 'model', '')}/{getattr(tp, 'solver', '')})",
                    tool_path=tp)
 

@@ -29,7 +29,6 @@ from drakedeburr.cell.station import load_cell  # noqa: E402
 from drakedeburr.hub import DEFAULT_HUB, load_hub  # noqa: E402
 from drakedeburr.plan import (  # noqa: E402
     PlanOptions,
-    WindowTargets,
     contact_geometry,
     load_plan,
     plan_windows,
@@ -56,10 +55,11 @@ def main() -> None:
     hub = load_hub(hub_name)
     print(f"cell: {cell.mode}-in-hand, hub {hub_name} with {len(hub.windows)} windows")
     if args.test_mode:
-        # ground-truth edge, fixed tilt: no upstream solve; a 20-point stretch of window 0
-        windows = [WindowTargets.from_window_edge(hub.windows[0]).stretch(0, 20)]
+        # the real chain (path stage CL points + orientation stage ToolPath) for window 0,
+        # planned on a 20-point stretch
+        windows = [window_targets_for_hub(hub, windows=[0])[0].stretch(0, 20)]
     else:
-        windows = window_targets_for_hub(hub)  # path + orientation stages when usable
+        windows = window_targets_for_hub(hub)  # path + orientation stages (ToolPath)
     for w in windows:
         print(f"  window {w.window_index} ({w.kind}): {len(w)} CL points, cone half-angle "
               f"{np.degrees(w.cone_half_angle):.1f} deg, depth of cut {w.depth_of_cut * 1e3:.1f} mm"
