@@ -83,12 +83,14 @@ def load_config(cls, path: str | Path):
     path = Path(path)
     data = yaml.safe_load(path.read_text()) or {}
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping of {cls.__name__} fields, got {type(data).__name__}")
+        raise ValueError(f"{path}: expected a mapping of {cls.__name__} fields, "
+                         f"got {type(data).__name__}")
     names = {f.name: f for f in dataclasses.fields(cls)}
     kwargs = {}
     for key, value in data.items():
         if key not in names:
-            raise ValueError(f"{path}: unknown {cls.__name__} field {key!r}; known: {sorted(names)}")
+            raise ValueError(f"{path}: unknown {cls.__name__} field {key!r}; "
+                             f"known: {sorted(names)}")
         if isinstance(value, dict) and key.startswith("bounds_"):
             value = OrientationBounds(**value)
         kwargs[key] = value

@@ -7,7 +7,6 @@ axle out of the visible face. Window edge loops are ordered counter-clockwise se
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -44,7 +43,8 @@ class WindowEdge:
         if p.ndim != 2 or p.shape[1] != 3 or len(p) < 4:
             raise ValueError(f"window {self.index}: p_HE must be (N>=4, 3), got {p.shape}")
         if self.kind not in ("large", "small"):
-            raise ValueError(f"window {self.index}: kind must be 'large' or 'small', got {self.kind!r}")
+            raise ValueError(f"window {self.index}: kind must be 'large' or 'small', "
+                             f"got {self.kind!r}")
 
 
 @dataclass(frozen=True, eq=False)

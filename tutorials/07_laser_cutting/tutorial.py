@@ -140,7 +140,6 @@ def main() -> None:
     from pydrake.geometry import Meshcat
 
     from drakedeburr.laser.display import animate_hole, build_tool_scene
-
     from drakedeburr.resources import model_path
 
     meshcat = Meshcat()
