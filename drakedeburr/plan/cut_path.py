@@ -26,11 +26,14 @@ program is a 20-line use of Drake's ``MathematicalProgram``.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation, Slerp
+
+log = logging.getLogger(__name__)
 
 __all__ = ["BlendedPath", "blend_corners", "smooth_axes", "CutPath", "cut_path"]
 
@@ -55,7 +58,8 @@ class BlendedPath:
 
 
 def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
-                  leg_share: float = 0.45, max_zone: float = 5e-3) -> BlendedPath:
+                  leg_share: float = 0.45, max_zone: float = 5e-3,
+                  zone_quantum: float = 0.05e-3) -> BlendedPath:
     """Round the corners of a polyline as a controller's zones do.
 
     Args:
@@ -64,6 +68,8 @@ def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
         step: largest spacing of the dense samples [m].
         leg_share: largest share of an adjacent move a blend leg may use.
         max_zone: largest blend leg [m].
+        zone_quantum: zones are rounded down to multiples of this [m] (a program then holds a
+            few dozen distinct zones, not one per target; rounding down keeps the deviation).
 
     Returns:
         BlendedPath (first and last targets are on the path; the others within ``deviation``).
@@ -84,6 +90,8 @@ def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
             continue
         d_dev = 2.0 * dev[k] / np.sin(phi / 2.0)
         zone[k] = min(d_dev, leg_share * L[k - 1], leg_share * L[k], max_zone)
+        if zone_quantum > 0 and zone[k] > zone_quantum:
+            zone[k] = np.floor(zone[k] / zone_quantum) * zone_quantum
     # pieces: straight from (P_k + zone_k u_k) to (P_{k+1} - zone_{k+1} u_k), then blend at k+1
     s_acc = 0.0
     out_s = [np.zeros(1)]
@@ -192,10 +200,16 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     Qd = 2.0 * Q.toarray()
     for j in range(2):
         prog.AddQuadraticCost(Qd, -2.0 * w_pref * w_s * u_pref[:, j], u[:, j], is_convex=True)
-    cos_a = np.cos(max(half_angle - margin, 1e-3))
+    # the margin applies where the axis is free; a pinned axis follows the IK's, which may use
+    # the cone up to its rim
+    half_i = np.full(N, max(half_angle - margin, 1e-3))
+    if pin is not None:
+        half_i[np.asarray(pin, bool)] = max(half_angle - 1e-4, 1e-3)
+    cos_i = np.cos(half_i)
     cl = c @ E  # cone axes in the (e1, e2, z0) basis
     for i in range(N):
         # v = (u1, u2, 1); [v.c / cos_a; v] in the Lorentz cone
+        cos_a = cos_i[i]
         A = np.zeros((4, 2))
         bvec = np.zeros(4)
         A[0] = cl[i, :2] / cos_a
@@ -220,6 +234,8 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     prog.SetInitialGuess(u, u_pref)
     res = ClarabelSolver().Solve(prog)
     if not res.is_success():
+        log.warning("axis smoothing program failed (%s); keeping the preferred axes",
+                    res.get_solution_result())
         return a_pref / np.linalg.norm(a_pref, axis=1, keepdims=True)
     uu = res.GetSolution(u)
     v = np.column_stack([uu, np.ones(N)]) @ E.T

@@ -83,7 +83,7 @@ class PlanOptions:
     approach_distance: float = 15e-3
     approach_speed: float = 0.05
     tcp_acceleration: float = 3.0
-    joint_step: float = 0.02
+    joint_step: float = 0.004
     max_joint_jump: float = 0.2
     windows: tuple[int, ...] | None = None
     orientation_sigma: float = 2.0
@@ -96,7 +96,7 @@ class PlanOptions:
     cut_motion: str = "blended"
     blend_deviation: float = 0.03e-3
     spin_sigma: float = 3e-3
-    axis_margin: float = 2e-3
+    axis_margin: float = 10e-3
     spin_search: bool = True
 
 
@@ -447,6 +447,8 @@ def plan_windows(
     t_start = time.perf_counter()
     kin = cell_kinematics(cell)
     checker = ClearanceChecker(cell)
+    # moves that do not cut keep the burr head clear of the hub too
+    free_checker = ClearanceChecker(cell, filter_burr_contact=False)
     params = options.params
     failures: list[dict] = []
     stretches: list[_Stretch] = []
@@ -465,8 +467,8 @@ def plan_windows(
         speed = params.home_speed if not stretches else params.window_switch_speed
         kind = "home" if not stretches else "transition"
         t0 = time.perf_counter()
-        js, mv = _joint_stretch(cell, kin, checker, q_cur, q_app0, speed, kind, options, failures,
-                                f"to window {wt.window_index}")
+        js, mv = _joint_stretch(cell, kin, free_checker, q_cur, q_app0, speed, kind, options,
+                                failures, f"to window {wt.window_index}")
         transition_seconds += time.perf_counter() - t0
         stats["transition_method"] = mv.method
         stretches.append(js)
@@ -474,8 +476,8 @@ def plan_windows(
         window_stats.append(stats)
         q_cur = win_stretches[-1].timed.q[-1]
     t0 = time.perf_counter()
-    js, mv = _joint_stretch(cell, kin, checker, q_cur, kin.q_home, params.home_speed, "home",
-                            options, failures, "return home")
+    js, mv = _joint_stretch(cell, kin, free_checker, q_cur, kin.q_home, params.home_speed,
+                            "home", options, failures, "return home")
     transition_seconds += time.perf_counter() - t0
     stretches.append(js)
     if progress is not None:
