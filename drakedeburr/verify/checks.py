@@ -283,7 +283,8 @@ def _cone_half_angle(plan, window: int, tool_path) -> float:
     """The cone half-angle the plan was made with (recorded per window by the planner), else
     the ToolPath's enclosing cone (the planner's default mapping)."""
     for st in (plan.meta or {}).get("windows", []):
-        if int(st.get("window", -1)) == int(window) and "cone_half_angle_rad" in st:
+        if (isinstance(st, dict) and int(st.get("window", -1)) == int(window)
+                and "cone_half_angle_rad" in st):
             return float(st["cone_half_angle_rad"])
     return float(getattr(tool_path, "cone_outer_half_angle", tool_path.cone_half_angle))
 
