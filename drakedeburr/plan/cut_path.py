@@ -251,6 +251,8 @@ class CutPath:
         target_index: (K,) dense sample at each target; X_target: (K, 4, 4) the target poses
             written to the program (positions = the given targets, orientations = the smooth
             ones there); zone: (K,) blend leg at each target [m].
+        psi_ik: (N,) the IK's spin (smoothed) about each sample's Z relative to ``X_HT`` [rad]
+            (the IK chose it with the clearance constraint: the spin search stays near it).
     """
 
     X_HT: np.ndarray
@@ -258,6 +260,7 @@ class CutPath:
     target_index: np.ndarray
     X_target: np.ndarray
     zone: np.ndarray
+    psi_ik: np.ndarray | None = None
 
 
 def _rotate_axis_to(R: np.ndarray, a_new: np.ndarray) -> np.ndarray:
@@ -321,15 +324,21 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
                     w_curv=w_curv, pin=_in_intervals(bp.s, pin), pin_axes=a_ik,
                     pin_angle=pin_angle)
     R = _rotate_axis_to(R, a)
+    R_ik = R.copy()
     if spin == "fixed":
         R = _fixed_spin(R, X_targets[:, :3, 0])
+    # the IK's spin (clearance-checked at the targets) relative to the frames returned
+    x, z = R[:, :, 0], R[:, :, 2]
+    psi_ik = np.unwrap(np.arctan2(np.sum(np.cross(x, R_ik[:, :, 0]) * z, axis=1),
+                                  np.sum(x * R_ik[:, :, 0], axis=1)))
     X = np.zeros((len(bp.s), 4, 4))
     X[:, :3, :3] = R
     X[:, :3, 3] = bp.p
     X[:, 3, 3] = 1.0
     Xt = X_targets.copy()
     Xt[:, :3, :3] = R[bp.target_index]
-    return CutPath(X_HT=X, s=bp.s, target_index=bp.target_index, X_target=Xt, zone=bp.zone)
+    return CutPath(X_HT=X, s=bp.s, target_index=bp.target_index, X_target=Xt, zone=bp.zone,
+                   psi_ik=psi_ik)
 
 
 def _in_intervals(s: np.ndarray, iv: np.ndarray | None) -> np.ndarray | None:

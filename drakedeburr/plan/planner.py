@@ -75,6 +75,16 @@ class PlanOptions:
         orientation_sigma_length: Gaussian width [m] of the orientation smoothing in tool
             travel (None: ``orientation_sigma`` in targets). The path stage spaces CL points
             unevenly, so a width in targets would not mean a width the wrist feels.
+        cut_motion: "blended" (default: corners blended within ``blend_deviation``, the
+            smoothest axis in the cones, spin search; :mod:`drakedeburr.plan.cut_path`) or
+            "linear" (linear/slerp moves between the targets, the first version).
+        blend_deviation: largest distance of a corner blend from its target [m].
+        spin_sigma: Gaussian width of the IK orientations' smoothing before the axis program [m].
+        axis_margin: the smoothed axis keeps this far inside its cone [rad] (so the program's
+            own slerp between targets stays inside too).
+        spin_search: choose the spin about the tool axis by dynamic programming
+            (:mod:`drakedeburr.plan.spin`); False keeps a fixed spin reference.
+        spin_band: the search stays within this of the IK's spin [rad].
     """
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
@@ -98,6 +108,7 @@ class PlanOptions:
     spin_sigma: float = 3e-3
     axis_margin: float = 10e-3
     spin_search: bool = True
+    spin_band: float = 1.2
 
 
 @dataclass
@@ -247,19 +258,28 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     within ``blend_deviation`` of the linear program, the smoothest axis inside the cones."""
     from drakedeburr.plan.cut_path import cut_path
     from drakedeburr.plan.interpolate import DensePath
-    from drakedeburr.plan.spin import optimize_spin
+    from drakedeburr.plan.spin import optimize_spin, spin_frames
 
     t1 = time.perf_counter()
     w = wt.window_index
     pin = None
+    spin_mode = "search"
     dev = np.full(len(order), options.blend_deviation)
-    for attempt in range(5):
+    for attempt in range(6):
         cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
-        if options.spin_search:
+        if spin_mode == "ik":
+            # last resort: the IK's own spin (clearance-checked at the targets), smoothed
+            X_ik = cp.X_HT.copy()
+            X_ik[:, :3, :3] = spin_frames(cp.X_HT[:, :3, :3], cp.psi_ik)
+            X_tg = cp.X_target.copy()
+            X_tg[:, :3, :3] = X_ik[cp.target_index, :3, :3]
+            cp = replace(cp, X_HT=X_ik, X_target=X_tg)
+        elif options.spin_search:
             X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
-                                               wrist_margin=Tolerances().wrist_margin)
+                                               wrist_margin=Tolerances().wrist_margin,
+                                               psi_ref=cp.psi_ik, band=options.spin_band)
             if spin_stats["ok"]:
                 X_tg = cp.X_target.copy()
                 X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
@@ -276,6 +296,13 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
         low = dist < options.min_clearance - _DISTANCE_SLACK
         if not low.any():
             break
+        if dist.min() < options.min_clearance - 0.5e-3 and spin_mode != "ik":
+            # far below the bound: the spin put the spindle body into the hub (pinning the
+            # axis cannot fix that); fall back to the IK's spin
+            log.info("window %d: %.2f mm clearance with the searched spin; using the IK's spin",
+                     w, dist.min() * 1e3)
+            spin_mode = "ik"
+            continue
         # keep the IK's (clearance-checked) axis around the samples that came too close
         near = np.convolve(low.astype(float), np.ones(2 * int(3e-3 / options.dense_step) + 1),
                            mode="same") > 0

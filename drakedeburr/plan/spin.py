@@ -38,7 +38,8 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 
 def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch: np.ndarray,
                   *, n_spin: int = 72, max_step: int = 4, wrist_margin: float = 0.15,
-                  sigma: float = 4e-3, stride: int = 2) -> tuple[np.ndarray, dict]:
+                  sigma: float = 4e-3, stride: int = 2, psi_ref: np.ndarray | None = None,
+                  band: float = np.pi) -> tuple[np.ndarray, dict]:
     """Smooth spin along a dense cut that minimises the joint motion.
 
     Args:
@@ -50,6 +51,10 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         wrist_margin: smallest |J5| allowed [rad].
         sigma: Gaussian width of the final smoothing [m].
         stride: the program runs on every ``stride``-th sample (the result is interpolated).
+        psi_ref: (N,) reference spin [rad] (the IK's, chosen with the clearance constraint);
+            band: spins farther than this from it are not considered [rad]. The search does
+            not query distances (too slow for 72 spins x every sample): staying near the IK's
+            spin keeps the spindle body where the IK found room, and the caller re-checks.
 
     Returns:
         (N, 4, 4) poses with the chosen spin, and stats (cost, feasible share, spin range).
@@ -79,6 +84,9 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         qq[..., j] = qb[j] + _wrap(qq[..., j] - qb[j])
     bad |= np.any((qq < kin.q_lower) | (qq > kin.q_upper), axis=2)
     bad |= np.abs(qq[..., 4]) < wrist_margin
+    if psi_ref is not None and band < np.pi:
+        ref = np.asarray(psi_ref, float)[sel]
+        bad |= np.abs(_wrap(psi[None, :] - ref[:, None])) > band
     w = 1.0 / np.asarray(kin.v_max, float)
     INF = np.inf
     cost = np.where(bad[0], INF, 0.0)
