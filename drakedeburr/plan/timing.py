@@ -44,7 +44,7 @@ class TimingLimits:
     v_max: tuple[float, ...]
     a_max: tuple[float, ...]
     velocity_fraction: float = 0.95
-    acceleration_fraction: float = 0.8
+    acceleration_fraction: float = 0.9
 
 
 @dataclass(frozen=True, eq=False)
