@@ -171,6 +171,12 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     # wrist can follow the whole loop inside its limits; try the best few distinct seeds
     seeds = seed_by_spin(kin, checker, p_HT[0], wt.axis_H[0], wt.t_H[0], q_from, options.ik,
                          count=options.window_attempts) or [None]
+    # then the seeds ranked from home: the previous window's end may hold the arm in a
+    # configuration from which this loop cannot be closed (the joint move goes anywhere)
+    more = seed_by_spin(kin, checker, p_HT[0], wt.axis_H[0], wt.t_H[0], kin.q_home, options.ik,
+                        count=options.window_attempts) or []
+    seeds = list(seeds) + [q for q in more if q is not None and not any(
+        s is not None and np.max(np.abs(q - s)) < 1e-6 for s in seeds)]
     wik, best_score = None, 0
     for attempt, q_first in enumerate(seeds):
         trial = solve_window_ik(cell, kin, checker, p_HQ, wt.axis_H[loop], wt.cone_axis_H[loop],
