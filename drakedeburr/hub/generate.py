@@ -535,15 +535,19 @@ class _Probes:
                 pts.append(np.column_stack([q, z - f * t]))
         return cls(np.concatenate(pts))
 
-    def hit(self, hull_pts: np.ndarray) -> bool:
+    def inside(self, hull_pts: np.ndarray) -> np.ndarray:
+        """Indices of the probes inside the convex hull of ``hull_pts``."""
         from scipy.spatial import ConvexHull
 
         lo, hi = hull_pts.min(axis=0), hull_pts.max(axis=0)
-        m = np.all((self.pts >= lo) & (self.pts <= hi), axis=1)
-        if not m.any():
-            return False
+        m = np.flatnonzero(np.all((self.pts >= lo) & (self.pts <= hi), axis=1))
+        if not len(m):
+            return m
         eq = ConvexHull(hull_pts).equations
-        return bool(np.any(np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)))
+        return m[np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)]
+
+    def hit(self, hull_pts: np.ndarray) -> bool:
+        return bool(len(self.inside(hull_pts)))
 
 
 @dataclass
