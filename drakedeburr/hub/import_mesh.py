@@ -337,7 +337,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     import yaml
     from manifold3d import Manifold, Mesh64
 
-    from drakedeburr.hub.extract import extract_window_edges
+    from drakedeburr.hub.extract import extract_window_edges, hub_frame_from_mesh
     from drakedeburr.hub.generate import (
         _Probes,
         _curvature,
@@ -386,6 +386,17 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
 
     if progress is not None:
         progress(1, steps, "hub frame and window edges")
+    z_M = hub_frame_from_mesh(mesh, options.axis_M).X_MH[:3, 2]
+    v = mesh.vertices - mesh.vertices.mean(axis=0)
+    across = v - np.outer(v @ z_M, z_M)
+    span = across @ np.linalg.svd(across, full_matrices=False)[2][:2].T
+    diameter = float(np.max(np.ptp(span, axis=0)))  # extent across the axis
+    if not DIAMETER_RANGE[0] <= diameter <= DIAMETER_RANGE[1]:
+        raise InputError(
+            f"{path}: diameter across the hub axis {diameter * 1e3:.0f} mm (file read as "
+            f"{lm.unit}) is not a wheel hub's ({DIAMETER_RANGE[0] * 1e3:.0f}-"
+            f"{DIAMETER_RANGE[1] * 1e3:.0f} mm); force the unit (unit='m'/'mm') or check the "
+            f"file")
     ext = extract_window_edges(mesh, source=str(path), axis_M=options.axis_M,
                                spacing=options.edge_spacing,
                                expected_windows=options.expected_windows)
@@ -393,13 +404,6 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     X_HM = np.linalg.inv(X_MH)
     V_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
     F = np.asarray(mesh.faces, np.int64)
-    diameter = 2.0 * float(np.linalg.norm(V_H[:, :2], axis=1).max())
-    if not DIAMETER_RANGE[0] <= diameter <= DIAMETER_RANGE[1]:
-        raise InputError(
-            f"{path}: diameter across the hub axis {diameter * 1e3:.0f} mm (file read as "
-            f"{lm.unit}) is not a wheel hub's ({DIAMETER_RANGE[0] * 1e3:.0f}-"
-            f"{DIAMETER_RANGE[1] * 1e3:.0f} mm); force the unit (unit='m'/'mm') or check the "
-            f"file")
 
     import open3d as o3d
 
