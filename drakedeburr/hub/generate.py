@@ -48,7 +48,8 @@ from drakedeburr.errors import InputError
 from drakedeburr.hub.spec import HubSpec, spec_to_yaml
 
 __all__ = ["GeneratedHub", "generate_hub", "build_window_outlines", "build_solid",
-           "write_npz", "window_intrusion", "sdf_text", "GENERATOR_VERSION"]
+           "write_npz", "window_intrusion", "sdf_text", "obj_text", "loop_curvature",
+           "WindowProbes", "GENERATOR_VERSION"]
 
 log = logging.getLogger(__name__)
 
@@ -479,7 +480,7 @@ def window_center_xy(poly_xy: np.ndarray, grid: int = 80) -> np.ndarray:
     return cand[int(np.argmax(d))]
 
 
-def _curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
+def loop_curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
     """Discrete curvature [1/m] of a closed polyline: circle through points i-k, i, i+k."""
     a = np.roll(p, k, axis=0)
     c = np.roll(p, -k, axis=0)
@@ -511,7 +512,7 @@ def _sector_hulls(r0: float, r1: float, z0: float, z1: float, sag: float, phase:
     return out
 
 
-class _Probes:
+class WindowProbes:
     """Points just inside the window openings [mm]: a collision hull containing one reaches
     more than ``COLL_WINDOW_REACH_MM`` into an opening."""
 
@@ -519,7 +520,7 @@ class _Probes:
         self.pts = np.asarray(pts, float)
 
     @classmethod
-    def from_spec(cls, spec: HubSpec, windows: list[_Window]) -> _Probes:
+    def from_spec(cls, spec: HubSpec, windows: list[_Window]) -> WindowProbes:
         pts = []
         t = spec.face_thickness * 1e3
         for w in windows:
@@ -557,12 +558,12 @@ class _Piece:
     hull_vol: float
 
 
-def _piece_ok(pc: _Piece, t: float, probes: _Probes) -> bool:
+def _piece_ok(pc: _Piece, t: float, probes: WindowProbes) -> bool:
     excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
     return excess <= COLL_TOL_MM and not probes.hit(pc.pts)
 
 
-def _plate_pieces(spec: HubSpec, plate, probes: _Probes, progress: Progress = None) -> list:
+def _plate_pieces(spec: HubSpec, plate, probes: WindowProbes, progress: Progress = None) -> list:
     """Convex pieces [mm] of the plate: quadtree of square cells, then greedy merging of
     neighbours (see module doc)."""
     from manifold3d import CrossSection
@@ -642,7 +643,7 @@ def _collision_pieces(spec: HubSpec, windows: list[_Window], progress: Progress 
     pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = _dished_plate(spec, windows) - _tube(0.0, bore_r, -1e3, 1e3)
-    pieces = _plate_pieces(spec, plate, _Probes.from_spec(spec, windows), progress)
+    pieces = _plate_pieces(spec, plate, WindowProbes.from_spec(spec, windows), progress)
     pad, rims = _rings(spec)
     if pad is not None:
         pieces += _sector_hulls(bore_r, *pad, COLL_SAG_MM, spec.spoke_phase)
@@ -701,7 +702,7 @@ def window_intrusion(loops: list[dict], piece_vertices: list[np.ndarray],
 
 
 # --------------------------------------------------------------------------- files
-def _obj_text(V_m: np.ndarray, faces: np.ndarray, header: str) -> str:
+def obj_text(V_m: np.ndarray, faces: np.ndarray, header: str) -> str:
     Vr = np.round(V_m, OBJ_DECIMALS) + 0.0
     buf = io.StringIO()
     buf.write(f"# {header}\n# units: metres, frame H\n")
@@ -808,7 +809,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
     files = []
     atomic_write_text(out / "hub.yaml", spec_to_yaml(spec))
     files.append("hub.yaml")
-    atomic_write_text(out / "hub.obj", _obj_text(V_m, F, f"drakedeburr hub {spec.name}"))
+    atomic_write_text(out / "hub.obj", obj_text(V_m, F, f"drakedeburr hub {spec.name}"))
     files.append("hub.obj")
     arrays: dict[str, np.ndarray] = {"kinds": np.array([lp["kind"] for lp in loops])}
     for lp in loops:
@@ -836,7 +837,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             pv_m = np.round(pv * 1e-3, OBJ_DECIMALS) + 0.0
             piece_V.append(pv_m)
             name = f"collision/piece_{i:03d}.obj"
-            atomic_write_text(out / name, _obj_text(pv_m, pf, f"hub {spec.name} convex piece {i}"))
+            atomic_write_text(out / name, obj_text(pv_m, pf, f"hub {spec.name} convex piece {i}"))
             piece_files.append(name)
         for stale in sorted(coll_dir.glob("piece_*.obj")):
             if f"collision/{stale.name}" not in piece_files:
@@ -865,7 +866,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
         # curvature over chords of ~0.6 of the smallest radius (fillet or blend): consecutive
         # points are collinear between outline vertices and would give spikes
         r_min = min(lp["fillet_m"], spec.blend_radius)
-        kappa = _curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
+        kappa = loop_curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
         c_xy = window_center_xy(lp["poly_xy_m"])
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         win_summary.append({

@@ -339,9 +339,9 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
 
     from drakedeburr.hub.extract import extract_window_edges, hub_frame_from_mesh
     from drakedeburr.hub.generate import (
-        _Probes,
-        _curvature,
-        _obj_text,
+        WindowProbes,
+        loop_curvature,
+        obj_text,
         sdf_text,
         window_center_xy,
         window_intrusion,
@@ -447,7 +447,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
             probe_edge.append(np.c_[w.p_HE, w.n_wall_H, w.t_H])
     probe_pts, probe_edge = np.concatenate(probe_pts), np.concatenate(probe_edge)
     ok = in_opening(probe_pts)
-    probes = _Probes(probe_pts[ok])
+    probes = WindowProbes(probe_pts[ok])
     t_coll = time.perf_counter()
     pieces, coll_stats = _collision_pieces(simple, probes, probe_edge[ok], options, progress)
     coll_seconds = time.perf_counter() - t_coll
@@ -466,7 +466,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     for w in windows:
         p = w.p_HE
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
-        kappa = _curvature(p, max(2, int(round(2e-3 / options.edge_spacing))))
+        kappa = loop_curvature(p, max(2, int(round(2e-3 / options.edge_spacing))))
         c_xy = window_center_xy(p[:, :2])
         u = c_xy / np.linalg.norm(c_xy)
         win_summary.append({
@@ -520,11 +520,11 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=out_root))
     try:
         atomic_write_text(tmp / "hub.yaml", (
-            f"# drakedeburr hub imported from a mesh by `drakedeburr hub import` (see "
-            f"docs/hub.md); do not edit.\n"
+            "# drakedeburr hub imported from a mesh by `drakedeburr hub import` (see "
+            "docs/hub.md); do not edit.\n"
             + yaml.safe_dump({"name": name, "imported_from": str(path.resolve()),
                               "mesh_sha256": sha}, sort_keys=False)))
-        atomic_write_text(tmp / "hub.obj", _obj_text(V_H, F, f"drakedeburr hub {name} "
+        atomic_write_text(tmp / "hub.obj", obj_text(V_H, F, f"drakedeburr hub {name} "
                                                      f"(imported from {path.name})"))
         arrays: dict[str, np.ndarray] = {"kinds": np.array([w.kind for w in windows])}
         for w in windows:
@@ -537,7 +537,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
             hull = Manifold.hull_points(pv)
             hv, hf = _manifold_arrays(hull)
             rel = f"collision/piece_{i:03d}.obj"
-            atomic_write_text(tmp / rel, _obj_text(hv, hf, f"hub {name} convex piece {i}"))
+            atomic_write_text(tmp / rel, obj_text(hv, hf, f"hub {name} convex piece {i}"))
             piece_files.append(rel)
         atomic_write_text(tmp / "hub.sdf", sdf_text(
             name, mass, com, I_com, piece_files,
