@@ -176,7 +176,7 @@ def test_collision_pieces_cover_the_solid_and_leave_the_openings_free(imported):
     lo, hi = truth.vertices_H.min(0), truth.vertices_H.max(0)
     q = rng.uniform(lo, hi, (60000, 3))
     d = _signed_distance(scene, q)
-    deep = q[d < -0.6e-3]  # deeper inside than the simplification tolerance (0.5 mm)
+    deep = q[d < -0.7e-3]  # deeper than the simplification tolerance (0.5 mm) + float32 slack
     assert len(deep) > 2000
     viol = _max_violation(eqs, deep @ X_HHb[:3, :3].T + X_HHb[:3, 3])
     assert np.all(viol <= 1e-7), f"{np.sum(viol > 1e-7)} solid points outside every piece"
