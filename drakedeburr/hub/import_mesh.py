@@ -18,11 +18,11 @@ Steps:
 4. Convex collision pieces: CoACD (approximate convex decomposition, Wei et al. 2022) on the
    solid simplified by ``simplify_tolerance``; then every piece that reaches more than
    ``window_reach`` into a window opening (probe points: edge points pushed into the opening and
-   down the wall, kept where they are outside the solid; the generator's probe helper) is
-   replaced: the solid inside that piece is decomposed again with a halved CoACD threshold, or
-   cut in two across its longest extent when CoACD keeps it whole. Pieces still reaching into a
-   window after ``max_refine_rounds`` are kept and reported (``summary.json``:
-   ``collision.max_window_intrusion_mm``), not hidden.
+   down the wall, kept where they are outside the solid; the generator's ``WindowProbes``) is
+   replaced by the hulls of the solid inside it cut in two at an offending probe's edge point
+   (across the edge, else along the wall plane, else across the longest extent), round after
+   round. Pieces still reaching into a window after ``max_refine_rounds`` are kept and
+   reported (``summary.json``: ``collision.max_window_intrusion_mm``), not hidden.
 5. Files are written into a temporary folder next to the target and renamed into place. The
    folder name carries a hash of the mesh bytes and the options, so importing the same file
    again returns the cached folder without running CoACD.
@@ -84,9 +84,9 @@ class ImportOptions:
         window_reach: a piece may reach at most this far into a window opening [m].
         probe_depth: the opening probes span this depth below the edge [m].
         max_refine_rounds: refinement rounds for pieces that reach into an opening.
-        refine: how such a piece's part is split: "bisect" (in two across its longest
-            extent; fast) or "coacd" (CoACD again with the threshold halved per round, cut in
-            two when it keeps the part whole; fewer pieces on curved walls, slower).
+        refine: how such a piece's part is split: "cut" (in two at the offending probe,
+            see the module doc; fast) or "coacd" (CoACD again with the threshold halved per
+            round, the cut when CoACD keeps the part whole; slower).
         density: material density for the inertia in hub.sdf [kg/m^3] (aluminium).
     """
 
@@ -105,7 +105,7 @@ class ImportOptions:
     window_reach: float = 1.0e-3
     probe_depth: float = 20e-3
     max_refine_rounds: int = 40
-    refine: str = "bisect"
+    refine: str = "cut"
     density: float = 2700.0
 
 
@@ -350,6 +350,8 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     from drakedeburr.hub.mesh_io import load_hub_mesh
 
     t_start = time.perf_counter()
+    if options.refine not in ("cut", "coacd"):
+        raise InputError(f"ImportOptions.refine must be 'cut' or 'coacd', got {options.refine!r}")
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
