@@ -287,7 +287,7 @@ def _collision_pieces(solid, probes, probe_edge: np.ndarray, options: ImportOpti
         bad = [i for i, h in hits.items() if len(h)]
         if progress is not None:
             progress(rnd, options.max_refine_rounds,
-                     f"collision refinement: {len(bad)} pieces reach into a window")
+                     f"collision refinement {rnd + 1}: {len(bad)} pieces reach into a window")
         if not bad:
             break
         stats["refine_rounds"] = rnd + 1
@@ -451,7 +451,8 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     ok = in_opening(probe_pts)
     probes = WindowProbes(probe_pts[ok])
     t_coll = time.perf_counter()
-    pieces, coll_stats = _collision_pieces(simple, probes, probe_edge[ok], options, progress)
+    sub = None if progress is None else (lambda d, n, label: progress(2, steps, label))
+    pieces, coll_stats = _collision_pieces(simple, probes, probe_edge[ok], options, sub)
     coll_seconds = time.perf_counter() - t_coll
     intrusion = window_intrusion(loops, pieces, options.probe_depth, keep=in_opening)
 
