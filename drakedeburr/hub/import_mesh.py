@@ -21,8 +21,11 @@ Steps:
    down the wall, kept where they are outside the solid; the generator's ``WindowProbes``) is
    replaced by the hulls of the solid inside it cut in two at an offending probe's edge point
    (across the edge, else along the wall plane, else across the longest extent), round after
-   round. Pieces still reaching into a window after ``max_refine_rounds`` are kept and
-   reported (``summary.json``: ``collision.max_window_intrusion_mm``), not hidden.
+   round. The same for pieces standing more than ``front_reach`` proud of the surface seen
+   from the front (probes on a plan-view grid; cut circumferentially, else radially): CoACD's
+   coarse hulls bridge the dish and the corner where the face meets the rim lip by up to
+   12 mm otherwise. Pieces still reaching into a window after ``max_refine_rounds`` are kept
+   and reported (``summary.json``: ``collision.max_window_intrusion_mm``), not hidden.
 5. Files are written into a temporary folder next to the target and renamed into place. The
    folder name carries a hash of the mesh bytes and the options, so importing the same file
    again returns the cached folder without running CoACD.
@@ -84,6 +87,11 @@ class ImportOptions:
         window_reach: a piece may reach at most this far into a window opening [m].
         probe_depth: the opening probes span this depth below the edge [m].
         max_refine_rounds: refinement rounds for pieces that reach into an opening.
+        front_reach: a piece may stand at most this far proud of the surface seen from the
+            front (+Z_H, where the tool works) [m]; probes on a plan-view grid of
+            ``front_probe_spacing`` [m]. (Surfaces the front view does not see, e.g. the tyre
+            well and the barrel's inside, are not probed: their pieces may bridge concave
+            regions, a conservative model where no tool goes.)
         refine: how such a piece's part is split: "cut" (in two at the offending probe,
             see the module doc; fast) or "coacd" (CoACD again with the threshold halved per
             round, the cut when CoACD keeps the part whole; slower).
@@ -105,6 +113,8 @@ class ImportOptions:
     window_reach: float = 1.0e-3
     probe_depth: float = 20e-3
     max_refine_rounds: int = 40
+    front_reach: float = 3.0e-3
+    front_probe_spacing: float = 4.0e-3
     refine: str = "cut"
     density: float = 2700.0
 
@@ -225,6 +235,36 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray):
     flip = np.einsum("ij,ij->i", t, chord) < 0
     t[flip] *= -1.0
     return n_wall, n_face, t
+
+
+def _front_probes(scene, face_normals: np.ndarray, options: ImportOptions):
+    """Probes ``front_reach`` above the surface seen along -Z_H (plan-view grid) and their cut
+    data (K, 9): surface point, circumferential and radial directions (cut planes that part
+    a hull bridging a concave corner of the face or a ring; circumferential first: fewer
+    pieces, measured)."""
+    import open3d as o3d
+
+    h = options.front_probe_spacing
+    r_max = 0.5 * DIAMETER_RANGE[1]
+    g = np.arange(-r_max, r_max + h, h)
+    gx, gy = np.meshgrid(g, g, indexing="ij")
+    keep = np.hypot(gx, gy).ravel() <= r_max
+    rays = np.zeros((int(keep.sum()), 6), np.float32)
+    rays[:, 0], rays[:, 1] = gx.ravel()[keep], gy.ravel()[keep]
+    rays[:, 2], rays[:, 5] = 1.0, -1.0
+    ans = scene.cast_rays(o3d.core.Tensor(rays))
+    t = ans["t_hit"].numpy()
+    hit = np.isfinite(t)
+    foot = rays[hit, :3].astype(float) - np.c_[np.zeros((hit.sum(), 2)), t[hit]]
+    n = face_normals[ans["primitive_ids"].numpy()[hit].astype(np.int64)]
+    n[n[:, 2] < 0] *= -1.0
+    q = foot + options.front_reach * n
+    er = np.c_[foot[:, :2], np.zeros(len(foot))]
+    er /= np.maximum(np.linalg.norm(er, axis=1, keepdims=True), 1e-12)
+    et = np.c_[-er[:, 1], er[:, 0], np.zeros(len(er))]
+    d = scene.compute_signed_distance(o3d.core.Tensor(q.astype(np.float32))).numpy()
+    ok = d > 0.5 * options.front_reach
+    return q[ok], np.c_[foot, et, er][ok]
 
 
 # --------------------------------------------------------------------------- collision
@@ -449,12 +489,18 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
             probe_edge.append(np.c_[w.p_HE, w.n_wall_H, w.t_H])
     probe_pts, probe_edge = np.concatenate(probe_pts), np.concatenate(probe_edge)
     ok = in_opening(probe_pts)
-    probes = WindowProbes(probe_pts[ok])
+    face_pts, face_cut = _front_probes(scene, tm.face_normals, options)
+    n_window_probes = int(ok.sum())
+    probes = WindowProbes(np.concatenate([probe_pts[ok], face_pts]))
     t_coll = time.perf_counter()
     sub = None if progress is None else (lambda d, n, label: progress(2, steps, label))
-    pieces, coll_stats = _collision_pieces(simple, probes, probe_edge[ok], options, sub)
+    pieces, coll_stats = _collision_pieces(simple, probes,
+                                           np.concatenate([probe_edge[ok], face_cut]), options,
+                                           sub)
     coll_seconds = time.perf_counter() - t_coll
     intrusion = window_intrusion(loops, pieces, options.probe_depth, keep=in_opening)
+    proud = WindowProbes(face_pts)
+    face_hits = sum(len(proud.inside(pv)) for pv in pieces)
 
     if progress is not None:
         progress(3, steps, "write folder")
@@ -505,12 +551,16 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
             "method": f"CoACD {_coacd_version()} on the solid simplified within "
                       f"{options.simplify_tolerance * 1e3:g} mm (threshold "
                       f"{options.threshold:g}); pieces reaching > "
-                      f"{options.window_reach * 1e3:g} mm into a window opening cut in two "
-                      f"across the window edge ({options.refine})",
+                      f"{options.window_reach * 1e3:g} mm into a window opening or > "
+                      f"{options.front_reach * 1e3:g} mm proud of the front surface cut in two "
+                      f"at the offending probe ({options.refine})",
             "piece_count": len(pieces),
             "max_window_intrusion_mm": round(intrusion * 1e3, 3),
             "window_reach_allowed_mm": round(options.window_reach * 1e3, 3),
-            "probes_in_openings": int(len(probes.pts)),
+            "probes_in_openings": n_window_probes,
+            "front_probes": int(len(face_pts)),
+            "front_probes_inside_pieces": int(face_hits),
+            "front_reach_allowed_mm": round(options.front_reach * 1e3, 3),
             "seconds": round(coll_seconds, 2), **coll_stats,
         },
     }
