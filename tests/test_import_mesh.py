@@ -237,6 +237,9 @@ def test_cli_hub_import_and_verify_a_mesh(imported, tmp_path, capsys):
     stl, cache = imported["stl"], imported["cache"]
     assert main(["-q", "hub", "import", str(stl), "--out", str(cache), "--no-progress"]) == 0
     assert "cached" in capsys.readouterr().out
+    assert main(["-q", "hub", "info", str(imported["res"].dir)]) == 0
+    assert main(["-q", "hub", "list", "--dir", str(cache)]) == 0
+    assert "5 windows (5 large, 0 small)" in capsys.readouterr().out
     # plan (one window: a whole hub is too slow for a unit test) and verify the imported mesh
     f = tmp_path / "report.json"
     code = main(["-q", "verify", str(stl), "--hub-cache", str(cache), "--windows", "0",

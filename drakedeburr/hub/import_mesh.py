@@ -501,6 +501,8 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     intrusion = window_intrusion(loops, pieces, options.probe_depth, keep=in_opening)
     proud = WindowProbes(face_pts)
     face_hits = sum(len(proud.inside(pv)) for pv in pieces)
+    hulls = [Manifold.hull_points(pv) for pv in pieces]
+    hull_volume = float(sum(h.volume() for h in hulls))
 
     if progress is not None:
         progress(3, steps, "write folder")
@@ -555,6 +557,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
                       f"{options.front_reach * 1e3:g} mm proud of the front surface cut in two "
                       f"at the offending probe ({options.refine})",
             "piece_count": len(pieces),
+            "hull_volume_over_solid": round(hull_volume / float(mp.volume), 4),
             "max_window_intrusion_mm": round(intrusion * 1e3, 3),
             "window_reach_allowed_mm": round(options.window_reach * 1e3, 3),
             "probes_in_openings": n_window_probes,
@@ -586,8 +589,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
         write_npz(tmp / "edges.npz", arrays)
         (tmp / "collision").mkdir()
         piece_files = []
-        for i, pv in enumerate(pieces):
-            hull = Manifold.hull_points(pv)
+        for i, hull in enumerate(hulls):
             hv, hf = _manifold_arrays(hull)
             rel = f"collision/piece_{i:03d}.obj"
             atomic_write_text(tmp / rel, obj_text(hv, hf, f"hub {name} convex piece {i}"))
