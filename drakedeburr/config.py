@@ -66,13 +66,21 @@ class Tolerances:
     registration_inlier_distance: float = 0.3e-3  # [m] scan point counts as on the hub model
     registration_fitness_min: float = 0.95  # [-] share of scan points on the model to accept
     registration_rmse_max: float = 0.1e-3  # [m] RMS point-to-model distance of those inliers
-    orientation_match: float = 1e-3  # [rad] trajectory vs program tool orientation (verify)
+    # [rad] trajectory vs program tool orientation (verify): the executed cut turns the tool
+    # smoothly where the program's slerp between targets kinks at each target (controllers
+    # blend orientation in their zones too); the planner keeps the axis 10 mrad inside its
+    # cone, so the program's own axis stays inside it as well
+    orientation_match: float = 10e-3
     wrist_margin: float = 0.15  # [rad] smallest |J5| allowed (J5 = 0 is the wrist singularity)
     min_manipulability: float = 1e-4  # [-] |det J| of the flange Jacobian (advisory)
     cycle_time_ratio: float = 1.05  # [-] cycle time / physical limit target (advisory)
     j6_range_large: float = 0.3491  # [rad] 20 deg: paper's J6 range on large windows (advisory)
     j6_range_small: float = 0.1745  # [rad] 10 deg: on small windows (advisory)
     query_distance: float = 0.02  # [m] distances above this are reported as "> this" (verify)
+    # [m] how far a hub's convex collision pieces may reach past its true surface (the hub
+    # generator splits any piece reaching > 0.5 mm into a window opening); allowed on top of
+    # the depth of cut when the burr head's penetration of the pieces is checked
+    collision_model_excess: float = 0.5e-3
 
 
 def load_config(cls, path: str | Path):

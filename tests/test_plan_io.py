@@ -108,3 +108,38 @@ def test_workpiece_in_hand_program_uses_the_hub_as_tool_and_says_so(tmp_path):
     np.testing.assert_allclose(prog.X_WO, X_WT)
     text = write_program(prog, tmp_path / "w.mod", "rapid")[0].read_text()
     assert "UNVERIFIED" in text and "robhold" in text
+
+
+def test_tool_path_reference_survives_save_load(tmp_path):
+    """A saved plan keeps what verification checks it against: the ToolPath's CL points,
+    frames, angles, box and cones (not only the hub's edges)."""
+    from dataclasses import replace
+
+    from drakedeburr.config import OrientationBounds
+    from drakedeburr.plan.types import ToolPathRecord
+
+    rng = np.random.default_rng(1)
+    m = 7
+    R = np.linalg.qr(rng.normal(size=(m, 3, 3)))[0]
+    tp = ToolPathRecord(window_index=0, kind="large", p_HC=rng.normal(size=(m, 3)), R_HL=R,
+                        axis_H=rng.normal(size=(m, 3)), theta_A=rng.uniform(size=m),
+                        theta_B=rng.uniform(size=m), cone_axis_H=rng.normal(size=(m, 3)),
+                        bounds=OrientationBounds(0.26, 0.44), cone_half_angle=0.08,
+                        cone_outer_half_angle=0.124, depth_of_cut=1.5e-3)
+    plan = replace(_plan(), tool_path=(tp,))
+    mut.save_plan(plan, tmp_path / "p")
+    back = mut.load_plan(tmp_path / "p").tool_path[0]
+    for name in ("p_HC", "R_HL", "axis_H", "theta_A", "theta_B", "cone_axis_H"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(tp, name))
+    assert back.bounds == tp.bounds and back.kind == "large" and back.window_index == 0
+    assert (back.cone_half_angle, back.cone_outer_half_angle, back.depth_of_cut) == (
+        0.08, 0.124, 1.5e-3)
+    # a damaged file names what is missing
+    import io as _io
+    with np.load(tmp_path / "p" / "arrays.npz") as a:
+        arr = {k: a[k] for k in a.files if k != "tp0_R_HL"}
+    buf = _io.BytesIO()
+    np.savez(buf, **arr)
+    (tmp_path / "p" / "arrays.npz").write_bytes(buf.getvalue())
+    with pytest.raises(InputError, match="window 0 lacks R_HL"):
+        mut.load_plan(tmp_path / "p")

@@ -127,11 +127,6 @@ def test_dense_recheck_of_the_cut(planned):
 
 def test_joint_limits_are_respected_densely(planned, request):
     cell, _, plan = planned
-    if "toolpath" in request.node.callspec.id:
-        # known planner defect (issue #5, open): with the real chain the timed trajectory
-        # exceeds the joint acceleration limits (~1.5-1.75x; the verifier reports it too)
-        request.applymarker(pytest.mark.xfail(
-            reason="real chain: joint acceleration above the limits (issue #5)", strict=False))
     tr = plan.trajectory
     tt = np.linspace(0, tr.duration, 4000)
     q, qd = tr.value(tt), tr.derivative(tt)

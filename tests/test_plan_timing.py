@@ -51,3 +51,24 @@ def test_least_squares_fit_rounds_kinks_but_stays_close():
     # a cubic rounding a slope change of 10 rad/m over one knot span: ~ 10 * 4 mm / 8
     assert np.max(np.abs(f(s) - q)) < 1.2 * 10.0 * 4e-3 / 8
     assert np.max(np.abs(f(s, 2))) < 0.5 * np.max(np.abs(mut.joint_spline(s, q)(s, 2)))
+
+
+def test_curved_path_keeps_the_acceleration_limits_on_the_stored_trajectory():
+    # a wiggly wrist path: q'' varies fast between samples, where a check at the samples alone
+    # let the stored cubic Hermite trajectory overshoot the limits (issue 5)
+    s = np.linspace(0.0, 0.1, 401)
+    q = np.zeros((401, 6))
+    q[:, 3] = 0.4 * np.sin(2 * np.pi * s / 0.01)
+    q[:, 5] = -0.4 * np.sin(2 * np.pi * s / 0.01)
+    p = np.stack([s, np.zeros_like(s), np.zeros_like(s)], 1)
+    lim = mut.TimingLimits(v_cap=0.15, a_cap=3.0, v_max=V_MAX, a_max=A_MAX)
+    tp = mut.time_path(s, q, p, lim)
+    traj = JointTrajectory(t=tp.t, q=tp.q, qd=tp.qd)
+    tt = np.linspace(0, traj.duration, 40000)
+    qdd = traj.derivative(tt, 2)
+    assert np.all(np.abs(qdd) <= np.asarray(A_MAX) * lim.acceleration_fraction * 1.001)
+    assert np.all(np.abs(traj.derivative(tt)) <= np.asarray(V_MAX) * (1 + 1e-6))
+    # the curvature term alone bounds the speed: sdot <= sqrt(a / |q''|) at the peaks
+    a4 = A_MAX[3] * lim.acceleration_fraction
+    peak = np.argmax(np.abs(q[:, 3]))
+    assert tp.sdot[peak] <= np.sqrt(a4 / (0.4 * (2 * np.pi / 0.01) ** 2)) * 1.01

@@ -73,7 +73,7 @@ class IkOptions:
     """
 
     position_tolerance: float = 1e-6
-    min_distance: float = 2.05e-3
+    min_distance: float = 2.1e-3
     influence_distance: float = 2e-3
     axis_weight: float = 10.0
     joint_weights: tuple[float, ...] = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
@@ -83,7 +83,7 @@ class IkOptions:
     retries: int = 3
     min_wrist: float = 0.25
     spin_samples: int = 36
-    min_distance_floor: float = 2.0e-3
+    min_distance_floor: float = 2.05e-3
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,7 +7,10 @@ folder with a ``plan.json`` is complete):
   (N, 4, 4), ``X_WF`` (N, 4, 4), ``q_targets`` (N, 6), ``p_HC`` (N, 3) and ``n_H`` (N, 3) (NaN
   where a target has none); ``X_WH`` (4, 4). SI units.
 * ``plan.json``: ``format``, ``version``, scenario, hub, mode, per-target scalars, segments,
-  failures, meta. The ToolPath objects are not stored (``tool_path`` is None after loading).
+  failures, meta, and per window the orientation stage's reference (``tool_paths``: kind,
+  bounds, cone half-angles, depth of cut; the arrays ``tp<w>_<name>`` in ``arrays.npz``: CL
+  points, local frames, axes, angles, cone axes). After loading, ``plan.tool_path`` is a tuple
+  of :class:`~drakedeburr.plan.types.ToolPathRecord` - what verification needs of a ToolPath.
 
 The joint CSV is for people and controllers that take joint streams: ``t_s, q1_deg .. q6_deg``
 (degrees at the boundary, :mod:`drakedeburr.units`).
@@ -22,8 +25,16 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr._io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from drakedeburr.config import OrientationBounds
 from drakedeburr.errors import InputError
-from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
+from drakedeburr.plan.types import (
+    TOOL_PATH_ARRAYS,
+    CartesianTarget,
+    JointTrajectory,
+    Plan,
+    PlanSegment,
+    ToolPathRecord,
+)
 from drakedeburr.units import deg_from_rad
 
 __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv",
@@ -62,6 +73,16 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
         n_H=np.array([nan3 if tg.n_H is None else tg.n_H for tg in plan.targets]).reshape(n, 3),
         X_WH=np.asarray(plan.X_WH, float),
     )
+    tp_docs = []
+    for tp in _tool_paths(plan):
+        w = int(tp.window_index)
+        for name in TOOL_PATH_ARRAYS:
+            arrays[f"tp{w}_{name}"] = np.asarray(getattr(tp, name), float)
+        tp_docs.append(dict(window_index=w, kind=str(tp.kind),
+                            bounds=[float(tp.bounds.theta_min), float(tp.bounds.theta_max)],
+                            cone_half_angle=float(tp.cone_half_angle),
+                            cone_outer_half_angle=float(tp.cone_outer_half_angle),
+                            depth_of_cut=float(tp.depth_of_cut)))
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     atomic_write_bytes(folder / "arrays.npz", buf.getvalue())
@@ -75,6 +96,7 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
                   for s in plan.segments],
         failures=_jsonable(list(plan.failures)),
         meta=_jsonable(plan.meta),
+        tool_paths=tp_docs,
     )
     atomic_write_json(folder / "plan.json", doc, indent=1)
     return folder
@@ -120,10 +142,34 @@ def load_plan(path: str | Path) -> Plan:
     segments = tuple(PlanSegment(window_index=int(s["window_index"]), kind=s["kind"],
                                  target_range=tuple(s["target_range"]),
                                  t_range=tuple(s["t_range"])) for s in doc["segments"])
+    records = []
+    for d in doc.get("tool_paths", []):
+        w = int(d["window_index"])
+        missing = [n for n in TOOL_PATH_ARRAYS if f"tp{w}_{n}" not in arr]
+        if missing:
+            raise InputError(f"{npz_path}: tool path of window {w} lacks {', '.join(missing)}")
+        records.append(ToolPathRecord(
+            window_index=w, kind=d["kind"], bounds=OrientationBounds(*d["bounds"]),
+            cone_half_angle=float(d["cone_half_angle"]),
+            cone_outer_half_angle=float(d["cone_outer_half_angle"]),
+            depth_of_cut=float(d["depth_of_cut"]),
+            **{n: arr[f"tp{w}_{n}"] for n in TOOL_PATH_ARRAYS}))
     return Plan(scenario=doc["scenario"], hub=doc["hub"], mode=doc["mode"], X_WH=arr["X_WH"],
                 targets=tuple(targets), segments=segments,
                 trajectory=JointTrajectory(t=arr["t"], q=arr["q"], qd=arr["qd"]),
-                tool_path=None, failures=tuple(doc["failures"]), meta=doc["meta"])
+                tool_path=tuple(records) or None, failures=tuple(doc["failures"]),
+                meta=doc["meta"])
+
+
+def _tool_paths(plan: Plan) -> list:
+    """The plan's ToolPaths (tuple, dict by window or None) that carry everything a record
+    needs; stand-ins without cone axes are skipped."""
+    tp = plan.tool_path
+    if tp is None:
+        return []
+    items = list(tp.values()) if isinstance(tp, dict) else list(tp)
+    need = (*TOOL_PATH_ARRAYS, "bounds", "cone_half_angle", "cone_outer_half_angle")
+    return [x for x in items if x is not None and all(hasattr(x, n) for n in need)]
 
 
 def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Path:

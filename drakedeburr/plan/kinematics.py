@@ -186,10 +186,12 @@ class ClearanceChecker:
     Owns one diagram context whose scene-graph collision filters exclude the burr head against
     the hub (``SceneGraph.collision_filter_manager(context)``); every other pair counts. Used
     by the IK (its plant context carries the filter into MinimumDistanceLowerBoundConstraint)
-    and by the dense checks.
+    and by the dense checks. ``filter_burr_contact=False`` counts the burr head too: moves
+    that do not cut (transitions, home) must keep it clear of the hub as well.
     """
 
     cell: object
+    filter_burr_contact: bool = True
     context: object = field(init=False)
     plant_context: object = field(init=False)
     _sg_context: object = field(init=False)
@@ -200,9 +202,10 @@ class ClearanceChecker:
         c = self.cell
         self.context = c.diagram.CreateDefaultContext()
         self._sg_context = c.scene_graph.GetMyContextFromRoot(self.context)
-        c.scene_graph.collision_filter_manager(self._sg_context).Apply(
-            CollisionFilterDeclaration().ExcludeBetween(
-                GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
+        if self.filter_burr_contact:
+            c.scene_graph.collision_filter_manager(self._sg_context).Apply(
+                CollisionFilterDeclaration().ExcludeBetween(
+                    GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
         self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
 
     def min_distance(self, q: np.ndarray,

@@ -22,7 +22,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -47,6 +47,7 @@ Progress = Callable[[int, int, str], None] | None
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
 # few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
 _DISTANCE_SLACK = 1e-6
+CL_DELTA = 0.03e-3
 
 
 @dataclass(frozen=True)
@@ -78,11 +79,11 @@ class PlanOptions:
 
     params: ProcessParameters = field(default_factory=ProcessParameters)
     ik: IkOptions = field(default_factory=IkOptions)
-    dense_step: float = 1e-3
+    dense_step: float = 0.25e-3
     approach_distance: float = 15e-3
     approach_speed: float = 0.05
     tcp_acceleration: float = 3.0
-    joint_step: float = 0.02
+    joint_step: float = 0.004
     max_joint_jump: float = 0.2
     windows: tuple[int, ...] | None = None
     orientation_sigma: float = 2.0
@@ -92,6 +93,11 @@ class PlanOptions:
     contact_radius: float | None = 1.6e-3
     window_attempts: int = 4
     orientation_sigma_length: float | None = 2e-3
+    cut_motion: str = "blended"
+    blend_deviation: float = 0.03e-3
+    spin_sigma: float = 3e-3
+    axis_margin: float = 10e-3
+    spin_search: bool = True
 
 
 @dataclass
@@ -107,11 +113,13 @@ def _limits(kin: CellKinematics, v_cap: float, options: PlanOptions) -> TimingLi
                         v_max=tuple(kin.v_max), a_max=tuple(kin.a_max))
 
 
-def _time_cartesian(kin, q, s, X, v_cap, options) -> tuple[TimedPath, float]:
+def _time_cartesian(kin, q, s, X, v_cap, options, interpolate: bool = False
+                    ) -> tuple[TimedPath, float]:
     """Timed Cartesian stretch with the widest joint-spline fit whose tool deviation from the
-    commanded samples stays within ``options.fit_tolerance``; returns it and that deviation."""
+    commanded samples stays within ``options.fit_tolerance`` (``interpolate``: no fit); returns
+    it and that deviation."""
     limits = _limits(kin, v_cap, options)
-    for spacing in (*options.fit_spacings, None):
+    for spacing in ((None,) if interpolate else (*options.fit_spacings, None)):
         timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing)
         dev = float(np.max(np.linalg.norm(kin.X_HT_from_q(timed.q)[:, :3, 3] - X[:, :3, 3],
                                           axis=1)))
@@ -125,11 +133,12 @@ def _time_joint(kin, q, s, v_cap, options) -> TimedPath:
     return time_path(s, q, p, _limits(kin, v_cap, options))
 
 
-def _target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None) -> CartesianTarget:
+def _target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None,
+            zone: float = 0.0) -> CartesianTarget:
     q = np.asarray(q, float)
     return CartesianTarget(window_index=window, segment=seg, cl_index=cl,
                            X_HT=kin.X_HT_from_q(q), X_WF=kin.fk_flange(q), q=q.copy(),
-                           speed=float(speed), zone=0.0, motion=motion,
+                           speed=float(speed), zone=float(zone), motion=motion,
                            p_HC=None if p_HC is None else np.asarray(p_HC, float),
                            n_H=None if n_H is None else np.asarray(n_H, float))
 
@@ -138,7 +147,6 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                  failures: list, progress: Progress
                  ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
     """Approach, cut and retract of one window; None when the window cannot be planned."""
-    params = options.params
     r_c, lift = contact_geometry(options.contact_radius)
     m = len(wt)
     # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
@@ -183,6 +191,9 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         return None
     order = loop[good]
     X_ik = wik.X_HT[good]
+    if options.cut_motion == "blended":
+        return _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
+                                      order, X_ik, t_ik)
     if options.orientation_sigma_length:
         s_ik = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(X_ik[:, :3, 3], axis=0),
                                                                axis=1))])
@@ -224,8 +235,92 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
         failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
                              reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
-    dmin = float(np.min(dist))
     t_dense = time.perf_counter() - t1
+    return _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik,
+                                X_cut, cut, cut.q[cut.target_index], dist, reverted, t_ik,
+                                t_dense)
+
+
+def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good, order, X_ik,
+                           t_ik):
+    """The executed cut as a smooth path (:mod:`drakedeburr.plan.cut_path`): blended corners
+    within ``blend_deviation`` of the linear program, the smoothest axis inside the cones."""
+    from drakedeburr.plan.cut_path import cut_path
+    from drakedeburr.plan.interpolate import DensePath
+    from drakedeburr.plan.spin import optimize_spin
+
+    t1 = time.perf_counter()
+    w = wt.window_index
+    pin = None
+    dev = np.full(len(order), options.blend_deviation)
+    for attempt in range(5):
+        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
+                      spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
+                      deviation=dev)
+        if options.spin_search:
+            X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
+                                               wrist_margin=Tolerances().wrist_margin)
+            if spin_stats["ok"]:
+                X_tg = cp.X_target.copy()
+                X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
+                cp = replace(cp, X_HT=X_spin, X_target=X_tg)
+            else:
+                log.info("window %d: spin search failed (%s); keeping the fixed spin", w,
+                         spin_stats["reason"])
+        q_d, ok_d = kin.track(kin.X_WF_from_X_HT(cp.X_HT), wik.q[good[0]])
+        cut = DensePath(X_HT=cp.X_HT, s=cp.s, target_index=cp.target_index, q=q_d, ok=ok_d)
+        if not np.all(cut.ok):
+            break
+        dist = np.array([checker.min_distance(q, options.min_clearance + 1e-3)[0]
+                         for q in cut.q])
+        low = dist < options.min_clearance - _DISTANCE_SLACK
+        if not low.any():
+            break
+        # keep the IK's (clearance-checked) axis around the samples that came too close
+        near = np.convolve(low.astype(float), np.ones(2 * int(3e-3 / options.dense_step) + 1),
+                           mode="same") > 0
+        margin = 3e-3
+        new_iv = np.column_stack([cp.s[low] - margin, cp.s[low] + margin])
+        pin = new_iv if pin is None else np.vstack([pin, new_iv])
+        # and round the corners there less (a blend cuts the corner by up to its deviation)
+        tight = np.unique(np.searchsorted(cp.s[cp.target_index], cp.s[near]))
+        tight = np.clip(np.concatenate([tight - 1, tight]), 0, len(order) - 1)
+        dev[tight] *= 0.25
+        log.info("window %d: %d samples under the clearance; pinning the axis and tightening "
+                 "the blends around them (attempt %d)", w, int(low.sum()), attempt + 1)
+    jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
+    for k in np.flatnonzero(~(jumps <= options.max_joint_jump)):
+        failures.append(dict(window=w, cl_index=-1, stage="dense", sample=int(k),
+                             reason=f"joint jump {float(jumps[k]):.3g} rad between dense samples"))
+    for k in np.flatnonzero(~cut.ok):
+        failures.append(dict(window=w, cl_index=-1, stage="dense", sample=int(k),
+                             reason="dense sample unreachable on the window's configuration"))
+    if not np.all(cut.ok):
+        return None
+    for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
+        failures.append(dict(window=w, cl_index=-1, stage="dense", sample=int(k),
+                             reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
+    # the program's targets: the CL targets' tool points with the smooth orientation there
+    q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
+                                    cut.q[cp.target_index[j]])[0][0]
+                          for j in range(len(cp.X_target))])
+    bad = np.flatnonzero(np.any(~np.isfinite(q_targets), axis=1))
+    for j in bad:
+        failures.append(dict(window=w, cl_index=int(order[j]), stage="dense",
+                             reason="program target unreachable with the smoothed orientation"))
+    if bad.size:
+        return None
+    t_dense = time.perf_counter() - t1
+    return _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik,
+                                cp.X_target, cut, q_targets, dist,
+                                np.zeros(len(order), bool), t_ik, t_dense, zones=cp.zone)
+
+
+def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik, X_cut,
+                         cut, q_targets, dist, reverted, t_ik, t_dense, zones=None):
+    """Approach/retract, timing and statistics of a window whose cut is tracked."""
+    params = options.params
+    dmin = float(np.min(dist))
     # approach and retract along the tool axis
     X0, Xe = X_cut[0], X_cut[-1]
     app = track_poses(kin, np.stack([X0, approach_pose(X0, options.approach_distance)]),
@@ -246,14 +341,16 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     s_app = app.s[-1] - app.s[::-1]
     t2 = time.perf_counter()
     timed_app, _ = _time_cartesian(kin, q_app, s_app, X_app, options.approach_speed, options)
+    # a blended cut is smooth already: interpolate its dense joints, no least-squares fit
     timed_cut, fit_dev = _time_cartesian(kin, cut.q, cut.s, cut.X_HT, params.grinding_speed,
-                                         options)
+                                         options, interpolate=options.cut_motion == "blended")
     timed_ret, _ = _time_cartesian(kin, ret.q, ret.s, ret.X_HT, options.approach_speed, options)
     t_time = time.perf_counter() - t2
     w = wt.window_index
-    q_targets = cut.q[cut.target_index]
+    zones = np.zeros(len(order)) if zones is None else zones
     cut_targets = [_target(kin, q_targets[j], w, "cut", int(i), params.grinding_speed, "linear",
-                           wt.p_HC[i], wt.n_H[i]) for j, i in enumerate(order)]
+                           wt.p_HC[i], wt.n_H[i], zone=float(zones[j]))
+                   for j, i in enumerate(order)]
     stretches = [
         _Stretch("approach", w, timed_app, [_target(kin, q_app[-1], w, "approach", int(good[0]),
                                                     options.approach_speed, "linear",
@@ -276,6 +373,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         j6_range_deg=float(np.ptp(q_deg[:, 5])),
         min_abs_j5_deg=float(np.min(np.abs(q_deg[:, 4]))),
         min_clearance_m=float(dmin), axis_in_theta_box_fraction=box_share,
+        cone_half_angle_rad=float(wt.cone_half_angle),
         smoothing_reverted_targets=int(reverted.sum()),
         speed_in_band_fraction=float(np.mean(np.abs(v_cut - params.grinding_speed) <= band))
         if len(v_cut) else 0.0,
@@ -349,6 +447,8 @@ def plan_windows(
     t_start = time.perf_counter()
     kin = cell_kinematics(cell)
     checker = ClearanceChecker(cell)
+    # moves that do not cut keep the burr head clear of the hub too
+    free_checker = ClearanceChecker(cell, filter_burr_contact=False)
     params = options.params
     failures: list[dict] = []
     stretches: list[_Stretch] = []
@@ -367,8 +467,8 @@ def plan_windows(
         speed = params.home_speed if not stretches else params.window_switch_speed
         kind = "home" if not stretches else "transition"
         t0 = time.perf_counter()
-        js, mv = _joint_stretch(cell, kin, checker, q_cur, q_app0, speed, kind, options, failures,
-                                f"to window {wt.window_index}")
+        js, mv = _joint_stretch(cell, kin, free_checker, q_cur, q_app0, speed, kind, options,
+                                failures, f"to window {wt.window_index}")
         transition_seconds += time.perf_counter() - t0
         stats["transition_method"] = mv.method
         stretches.append(js)
@@ -376,8 +476,8 @@ def plan_windows(
         window_stats.append(stats)
         q_cur = win_stretches[-1].timed.q[-1]
     t0 = time.perf_counter()
-    js, mv = _joint_stretch(cell, kin, checker, q_cur, kin.q_home, params.home_speed, "home",
-                            options, failures, "return home")
+    js, mv = _joint_stretch(cell, kin, free_checker, q_cur, kin.q_home, params.home_speed,
+                            "home", options, failures, "return home")
     transition_seconds += time.perf_counter() - t0
     stretches.append(js)
     if progress is not None:
@@ -487,9 +587,11 @@ def _tool_path(edge, params: ProcessParameters):
 
     from drakedeburr.orientation.orient import orient_window
     from drakedeburr.path import fit_edge_curve, plan_cl
+    from drakedeburr.path.cl_planning import PlannerParams
 
     curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
-    cl = plan_cl(curve, window_index=edge.index, kind=edge.kind)
+    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA),
+                 window_index=edge.index, kind=edge.kind)
     nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
     return orient_window(cl, edge.n_wall_H[nearest], params=params)
 

@@ -6,10 +6,12 @@ q'(s) and q''(s); the speed profile sdot(s) is then the largest one that respect
 
 * the TCP speed cap: |dp_HT/ds| sdot <= v_cap (150 mm/s cutting, 450 mm/s between windows...),
 * joint velocities: |q_j'| sdot <= f_v v_max_j,
-* joint accelerations: |q_j''| sdot^2 + |q_j'| |sddot| <= f_a a_max_j (split between the two
-  terms), and a TCP acceleration cap on sddot,
+* joint accelerations: |q_j' sddot + q_j'' sdot^2| <= f_a a_max_j, exactly (no split between
+  the curvature and the tangential term), and a TCP acceleration cap on sddot,
 
-found by the classic forward/backward passes over the velocity-limit curve (rest to rest).
+found by the classic time-optimal construction (Bobrow; Pham's TOPP): the maximum-velocity
+curve where the admissible sddot interval closes, then forward (largest sddot) and backward
+(most negative sddot) integration passes under it, rest to rest.
 Why not Drake's ``Toppra``: it enforces its limits only at its grid points (a 30 mm/s limit was
 overshot to 32.8 mm/s between them, DESIGN.md), and here the grid is the dense path itself, so
 the passes are exact at every sample and need no LP per grid point. TOPP-RA
@@ -85,6 +87,64 @@ def joint_spline(s: np.ndarray, q: np.ndarray, fit_spacing: float | None = None)
     return make_lsq_spline(s, q, knots, k=3, axis=0)
 
 
+def _sddot_interval(x: np.ndarray, xx: np.ndarray, a: np.ndarray, v2: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Admissible path acceleration interval [lo, hi] at given sdot^2 (per sample).
+
+    Args:
+        x: (J, N) first derivatives dx_j/ds; xx: (J, N) second derivatives; a: (J,) limits;
+        v2: (N,) sdot^2.
+    """
+    acc_c = xx * v2[None]                      # curvature term x_j'' sdot^2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b1 = (-a[:, None] - acc_c) / x
+        b2 = (a[:, None] - acc_c) / x
+    small = np.abs(x) < 1e-12
+    lo_j = np.where(small, -np.inf, np.minimum(b1, b2))
+    hi_j = np.where(small, np.inf, np.maximum(b1, b2))
+    # a joint that barely moves along the path still needs |x_j''| sdot^2 <= a_j
+    bad = small & (np.abs(acc_c) > a[:, None])
+    lo = np.max(lo_j, axis=0)
+    hi = np.min(hi_j, axis=0)
+    hi = np.where(np.any(bad, axis=0), -np.inf, hi)
+    return lo, hi
+
+
+def _passes(s, x, xx, lim_a, v_curve) -> np.ndarray:
+    """Forward (largest sddot) and backward (most negative sddot) passes under the curve
+    ``v_curve`` (sdot^2 per sample), rest to rest; the accelerations are evaluated at both ends
+    of each step (the tighter counts). Returns sdot (N,)."""
+    v2 = np.array(v_curve, float)
+    n = len(v2)
+    v2[0] = v2[-1] = 0.0
+    ds = np.diff(s)
+    for k in range(n - 1):
+        acc = min(_sddot_interval(x[:, k:k + 1], xx[:, k:k + 1], lim_a, v2[k:k + 1])[1][0],
+                  _sddot_interval(x[:, k + 1:k + 2], xx[:, k + 1:k + 2], lim_a,
+                                  v2[k:k + 1])[1][0])
+        v2[k + 1] = min(v2[k + 1], max(v2[k] + 2.0 * max(acc, 0.0) * ds[k], 0.0))
+    for k in range(n - 2, -1, -1):
+        dec = max(_sddot_interval(x[:, k + 1:k + 2], xx[:, k + 1:k + 2], lim_a,
+                                  v2[k + 1:k + 2])[0][0],
+                  _sddot_interval(x[:, k:k + 1], xx[:, k:k + 1], lim_a, v2[k + 1:k + 2])[0][0])
+        v2[k] = min(v2[k], max(v2[k + 1] - 2.0 * min(dec, 0.0) * ds[k], 0.0))
+    return np.sqrt(np.maximum(v2, 0.0))
+
+
+def _hermite_accel_ratio(t, q, qd, amax) -> np.ndarray:
+    """(N,) largest |acceleration| / limit of the cubic Hermite spline at each knot (over the
+    intervals that touch it)."""
+    h = np.diff(t)[:, None]
+    dq = np.diff(q, axis=0)
+    a0 = (6.0 * dq - h * (4.0 * qd[:-1] + 2.0 * qd[1:])) / h ** 2
+    a1 = (-6.0 * dq + h * (2.0 * qd[:-1] + 4.0 * qd[1:])) / h ** 2
+    r = np.max(np.maximum(np.abs(a0), np.abs(a1)) / amax[None], axis=1)  # per interval
+    out = np.zeros(len(t))
+    out[:-1] = r
+    out[1:] = np.maximum(out[1:], r)
+    return out
+
+
 def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimits,
               fit_spacing: float | None = None) -> TimedPath:
     """Time a sampled path rest to rest under a TCP speed cap and joint limits.
@@ -115,24 +175,37 @@ def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimi
     dp_norm = np.linalg.norm(dp, axis=1)
     vmax = np.asarray(limits.v_max) * limits.velocity_fraction
     amax = np.asarray(limits.a_max) * limits.acceleration_fraction
+    x = np.vstack([dq.T, dp_norm[None]])            # (7, N): joints and the TCP path speed
+    xx = np.vstack([ddq.T, np.zeros((1, n))])      # their second derivatives
+    lim_a = np.concatenate([amax, [limits.a_cap]])  # (7,) acceleration limits
     with np.errstate(divide="ignore", invalid="ignore"):
         v_lim = np.minimum(
             limits.v_cap / np.maximum(dp_norm, 1e-12),
             np.min(vmax[None] / np.maximum(np.abs(dq), 1e-12), axis=1))
-        # half of each joint's acceleration for the curvature term, half for sddot
-        v_lim = np.minimum(v_lim, np.sqrt(np.min(0.5 * amax[None] / np.maximum(np.abs(ddq), 1e-12),
-                                                 axis=1)))
-        a_lim = np.minimum(limits.a_cap / np.maximum(dp_norm, 1e-12),
-                           np.min(0.5 * amax[None] / np.maximum(np.abs(dq), 1e-12), axis=1))
-    v2 = v_lim ** 2
-    v2[0] = v2[-1] = 0.0
-    ds = np.diff(s)
-    for k in range(n - 1):  # forward: accelerate
-        v2[k + 1] = min(v2[k + 1], v2[k] + 2.0 * a_lim[k] * ds[k])
-    for k in range(n - 2, -1, -1):  # backward: decelerate
-        v2[k] = min(v2[k], v2[k + 1] + 2.0 * a_lim[k + 1] * ds[k])
-    sdot = np.sqrt(np.maximum(v2, 0.0))
-    dt = 2.0 * ds / np.maximum(sdot[:-1] + sdot[1:], 1e-12)
-    t = np.concatenate([[0.0], np.cumsum(dt)])
-    qd = dq * sdot[:, None]
+    # the maximum-velocity curve of the acceleration limits: the largest sdot^2 for which some
+    # sddot satisfies |x_j' sddot + x_j'' sdot^2| <= a_j for every j (bisection per sample)
+    lo = np.zeros(n)
+    hi = v_lim ** 2
+    feasible = _sddot_interval(x, xx, lim_a, hi)[0] <= _sddot_interval(x, xx, lim_a, hi)[1]
+    lo[feasible] = hi[feasible]
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        a_lo, a_hi = _sddot_interval(x, xx, lim_a, mid)
+        ok = a_lo <= a_hi
+        lo = np.where(ok, mid, lo)
+        hi = np.where(ok, hi, mid)
+    v_curve = lo
+    # the trajectory is stored as a cubic Hermite spline through (t, q, qd) at the samples; its
+    # accelerations between samples differ from the path's where q'' varies fast, so check them
+    # exactly (linear within an interval: the ends are the extremes) and slow down locally
+    for _ in range(12):
+        sdot = _passes(s, x, xx, lim_a, v_curve)
+        dt = 2.0 * np.diff(s) / np.maximum(sdot[:-1] + sdot[1:], 1e-12)
+        t = np.concatenate([[0.0], np.cumsum(dt)])
+        qd = dq * sdot[:, None]
+        ratio = _hermite_accel_ratio(t, q, qd, amax)
+        over = ratio > 1.0 + 1e-6
+        if not over.any():
+            break
+        v_curve = np.where(over, np.minimum(v_curve, sdot ** 2) / ratio ** 1.2, v_curve)
     return TimedPath(t=t, q=q, qd=qd, sdot=sdot, v_tcp=dp_norm * sdot)

@@ -393,14 +393,18 @@ def reference_plan(
             else:
                 box = OrientationBounds(float(min(th_A.min(), th_B.min())) - box_margin,
                                         float(max(th_A.max(), th_B.max())) + box_margin)
+        mid = 0.5 * (box.theta_min + box.theta_max)
+        cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
+        inner, outer = cone_half_angles(box)
+        if not (theta is not None and w in theta):
+            # the reference plan's admissible cone: 0.1 rad about its fixed axis
+            cone_axis_H = -up_H.copy()
+            inner = outer = 0.1
             tilt = (axis_tilt or {}).get(w, 0.0)
             if tilt:
                 from scipy.spatial.transform import Rotation
 
                 up_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(up_H)
-        mid = 0.5 * (box.theta_min + box.theta_max)
-        cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
-        inner, outer = cone_half_angles(box)
         depth = params.depth_of_cut_large if edge.kind == "large" else params.depth_of_cut_small
 
         seg = np.linalg.norm(np.diff(np.vstack([edge.p_HE, edge.p_HE[:1]]), axis=0), axis=1)

@@ -1,0 +1,361 @@
+"""The executed cut of one window as a smooth Cartesian path: blended corners, smooth axis.
+
+A controller runs the program as linear moves between targets; with a zone at each target it
+rounds the corner there instead of stopping (ABB ``zonedata``, KUKA ``C_DIS``, FANUC ``CNT``).
+Without rounding, the tool direction kinks at every target, the joint path q(s) has a slope
+kink there, and any timing crawls through it. So the motion simulated here is:
+
+* **position**: the polyline of the targets with every corner replaced by a quadratic Bezier
+  blend whose legs ``d_k`` are the zone at that target, chosen so the blend stays within
+  ``deviation`` of the corner (a symmetric quadratic blend with legs ``d`` and a turn ``phi``
+  misses the corner by ``d/2 * sin(phi/2)``) and uses at most ``leg_share`` of each adjacent
+  move;
+* **tool axis**: one small convex program (second-order cone program, Drake
+  ``MathematicalProgram`` + Clarabel) over the dense samples: minimise the axis' turning
+  energy along the path (first and second differences, so the rotation needed at a fillet is
+  spread over as much travel as the cones allow) plus a soft pull toward the preferred axis,
+  with the admissible cone as a hard constraint at every sample. The axis is written in
+  gnomonic coordinates ``u`` about the mean cone axis (``a ~ E u + z0``): a cone about any
+  axis is then the second-order cone ``|E u + z0| <= (E u + z0).c / cos(alpha)``, exactly;
+* **spin** about the axis: the target orientations' spin, interpolated and Gaussian-smoothed
+  along the travel (the IK keeps J6 continuous at the targets).
+
+Why hand-written: the blend is the controllers' zone model (no library has it), and the axis
+program is a 20-line use of Drake's ``MathematicalProgram``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+from scipy.spatial.transform import Rotation, Slerp
+
+log = logging.getLogger(__name__)
+
+__all__ = ["BlendedPath", "blend_corners", "smooth_axes", "CutPath", "cut_path"]
+
+
+@dataclass(frozen=True, eq=False)
+class BlendedPath:
+    """Dense samples of a polyline with blended corners.
+
+    Attributes:
+        s: (N,) arc length along the blended path from the first target [m].
+        p: (N, 3) points [m].
+        target_s: (K,) arc length at each target's closest point on the path [m].
+        target_index: (K,) dense sample index nearest each target.
+        zone: (K,) blend leg at each target [m] (0 at the ends).
+    """
+
+    s: np.ndarray
+    p: np.ndarray
+    target_s: np.ndarray
+    target_index: np.ndarray
+    zone: np.ndarray
+
+
+def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
+                  leg_share: float = 0.45, max_zone: float = 5e-3,
+                  zone_quantum: float = 0.05e-3) -> BlendedPath:
+    """Round the corners of a polyline as a controller's zones do.
+
+    Args:
+        P: (K, 3) target points [m], K >= 2, consecutive points distinct.
+        deviation: largest distance of a blend from its corner [m] (or (K,) per target).
+        step: largest spacing of the dense samples [m].
+        leg_share: largest share of an adjacent move a blend leg may use.
+        max_zone: largest blend leg [m].
+        zone_quantum: zones are rounded down to multiples of this [m] (a program then holds a
+            few dozen distinct zones, not one per target; rounding down keeps the deviation).
+
+    Returns:
+        BlendedPath (first and last targets are on the path; the others within ``deviation``).
+    """
+    P = np.asarray(P, float)
+    K = len(P)
+    seg = np.diff(P, axis=0)
+    L = np.linalg.norm(seg, axis=1)
+    if np.any(L <= 0):
+        raise ValueError("blend_corners: repeated target point")
+    u = seg / L[:, None]
+    zone = np.zeros(K)
+    dev = np.broadcast_to(np.asarray(deviation, float), (K,))
+    for k in range(1, K - 1):
+        c = float(np.clip(u[k - 1] @ u[k], -1.0, 1.0))
+        phi = np.arccos(c)
+        if phi < 1e-9:
+            continue
+        d_dev = 2.0 * dev[k] / np.sin(phi / 2.0)
+        zone[k] = min(d_dev, leg_share * L[k - 1], leg_share * L[k], max_zone)
+        if zone_quantum > 0 and zone[k] > zone_quantum:
+            zone[k] = np.floor(zone[k] / zone_quantum) * zone_quantum
+    # pieces: straight from (P_k + zone_k u_k) to (P_{k+1} - zone_{k+1} u_k), then blend at k+1
+    s_acc = 0.0
+    out_s = [np.zeros(1)]
+    out_p = [P[:1]]
+    target_s = np.zeros(K)
+    for k in range(K - 1):
+        a = P[k] + zone[k] * u[k]
+        b = P[k + 1] - zone[k + 1] * u[k]
+        # straight piece cur(=a) -> b
+        ln = float(np.linalg.norm(b - a))
+        if ln > 0:
+            n = max(1, int(np.ceil(ln / step)))
+            f = np.arange(1, n + 1) / n
+            out_p.append(a + np.outer(f, b - a))
+            out_s.append(s_acc + f * ln)
+            s_acc += ln
+        if k + 1 == K - 1:
+            target_s[K - 1] = s_acc
+            break
+        # quadratic Bezier b -> P_{k+1} -> c
+        c_end = P[k + 1] + zone[k + 1] * u[k + 1]
+        if zone[k + 1] <= 0:
+            target_s[k + 1] = s_acc
+            continue
+        tt = np.linspace(0.0, 1.0, 401)
+        B = ((1 - tt) ** 2)[:, None] * b + (2 * (1 - tt) * tt)[:, None] * P[k + 1] \
+            + (tt ** 2)[:, None] * c_end
+        sl = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(B, axis=0), axis=1))])
+        n = max(2, int(np.ceil(sl[-1] / step)))
+        sq = np.arange(1, n + 1) / n * sl[-1]
+        tq = np.interp(sq, sl, tt)
+        Bq = ((1 - tq) ** 2)[:, None] * b + (2 * (1 - tq) * tq)[:, None] * P[k + 1] \
+            + (tq ** 2)[:, None] * c_end
+        out_p.append(Bq)
+        out_s.append(s_acc + sq)
+        target_s[k + 1] = s_acc + float(np.interp(0.5, tt, sl))
+        s_acc += sl[-1]
+    s = np.concatenate(out_s)
+    p = np.concatenate(out_p)
+    keep = np.concatenate([[True], np.diff(s) > 1e-12])
+    s, p = s[keep], p[keep]
+    idx = np.clip(np.searchsorted(s, target_s), 0, len(s) - 1)
+    prev = np.clip(idx - 1, 0, len(s) - 1)
+    idx = np.where(np.abs(s[prev] - target_s) < np.abs(s[idx] - target_s), prev, idx)
+    return BlendedPath(s=s, p=p, target_s=target_s, target_index=idx, zone=zone)
+
+
+def _basis(z0: np.ndarray) -> np.ndarray:
+    z0 = z0 / np.linalg.norm(z0)
+    h = np.array([1.0, 0.0, 0.0]) if abs(z0[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(z0, h)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([e1, np.cross(z0, e1), z0], axis=1)  # columns e1, e2, z0
+
+
+def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_angle: float,
+                *, margin: float = 2e-3, w_pref: float = 1.0, w_rate: float = 1e-4,
+                w_curv: float = 1e-10, pin: np.ndarray | None = None,
+                pin_angle: float = 0.004, pin_axes: np.ndarray | None = None) -> np.ndarray:
+    """Smoothest tool-axis curve inside per-sample cones (a second-order cone program).
+
+    Minimises ``w_rate * sum |du/ds|^2 ds + w_curv * sum |d2u/ds2|^2 ds + w_pref * sum |u -
+    u_pref|^2 ds`` over gnomonic coordinates ``u`` of the axis, subject to the angle between
+    the axis and the cone axis being at most ``half_angle - margin`` at every sample.
+
+    Args:
+        s: (N,) arc length [m], increasing.
+        a_pref: (N, 3) preferred unit axes; cone_axis: (N, 3) unit cone axes.
+        half_angle: cone half-angle [rad]; margin: kept inside it [rad].
+        pin: (N,) bool samples whose axis must stay within ``pin_angle`` of the preferred
+            one (where the smoothed axis cost clearance: the preferred axes come from the
+            clearance-constrained IK); pin_axes: (N, 3) the axes to stay near (default
+            ``a_pref``).
+
+    Returns:
+        (N, 3) unit axes. Falls back to the preferred axes if the program fails.
+    """
+    from pydrake.solvers import ClarabelSolver, MathematicalProgram
+
+    s = np.asarray(s, float)
+    a_pref = np.asarray(a_pref, float)
+    c = np.asarray(cone_axis, float)
+    N = len(s)
+    E = _basis(np.mean(c, axis=0))
+    # preferred axes in gnomonic coordinates
+    loc = a_pref @ E
+    u_pref = loc[:, :2] / loc[:, 2:3]
+    prog = MathematicalProgram()
+    u = prog.NewContinuousVariables(N, 2, "u")
+    ds = np.maximum(np.diff(s), 1e-6)
+    w_s = np.concatenate([[ds[0]], 0.5 * (ds[:-1] + ds[1:]), [ds[-1]]]) / max(s[-1] - s[0], 1e-9)
+    # sparse quadratic cost (scaled by path length so the weights are per metre)
+    from scipy.sparse import diags
+
+    n = N
+    D1 = diags([-1.0, 1.0], [0, 1], shape=(n - 1, n)).tocsr()
+    D1 = diags(1.0 / ds) @ D1
+    h = 0.5 * (ds[:-1] + ds[1:])
+    D2 = diags([1.0 / ds[:-1], -(1.0 / ds[:-1] + 1.0 / ds[1:]), 1.0 / ds[1:]], [0, 1, 2],
+               shape=(n - 2, n)).tocsr()
+    D2 = diags(1.0 / h) @ D2
+    W1 = diags(ds / s[-1])
+    W2 = diags(h / s[-1])
+    Q = (w_rate * (D1.T @ W1 @ D1) + w_curv * (D2.T @ W2 @ D2) + w_pref * diags(w_s)).tocsc()
+    # Drake's AddQuadraticCost takes a dense Q; build it once for both coordinates
+    Qd = 2.0 * Q.toarray()
+    for j in range(2):
+        prog.AddQuadraticCost(Qd, -2.0 * w_pref * w_s * u_pref[:, j], u[:, j], is_convex=True)
+    # the margin applies where the axis is free; a pinned axis follows the IK's, which may use
+    # the cone up to its rim
+    half_i = np.full(N, max(half_angle - margin, 1e-3))
+    if pin is not None:
+        half_i[np.asarray(pin, bool)] = max(half_angle - 1e-4, 1e-3)
+    cos_i = np.cos(half_i)
+    cl = c @ E  # cone axes in the (e1, e2, z0) basis
+    for i in range(N):
+        # v = (u1, u2, 1); [v.c / cos_a; v] in the Lorentz cone
+        cos_a = cos_i[i]
+        A = np.zeros((4, 2))
+        bvec = np.zeros(4)
+        A[0] = cl[i, :2] / cos_a
+        bvec[0] = cl[i, 2] / cos_a
+        A[1, 0] = 1.0
+        A[2, 1] = 1.0
+        bvec[3] = 1.0
+        prog.AddLorentzConeConstraint(A, bvec, u[i])
+    if pin is not None:
+        cos_p = np.cos(pin_angle)
+        ap = (a_pref if pin_axes is None else np.asarray(pin_axes, float)) @ E
+        ap /= np.linalg.norm(ap, axis=1, keepdims=True)
+        for i in np.flatnonzero(pin):
+            A = np.zeros((4, 2))
+            bvec = np.zeros(4)
+            A[0] = ap[i, :2] / cos_p
+            bvec[0] = ap[i, 2] / cos_p
+            A[1, 0] = 1.0
+            A[2, 1] = 1.0
+            bvec[3] = 1.0
+            prog.AddLorentzConeConstraint(A, bvec, u[i])
+    prog.SetInitialGuess(u, u_pref)
+    res = ClarabelSolver().Solve(prog)
+    if not res.is_success():
+        log.warning("axis smoothing program failed (%s); keeping the preferred axes",
+                    res.get_solution_result())
+        return a_pref / np.linalg.norm(a_pref, axis=1, keepdims=True)
+    uu = res.GetSolution(u)
+    v = np.column_stack([uu, np.ones(N)]) @ E.T
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+@dataclass(frozen=True, eq=False)
+class CutPath:
+    """The smooth executed cut.
+
+    Attributes:
+        X_HT: (N, 4, 4) dense tool poses in H [m]; s: (N,) travel [m].
+        target_index: (K,) dense sample at each target; X_target: (K, 4, 4) the target poses
+            written to the program (positions = the given targets, orientations = the smooth
+            ones there); zone: (K,) blend leg at each target [m].
+    """
+
+    X_HT: np.ndarray
+    s: np.ndarray
+    target_index: np.ndarray
+    X_target: np.ndarray
+    zone: np.ndarray
+
+
+def _rotate_axis_to(R: np.ndarray, a_new: np.ndarray) -> np.ndarray:
+    """Rotate each frame minimally so that its -Z column becomes ``a_new``."""
+    a_old = -R[:, :, 2]
+    k = np.cross(a_old, a_new)
+    sn = np.linalg.norm(k, axis=1)
+    cs = np.sum(a_old * a_new, axis=1)
+    ang = np.arctan2(sn, cs)
+    axis = np.where(sn[:, None] > 1e-12, k / np.maximum(sn, 1e-12)[:, None], 0.0)
+    return Rotation.from_rotvec(axis * ang[:, None]).as_matrix() @ R
+
+
+def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, *,
+             deviation: float | np.ndarray = 0.03e-3, step: float = 0.5e-3,
+             spin_sigma: float = 3e-3,
+             axis_margin: float = 2e-3, w_rate: float = 1e-4, w_curv: float = 1e-10,
+             spin: str = "fixed", position_sigma: float = 0.0,
+             pin: np.ndarray | None = None, pin_angle: float = 0.004) -> CutPath:
+    """The executed cut through target poses: blended corners, smooth axis and spin.
+
+    Args:
+        X_targets: (K, 4, 4) target tool poses in H from the IK (tool point on the CL target,
+            axis in the cone) [m].
+        cone_axis_H: (K, 3) unit cone axes at the targets (tip -> spindle); half_angle [rad].
+        deviation: corner blend tolerance [m] (or (K,) per target); step: dense sample
+            spacing [m].
+        spin_sigma: Gaussian width of the orientation smoothing before the axis program [m].
+        axis_margin: kept inside the cone [rad]; w_rate, w_curv: axis program weights.
+        pin: (P, 2) travel intervals [m] whose axis stays near the IK's (see
+            :func:`smooth_axes`).
+
+    Returns:
+        CutPath.
+    """
+    X_targets = np.asarray(X_targets, float)
+    bp = blend_corners(X_targets[:, :3, 3], deviation, step)
+    if position_sigma > 0:
+        # a quadratic blend has a curvature step at both ends (C1 path): a light Gaussian
+        # smoothing makes the curvature continuous and moves the path by ~kappa sigma^2 / 2
+        # (0.01 mm at a 3 mm fillet radius for sigma = 0.25 mm); the ends stay fixed
+        sig = position_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
+        p_s = gaussian_filter1d(bp.p, sig, axis=0, mode="nearest")
+        ramp = np.clip(np.minimum(bp.s - bp.s[0], bp.s[-1] - bp.s) / (4 * position_sigma), 0, 1)
+        bp = replace(bp, p=bp.p + ramp[:, None] * (p_s - bp.p))
+    rot = Rotation.from_matrix(X_targets[:, :3, :3])
+    ts = bp.target_s
+    # orientation of the targets interpolated along the travel, then Gaussian-smoothed
+    R = Slerp(ts, rot)(np.clip(bp.s, ts[0], ts[-1])).as_matrix()
+    a_ik = -R[:, :, 2]  # the IK's axes, linearly interpolated (clearance-checked at targets)
+    quat = Rotation.from_matrix(R).as_quat()
+    for i in range(1, len(quat)):
+        if quat[i] @ quat[i - 1] < 0:
+            quat[i] = -quat[i]
+    if spin_sigma > 0:
+        sig = spin_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
+        quat = gaussian_filter1d(quat, sig, axis=0, mode="nearest")
+    R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
+    c_rot = _axes_interp(ts, cone_axis_H, bp.s)
+    a = smooth_axes(bp.s, -R[:, :, 2], c_rot, half_angle, margin=axis_margin, w_rate=w_rate,
+                    w_curv=w_curv, pin=_in_intervals(bp.s, pin), pin_axes=a_ik,
+                    pin_angle=pin_angle)
+    R = _rotate_axis_to(R, a)
+    if spin == "fixed":
+        R = _fixed_spin(R, X_targets[:, :3, 0])
+    X = np.zeros((len(bp.s), 4, 4))
+    X[:, :3, :3] = R
+    X[:, :3, 3] = bp.p
+    X[:, 3, 3] = 1.0
+    Xt = X_targets.copy()
+    Xt[:, :3, :3] = R[bp.target_index]
+    return CutPath(X_HT=X, s=bp.s, target_index=bp.target_index, X_target=Xt, zone=bp.zone)
+
+
+def _in_intervals(s: np.ndarray, iv: np.ndarray | None) -> np.ndarray | None:
+    if iv is None or len(iv) == 0:
+        return None
+    iv = np.asarray(iv, float).reshape(-1, 2)
+    return np.any((s[:, None] >= iv[None, :, 0]) & (s[:, None] <= iv[None, :, 1]), axis=1)
+
+
+def _fixed_spin(R: np.ndarray, x_targets: np.ndarray) -> np.ndarray:
+    """Frames with the same axes (Z) and X as close as possible to one fixed direction: the
+    mean X of the targets. The spindle body then keeps pointing the same way while the axis
+    precesses, and the spin turns only as much as the axis' tilt forces."""
+    r = np.mean(np.asarray(x_targets, float), axis=0)
+    z = R[:, :, 2]
+    x = r[None] - (z @ r)[:, None] * z
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    out = np.empty_like(R)
+    out[:, :, 0] = x
+    out[:, :, 1] = np.cross(z, x)
+    out[:, :, 2] = z
+    return out
+
+
+def _axes_interp(ts: np.ndarray, axes: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Unit axes interpolated linearly in ``ts`` and renormalised."""
+    axes = np.asarray(axes, float)
+    out = np.column_stack([np.interp(s, ts, axes[:, j]) for j in range(3)])
+    return out / np.linalg.norm(out, axis=1, keepdims=True)

@@ -1,0 +1,114 @@
+"""The spin about the tool axis along a cut: the robot's one free rotation, chosen globally.
+
+The burr is rotationally symmetric, so the rotation of the tool about its own axis is free at
+every point of a cut. It decides the whole arm pose: a poor choice drives the wrist toward its
+singularity (J5 -> 0), where J4 and J6 counter-rotate at many rad/s for a small change of the
+tool axis, and the timing has to crawl. So the spin is chosen for the whole cut at once by
+dynamic programming over a grid of spins at every dense sample: the path that minimises the
+joint motion (each joint's step divided by its speed limit, squared, summed) while staying on
+the window's configuration branch, inside the joint limits and away from the wrist singularity.
+The grid path is then unwrapped and Gaussian-smoothed along the travel, so the spin is smooth.
+
+Why hand-written: redundancy resolution of a 6-axis robot for a 5-axis task is a small dynamic
+program over the analytic IK; no maintained library offers it for our kinematics.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from drakedeburr.plan.kinematics import CellKinematics
+
+__all__ = ["spin_frames", "optimize_spin"]
+
+
+def spin_frames(R: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    """Frames ``R`` turned by ``psi`` about their own Z axis: (N, 3, 3) x (N,) -> (N, 3, 3)."""
+    c, s = np.cos(psi), np.sin(psi)
+    out = np.array(R, float, copy=True)
+    out[:, :, 0] = c[:, None] * R[:, :, 0] + s[:, None] * R[:, :, 1]
+    out[:, :, 1] = -s[:, None] * R[:, :, 0] + c[:, None] * R[:, :, 1]
+    return out
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+
+
+def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch: np.ndarray,
+                  *, n_spin: int = 72, max_step: int = 4, wrist_margin: float = 0.15,
+                  sigma: float = 4e-3, stride: int = 2) -> tuple[np.ndarray, dict]:
+    """Smooth spin along a dense cut that minimises the joint motion.
+
+    Args:
+        kin: cell kinematics.
+        X_HT: (N, 4, 4) dense tool poses in H [m]; their Z axes (and positions) are kept.
+        s: (N,) travel [m].
+        q_branch: (6,) joints whose (shoulder, elbow, wrist) branch the cut keeps [rad].
+        n_spin: spin grid size over a full turn; max_step: largest grid step between samples.
+        wrist_margin: smallest |J5| allowed [rad].
+        sigma: Gaussian width of the final smoothing [m].
+        stride: the program runs on every ``stride``-th sample (the result is interpolated).
+
+    Returns:
+        (N, 4, 4) poses with the chosen spin, and stats (cost, feasible share, spin range).
+        When no spin path is feasible the input poses are returned and stats["ok"] is False.
+    """
+    X_HT = np.asarray(X_HT, float)
+    N = len(X_HT)
+    sel = np.unique(np.concatenate([np.arange(0, N, stride), [N - 1]]))
+    n = len(sel)
+    psi = np.arange(n_spin) * (2.0 * np.pi / n_spin)
+    R0 = X_HT[sel, :3, :3]
+    X = np.repeat(X_HT[sel][:, None], n_spin, axis=1)  # (n, M, 4, 4)
+    for m in range(n_spin):
+        X[:, m, :3, :3] = spin_frames(R0, np.full(n, psi[m]))
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X.reshape(-1, 4, 4)))
+    b0 = kin.branch_of(np.asarray(q_branch, float))
+    match = np.flatnonzero(np.all(branches == b0[None], axis=1))
+    if match.size == 0:
+        return X_HT, {"ok": False, "reason": "branch not found"}
+    q = q_all[:, match[0]].reshape(n, n_spin, 6)
+    bad = np.any(~np.isfinite(q), axis=2)
+    qq = np.where(np.isfinite(q), q, 0.0)
+    # the turning joints J4/J6 taken within half a turn of the start (a cut turns the wrist by
+    # well under that), then every joint inside its limits
+    qb = np.asarray(q_branch, float)
+    for j in (3, 5):
+        qq[..., j] = qb[j] + _wrap(qq[..., j] - qb[j])
+    bad |= np.any((qq < kin.q_lower) | (qq > kin.q_upper), axis=2)
+    bad |= np.abs(qq[..., 4]) < wrist_margin
+    w = 1.0 / np.asarray(kin.v_max, float)
+    INF = np.inf
+    cost = np.where(bad[0], INF, 0.0)
+    back = np.zeros((n, n_spin), int)
+    shifts = range(-max_step, max_step + 1)
+    for k in range(1, n):
+        best = np.full(n_spin, INF)
+        arg = np.zeros(n_spin, int)
+        for d in shifts:
+            prev = np.roll(np.arange(n_spin), d)  # state m at k comes from prev[m] at k-1
+            dq = (qq[k] - qq[k - 1, prev]) * w[None]  # J4/J6 may not jump a turn
+            c = cost[prev] + np.sum(dq * dq, axis=1)
+            better = c < best
+            best = np.where(better, c, best)
+            arg = np.where(better, prev, arg)
+        best[bad[k]] = INF
+        cost, back[k] = best, arg
+    if not np.isfinite(cost).any():
+        return X_HT, {"ok": False, "reason": "no feasible spin path"}
+    m = int(np.argmin(cost))
+    path = np.zeros(n, int)
+    path[-1] = m
+    for k in range(n - 1, 0, -1):
+        path[k - 1] = back[k, path[k]]
+    ang = np.unwrap(psi[path])
+    ang_full = np.interp(s, s[sel], ang)
+    if sigma > 0:
+        step = max(float(np.median(np.diff(s))), 1e-9)
+        ang_full = gaussian_filter1d(ang_full, sigma / step, mode="nearest")
+    out = X_HT.copy()
+    out[:, :3, :3] = spin_frames(X_HT[:, :3, :3], ang_full)
+    return out, {"ok": True, "cost": float(cost[m]), "spin_range_rad": float(np.ptp(ang_full)),
+                 "feasible_share": float(np.mean(~bad))}

@@ -1,0 +1,96 @@
+import numpy as np
+import pytest
+
+import drakedeburr.plan.cut_path as mut
+
+
+def _dist_to_polyline(p, P):
+    a, b = P[:-1], P[1:]
+    ab = b - a
+    t = np.clip(np.einsum("nkj,kj->nk", p[:, None] - a[None], ab) / np.sum(ab * ab, 1), 0, 1)
+    c = a[None] + t[..., None] * ab[None]
+    return np.min(np.linalg.norm(p[:, None] - c, axis=2), axis=1)
+
+
+def _polygon(R=0.01, n=24, arc=np.pi):
+    th = np.linspace(0, arc, n)
+    return np.stack([R * np.cos(th), R * np.sin(th), np.zeros(n)], 1)
+
+
+@pytest.mark.parametrize("dev", [0.01e-3, 0.03e-3])
+def test_blends_stay_within_the_deviation_both_ways(dev):
+    P = _polygon()
+    bp = mut.blend_corners(P, dev, 0.02e-3)
+    # path -> program and program corners -> path
+    assert _dist_to_polyline(bp.p, P).max() <= dev * 1.01
+    d_corner = _dist_to_polyline(P, bp.p)
+    assert d_corner.max() <= dev * 1.01
+    # each corner is missed by exactly (zone / 2) sin(turn / 2) (quadratic blend geometry)
+    turn = np.pi / (len(P) - 1)
+    assert np.allclose(d_corner[1:-1], bp.zone[1:-1] / 2 * np.sin(turn / 2), rtol=0.02)
+    assert np.allclose(bp.p[0], P[0]) and np.allclose(bp.p[-1], P[-1])
+    assert np.all(np.diff(bp.s) > 0) and np.all(np.diff(bp.target_s) > 0)
+    # arc length of the samples equals the parameter
+    assert np.allclose(np.cumsum(np.linalg.norm(np.diff(bp.p, axis=0), axis=1)), bp.s[1:] - bp.s[0],
+                       rtol=1e-3)
+    # tangent continuity: no direction kink between samples larger than the polygon's turn
+    u = np.diff(bp.p, axis=0)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    turn = np.arccos(np.clip(np.sum(u[1:] * u[:-1], 1), -1, 1))
+    assert turn.max() < (np.pi / 23) * 0.5
+
+
+def test_smooth_axes_stay_in_their_cones_and_are_smoother_than_the_preference():
+    rng = np.random.default_rng(0)
+    n = 300
+    s = np.linspace(0, 0.15, n)
+    phi = np.linspace(0, np.pi, n)
+    tilt = 0.45
+    c = np.stack([np.sin(tilt) * np.cos(phi), np.sin(tilt) * np.sin(phi),
+                  np.full(n, np.cos(tilt))], 1)
+    half = 0.12
+    # a noisy preferred axis inside the cones
+    a_pref = c + rng.normal(scale=0.03, size=(n, 3))
+    a_pref /= np.linalg.norm(a_pref, axis=1, keepdims=True)
+    a = mut.smooth_axes(s, a_pref, c, half, margin=2e-3, w_pref=1e-2)
+    assert np.allclose(np.linalg.norm(a, axis=1), 1.0)
+    ang = np.arccos(np.clip(np.sum(a * c, 1), -1, 1))
+    assert ang.max() <= half - 2e-3 + 1e-6
+
+    def energy(x):
+        return np.sum(np.linalg.norm(np.diff(x, 2, axis=0), axis=1) ** 2)
+    assert energy(a) < 0.05 * energy(a_pref)
+
+
+def test_pinned_axes_stay_near_the_given_axes():
+    n = 200
+    s = np.linspace(0, 0.1, n)
+    c = np.tile([0.0, 0.0, 1.0], (n, 1))
+    a_pin = np.tile([np.sin(0.1), 0.0, np.cos(0.1)], (n, 1))
+    pin = (s > 0.04) & (s < 0.06)
+    a = mut.smooth_axes(s, c, c, 0.2, pin=pin, pin_axes=a_pin, pin_angle=0.004)
+    ang_pin = np.arccos(np.clip(np.sum(a[pin] * a_pin[pin], 1), -1, 1))
+    assert ang_pin.max() <= 0.004 + 1e-5  # interior-point solver tolerance
+    assert np.arccos(np.clip(a[0] @ c[0], -1, 1)) < 0.05  # free elsewhere, pulled to pref
+
+
+def test_cut_path_keeps_targets_and_orthonormal_frames():
+    P = _polygon(R=0.02, n=15, arc=np.pi / 2)
+    n = len(P)
+    tilt = 0.4
+    c = np.tile([np.sin(tilt), 0.0, np.cos(tilt)], (n, 1))
+    X = np.tile(np.eye(4), (n, 1, 1))
+    X[:, :3, 3] = P
+    # tool Z (spindle -> tip) = -axis
+    z = -c[0]
+    x = np.cross([0, 1.0, 0], z)
+    x /= np.linalg.norm(x)
+    X[:, :3, :3] = np.stack([x, np.cross(z, x), z], 1)
+    cp = mut.cut_path(X, c, 0.1, deviation=0.02e-3, step=0.2e-3)
+    R = cp.X_HT[:, :3, :3]
+    assert np.allclose(np.einsum("nji,njk->nik", R, R), np.eye(3), atol=1e-9)
+    assert np.allclose(np.linalg.det(R), 1.0)
+    assert np.allclose(cp.X_target[:, :3, 3], P)
+    ang = np.arccos(np.clip(np.sum(-R[:, :, 2] * c[0], 1), -1, 1))
+    assert ang.max() <= 0.1
+    assert _dist_to_polyline(cp.X_HT[:, :3, 3], P).max() <= 0.02e-3 * 1.01
