@@ -121,7 +121,8 @@ def _run_import(args: argparse.Namespace) -> int:
     options = ImportOptions(
         unit=args.unit, expected_windows=args.windows,
         axis_M=tuple(args.axis) if args.axis else None,
-        window_reach=m_from_mm(args.window_reach_mm), seed=args.seed)
+        window_reach=m_from_mm(args.window_reach_mm),
+        front_reach=m_from_mm(args.front_reach_mm), seed=args.seed)
     progress = None if args.no_progress else tqdm_progress(f"import {Path(args.mesh).name}")
     res = import_mesh(args.mesh, args.out, options=options, progress=progress)
     c = res.summary["collision"]
@@ -160,6 +161,9 @@ def register(subparsers) -> None:
     p.add_argument("--windows", type=int, help="expected number of windows (else any)")
     p.add_argument("--window-reach-mm", type=float, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
+    p.add_argument("--front-reach-mm", type=float, default=3.0,
+                   help="how far a collision piece may stand proud of the surface seen from "
+                        "the front [mm]")
     p.add_argument("--seed", type=int, default=0, help="CoACD random seed")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_import)
