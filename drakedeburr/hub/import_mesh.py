@@ -84,7 +84,12 @@ class ImportOptions:
         resolution: CoACD surface sampling resolution.
         mcts_iterations, mcts_nodes, mcts_max_depth: CoACD's tree search effort.
         seed: CoACD random seed (deterministic output for a given mesh).
-        window_reach: a piece may reach at most this far into a window opening [m].
+        window_reach: a piece may reach at most this far into a window opening [m]. The
+            generator holds 0.5 mm (which ``Tolerances.collision_model_excess`` assumes); at
+            1 mm the full-hub verification of h5_straight's mesh failed ``burr_contact`` by
+            0.03 mm and the planner lost 7 IK targets of window 4, at 0.5 mm it passed like the
+            bundled hub but took 1108 pieces, 53 s, and did not converge within
+            ``max_refine_rounds`` on the same mesh in another pose (known weakness).
         probe_depth: the opening probes span this depth below the edge [m].
         max_refine_rounds: refinement rounds for pieces that reach into an opening.
         front_reach: a piece may stand at most this far proud of the surface seen from the
