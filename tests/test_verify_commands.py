@@ -34,7 +34,7 @@ def test_verify_bad_input_exits_2(tmp_path):
     assert main(["-q", "verify", str(tmp_path / "missing.stl")]) == 2
     mesh = tmp_path / "hub.stl"
     mesh.write_text("solid x\nendsolid x\n")
-    assert main(["-q", "verify", str(mesh)]) == 2  # no Drake model from a bare mesh yet
+    assert main(["-q", "verify", str(mesh)]) == 2  # a mesh without triangles
     assert main(["-q", "verify", "tool_in_hand/h5_straight", "--windows", "zero"]) == 2
 
 

@@ -1,4 +1,5 @@
-"""``drakedeburr hub ...``: generate, list and inspect the parametric hub models."""
+"""``drakedeburr hub ...``: generate the parametric hub models, import a hub mesh, list and
+inspect hub models."""
 
 from __future__ import annotations
 
@@ -112,9 +113,29 @@ def _run_scan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_import(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
+    from drakedeburr.units import m_from_mm
+
+    options = ImportOptions(
+        unit=args.unit, expected_windows=args.windows,
+        axis_M=tuple(args.axis) if args.axis else None,
+        window_reach=m_from_mm(args.window_reach_mm),
+        front_reach=m_from_mm(args.front_reach_mm), seed=args.seed)
+    progress = None if args.no_progress else tqdm_progress(f"import {Path(args.mesh).name}")
+    res = import_mesh(args.mesh, args.out, options=options, progress=progress)
+    c = res.summary["collision"]
+    print(f"{res.name}: {res.window_count} windows, {res.piece_count} collision pieces "
+          f"(max reach into a window {c['max_window_intrusion_mm']} mm), "
+          f"{'cached' if res.cached else f'{res.seconds:.1f} s'} -> {res.dir}")
+    return 0
+
+
 def register(subparsers) -> None:
-    """Add ``drakedeburr hub {generate,list,info,scan}``."""
-    hub = subparsers.add_parser("hub", help="parametric hub models: generate, list, info, scan")
+    """Add ``drakedeburr hub {generate,import,list,info,scan}``."""
+    hub = subparsers.add_parser(
+        "hub", help="hub models: generate, import a mesh, list, info, scan")
     sub = hub.add_subparsers(dest="hub_command", metavar="HUB_COMMAND")
     sub.required = True
 
@@ -125,6 +146,27 @@ def register(subparsers) -> None:
     p.add_argument("--out", help="parent folder of the hub folders (default: bundled models/hubs)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_generate)
+
+    p = sub.add_parser(
+        "import", help="hub mesh file (STL/OBJ/PLY) -> hub model folder (edges, CoACD pieces)",
+        description="Turn a closed hub mesh into a hub model folder OUT/<name>_<hash> that "
+                    "`drakedeburr plan`/`verify` load like a bundled hub (docs/hub.md). "
+                    "Re-importing the same file with the same options reuses the folder.")
+    p.add_argument("mesh", help="STL, OBJ or PLY file (metres or millimetres)")
+    p.add_argument("--out", required=True, help="parent folder of the hub folder")
+    p.add_argument("--unit", choices=("m", "mm"), help="force the file's unit (default: by size)")
+    p.add_argument("--axis", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                   help="hub axis out of the visible face, in the file's frame (default: "
+                        "estimated)")
+    p.add_argument("--windows", type=int, help="expected number of windows (else any)")
+    p.add_argument("--window-reach-mm", type=float, default=1.0,
+                   help="how far a collision piece may reach into a window opening [mm]")
+    p.add_argument("--front-reach-mm", type=float, default=3.0,
+                   help="how far a collision piece may stand proud of the surface seen from "
+                        "the front [mm]")
+    p.add_argument("--seed", type=int, default=0, help="CoACD random seed")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(_run=_run_import)
 
     p = sub.add_parser("list", help="list hub models")
     p.add_argument("--dir", help="folder of hub folders (default: bundled models/hubs)")

@@ -48,7 +48,8 @@ from drakedeburr.errors import InputError
 from drakedeburr.hub.spec import HubSpec, spec_to_yaml
 
 __all__ = ["GeneratedHub", "generate_hub", "build_window_outlines", "build_solid",
-           "write_npz", "GENERATOR_VERSION"]
+           "write_npz", "window_intrusion", "sdf_text", "obj_text", "loop_curvature",
+           "WindowProbes", "GENERATOR_VERSION"]
 
 log = logging.getLogger(__name__)
 
@@ -479,7 +480,7 @@ def window_center_xy(poly_xy: np.ndarray, grid: int = 80) -> np.ndarray:
     return cand[int(np.argmax(d))]
 
 
-def _curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
+def loop_curvature(p: np.ndarray, k: int = 1) -> np.ndarray:
     """Discrete curvature [1/m] of a closed polyline: circle through points i-k, i, i+k."""
     a = np.roll(p, k, axis=0)
     c = np.roll(p, -k, axis=0)
@@ -511,11 +512,15 @@ def _sector_hulls(r0: float, r1: float, z0: float, z1: float, sag: float, phase:
     return out
 
 
-class _Probes:
+class WindowProbes:
     """Points just inside the window openings [mm]: a collision hull containing one reaches
     more than ``COLL_WINDOW_REACH_MM`` into an opening."""
 
-    def __init__(self, spec: HubSpec, windows: list[_Window]):
+    def __init__(self, pts: np.ndarray):
+        self.pts = np.asarray(pts, float)
+
+    @classmethod
+    def from_spec(cls, spec: HubSpec, windows: list[_Window]) -> WindowProbes:
         pts = []
         t = spec.face_thickness * 1e3
         for w in windows:
@@ -529,17 +534,21 @@ class _Probes:
             z = spec.z_face(np.hypot(q[:, 0], q[:, 1]) * 1e-3) * 1e3
             for f in np.linspace(0.02, 0.98, 6):
                 pts.append(np.column_stack([q, z - f * t]))
-        self.pts = np.concatenate(pts)
+        return cls(np.concatenate(pts))
 
-    def hit(self, hull_pts: np.ndarray) -> bool:
+    def inside(self, hull_pts: np.ndarray) -> np.ndarray:
+        """Indices of the probes inside the convex hull of ``hull_pts``."""
         from scipy.spatial import ConvexHull
 
         lo, hi = hull_pts.min(axis=0), hull_pts.max(axis=0)
-        m = np.all((self.pts >= lo) & (self.pts <= hi), axis=1)
-        if not m.any():
-            return False
+        m = np.flatnonzero(np.all((self.pts >= lo) & (self.pts <= hi), axis=1))
+        if not len(m):
+            return m
         eq = ConvexHull(hull_pts).equations
-        return bool(np.any(np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)))
+        return m[np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)]
+
+    def hit(self, hull_pts: np.ndarray) -> bool:
+        return bool(len(self.inside(hull_pts)))
 
 
 @dataclass
@@ -549,12 +558,12 @@ class _Piece:
     hull_vol: float
 
 
-def _piece_ok(pc: _Piece, t: float, probes: _Probes) -> bool:
+def _piece_ok(pc: _Piece, t: float, probes: WindowProbes) -> bool:
     excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
     return excess <= COLL_TOL_MM and not probes.hit(pc.pts)
 
 
-def _plate_pieces(spec: HubSpec, plate, probes: _Probes, progress: Progress = None) -> list:
+def _plate_pieces(spec: HubSpec, plate, probes: WindowProbes, progress: Progress = None) -> list:
     """Convex pieces [mm] of the plate: quadtree of square cells, then greedy merging of
     neighbours (see module doc)."""
     from manifold3d import CrossSection
@@ -634,7 +643,7 @@ def _collision_pieces(spec: HubSpec, windows: list[_Window], progress: Progress 
     pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = _dished_plate(spec, windows) - _tube(0.0, bore_r, -1e3, 1e3)
-    pieces = _plate_pieces(spec, plate, _Probes(spec, windows), progress)
+    pieces = _plate_pieces(spec, plate, WindowProbes.from_spec(spec, windows), progress)
     pad, rims = _rings(spec)
     if pad is not None:
         pieces += _sector_hulls(bore_r, *pad, COLL_SAG_MM, spec.spoke_phase)
@@ -649,18 +658,25 @@ def _hull_equations(V: np.ndarray) -> np.ndarray:
     return ConvexHull(V).equations  # (F, 4): n.x + d <= 0 inside
 
 
-def _window_intrusion(loops: list[dict], piece_vertices: list[np.ndarray],
-                      spec: HubSpec) -> float:
+def window_intrusion(loops: list[dict], piece_vertices: list[np.ndarray],
+                     face_thickness: float, keep=None) -> float:
     """Largest distance [m] from the window wall into the opening that a piece reaches.
 
     Probes: each edge point moved into the opening by s along n_wall, at 5 depths through the
     face thickness; the largest s of a probe inside any piece is returned (0 if none).
+
+    Args:
+        loops: per window a mapping with ``p_HE`` and ``n_wall_H`` (N, 3) in H [m].
+        piece_vertices: convex pieces, each (M, 3) hull vertices in H [m].
+        face_thickness: depth [m] below the edge (along -Z_H) that the probes span.
+        keep: optional callable (K, 3) probes -> (K,) bool: which probes really lie in the
+            opening (for a mesh whose walls are not parallel to the axis); default all.
     """
     eqs = [_hull_equations(v) for v in piece_vertices]
     lo = np.array([v.min(axis=0) for v in piece_vertices])
     hi = np.array([v.max(axis=0) for v in piece_vertices])
     steps = np.array([0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0]) * 1e-3
-    depths = np.linspace(0.05, 0.95, 5) * spec.face_thickness
+    depths = np.linspace(0.05, 0.95, 5) * face_thickness
     worst = 0.0
     for lp in loops:
         p, n = lp["p_HE"][::4], lp["n_wall_H"][::4]
@@ -668,6 +684,8 @@ def _window_intrusion(loops: list[dict], piece_vertices: list[np.ndarray],
             if s <= worst:
                 break
             q = np.concatenate([p + s * n - np.array([0, 0, d]) for d in depths])
+            if keep is not None:
+                q = q[keep(q)]
             hit = False
             for e, a, b in zip(eqs, lo, hi, strict=True):
                 m = np.all((q >= a - 1e-9) & (q <= b + 1e-9), axis=1)
@@ -684,7 +702,7 @@ def _window_intrusion(loops: list[dict], piece_vertices: list[np.ndarray],
 
 
 # --------------------------------------------------------------------------- files
-def _obj_text(V_m: np.ndarray, faces: np.ndarray, header: str) -> str:
+def obj_text(V_m: np.ndarray, faces: np.ndarray, header: str) -> str:
     Vr = np.round(V_m, OBJ_DECIMALS) + 0.0
     buf = io.StringIO()
     buf.write(f"# {header}\n# units: metres, frame H\n")
@@ -707,14 +725,18 @@ def write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
     atomic_write_bytes(path, buf.getvalue())
 
 
-def _sdf_text(spec: HubSpec, mass: float, com: np.ndarray, I: np.ndarray,
-              piece_files: list[str]) -> str:
+def sdf_text(name: str, mass: float, com: np.ndarray, I: np.ndarray,
+             piece_files: list[str], *,
+             origin: str = "parametric hub {name}: generated by `drakedeburr hub generate`") -> str:
+    """``hub.sdf``: link ``hub`` (body frame H), visual ``hub.obj``, one declared-convex
+    collision mesh per piece file. ``mass`` [kg], ``com`` (3,) [m] in H, ``I`` (3, 3) [kg m^2]
+    about the centre of mass, axes of H."""
     cols = "\n".join(
         f"""      <collision name="{Path(f).stem}">
         <geometry><mesh><uri>{f}</uri><drake:declare_convex/></mesh></geometry>
       </collision>""" for f in piece_files)
     return f"""<?xml version="1.0"?>
-<!-- drakedeburr parametric hub {spec.name!r}: generated by `drakedeburr hub generate`, do not
+<!-- drakedeburr {origin.format(name=repr(name))}, do not
      edit. Body frame of link `hub` = hub frame H (origin on the axis at the front face, +Z out of
      the visible face). Units: metres, kg. Visual: the watertight mesh; collision: convex pieces
      (a Drake Mesh collides as its convex hull, which would fill the windows). -->
@@ -787,7 +809,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
     files = []
     atomic_write_text(out / "hub.yaml", spec_to_yaml(spec))
     files.append("hub.yaml")
-    atomic_write_text(out / "hub.obj", _obj_text(V_m, F, f"drakedeburr hub {spec.name}"))
+    atomic_write_text(out / "hub.obj", obj_text(V_m, F, f"drakedeburr hub {spec.name}"))
     files.append("hub.obj")
     arrays: dict[str, np.ndarray] = {"kinds": np.array([lp["kind"] for lp in loops])}
     for lp in loops:
@@ -815,13 +837,13 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             pv_m = np.round(pv * 1e-3, OBJ_DECIMALS) + 0.0
             piece_V.append(pv_m)
             name = f"collision/piece_{i:03d}.obj"
-            atomic_write_text(out / name, _obj_text(pv_m, pf, f"hub {spec.name} convex piece {i}"))
+            atomic_write_text(out / name, obj_text(pv_m, pf, f"hub {spec.name} convex piece {i}"))
             piece_files.append(name)
         for stale in sorted(coll_dir.glob("piece_*.obj")):
             if f"collision/{stale.name}" not in piece_files:
                 stale.unlink()
         files.extend(piece_files)
-        intrusion = _window_intrusion(loops, piece_V, spec)
+        intrusion = window_intrusion(loops, piece_V, spec.face_thickness)
         collision_info = {
             "method": "face plate: quadtree of square cells, convex hull of each connected "
                       f"part, split while the hull adds > {COLL_TOL_MM} mm average thickness or "
@@ -833,7 +855,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
             "max_window_intrusion_mm": round(intrusion * 1e3, 3),
             "bolt_holes_filled": True,
         }
-    atomic_write_text(out / "hub.sdf", _sdf_text(spec, mass, com, I_com, piece_files))
+    atomic_write_text(out / "hub.sdf", sdf_text(spec.name, mass, com, I_com, piece_files))
     files.append("hub.sdf")
 
     if progress:
@@ -844,7 +866,7 @@ def generate_hub(spec: HubSpec, out_dir: str | Path, *, progress: Progress = Non
         # curvature over chords of ~0.6 of the smallest radius (fillet or blend): consecutive
         # points are collinear between outline vertices and would give spikes
         r_min = min(lp["fillet_m"], spec.blend_radius)
-        kappa = _curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
+        kappa = loop_curvature(p, max(2, int(0.3 * r_min / spec.edge_sample_spacing)))
         c_xy = window_center_xy(lp["poly_xy_m"])
         seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
         win_summary.append({

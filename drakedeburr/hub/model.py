@@ -29,7 +29,8 @@ class HubModel:
     Attributes:
         name: hub name (folder name / spec name).
         dir: the hub folder.
-        spec: the HubSpec it was generated from.
+        spec: the HubSpec it was generated from; None for a hub imported from a mesh
+            (``drakedeburr hub import``: its ``hub.yaml`` names the source file instead).
         vertices_H: (V, 3) mesh vertices [m] in H.
         faces: (F, 3) int triangle indices, outward (counter-clockwise) winding.
         windows: ground-truth window edges, index order (CCW about +Z_H from +X_H).
@@ -42,7 +43,7 @@ class HubModel:
 
     name: str
     dir: Path
-    spec: HubSpec
+    spec: HubSpec | None
     vertices_H: np.ndarray
     faces: np.ndarray
     windows: tuple[WindowEdge, ...]
@@ -112,7 +113,7 @@ def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
     data = np.load(path, allow_pickle=False)
     kinds = [str(k) for k in data["kinds"]]
     if len(kinds) != n_windows:
-        raise InputError(f"{path}: {len(kinds)} windows, the spec says {n_windows}")
+        raise InputError(f"{path}: {len(kinds)} windows, the hub says {n_windows}")
     out = []
     for i, kind in enumerate(kinds):
         keys = [f"w{i}_{k}" for k in ("p_HE", "t_H", "n_wall_H", "n_face_H")]
@@ -122,6 +123,21 @@ def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
         out.append(WindowEdge(index=i, kind=kind, p_HE=data[keys[0]], t_H=data[keys[1]],
                               n_wall_H=data[keys[2]], n_face_H=data[keys[3]]))
     return tuple(out)
+
+
+def _imported_from(path: Path) -> dict | None:
+    """The mapping of an imported hub's ``hub.yaml`` (key ``imported_from``), else None."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML: {exc}") from exc
+    if isinstance(data, dict) and "imported_from" in data:
+        if not isinstance(data.get("name"), str):
+            raise InputError(f"{path}: imported hub without a 'name'")
+        return data
+    return None
 
 
 def load_hub(name_or_dir: str | Path) -> HubModel:
@@ -140,16 +156,21 @@ def load_hub(name_or_dir: str | Path) -> HubModel:
         InputError: a file is malformed.
     """
     d = resolve_hub_dir(name_or_dir)
-    spec = load_spec(d / "hub.yaml")
+    imported = _imported_from(d / "hub.yaml")
+    spec = None if imported else load_spec(d / "hub.yaml")
+    name = imported["name"] if imported else spec.name
     needed = ("hub.obj", "edges.npz", "summary.json", "hub.sdf")
     missing = [f for f in needed if not (d / f).is_file()]
     if missing:
+        how = (f"drakedeburr hub import {imported['imported_from']} --out {d.parent}" if imported
+               else f"drakedeburr hub generate {spec.name} --out {d.parent}")
         raise FileNotFoundError(f"{d}: hub model not generated ({', '.join(missing)} missing); "
-                                f"run: drakedeburr hub generate {spec.name} --out {d.parent}")
+                                f"run: {how}")
     V, F = read_obj(d / "hub.obj")
     summary = json.loads((d / "summary.json").read_text())
-    windows = _read_edges(d / "edges.npz", spec.window_count)
+    windows = _read_edges(d / "edges.npz",
+                          int(summary["window_count"]) if imported else spec.window_count)
     pieces = tuple(sorted((d / "collision").glob("piece_*.obj")))
-    return HubModel(name=spec.name, dir=d, spec=spec, vertices_H=V, faces=F, windows=windows,
+    return HubModel(name=name, dir=d, spec=spec, vertices_H=V, faces=F, windows=windows,
                     collision_paths=pieces, sdf_path=d / "hub.sdf", mesh_path=d / "hub.obj",
                     summary=summary)

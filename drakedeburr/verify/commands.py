@@ -3,7 +3,9 @@
 ``verify TARGET`` where TARGET is
   * a saved plan (folder or file, read with ``drakedeburr.plan.io.load_plan``),
   * ``SCENARIO/HUB`` (bundled names, e.g. ``tool_in_hand/h5_straight``) or a hub folder, or
-  * a hub mesh file (``.stl``/``.obj``/``.ply``: handed to the planner, which must import it);
+  * a hub mesh file (``.stl``/``.obj``/``.ply``): imported into a hub model folder first
+    (``drakedeburr hub import``: window edges, CoACD collision pieces; cached under
+    ``--hub-cache``, default OUT/hub_import or beside --json/--html, else the user cache);
 for a hub or mesh the hub is planned first, then verified. Exit 0 pass, 1 fail, 2 bad input.
 """
 
@@ -63,6 +65,35 @@ def _load_plan(path: Path):
     return load_plan(path)
 
 
+def _hub_cache(args: argparse.Namespace) -> Path:
+    """Where an imported mesh's hub folder goes: --hub-cache, else beside the outputs, else
+    the user cache (never the package's models folder)."""
+    if args.hub_cache:
+        return Path(args.hub_cache)
+    if args.out:
+        return Path(args.out) / "hub_import"
+    for f in (args.json, args.html):
+        if f:
+            return Path(f).resolve().parent / "hub_import"
+    import os
+
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "drakedeburr" / "hubs"
+
+
+def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
+    """Import a hub mesh file (cached) and return its hub folder."""
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
+
+    res = import_mesh(mesh, _hub_cache(args), options=ImportOptions(unit=args.unit),
+                      progress=tqdm_progress("import mesh"))
+    log.info("%s: %s hub folder %s (%d windows, %d collision pieces)", mesh,
+             "cached" if res.cached else "imported", res.dir, res.window_count,
+             res.piece_count)
+    return str(res.dir)
+
+
 def _run_verify(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.config import ProcessParameters, Tolerances
@@ -79,12 +110,7 @@ def _run_verify(args: argparse.Namespace) -> int:
     else:
         scenario, hub = rest
         if Path(hub).suffix.lower() in _MESH_SUFFIXES:
-            from drakedeburr.errors import InputError
-
-            raise InputError(
-                f"{hub}: a bare mesh has no Drake hub model (hub.sdf with convex collision "
-                "pieces), which planning and the clearance checks need; no stage builds one "
-                "from a mesh yet. Use a generated hub folder or a bundled hub name.")
+            hub = _import_mesh(hub, args)
         plan = make_plan(scenario, hub, args.planner, windows, params,
                          progress=tqdm_progress("plan"))
     kwargs = {}
@@ -157,6 +183,11 @@ def register(subparsers) -> None:
     p.add_argument("--html", help="write the self-contained HTML report here")
     p.add_argument("-o", "--out", help="folder for report.json and report.html")
     p.add_argument("--no-replay", action="store_true", help="HTML without the Meshcat replay")
+    p.add_argument("--hub-cache", help="folder for the hub model imported from a mesh target "
+                                       "(default: OUT/hub_import, beside --json/--html, or "
+                                       "~/.cache/drakedeburr/hubs)")
+    p.add_argument("--unit", choices=("m", "mm"),
+                   help="unit of a mesh target (default: detected from its size)")
     _common(p)
     p.set_defaults(_run=_run_verify)
 
