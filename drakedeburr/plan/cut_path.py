@@ -139,6 +139,19 @@ def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
     return BlendedPath(s=s, p=p, target_s=target_s, target_index=idx, zone=zone)
 
 
+def _add_cone(prog, u_i, axis: np.ndarray, cos_a: float) -> None:
+    """Angle between the axis v = (u1, u2, 1) (gnomonic, basis E) and the unit ``axis`` (in
+    basis E) at most arccos(cos_a): ``[v.axis / cos_a; v]`` in the Lorentz cone."""
+    A = np.zeros((4, 2))
+    b = np.zeros(4)
+    A[0] = axis[:2] / cos_a
+    b[0] = axis[2] / cos_a
+    A[1, 0] = 1.0
+    A[2, 1] = 1.0
+    b[3] = 1.0
+    prog.AddLorentzConeConstraint(A, b, u_i)
+
+
 def _basis(z0: np.ndarray) -> np.ndarray:
     z0 = z0 / np.linalg.norm(z0)
     h = np.array([1.0, 0.0, 0.0]) if abs(z0[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -208,29 +221,12 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     cos_i = np.cos(half_i)
     cl = c @ E  # cone axes in the (e1, e2, z0) basis
     for i in range(N):
-        # v = (u1, u2, 1); [v.c / cos_a; v] in the Lorentz cone
-        cos_a = cos_i[i]
-        A = np.zeros((4, 2))
-        bvec = np.zeros(4)
-        A[0] = cl[i, :2] / cos_a
-        bvec[0] = cl[i, 2] / cos_a
-        A[1, 0] = 1.0
-        A[2, 1] = 1.0
-        bvec[3] = 1.0
-        prog.AddLorentzConeConstraint(A, bvec, u[i])
+        _add_cone(prog, u[i], cl[i], cos_i[i])
     if pin is not None:
-        cos_p = np.cos(pin_angle)
         ap = (a_pref if pin_axes is None else np.asarray(pin_axes, float)) @ E
         ap /= np.linalg.norm(ap, axis=1, keepdims=True)
         for i in np.flatnonzero(pin):
-            A = np.zeros((4, 2))
-            bvec = np.zeros(4)
-            A[0] = ap[i, :2] / cos_p
-            bvec[0] = ap[i, 2] / cos_p
-            A[1, 0] = 1.0
-            A[2, 1] = 1.0
-            bvec[3] = 1.0
-            prog.AddLorentzConeConstraint(A, bvec, u[i])
+            _add_cone(prog, u[i], ap[i], np.cos(pin_angle))
     prog.SetInitialGuess(u, u_pref)
     res = ClarabelSolver().Solve(prog)
     if not res.is_success():
