@@ -83,7 +83,7 @@ class PlanOptions:
         axis_margin: the smoothed axis keeps this far inside its cone [rad] (so the program's
             own slerp between targets stays inside too).
         spin_search: choose the spin about the tool axis by dynamic programming
-            (:mod:`drakedeburr.plan.spin`); False keeps a fixed spin reference.
+            (:mod:`drakedeburr.plan.spin`); False: the IK's spin, smoothed.
         spin_band: the search stays within this of the IK's spin [rad].
     """
 
@@ -275,27 +275,34 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
         cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
-        if spin_mode == "ik":
-            # last resort: the IK's own spin (clearance-checked at the targets), smoothed
-            X_ik = cp.X_HT.copy()
-            X_ik[:, :3, :3] = spin_frames(cp.X_HT[:, :3, :3], cp.psi_ik)
-            X_tg = cp.X_target.copy()
-            X_tg[:, :3, :3] = X_ik[cp.target_index, :3, :3]
-            cp = replace(cp, X_HT=X_ik, X_target=X_tg)
-        elif options.spin_search:
+        if spin_mode == "search" and options.spin_search:
             X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
-                                               wrist_margin=Tolerances().wrist_margin,
+                                               wrist_margin=options.ik.min_wrist,
                                                psi_ref=cp.psi_ik, band=options.spin_band)
             if spin_stats["ok"]:
                 X_tg = cp.X_target.copy()
                 X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
                 cp = replace(cp, X_HT=X_spin, X_target=X_tg)
             else:
-                log.info("window %d: spin search failed (%s); keeping the fixed spin", w,
+                log.info("window %d: spin search failed (%s); using the IK's spin", w,
                          spin_stats["reason"])
+                spin_mode = "ik"
+        if spin_mode == "ik" or not options.spin_search:
+            # the IK's own spin (clearance-checked at the targets), smoothed
+            X_sp = cp.X_HT.copy()
+            X_sp[:, :3, :3] = spin_frames(cp.X_HT[:, :3, :3], cp.psi_ik)
+            X_tg = cp.X_target.copy()
+            X_tg[:, :3, :3] = X_sp[cp.target_index, :3, :3]
+            cp = replace(cp, X_HT=X_sp, X_target=X_tg)
         q_d, ok_d = kin.track(kin.X_WF_from_X_HT(cp.X_HT), wik.q[good[0]])
         cut = DensePath(X_HT=cp.X_HT, s=cp.s, target_index=cp.target_index, q=q_d, ok=ok_d)
-        if not np.all(cut.ok):
+        jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
+        if not (np.all(cut.ok) and np.all(jumps <= options.max_joint_jump)):
+            if spin_mode != "ik":
+                log.info("window %d: searched spin leaves the limits or jumps; using the IK's "
+                         "spin", w)
+                spin_mode = "ik"
+                continue
             break
         dist = np.array([checker.min_distance(q, options.min_clearance + 1e-3)[0]
                          for q in cut.q])
