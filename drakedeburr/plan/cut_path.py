@@ -27,7 +27,7 @@ program is a 20-line use of Drake's ``MathematicalProgram``.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
@@ -274,7 +274,7 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
              deviation: float | np.ndarray = 0.03e-3, step: float = 0.5e-3,
              spin_sigma: float = 3e-3,
              axis_margin: float = 2e-3, w_rate: float = 1e-4, w_curv: float = 1e-10,
-             spin: str = "fixed", position_sigma: float = 0.0,
+             spin: str = "fixed",
              pin: np.ndarray | None = None, pin_angle: float = 0.004) -> CutPath:
     """The executed cut through target poses: blended corners, smooth axis and spin.
 
@@ -294,14 +294,6 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
     """
     X_targets = np.asarray(X_targets, float)
     bp = blend_corners(X_targets[:, :3, 3], deviation, step)
-    if position_sigma > 0:
-        # a quadratic blend has a curvature step at both ends (C1 path): a light Gaussian
-        # smoothing makes the curvature continuous and moves the path by ~kappa sigma^2 / 2
-        # (0.01 mm at a 3 mm fillet radius for sigma = 0.25 mm); the ends stay fixed
-        sig = position_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
-        p_s = gaussian_filter1d(bp.p, sig, axis=0, mode="nearest")
-        ramp = np.clip(np.minimum(bp.s - bp.s[0], bp.s[-1] - bp.s) / (4 * position_sigma), 0, 1)
-        bp = replace(bp, p=bp.p + ramp[:, None] * (p_s - bp.p))
     rot = Rotation.from_matrix(X_targets[:, :3, :3])
     ts = bp.target_s
     # orientation of the targets interpolated along the travel, then Gaussian-smoothed
