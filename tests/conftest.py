@@ -25,3 +25,17 @@ def extdata() -> Path:
 @pytest.fixture(autouse=True)
 def _quiet_logs(caplog):
     caplog.set_level(logging.INFO, logger="drakedeburr")
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _collect_cycles_on_main_thread():
+    """Free each module's leftover Drake objects on the main thread.
+
+    A Drake Meshcat left in a reference cycle (any diagram with a MeshcatVisualizer) aborts the
+    whole test process if the cycle collector happens to run on another thread (a later test's
+    process-pool manager thread): ``meshcat.cc: IsThread(main_thread_id_) failed``.
+    """
+    yield
+    from drakedeburr.viz.scene import collect_here
+
+    collect_here()

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from drakedeburr._io import atomic_write_text
 from drakedeburr.errors import InputError
+from drakedeburr.viz.scene import collect_here
 
 __all__ = ["BatchJob", "hub_folders", "run_job", "verify_all", "summary_markdown"]
 
@@ -169,6 +170,8 @@ def verify_all(
     if scheduler is not None:
         from distributed import Client, as_completed
 
+        collect_here()  # no Meshcat may be left for the helper threads to free
+
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
             futures = client.map(run_job, jobs, pure=False)
@@ -179,6 +182,7 @@ def verify_all(
                 client.close()
         executor = "dask"
     elif workers > 1:
+        collect_here()  # no Meshcat may be left for the helper threads to free
         import multiprocessing
         import os
         from concurrent.futures import ProcessPoolExecutor, as_completed

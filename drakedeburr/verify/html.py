@@ -166,6 +166,7 @@ def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
         return meshcat.StaticHtml()
     finally:
         del meshcat
+        scene.collect_here()  # free it on this thread (see collect_here)
 
 
 def _fmt(v, unit: str) -> str:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr._io import atomic_write_text
+from drakedeburr.viz.scene import collect_here
 
 __all__ = ["plan_replay", "save_plan_html", "draw_tool_path"]
 
@@ -100,4 +101,8 @@ def save_plan_html(plan, path: str | Path, *, cell=None, dt: float = 0.05) -> Pa
         The written path.
     """
     meshcat = plan_replay(plan, cell=cell, dt=dt)
-    return atomic_write_text(path, meshcat.StaticHtml())
+    try:
+        return atomic_write_text(path, meshcat.StaticHtml())
+    finally:
+        del meshcat
+        collect_here()  # free the replay's Meshcat on this thread (see collect_here)

@@ -22,6 +22,7 @@ from drakedeburr._io import atomic_write_text
 __all__ = [
     "ROOT",
     "get_meshcat",
+    "collect_here",
     "publish_scene_graph",
     "publish_model_file",
     "publish_cell",
@@ -47,6 +48,21 @@ def _shared_meshcat():
     meshcat = Meshcat()
     log.info("Meshcat listening at %s", meshcat.web_url())
     return meshcat
+
+
+def collect_here() -> None:
+    """Run Python's cycle collector now, on the calling thread.
+
+    Drake's ``Meshcat`` must be destroyed on the thread that created it (``meshcat.cc``
+    demands ``IsThread(main_thread_id_)`` in its destructor and the process aborts otherwise).
+    A diagram with a ``MeshcatVisualizer`` holds its Meshcat in a reference cycle, so once
+    dropped it waits for the cycle collector, which may run on any thread that allocates
+    (a process pool's manager thread, dask's event loop). Call this after dropping a Meshcat
+    you created, and before starting helper threads.
+    """
+    import gc
+
+    gc.collect()
 
 
 def get_meshcat(*, new: bool = False, port: int | None = None):
