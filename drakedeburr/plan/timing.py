@@ -113,22 +113,43 @@ def _sddot_interval(x: np.ndarray, xx: np.ndarray, a: np.ndarray, v2: np.ndarray
 def _passes(s, x, xx, lim_a, v_curve) -> np.ndarray:
     """Forward (largest sddot) and backward (most negative sddot) passes under the curve
     ``v_curve`` (sdot^2 per sample), rest to rest; the accelerations are evaluated at both ends
-    of each step (the tighter counts). Returns sdot (N,)."""
+    of each step (the tighter counts). Returns sdot (N,).
+
+    The passes are sequential, so they run as a plain loop; it is kept cheap by the bounds of
+    :func:`_sddot_interval` being linear in sdot^2 for a moving joint: the upper bound is
+    ``min_j (a_j/|x_j'| - (x_j''/x_j') sdot^2)`` and the lower ``max_j (-a_j/|x_j'| - ...)``;
+    a joint that does not move (|x_j'| < 1e-12) bounds nothing but caps
+    ``sdot^2 <= a_j/|x_j''|`` (above it no sddot is admissible).
+    """
     v2 = np.array(v_curve, float)
     n = len(v2)
     v2[0] = v2[-1] = 0.0
-    ds = np.diff(s)
+    ds = np.diff(s).tolist()
+    small = np.abs(x) < 1e-12
+    with np.errstate(divide="ignore", invalid="ignore"):
+        alpha = np.where(small, np.inf, lim_a[:, None] / np.abs(x))
+        beta = np.where(small, 0.0, xx / x)
+        cap = np.where(small, lim_a[:, None] / np.abs(xx), np.inf)
+    alpha_t, beta_t = alpha.T.tolist(), beta.T.tolist()
+    cap_t = np.min(cap, axis=0).tolist()
+    inf = float("inf")
+
+    def hi(k: int, v: float) -> float:
+        if v > cap_t[k]:
+            return -inf
+        return min(a - b * v for a, b in zip(alpha_t[k], beta_t[k]))
+
+    def lo(k: int, v: float) -> float:
+        return max(-a - b * v for a, b in zip(alpha_t[k], beta_t[k]))
+
+    w = v2.tolist()
     for k in range(n - 1):
-        acc = min(_sddot_interval(x[:, k:k + 1], xx[:, k:k + 1], lim_a, v2[k:k + 1])[1][0],
-                  _sddot_interval(x[:, k + 1:k + 2], xx[:, k + 1:k + 2], lim_a,
-                                  v2[k:k + 1])[1][0])
-        v2[k + 1] = min(v2[k + 1], max(v2[k] + 2.0 * max(acc, 0.0) * ds[k], 0.0))
+        acc = min(hi(k, w[k]), hi(k + 1, w[k]))
+        w[k + 1] = min(w[k + 1], max(w[k] + 2.0 * max(acc, 0.0) * ds[k], 0.0))
     for k in range(n - 2, -1, -1):
-        dec = max(_sddot_interval(x[:, k + 1:k + 2], xx[:, k + 1:k + 2], lim_a,
-                                  v2[k + 1:k + 2])[0][0],
-                  _sddot_interval(x[:, k:k + 1], xx[:, k:k + 1], lim_a, v2[k + 1:k + 2])[0][0])
-        v2[k] = min(v2[k], max(v2[k + 1] - 2.0 * min(dec, 0.0) * ds[k], 0.0))
-    return np.sqrt(np.maximum(v2, 0.0))
+        dec = max(lo(k + 1, w[k + 1]), lo(k, w[k + 1]))
+        w[k] = min(w[k], max(w[k + 1] - 2.0 * min(dec, 0.0) * ds[k], 0.0))
+    return np.sqrt(np.maximum(np.array(w), 0.0))
 
 
 def _hermite_accel_ratio(t, q, qd, amax) -> np.ndarray:
