@@ -48,3 +48,30 @@ def test_spin_search_keeps_axes_and_points_and_removes_a_wobble():
     # FK of the result reproduces its poses (independent re-check of the tracking)
     assert np.allclose(kin.X_HT_from_q(q_out), out, atol=1e-9)
     assert _cost(kin, q_out) < 0.5 * _cost(kin, q_wob)
+
+
+def test_spin_search_result_stays_inside_the_limits_near_a_j4_limit():
+    # a cut whose wrist winds J4 up to within a few degrees of its limit: the smoothing of the
+    # searched spin must not carry J4 past it (it did, 200.6 deg against 200)
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.kinematics import cell_kinematics
+
+    kin = cell_kinematics(load_cell("tool_in_hand"))
+    n = 300
+    s = np.linspace(0.0, 0.08, n)
+    top = kin.q_upper[3] - 0.03
+    q0 = np.array([0.2, 0.4, 0.1, top - 1.2, 0.9, 0.0])
+    ramp = np.clip(s / (0.6 * s[-1]), 0.0, 1.0)
+    q = q0 + np.outer(ramp, [0.1, 0.05, -0.05, 1.2, 0.2, 0.8])
+    X = kin.X_HT_from_q(q)
+    X[:, :3, :3] = mut.spin_frames(X[:, :3, :3], 0.6 * np.sin(2 * np.pi * s / 0.03))
+    for sigma in (4e-3, 12e-3, 30e-3):
+        out, stats = mut.optimize_spin(kin, X, s, q0, wrist_margin=0.15, sigma=sigma)
+        if not stats["ok"]:
+            continue
+        q_out, ok = kin.track(kin.X_WF_from_X_HT(out), q0)
+        assert np.all(ok), (sigma, np.degrees(q_out[:, 3].max()))
+        assert np.all(q_out[:, 3] <= kin.q_upper[3] + 1e-9)
+        assert np.all(np.abs(q_out[:, 4]) >= 0.8 * 0.15)
+        assert np.allclose(out[:, :3, 2], X[:, :3, 2], atol=1e-12)
+        assert stats["sigma_m"] <= sigma

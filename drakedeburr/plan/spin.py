@@ -112,11 +112,29 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
     for k in range(n - 1, 0, -1):
         path[k - 1] = back[k, path[k]]
     ang = np.unwrap(psi[path])
-    ang_full = np.interp(s, s[sel], ang)
-    if sigma > 0:
-        step = max(float(np.median(np.diff(s))), 1e-9)
-        ang_full = gaussian_filter1d(ang_full, sigma / step, mode="nearest")
-    out = X_HT.copy()
-    out[:, :3, :3] = spin_frames(X_HT[:, :3, :3], ang_full)
+    ang_grid = np.interp(s, s[sel], ang)
+    step = max(float(np.median(np.diff(s))), 1e-9)
+    # the smoothing moves the spin off the grid path the program checked: re-check the joints
+    # it gives (branch, limits, wrist margin, J4/J6 in the start's turn window) on every sample
+    # and smooth less where it breaks them (a path hugging a J4 limit); unsmoothed, only the
+    # interpolation between the program's samples remains
+    for sig in ((sigma, 0.5 * sigma, 0.25 * sigma, 0.0) if sigma > 0 else (0.0,)):
+        ang_full = gaussian_filter1d(ang_grid, sig / step, mode="nearest") if sig > 0 else ang_grid
+        out = X_HT.copy()
+        out[:, :3, :3] = spin_frames(X_HT[:, :3, :3], ang_full)
+        q_out, ok = kin.track(kin.X_WF_from_X_HT(out), qb)
+        if _joints_ok(kin, q_out, ok, qb, wrist_margin):
+            break
+    else:
+        return X_HT, {"ok": False, "reason": "the spin path leaves the limits between samples"}
     return out, {"ok": True, "cost": float(cost[m]), "spin_range_rad": float(np.ptp(ang_full)),
-                 "feasible_share": float(np.mean(~bad))}
+                 "feasible_share": float(np.mean(~bad)), "sigma_m": sig}
+
+
+def _joints_ok(kin: CellKinematics, q: np.ndarray, ok: np.ndarray, qb: np.ndarray,
+               wrist_margin: float) -> bool:
+    """The joints of a spin path meet what the program demanded of its grid states (the wrist
+    margin to 80 %: between the program's samples the path is interpolated)."""
+    if not np.all(ok) or np.any(np.abs(q[:, 4]) < 0.8 * wrist_margin):
+        return False
+    return bool(np.all(np.abs(q[:, [3, 5]] - qb[[3, 5]]) <= np.pi))
