@@ -47,7 +47,13 @@ Progress = Callable[[int, int, str], None] | None
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
 # few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
 _DISTANCE_SLACK = 1e-6
+# CL targets of the real chain: the path stage's ``adaptive`` segmentation at 0.03 mm chord
+# height (the executed linear moves stay within it of the edge curve), with the FEWEST points
+# that meet it and L_max (count budget 1): long chords on straight edges, short ones in fillets.
+# The default budget (the proposed method's count) spreads ~2.3x as many points evenly; the
+# robot gains nothing from them (every move is linear and blended), and each costs an IK solve.
 CL_DELTA = 0.03e-3
+CL_COUNT_BUDGET = 1
 
 
 @dataclass(frozen=True)
@@ -630,7 +636,8 @@ def _tool_path(edge, params: ProcessParameters):
     from drakedeburr.path.cl_planning import PlannerParams
 
     curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
-    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA),
+    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
+                                                            count_budget=CL_COUNT_BUDGET),
                  window_index=edge.index, kind=edge.kind)
     nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
     return orient_window(cl, edge.n_wall_H[nearest], params=params)
