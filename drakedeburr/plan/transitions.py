@@ -77,8 +77,9 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     """A collision-free joint move from ``q0`` to ``q1``.
 
     Tries, in order: the straight joint line; lines through via points (the mid-pose lifted
-    by ``lift`` and 2.5 ``lift`` along the hub's face normal, both ends lifted, home; solved by
-    the analytic IK); KinematicTrajectoryOptimization warm-started from the first via path.
+    by ``lift`` and 2.5 ``lift`` along the hub's face normal, both ends lifted, home, both ends
+    lifted with home between them; solved by the analytic IK); KinematicTrajectoryOptimization
+    warm-started from the first via path.
 
     Args:
         q0, q1: (6,) joints [rad]. step: joint-space sample spacing [rad].
@@ -100,6 +101,11 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     if a is not None and b is not None:
         candidates.append(np.vstack([q0, a, b, q1]))
     candidates.append(np.vstack([q0, kin.q_home, q1]))
+    # a wrist that must unwind most of a turn between windows (the workpiece cell winds J4/J6
+    # around each loop) sweeps the part through the spindle on any of those lines: back off
+    # first, unwind at home, come back in
+    if a is not None and b is not None:
+        candidates.append(np.vstack([q0, a, kin.q_home, b, q1]))
     for way in candidates:
         q = _densify(way, step)
         d = check_joint_samples(checker, q, min_distance)
