@@ -44,7 +44,7 @@ import numpy as np
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 from drakedeburr.plan.targets import X_HT_from_axis
 
-__all__ = ["IkOptions", "WindowIk", "solve_window_ik", "seed_by_spin"]
+__all__ = ["IkOptions", "WindowIk", "solve_window_ik", "seed_by_spin", "cone_clearance_probe"]
 
 log = logging.getLogger(__name__)
 
@@ -251,6 +251,62 @@ def _analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarr
     return X, dist
 
 
+def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
+                         cone_axis_H: np.ndarray, half_angle: float, pref_axis_H: np.ndarray,
+                         t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
+                         bound: float = 2.05e-3, min_wrist: float = 0.25,
+                         rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98), ring_axes: int = 16,
+                         spins: int = 24, per_axis: int = 24) -> dict:
+    """Is there any admissible pose at a target? A sampled search of the whole cone.
+
+    Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings``
+    x half-angle; for each, ``spins`` spins about it and every analytic IK branch (J4/J6 turned
+    into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis`` of them
+    queried for signed distance. Stops at the first pose with ``bound`` clearance.
+
+    Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
+    clears the cell: the tool or the theta box has to change) from a solver failure (a pose
+    exists; the returned one seeds the retry).
+
+    Returns:
+        ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
+    """
+    c = cone_axis_H / np.linalg.norm(cone_axis_H)
+    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(c, e1)
+    axes = [pref_axis_H / np.linalg.norm(pref_axis_H), c]
+    for ring in rings:
+        if ring > 0:
+            th = ring * half_angle
+            axes += [np.cos(th) * c + np.sin(th) * (np.cos(f) * e1 + np.sin(f) * e2)
+                     for f in np.linspace(0.0, 2 * np.pi, ring_axes, endpoint=False)]
+    psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
+    best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
+    b_ref = kin.branch_of(q_ref)
+    for a in axes:
+        X = X_HT_from_axis(np.repeat((p_HQ + lift * a)[None], spins, 0),
+                           np.repeat(a[None], spins, 0), np.repeat(t_H[None], spins, 0), psi)
+        q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+        # the reference configuration's branch first, then the others
+        order = np.argsort([0 if np.all(b == b_ref) else 1 for b in branches], kind="stable")
+        q = q_all[:, order].transpose(1, 0, 2).reshape(-1, 6)
+        q = q[~np.any(np.isnan(q), axis=1)]
+        for j in (3, 5):
+            q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
+            q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
+        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
+        for qq in q[:: max(1, len(q) // per_axis)]:
+            d, pair = checker.min_distance(qq, bound + 1e-3)
+            best["queries"] += 1
+            if d > best["best_clearance"]:
+                best.update(best_clearance=float(d), pair=pair, q=qq.copy())
+            if d >= bound:
+                best["feasible"] = True
+                return best
+    return best
+
+
 def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     from pydrake.solvers import SolverOptions
 
@@ -366,7 +422,7 @@ def solve_window_ik(
     ok = np.zeros(m, bool)
     clearance = np.zeros(m)
     failures: list[dict] = []
-    n_dist = n_fallback = n_retry = n_analytic = 0
+    n_dist = n_fallback = n_retry = n_analytic = n_probe = 0
     reach = options.min_distance + options.influence_distance
     t0 = time.perf_counter()
     p_T_pref = p_HT + lift * pref_axis_H  # T itself at the preferred axis (seeds)
@@ -387,6 +443,7 @@ def solve_window_ik(
             q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev)
         done = False
         best = None
+        probe = None
         if options.analytic_first and q_prev is not None:
             acc = _analytic_accept(kin, checker, q_seed, anchor, p_HT[i], cone_axis_H[i], half,
                                    options, lift, reach)
@@ -399,10 +456,23 @@ def solve_window_ik(
             # from the second retry on, ask only for the acceptance bound, not the margin
             opts = options if attempt < 2 else replace(
                 options, min_distance=min(options.min_distance, options.min_distance_floor))
+            if attempt == 1 and probe is None:
+                # the program failed from the warm start: is there any admissible pose at all?
+                probe = cone_clearance_probe(kin, checker, p_HT[i], cone_axis_H[i], half,
+                                             pref_axis_H[i], t_H[i], anchor, lift=lift,
+                                             bound=options.min_distance_floor,
+                                             min_wrist=options.min_wrist)
+                n_probe += 1
+                if not probe["feasible"]:
+                    break  # no seed can help: reported as unreachable below
             if attempt > 0:
                 n_retry += 1
                 reseed = None
-                if attempt in (1, 2) and i_prev >= 0:
+                if attempt == 1 and probe["q"] is not None and np.max(
+                        np.abs(probe["q"] - anchor)) <= options.trust_region:
+                    reseed = probe["q"]  # the probe's pose: admissible and clear
+                    start_with_distance = True
+                elif attempt in (1, 2) and i_prev >= 0:
                     # where the preferred axis is too close to the hub (concave fillets), seed
                     # from the axis in the cone with the most clearance, distance-active at once
                     reseed = _clearance_seed(kin, checker, X_out[i_prev], p_HT[i],
@@ -452,13 +522,20 @@ def solve_window_ik(
                 rec.update(position_error=best[3], cone_angle=best[4], clearance=best[2])
                 met = best[3] <= 1e-5 and best[4] <= half + 1e-6
                 rec["reason"] = "clearance below bound" if met else "position/cone not met"
+            if probe is not None and not probe["feasible"]:
+                rec.update(cone_best_clearance=probe["best_clearance"],
+                           blocking_pair=list(probe["pair"]))
+                rec["reason"] = (
+                    f"unreachable: no tool axis in the cone ({np.degrees(half):.1f} deg) and "
+                    f"spin clears the cell; best {probe['best_clearance'] * 1e3:.2f} mm "
+                    f"({probe['pair'][0]} vs {probe['pair'][1]})")
             failures.append(rec)
         if progress is not None:
             progress(i + 1, m, f"window {window_index} IK")
     dt = time.perf_counter() - t0
     stats = dict(points=m, seconds=dt, seconds_per_point=dt / max(m, 1),
                  distance_resolves=n_dist, ipopt_fallbacks=n_fallback, retries=n_retry,
-                 analytic_accepted=n_analytic,
+                 analytic_accepted=n_analytic, cone_probes=n_probe,
                  failed=int(m - ok.sum()))
     log.info("window %d: IK %d/%d points in %.2f s (%.1f ms/point), %d analytic warm starts "
              "accepted, %d distance re-solves", window_index, int(ok.sum()), m, dt,

@@ -160,6 +160,32 @@ def _target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None,
                            n_H=None if n_H is None else np.asarray(n_H, float))
 
 
+def _clearance_records(window: int, checker, cut, dist: np.ndarray, bound: float) -> list[dict]:
+    """One failure record per stretch of the executed cut under the clearance bound: where it
+    starts and ends (sample index and tool travel), its least clearance and the closest pair."""
+    low = dist < bound
+    out = []
+    k = 0
+    while k < len(low):
+        if not low[k]:
+            k += 1
+            continue
+        end = k
+        while end + 1 < len(low) and low[end + 1]:
+            end += 1
+        j = k + int(np.argmin(dist[k:end + 1]))
+        d, pair = checker.min_distance(cut.q[j], bound + 1e-3)
+        out.append(dict(window=window, cl_index=-1, stage="dense", sample=int(j),
+                        samples=[int(k), int(end)],
+                        s_range_mm=[float(cut.s[k] * 1e3), float(cut.s[end] * 1e3)],
+                        clearance=float(d), pair=list(pair),
+                        reason=f"clearance {d * 1e3:.3f} mm on the executed motion over "
+                               f"{cut.s[k] * 1e3:.1f}-{cut.s[end] * 1e3:.1f} mm of the cut "
+                               f"({end - k + 1} samples; {pair[0]} vs {pair[1]})"))
+        k = end + 1
+    return out
+
+
 def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, options: PlanOptions,
                  failures: list, progress: Progress
                  ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
@@ -198,6 +224,13 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
         if wik is None or score < best_score:
             wik, best_score = trial, score
         if score == 0:
+            break
+        # targets no pose in the cone can reach (the IK's probe): no other start fixes those
+        unreachable = sum(1 for f in trial.failures if "cone_best_clearance" in f)
+        if score == unreachable and trial is wik:
+            log.warning("window %d: %d targets unreachable with %.1f mm clearance by any tool "
+                        "axis in the cone; reported", wt.window_index, unreachable,
+                        1e3 * options.ik.min_distance_floor)
             break
         log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
                  "another", wt.window_index, attempt, len(trial.failures),
@@ -255,9 +288,8 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
                              reason="dense sample unreachable on the window's configuration"))
     if not np.all(cut.ok):
         return None
-    for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
-        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense", sample=int(k),
-                             reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
+    failures += _clearance_records(wt.window_index, checker, cut, dist,
+                                   options.min_clearance - _DISTANCE_SLACK)
     t_dense = time.perf_counter() - t1
     return _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik,
                                 X_cut, cut, cut.q[cut.target_index], dist, reverted, t_ik,
@@ -343,9 +375,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                              reason="dense sample unreachable on the window's configuration"))
     if not np.all(cut.ok):
         return None
-    for k in np.flatnonzero(dist < options.min_clearance - _DISTANCE_SLACK):
-        failures.append(dict(window=w, cl_index=-1, stage="dense", sample=int(k),
-                             reason=f"clearance {dist[k] * 1e3:.3f} mm on the executed motion"))
+    failures += _clearance_records(w, checker, cut, dist, options.min_clearance - _DISTANCE_SLACK)
     # the program's targets: the CL targets' tool points with the smooth orientation there
     q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
                                     cut.q[cp.target_index[j]])[0][0]
