@@ -137,10 +137,10 @@ def _passes(s, x, xx, lim_a, v_curve) -> np.ndarray:
     def hi(k: int, v: float) -> float:
         if v > cap_t[k]:
             return -inf
-        return min(a - b * v for a, b in zip(alpha_t[k], beta_t[k]))
+        return min(a - b * v for a, b in zip(alpha_t[k], beta_t[k], strict=True))
 
     def lo(k: int, v: float) -> float:
-        return max(-a - b * v for a, b in zip(alpha_t[k], beta_t[k]))
+        return max(-a - b * v for a, b in zip(alpha_t[k], beta_t[k], strict=True))
 
     w = v2.tolist()
     for k in range(n - 1):
