@@ -266,7 +266,9 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
 
     Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
     clears the cell: the tool or the theta box has to change) from a solver failure (a pose
-    exists; the returned one seeds the retry).
+    exists; the returned one seeds the retry). The search is sampled, so only a best pose more
+    than 0.2 mm short of the bound ends the target's retries and labels it unreachable; nearer
+    misses go on to the distance-constrained retries, which can still find the bound.
 
     Returns:
         ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
@@ -463,8 +465,9 @@ def solve_window_ik(
                                              bound=options.min_distance_floor,
                                              min_wrist=options.min_wrist)
                 n_probe += 1
-                if not probe["feasible"]:
-                    break  # no seed can help: reported as unreachable below
+                if not probe["feasible"] and (probe["best_clearance"]
+                                              < options.min_distance_floor - 0.2e-3):
+                    break  # far from any admissible pose: no seed can help (reported below)
             if attempt > 0:
                 n_retry += 1
                 reseed = None
@@ -522,7 +525,8 @@ def solve_window_ik(
                 rec.update(position_error=best[3], cone_angle=best[4], clearance=best[2])
                 met = best[3] <= 1e-5 and best[4] <= half + 1e-6
                 rec["reason"] = "clearance below bound" if met else "position/cone not met"
-            if probe is not None and not probe["feasible"]:
+            if probe is not None and not probe["feasible"] and (
+                    probe["best_clearance"] < options.min_distance_floor - 0.2e-3):
                 rec.update(cone_best_clearance=probe["best_clearance"],
                            blocking_pair=list(probe["pair"]))
                 rec["reason"] = (

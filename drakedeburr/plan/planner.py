@@ -484,7 +484,10 @@ def _angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
 
 
 def _joint_stretch(cell, kin, checker, q0, q1, v_cap, kind, options, failures, label) -> _Stretch:
-    mv = joint_move(cell, kin, checker, q0, q1, min_distance=options.ik.min_distance,
+    # the move is checked as executed (every ``joint_step`` rad), so it needs the acceptance
+    # bound, not the IK's 0.1 mm margin (that is for the smoothing between cut targets); a
+    # hair above it for the spline through the samples
+    mv = joint_move(cell, kin, checker, q0, q1, min_distance=options.min_clearance + 0.02e-3,
                     step=options.joint_step)
     if not mv.ok:
         failures.append(dict(window=-1, cl_index=-1, stage=kind,

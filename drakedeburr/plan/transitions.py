@@ -79,7 +79,8 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     Tries, in order: the straight joint line; lines through via points (the mid-pose lifted
     by ``lift`` and 2.5 ``lift`` along the hub's face normal, both ends lifted, home, both ends
     lifted with home between them; solved by the analytic IK); KinematicTrajectoryOptimization
-    warm-started from the first via path.
+    warm-started from the first via path, solved again from its own result with 3x the
+    collision samples when the dense check finds it too close between them.
 
     Args:
         q0, q1: (6,) joints [rad]. step: joint-space sample spacing [rad].
@@ -106,17 +107,32 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     # first, unwind at home, come back in
     if a is not None and b is not None:
         candidates.append(np.vstack([q0, a, kin.q_home, b, q1]))
+    guess = None
     for way in candidates:
         q = _densify(way, step)
         d = check_joint_samples(checker, q, min_distance)
         if d >= min_distance:
             return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
                              info=dict(via_points=len(way) - 2))
-    guess = candidates[0] if candidates else np.stack([q0, q1])
-    q_kto, info = _kto(cell, checker, q0, q1, guess, min_distance)
-    if q_kto is not None:
+        if guess is None:
+            guess = way
+    guess = guess if guess is not None else np.stack([q0, q1])
+    # KTO repair: the distance constraint holds at its collision samples only, so where the
+    # dense check still finds the arm too close in between, solve again from that result with
+    # three times the samples
+    info: dict = {}
+    for samples in (25, 75):
+        q_kto, info = _kto(cell, checker, q0, q1, guess, min_distance,
+                           num_collision_samples=samples)
+        if q_kto is None:
+            break
         q = _densify(q_kto, step)
         d = check_joint_samples(checker, q, min_distance)
+        info["collision_samples"] = samples
+        if d >= min_distance:
+            break
+        guess = q_kto[np.linspace(0, len(q_kto) - 1, 24).astype(int)]
+    if q_kto is not None:
         return JointMove(q=q, s=_arc(q), clearance=d, method="kto", ok=d >= min_distance,
                          info=info)
     return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=False, info=info)
