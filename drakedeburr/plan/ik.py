@@ -188,21 +188,37 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
 
 
 def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
-                   axis_H: np.ndarray, q_prev: np.ndarray) -> np.ndarray:
-    """Seed that already meets position and preferred axis exactly: the previous pose's X_T
-    projected normal to the new axis (minimal spin change), solved by the analytic IK on the
-    previous configuration; falls back to ``q_prev``."""
+                   axis_H: np.ndarray, q_prev: np.ndarray,
+                   weights: tuple[float, ...] = IkOptions.joint_weights,
+                   spin_span: float = 0.5, spin_samples: int = 21) -> np.ndarray:
+    """Seed that already meets position and preferred axis exactly, with the spin about the
+    axis that minimises the program's own joint cost ``sum w_j (q_j - q_prev_j)^2``: spins
+    within ``spin_span`` of the previous pose's X_T projected normal to the new axis, solved
+    by the analytic IK on the previous configuration's branch. Falls back to ``q_prev``."""
     z = -axis_H / np.linalg.norm(axis_H)
     x = X_prev[:3, 0] - (X_prev[:3, 0] @ z) * z
     if np.linalg.norm(x) < 1e-6:
         return q_prev
     x /= np.linalg.norm(x)
-    X = np.eye(4)
-    X[:3, 0], X[:3, 1], X[:3, 2], X[:3, 3] = x, np.cross(z, x), z, p_HT
-    q, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q_prev)
-    if not ok[0] or np.max(np.abs(q[0] - q_prev)) > 0.6:
+    y = np.cross(z, x)
+    psi = np.linspace(-spin_span, spin_span, spin_samples)
+    X = np.repeat(np.eye(4)[None], spin_samples, axis=0)
+    X[:, :3, 0] = np.cos(psi)[:, None] * x + np.sin(psi)[:, None] * y
+    X[:, :3, 1] = -np.sin(psi)[:, None] * x + np.cos(psi)[:, None] * y
+    X[:, :3, 2] = z
+    X[:, :3, 3] = p_HT
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+    match = np.flatnonzero(np.all(branches == kin.branch_of(q_prev)[None], axis=1))
+    if match.size == 0:
         return q_prev
-    return q[0]
+    cand = q_all[:, match[0]]
+    cand = q_prev + np.mod(cand - q_prev + np.pi, 2 * np.pi) - np.pi  # no 2 pi turns
+    good = ~np.any(np.isnan(cand), axis=1) & kin.within_limits(cand)
+    good &= np.max(np.abs(cand - q_prev), axis=1) <= 0.6
+    if not good.any():
+        return q_prev
+    cost = np.where(good, np.sum(np.asarray(weights) * (cand - q_prev) ** 2, axis=1), np.inf)
+    return cand[int(np.argmin(cost))]
 
 
 def _clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
@@ -442,7 +458,8 @@ def solve_window_ik(
             anchor = q_seed
         else:
             anchor = q_prev
-            q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev)
+            q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev,
+                                    options.joint_weights)
         done = False
         best = None
         probe = None

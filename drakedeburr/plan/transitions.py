@@ -67,6 +67,18 @@ def check_joint_samples(checker: ClearanceChecker, q: np.ndarray, bound: float) 
     return float(best)
 
 
+def _clear_share(checker: ClearanceChecker, q: np.ndarray, bound: float) -> tuple[float, float]:
+    """(clearance as check_joint_samples, share of the samples before the first one under
+    ``bound``)."""
+    best = np.inf
+    for k, row in enumerate(q):
+        d = checker.min_distance(row, bound + 1e-3)[0]
+        best = min(best, d)
+        if d < bound:
+            return float(best), k / len(q)
+    return float(best), 1.0
+
+
 def _arc(q: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
 
@@ -107,15 +119,18 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
     # first, unwind at home, come back in
     if a is not None and b is not None:
         candidates.append(np.vstack([q0, a, kin.q_home, b, q1]))
-    guess = None
+    a2, b2 = _lifted(kin, q0, 5.0 * lift), _lifted(kin, q1, 5.0 * lift)
+    if a2 is not None and b2 is not None:
+        candidates.append(np.vstack([q0, a2, kin.q_home, b2, q1]))
+    guess, guess_reach = None, -1.0
     for way in candidates:
         q = _densify(way, step)
-        d = check_joint_samples(checker, q, min_distance)
+        d, reach = _clear_share(checker, q, min_distance)
         if d >= min_distance:
             return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
                              info=dict(via_points=len(way) - 2))
-        if guess is None:
-            guess = way
+        if reach > guess_reach:
+            guess, guess_reach = way, reach  # the KTO starts from the via path clear longest
     guess = guess if guess is not None else np.stack([q0, q1])
     # KTO repair: the distance constraint holds at its collision samples only, so where the
     # dense check still finds the arm too close in between, solve again from that result with
@@ -139,11 +154,16 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
 
 
 def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
-    """Joints of the pose at ``q`` lifted by ``lift`` along +Z_H (same branch)."""
-    X = kin.X_HT_from_q(q)
-    X[2, 3] += lift
-    qq, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q)
-    return qq[0] if ok[0] else None
+    """Joints of the pose at ``q`` lifted by ``lift`` along +Z_H (same branch); where that
+    leaves the joint limits (a wrist wound to its J4 limit at the end of a window), the
+    largest of lift/2, /4, /8 that stays inside."""
+    for h in (lift, 0.5 * lift, 0.25 * lift, 0.125 * lift):
+        X = kin.X_HT_from_q(q)
+        X[2, 3] += h
+        qq, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q)
+        if ok[0]:
+            return qq[0]
+    return None
 
 
 def _via(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, lift: float) -> np.ndarray | None:
