@@ -22,7 +22,7 @@ burr-head/hub process contact):
 Warm start: the first target of a window is seeded by a sweep over the spin with the analytic
 OPW IK (every branch, J5 kept away from its singularity, the configuration of ``q_ref``
 preferred); later targets from the previous solution, re-posed analytically on the new target
-at the preferred axis. Where that warm start already meets every constraint of the program
+at the preferred axis with the spin that minimises the program's joint cost. Where that warm start already meets every constraint of the program
 (checked independently: FK position and cone, limits, trust region, wrist, signed distance) it
 is taken as is (``IkOptions.analytic_first``): the axis cost is then at its minimum and the
 solve would only move the spin, and most targets are far from any contact. The Drake program
