@@ -21,15 +21,15 @@ burr-head/hub process contact):
 
 Warm start: the first target of a window is seeded by a sweep over the spin with the analytic
 OPW IK (every branch, J5 kept away from its singularity, the configuration of ``q_ref``
-preferred); later targets from the previous solution, re-posed analytically on the new target
-at the preferred axis with the spin that minimises the program's joint cost. Where that warm start already meets every constraint of the program
-(checked independently: FK position and cone, limits, trust region, wrist, signed distance) it
-is taken as is (``IkOptions.analytic_first``): the axis cost is then at its minimum and the
-solve would only move the spin, and most targets are far from any contact. The Drake program
-runs where it does not: at the first target and wherever the preferred axis lacks clearance,
-where the distance constraint tilts the axis inside the cone. SNOPT with capped major iterations,
-IPOPT as fallback, then re-seeded retries; points that still fail are reported per point,
-never raised.
+preferred); later targets from the previous solution, re-posed analytically on the new target at
+the preferred axis with the spin that minimises the program's joint cost. Where that warm start
+already meets every constraint of the program (checked independently: FK position and cone,
+limits, trust region, wrist, signed distance) it is taken as is (``IkOptions.analytic_first``):
+the axis cost is then at its minimum and the solve would only move the spin, and most targets
+are far from any contact. The Drake program runs where it does not: at the first target and
+wherever the preferred axis lacks clearance, where the distance constraint tilts the axis inside
+the cone. SNOPT with capped major iterations, IPOPT as fallback, then re-seeded retries; points
+that still fail are reported per point, never raised.
 """
 
 from __future__ import annotations
@@ -221,6 +221,15 @@ def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
     return cand[int(np.argmin(cost))]
 
 
+def _cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
+    """``count`` unit axes at ``angle`` from the unit axis ``c``, evenly around it."""
+    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(c, e1)
+    return [np.cos(angle) * c + np.sin(angle) * (np.cos(f) * e1 + np.sin(f) * e2)
+            for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
+
+
 def _clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
                     p_HT: np.ndarray, cone_axis_H: np.ndarray, half_angle: float,
                     pref_axis_H: np.ndarray, q_prev: np.ndarray, reach: float,
@@ -229,13 +238,7 @@ def _clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.n
     ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
     ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
     c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(c, e1)
-    th = 0.8 * half_angle
-    phis = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
-    axes = [pref_axis_H, c] + [np.cos(th) * c + np.sin(th) * (np.cos(f) * e1 + np.sin(f) * e2)
-                               for f in phis]
+    axes = [pref_axis_H, c] + _cone_ring(c, 0.8 * half_angle, samples)
     best, best_d = None, -np.inf
     for a in axes:
         q = _analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
@@ -290,15 +293,10 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
         ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
     """
     c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(c, e1)
     axes = [pref_axis_H / np.linalg.norm(pref_axis_H), c]
     for ring in rings:
         if ring > 0:
-            th = ring * half_angle
-            axes += [np.cos(th) * c + np.sin(th) * (np.cos(f) * e1 + np.sin(f) * e2)
-                     for f in np.linspace(0.0, 2 * np.pi, ring_axes, endpoint=False)]
+            axes += _cone_ring(c, ring * half_angle, ring_axes)
     psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
     best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
     b_ref = kin.branch_of(q_ref)
