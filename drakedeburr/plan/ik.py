@@ -82,6 +82,10 @@ class IkOptions:
             (the axis cost at its minimum, zero) with the smallest spin change, so the Drake
             solve would only trade a few mrad of axis for spin; it costs ~30 ms a point
             against ~1 ms for the check. False: the Drake program at every target.
+        seed_spin: the warm start's spin about the preferred axis: ``"joint_cost"`` the one
+            (within 0.5 rad of the previous frame's) minimising the program's joint cost, or
+            ``"frame"`` the previous frame's own (least rotation of the tool frame). The
+            planner tries the other rule on a window the first leaves failing.
     """
 
     position_tolerance: float = 1e-6
@@ -97,6 +101,14 @@ class IkOptions:
     spin_samples: int = 36
     min_distance_floor: float = 2.05e-3
     analytic_first: bool = True
+    seed_spin: str = "joint_cost"
+
+    def __post_init__(self) -> None:
+        if self.seed_spin not in ("joint_cost", "frame"):
+            from drakedeburr.errors import InputError
+
+            raise InputError(f"IkOptions.seed_spin must be 'joint_cost' or 'frame', "
+                             f"got {self.seed_spin!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -457,7 +469,9 @@ def solve_window_ik(
         else:
             anchor = q_prev
             q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev,
-                                    options.joint_weights)
+                                    options.joint_weights,
+                                    spin_span=0.5 if options.seed_spin == "joint_cost" else 0.0,
+                                    spin_samples=21 if options.seed_spin == "joint_cost" else 1)
         done = False
         best = None
         probe = None

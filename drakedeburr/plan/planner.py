@@ -189,7 +189,34 @@ def _clearance_records(window: int, checker, cut, dist: np.ndarray, bound: float
 def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, options: PlanOptions,
                  failures: list, progress: Progress
                  ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
-    """Approach, cut and retract of one window; None when the window cannot be planned."""
+    """Approach, cut and retract of one window; None when the window cannot be planned.
+
+    Planned with the IK's warm-start spin rule, and again with the other rule when that leaves
+    failure records (the better result is kept): the spin picked target by target decides how
+    far the wrist winds around the loop, and each rule winds some window into its J4/J6 limits
+    (or a corner no transition leaves) where the other does not.
+    """
+    first: list = []
+    res = _plan_window_once(cell, kin, checker, wt, q_from, options, first, progress)
+    if res is not None and not first:
+        return res
+    other = "frame" if options.ik.seed_spin == "joint_cost" else "joint_cost"
+    log.info("window %d: %d failure records; planning it again with the %r warm-start spin",
+             wt.window_index, len(first), other)
+    second: list = []
+    res2 = _plan_window_once(cell, kin, checker, wt, q_from,
+                             replace(options, ik=replace(options.ik, seed_spin=other)), second,
+                             progress)
+    if res2 is not None and (res is None or len(second) < len(first)):
+        res, first = res2, second
+    failures += first
+    return res
+
+
+def _plan_window_once(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray,
+                      options: PlanOptions, failures: list, progress: Progress
+                      ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
+    """One planning pass of a window (see :func:`_plan_window`)."""
     r_c, lift = contact_geometry(options.contact_radius)
     m = len(wt)
     # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
@@ -485,10 +512,9 @@ def _angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
 
 def _joint_stretch(cell, kin, checker, q0, q1, v_cap, kind, options, failures, label) -> _Stretch:
     # the move is checked as executed (every ``joint_step`` rad), so it needs the acceptance
-    # bound, not the IK's 0.1 mm margin (that is for the smoothing between cut targets); a
-    # hair above it for the spline through the samples
-    mv = joint_move(cell, kin, checker, q0, q1, min_distance=options.min_clearance + 0.02e-3,
-                    step=options.joint_step)
+    # bound, not the IK's 0.1 mm margin (that is for the smoothing between cut targets)
+    mv = joint_move(cell, kin, checker, q0, q1,
+                    min_distance=options.min_clearance + _DISTANCE_SLACK, step=options.joint_step)
     if not mv.ok:
         failures.append(dict(window=-1, cl_index=-1, stage=kind,
                              reason=f"{label}: no collision-free joint move found "
