@@ -194,7 +194,7 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     Planned with the IK's warm-start spin rule, and again with the other rule when that leaves
     failure records (the better result is kept): the spin picked target by target decides how
     far the wrist winds around the loop, and each rule winds some window into its J4/J6 limits
-    (or a corner no transition leaves) where the other does not.
+    where the other does not.
     """
     first: list = []
     res = _plan_window_once(cell, kin, checker, wt, q_from, options, first, progress)
