@@ -75,6 +75,8 @@ class PlanOptions:
         fit_spacings: knot spacings [m] of the least-squares joint spline, widest first.
         fit_tolerance: largest tool deviation [m] the joint-spline fit may cause.
         min_clearance: acceptance bound on every dense sample [m] (burr head/hub excepted).
+        wrist_margin: smallest |J5| on a cut [rad] (the verifier's singularity margin); a cut
+            that comes closer to the wrist singularity is a failure record.
         contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
             3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
         window_attempts: distinct start configurations tried when a window's IK fails.
@@ -106,6 +108,7 @@ class PlanOptions:
     fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3, 1e-3)
     fit_tolerance: float = 0.03e-3
     min_clearance: float = field(default_factory=lambda: Tolerances().min_clearance)
+    wrist_margin: float = field(default_factory=lambda: Tolerances().wrist_margin)
     contact_radius: float | None = 1.6e-3
     window_attempts: int = 4
     orientation_sigma_length: float | None = 2e-3
@@ -439,6 +442,12 @@ def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, 
         if dd < options.min_clearance - _DISTANCE_SLACK:
             failures.append(dict(window=wt.window_index, cl_index=-1, stage=name,
                                  reason=f"{name} clearance {dd * 1e3:.2f} mm"))
+    j5 = float(np.min(np.abs(cut.q[:, 4])))
+    if j5 < options.wrist_margin:
+        failures.append(dict(window=wt.window_index, cl_index=-1, stage="dense",
+                             sample=int(np.argmin(np.abs(cut.q[:, 4]))),
+                             reason=f"wrist singularity: |J5| down to {np.degrees(j5):.1f} deg "
+                                    f"on the cut (margin {np.degrees(options.wrist_margin):.1f})"))
     q_app = app.q[::-1]
     X_app = app.X_HT[::-1]
     s_app = app.s[-1] - app.s[::-1]
