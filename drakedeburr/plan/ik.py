@@ -335,6 +335,12 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     return best
 
 
+def _unreachable(probe: dict, options: IkOptions) -> bool:
+    """The probe's best pose is more than 0.2 mm short of the bound (the sampled search may
+    miss a pose within that; the retries may still find it)."""
+    return not probe["feasible"] and probe["best_clearance"] < options.min_distance_floor - 0.2e-3
+
+
 def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     from pydrake.solvers import SolverOptions
 
@@ -494,8 +500,7 @@ def solve_window_ik(
                                              bound=options.min_distance_floor,
                                              min_wrist=options.min_wrist)
                 n_probe += 1
-                if not probe["feasible"] and (probe["best_clearance"]
-                                              < options.min_distance_floor - 0.2e-3):
+                if _unreachable(probe, options):
                     break  # far from any admissible pose: no seed can help (reported below)
             if attempt > 0:
                 n_retry += 1
@@ -554,8 +559,7 @@ def solve_window_ik(
                 rec.update(position_error=best[3], cone_angle=best[4], clearance=best[2])
                 met = best[3] <= 1e-5 and best[4] <= half + 1e-6
                 rec["reason"] = "clearance below bound" if met else "position/cone not met"
-            if probe is not None and not probe["feasible"] and (
-                    probe["best_clearance"] < options.min_distance_floor - 0.2e-3):
+            if probe is not None and _unreachable(probe, options):
                 rec.update(cone_best_clearance=probe["best_clearance"],
                            blocking_pair=list(probe["pair"]))
                 rec["reason"] = (

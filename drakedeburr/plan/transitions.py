@@ -58,18 +58,12 @@ def _densify(q_way: np.ndarray, step: float) -> np.ndarray:
 
 def check_joint_samples(checker: ClearanceChecker, q: np.ndarray, bound: float) -> float:
     """Minimum clearance [m] over joint samples (stops early below ``bound``)."""
-    best = np.inf
-    for row in q:
-        d = checker.min_distance(row, bound + 1e-3)[0]
-        best = min(best, d)
-        if d < bound:
-            break
-    return float(best)
+    return _clear_share(checker, q, bound)[0]
 
 
 def _clear_share(checker: ClearanceChecker, q: np.ndarray, bound: float) -> tuple[float, float]:
-    """(clearance as check_joint_samples, share of the samples before the first one under
-    ``bound``)."""
+    """(minimum clearance [m] over joint samples, stopping at the first one under ``bound``;
+    the share of the samples before that one)."""
     best = np.inf
     for k, row in enumerate(q):
         d = checker.min_distance(row, bound + 1e-3)[0]
