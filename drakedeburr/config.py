@@ -9,9 +9,16 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import yaml
 
-__all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "load_config"]
+from drakedeburr.errors import InputError
+
+__all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "load_config",
+           "process_parameters", "PROCESS_FILE"]
+
+#: a part's process recipe, beside its model (e.g. ``models/hubs/<name>/process.yaml``)
+PROCESS_FILE = "process.yaml"
 
 
 @dataclass(frozen=True)
@@ -20,6 +27,13 @@ class OrientationBounds:
 
     theta_min: float
     theta_max: float
+
+    def __post_init__(self):
+        lo, hi = float(self.theta_min), float(self.theta_max)
+        # signed tilts (rotations about the local frame's axes, SPEC section 5)
+        if not (np.isfinite(lo) and np.isfinite(hi) and -0.5 * np.pi < lo < hi < 0.5 * np.pi):
+            raise ValueError(f"orientation bounds need -pi/2 < theta_min < theta_max < pi/2 rad, "
+                             f"got [{self.theta_min}, {self.theta_max}]")
 
 
 @dataclass(frozen=True)
@@ -83,23 +97,56 @@ class Tolerances:
     collision_model_excess: float = 0.5e-3
 
 
+def _overrides(cls, path: Path) -> dict:
+    """The fields of dataclass ``cls`` set by the YAML mapping in ``path``, validated."""
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML ({exc})") from exc
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: expected a mapping of {cls.__name__} fields, "
+                         f"got {type(data).__name__}")
+    names = {f.name: f for f in dataclasses.fields(cls)}
+    kwargs = {}
+    for key, value in data.items():
+        if key not in names:
+            raise InputError(f"{path}: unknown {cls.__name__} field {key!r}; "
+                             f"known: {sorted(names)}")
+        if key.startswith("bounds_"):
+            try:
+                value = OrientationBounds(**value)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"{path}: {key}: expected {{theta_min: .., theta_max: ..}} "
+                                 f"[rad] ({exc})") from exc
+        kwargs[key] = value
+    return kwargs
+
+
 def load_config(cls, path: str | Path):
     """Instantiate dataclass ``cls`` from a YAML mapping, overriding its defaults.
 
     Unknown keys are an error that names the file and the key.
     """
     path = Path(path)
-    data = yaml.safe_load(path.read_text()) or {}
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping of {cls.__name__} fields, "
-                         f"got {type(data).__name__}")
-    names = {f.name: f for f in dataclasses.fields(cls)}
+    return cls(**_overrides(cls, path))
+
+
+def process_parameters(folder: str | Path | None = None, **overrides) -> ProcessParameters:
+    """One part's process parameters: the defaults (source Tab. 7 and the theta boxes of its
+    section 2.3), then ``process.yaml`` in the part's folder when it has one, then
+    ``overrides`` (e.g. a command-line grinding speed).
+
+    A part's recipe lives beside its model because it belongs to the part: a deep-dish hub
+    needs a smaller tilt than the source's flat-faced hub so the spindle body clears the dish
+    (``models/hubs/h5_deepdish/process.yaml``). The planner and the verifier both read it.
+
+    Raises:
+        InputError: the file is malformed (names the file and the field).
+    """
     kwargs = {}
-    for key, value in data.items():
-        if key not in names:
-            raise ValueError(f"{path}: unknown {cls.__name__} field {key!r}; "
-                             f"known: {sorted(names)}")
-        if isinstance(value, dict) and key.startswith("bounds_"):
-            value = OrientationBounds(**value)
-        kwargs[key] = value
-    return cls(**kwargs)
+    if folder is not None:
+        f = Path(folder) / PROCESS_FILE
+        if f.is_file():
+            kwargs = _overrides(ProcessParameters, f)
+    kwargs.update({k: v for k, v in overrides.items() if v is not None})
+    return ProcessParameters(**kwargs)

@@ -10,6 +10,7 @@ import drakedeburr._io as io_mut
 import drakedeburr.config as config_mut
 import drakedeburr.resources as mut
 import drakedeburr.units as units
+from drakedeburr.errors import InputError
 
 
 def test_models_dir_has_package_xml():
@@ -46,6 +47,38 @@ def test_config_from_yaml(tmp_path):
     f.write_text("grinding_sped: 0.1\n")
     with pytest.raises(ValueError, match="unknown ProcessParameters field 'grinding_sped'"):
         config_mut.load_config(config_mut.ProcessParameters, f)
+
+
+def test_process_parameters_of_a_part(tmp_path):
+    """Defaults, then the part's process.yaml, then explicit overrides; bad files are named."""
+    assert config_mut.process_parameters(tmp_path) == config_mut.ProcessParameters()
+    (tmp_path / config_mut.PROCESS_FILE).write_text(
+        "bounds_large: {theta_min: 0.09, theta_max: 0.26}\ngrinding_speed: 0.12\n")
+    p = config_mut.process_parameters(tmp_path)
+    assert p.bounds_large == config_mut.OrientationBounds(0.09, 0.26)
+    assert p.grinding_speed == 0.12
+    assert p.bounds_small == config_mut.ProcessParameters().bounds_small
+    assert config_mut.process_parameters(tmp_path, grinding_speed=0.1).grinding_speed == 0.1
+    assert config_mut.process_parameters(tmp_path, grinding_speed=None).grinding_speed == 0.12
+    for text, what in (("bounds_large: {theta_min: 0.3, theta_max: 0.2}\n", "theta_min <"),
+                       ("bounds_small: {theta_min: 0.1}\n", "bounds_small"),
+                       ("bounds_small: {lo: 0.1, hi: 0.2}\n", "bounds_small"),
+                       ("[1, 2]\n", "expected a mapping"),
+                       ("a: [\n", "not valid YAML")):
+        (tmp_path / config_mut.PROCESS_FILE).write_text(text)
+        with pytest.raises(InputError, match=what) as err:
+            config_mut.process_parameters(tmp_path)
+        assert str(tmp_path / config_mut.PROCESS_FILE) in str(err.value)
+
+
+def test_bundled_hub_recipes_are_valid():
+    """Every bundled hub's process.yaml loads; h5_deepdish carries the smaller tilt box."""
+    from drakedeburr.hub import load_hub
+
+    for name in mut.hub_names():
+        load_hub(name).process  # noqa: B018 - raises on a bad recipe
+    if "h5_deepdish" in mut.hub_names():
+        assert load_hub("h5_deepdish").process.bounds_large.theta_max <= 0.26
 
 
 def test_atomic_write_keeps_old_file_on_failure(tmp_path):

@@ -91,10 +91,12 @@ def test_analytic_first_takes_the_preferred_axis_and_solves_the_rest_with_drake(
 
 
 def test_cone_probe_tells_unreachable_targets_from_solver_failures():
-    """h5_deepdish window 4 has a stretch where the spindle body meets the dish wall at every
-    axis in the cone: the probe must say so and name the pair; elsewhere it must return a pose
-    that is admissible (Drake FK) and clear."""
+    """h5_deepdish with the source's theta box (0.26-0.44 rad) has a stretch of every window
+    where the spindle body meets the rising dish face at every axis in the cone: the probe must
+    say so and name the pair; elsewhere it must return a pose that is admissible (Drake FK) and
+    clear. The hub's own recipe (process.yaml: the small windows' box) clears that stretch."""
     from drakedeburr.cell.station import load_cell
+    from drakedeburr.config import ProcessParameters
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.ik import IkOptions, cone_clearance_probe
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
@@ -105,33 +107,44 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
         pytest.skip("h5_deepdish not bundled")
     cell = load_cell("tool_in_hand", "h5_deepdish")
     kin, checker = cell_kinematics(cell), ClearanceChecker(cell)
-    wt = window_targets_for_hub(load_hub("h5_deepdish"), source="toolpath", windows=[4])[0]
+    hub = load_hub("h5_deepdish")
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
-    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)
     bound = IkOptions().min_distance_floor
 
-    def probe(i):
-        return cone_clearance_probe(kin, checker, p_HQ[i], wt.cone_axis_H[i],
-                                    wt.cone_half_angle, wt.axis_H[i], wt.t_H[i], cell.q_home,
-                                    lift=lift, bound=bound)
+    def probe(wt, i):
+        p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)
+        return p_HQ[i], cone_clearance_probe(
+            kin, checker, p_HQ[i], wt.cone_axis_H[i], wt.cone_half_angle, wt.axis_H[i],
+            wt.t_H[i], cell.q_home, lift=lift, bound=bound)
 
+    def assert_admissible(wt, i, p_HQ, res):
+        assert res["feasible"]
+        ctx = cell.plant.CreateDefaultContext()
+        cell.plant.SetPositions(ctx, res["q"])
+        X = cell.plant.CalcRelativeTransform(ctx, cell.hub_frame, cell.tool_frame)
+        R = X.rotation().matrix()
+        assert np.linalg.norm(X.translation() + lift * R[:, 2] - p_HQ) < 1e-6
+        assert (np.arccos(np.clip(-R[:, 2] @ wt.cone_axis_H[i], -1, 1))
+                <= wt.cone_half_angle + 1e-9)
+        assert checker.min_distance(res["q"], 0.01)[0] >= bound
+        assert kin.within_limits(res["q"])
+
+    source_box = window_targets_for_hub(hub, source="toolpath", windows=[4],
+                                        params=ProcessParameters())[0]
     # the blocked stretch: the CL point whose tool point is deepest in the dish's wall region
     # (CL 57-64 of 109 with the planner's CL settings; scanned from the middle of the loop)
-    r = None
-    for i in range(len(wt) // 2, len(wt) // 2 + 16):
-        r = probe(i)
+    r, i_blocked = None, -1
+    for i in range(len(source_box) // 2, len(source_box) // 2 + 16):
+        _, r = probe(source_box, i)
         if not r["feasible"]:
+            i_blocked = i
             break
     assert not r["feasible"], "expected targets no axis in the cone can reach"
     assert r["best_clearance"] < bound and r["queries"] > 100
     assert any("spindle" in name for name in r["pair"]) and any("hub" in n for n in r["pair"])
-    ok = probe(0)
-    assert ok["feasible"]
-    ctx = cell.plant.CreateDefaultContext()
-    cell.plant.SetPositions(ctx, ok["q"])
-    X = cell.plant.CalcRelativeTransform(ctx, cell.hub_frame, cell.tool_frame)
-    R = X.rotation().matrix()
-    assert np.linalg.norm(X.translation() + lift * R[:, 2] - p_HQ[0]) < 1e-6
-    assert np.arccos(np.clip(-R[:, 2] @ wt.cone_axis_H[0], -1, 1)) <= wt.cone_half_angle + 1e-9
-    assert checker.min_distance(ok["q"], 0.01)[0] >= bound
-    assert kin.within_limits(ok["q"])
+    assert_admissible(source_box, 0, *probe(source_box, 0))
+    # the hub's recipe: same CL points (the path stage does not depend on the box), other cone
+    assert hub.process.bounds_large.theta_max <= ProcessParameters().bounds_large.theta_min
+    recipe = window_targets_for_hub(hub, source="toolpath", windows=[4])[0]
+    assert np.allclose(recipe.p_HC, source_box.p_HC)
+    assert_admissible(recipe, i_blocked, *probe(recipe, i_blocked))

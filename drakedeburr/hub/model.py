@@ -59,6 +59,14 @@ class HubModel:
 
         return trimesh.Trimesh(self.vertices_H, self.faces, process=False)
 
+    @functools.cached_property
+    def process(self):
+        """The hub's process parameters (``process.yaml`` in its folder over the defaults:
+        :func:`drakedeburr.config.process_parameters`)."""
+        from drakedeburr.config import process_parameters
+
+        return process_parameters(self.dir)
+
     @property
     def large_windows(self) -> tuple[WindowEdge, ...]:
         return tuple(w for w in self.windows if w.kind == "large")

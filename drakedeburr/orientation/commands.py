@@ -120,7 +120,7 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
             n_H = inner_normals_from_mesh(hub.trimesh, cl).n_wall_H
         else:
             n_H = inner_normals_from_cloud(scan, cl).n_wall_H
-        tp = orient_window(cl, n_H, model=model, solver=solver)
+        tp = orient_window(cl, n_H, model=model, solver=solver, params=hub.process)
         row = tool_path_summary(tp)
         row["normals"] = normals
         if edge.n_wall_H is not None:

@@ -43,7 +43,8 @@ def _run_plan(args: argparse.Namespace) -> int:
     m = plan.meta
     print(f"plan written to {out}: {len(m['windows'])} windows, cycle {m['cycle_seconds']:.2f} s "
           f"(cutting {m['cutting_seconds']:.2f} s vs {m['physical_cut_seconds']:.2f} s at "
-          f"{options.params.grinding_speed * 1e3:.0f} mm/s), {len(plan.failures)} failure records")
+          f"{m['options']['params']['grinding_speed'] * 1e3:.0f} mm/s), "
+          f"{len(plan.failures)} failure records")
     for w in m["windows"]:
         print(f"  window {w['window']} ({w['kind']}): {w['reached']}/{w['cl_points']} CL, "
               f"J4/J5/J6 range {w['j4_range_deg']:.1f}/{w['j5_range_deg']:.1f}/"

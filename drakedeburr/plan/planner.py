@@ -61,7 +61,9 @@ class PlanOptions:
     """Planner settings (process speeds come from ``params``).
 
     Attributes:
-        params: process parameters (speeds, depth of cut, bounds).
+        params: process parameters (speeds, depth of cut, bounds); None: the hub's own
+            (:func:`drakedeburr.config.process_parameters`: ``process.yaml`` in the hub folder
+            over the defaults) in :func:`plan_hub`, the defaults in :func:`plan_windows`.
         ik: per-target IK settings.
         dense_step: tool travel between dense samples of the executed motion [m].
         approach_distance: approach/retract length along the tool axis [m].
@@ -95,7 +97,7 @@ class PlanOptions:
         spin_band: the search stays within this of the IK's spin [rad].
     """
 
-    params: ProcessParameters = field(default_factory=ProcessParameters)
+    params: ProcessParameters | None = None
     ik: IkOptions = field(default_factory=IkOptions)
     dense_step: float = 0.25e-3
     approach_distance: float = 15e-3
@@ -559,6 +561,8 @@ def plan_windows(
         Plan; ``failures`` lists every point/move that failed (empty when all planned).
     """
     t_start = time.perf_counter()
+    if options.params is None:
+        options = replace(options, params=ProcessParameters())
     kin = cell_kinematics(cell)
     checker = ClearanceChecker(cell)
     # moves that do not cut keep the burr head clear of the hub too
@@ -670,9 +674,10 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
             tilt, no upstream stages), or "auto" (the toolpath chain; the edges stand-in only
             when the upstream stages cannot be imported, with a logged warning - a ToolPath
             that is wrong raises, as with "toolpath").
+        params: process parameters (default: the hub's, ``hub_model.process``).
         windows: window indices (default all).
     """
-    params = params or ProcessParameters()
+    params = params or hub_model.process
     chosen = [w for w in hub_model.windows if windows is None or w.index in set(windows)]
     out = []
     for k, edge in enumerate(chosen):
@@ -744,6 +749,8 @@ def plan_hub(
     cell = load_cell(scenario, hub)
     hub_name = hub if hub is not None else cell.hub_sdf.parent.name
     hub_model = load_hub(cell.hub_sdf.parent)
+    if options.params is None:
+        options = replace(options, params=hub_model.process)
     t0 = time.perf_counter()
     wts = window_targets_for_hub(hub_model, source=source, params=options.params,
                                  windows=options.windows)

@@ -37,7 +37,8 @@ class BatchJob:
         windows: windows to plan and expect (None: all).
         quick: coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate.
         html: also write ``report.html`` (without the Meshcat replay).
-        grinding_speed: override of the process speed [m/s] (None: config default).
+        grinding_speed: override of the process speed [m/s] (None: the hub's, see
+            :func:`hub_process`).
     """
 
     scenario: str
@@ -62,6 +63,22 @@ def hub_folders(root: str | Path) -> list[Path]:
     return hubs
 
 
+def hub_process(hub: str | None, grinding_speed: float | None = None):
+    """The process parameters a hub is planned and verified with: its ``process.yaml`` over the
+    defaults (:func:`drakedeburr.config.process_parameters`), ``grinding_speed`` [m/s] over
+    both; the defaults alone for a hub that is not found (e.g. a plan of a removed hub)."""
+    from drakedeburr.config import process_parameters
+    from drakedeburr.hub.model import resolve_hub_dir
+
+    folder = None
+    if hub:
+        try:
+            folder = resolve_hub_dir(hub)
+        except FileNotFoundError:
+            log.warning("hub %s not found: default process parameters", hub)
+    return process_parameters(folder, grinding_speed=grinding_speed)
+
+
 def make_plan(scenario: str, hub: str, planner: str, windows, params, progress=None):
     """Plan a hub with the chosen planner (used by the CLI and the batch jobs)."""
     if planner == "reference":
@@ -84,7 +101,7 @@ _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 def run_job(job: BatchJob) -> dict:
     """Plan + verify one hub; never raises (errors become a row with ``error``)."""
-    from drakedeburr.config import ProcessParameters, Tolerances
+    from drakedeburr.config import Tolerances
     from drakedeburr.verify.checks import verify_plan
     from drakedeburr.verify.report import write_report_json
 
@@ -92,8 +109,7 @@ def run_job(job: BatchJob) -> dict:
     row = {"scenario": Path(job.scenario).stem, "hub": Path(job.hub).name, "passed": False,
            "failed": [], "advisory_failed": [], "error": None}
     try:
-        params = ProcessParameters() if job.grinding_speed is None else ProcessParameters(
-            grinding_speed=job.grinding_speed)
+        params = hub_process(job.hub, job.grinding_speed)
         t0 = time.perf_counter()
         plan = make_plan(job.scenario, job.hub, job.planner, job.windows, params)
         row["plan_s"] = time.perf_counter() - t0

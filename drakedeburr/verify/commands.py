@@ -15,6 +15,8 @@ import argparse
 import logging
 from pathlib import Path
 
+from drakedeburr.units import m_from_mm
+
 log = logging.getLogger(__name__)
 
 _MESH_SUFFIXES = (".stl", ".obj", ".ply")
@@ -96,21 +98,22 @@ def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
 
 def _run_verify(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
-    from drakedeburr.config import ProcessParameters, Tolerances
-    from drakedeburr.verify.batch import make_plan
+    from drakedeburr.config import Tolerances
+    from drakedeburr.verify.batch import hub_process, make_plan
     from drakedeburr.verify.checks import verify_plan
     from drakedeburr.verify.report import write_report_json
 
-    params = ProcessParameters() if args.grinding_speed is None else ProcessParameters(
-        grinding_speed=args.grinding_speed * 1e-3)
+    speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
     windows = _windows(args.windows)
     kind, *rest = _resolve_target(args.target, args.scenario)
     if kind == "plan":
         plan = _load_plan(rest[0])
+        params = hub_process(plan.hub, speed)
     else:
         scenario, hub = rest
         if Path(hub).suffix.lower() in _MESH_SUFFIXES:
             hub = _import_mesh(hub, args)
+        params = hub_process(hub, speed)
         plan = make_plan(scenario, hub, args.planner, windows, params,
                          progress=tqdm_progress("plan"))
     kwargs = {}
