@@ -2,11 +2,9 @@
 
 * every hub in both cells with the edge-derived targets (``source="edges"``: ground-truth
   edge, fixed tilt inside the theta_A box, theta_B = 0);
-* the real chain (path stage CL points -> orientation stage ToolPath -> plan) for the
-  default hub in both cells and the tool-in-hand h5_split and h6_curved. The real chain's
-  known failures (docs/plan.md "Limits") are not run here: h5_deepdish has targets no axis in
-  the cone can reach with 2 mm clearance (tests/test_plan_ik.py checks that they are reported
-  as such), and the workpiece cell's h5_split/h6_curved leave one window each.
+* every hub in both cells with the real chain (path stage CL points -> orientation stage
+  ToolPath -> plan), each hub with its own process recipe (``process.yaml``: h5_deepdish's
+  smaller tilt box, see docs/plan.md).
 """
 
 import numpy as np
@@ -16,16 +14,8 @@ from drakedeburr.resources import hub_names
 
 HUBS = hub_names()
 
-
-REAL_CHAIN = [("h5_straight", "tool", "toolpath"), ("h5_straight", "workpiece", "toolpath"),
-              ("h5_split", "tool", "toolpath"), ("h6_curved", "tool", "toolpath")]
-# known failure (issue #5, open): h5_deepdish in the workpiece cell leaves IK failures in
-# window 1 even with the edge-derived targets
-_KNOWN = {("h5_deepdish", "workpiece")}
-EDGES = [pytest.param(hub, mode, "edges", marks=pytest.mark.xfail(
-             reason="h5_deepdish workpiece cell: IK failures in window 1 (issue #5)",
-             strict=False)) if (hub, mode) in _KNOWN else (hub, mode, "edges")
-         for hub in HUBS for mode in ("tool", "workpiece")]
+REAL_CHAIN = [(hub, mode, "toolpath") for hub in HUBS for mode in ("tool", "workpiece")]
+EDGES = [(hub, mode, "edges") for hub in HUBS for mode in ("tool", "workpiece")]
 
 
 @pytest.mark.slow

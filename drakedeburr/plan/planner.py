@@ -25,6 +25,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
@@ -95,6 +96,11 @@ class PlanOptions:
         spin_search: choose the spin about the tool axis by dynamic programming
             (:mod:`drakedeburr.plan.spin`); False: the IK's spin, smoothed.
         spin_band: the search stays within this of the IK's spin [rad].
+        program_orientation: largest angle [rad] between the executed tool orientation and the
+            program's (slerp between consecutive targets, as a controller interpolates); where
+            the smooth cut turns faster than that allows, via targets (``cl_index`` -1) are
+            added on the executed path (half the verifier's ``Tolerances.orientation_match``).
+        via_rounds: rounds of via insertion (each re-plans the cut through the new targets).
     """
 
     params: ProcessParameters | None = None
@@ -120,6 +126,9 @@ class PlanOptions:
     axis_margin: float = 10e-3
     spin_search: bool = True
     spin_band: float = 1.2
+    program_orientation: float = field(
+        default_factory=lambda: 0.5 * Tolerances().orientation_match)
+    via_rounds: int = 4
 
 
 @dataclass
@@ -218,6 +227,31 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     return res
 
 
+def _rewound_start(kin: CellKinematics, trial, q_first: np.ndarray | None,
+                   near: float = 0.2) -> np.ndarray | None:
+    """``q_first`` with J4/J6 turned by 2 pi away from the limit the window's IK ran into.
+
+    A closed loop winds the wrist (in the workpiece cell J6 turns almost a full circle per
+    window, the hub spinning under the fixed burr): started mid-range it runs into +-400 deg.
+    The same start a turn the other way leaves room for the whole loop. None when the reached
+    joints came within ``near`` [rad] of neither limit (or of both), or the turn leaves the
+    limits.
+    """
+    reached = np.flatnonzero(trial.ok)
+    if q_first is None or len(reached) == 0:
+        return None
+    q = trial.q[reached]
+    out = np.array(q_first, float)
+    for j in (3, 5):
+        lo, hi = kin.q_lower[j], kin.q_upper[j]
+        at_lo, at_hi = q[:, j].min() < lo + near, q[:, j].max() > hi - near
+        if at_lo != at_hi:
+            turned = out[j] + (2 * np.pi if at_lo else -2 * np.pi)
+            if lo <= turned <= hi:
+                out[j] = turned
+    return None if np.array_equal(out, q_first) else out
+
+
 def _plan_window_once(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray,
                       options: PlanOptions, failures: list, progress: Progress
                       ) -> tuple[list[_Stretch], dict, np.ndarray] | None:
@@ -267,6 +301,11 @@ def _plan_window_once(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray,
         log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
                  "another", wt.window_index, attempt, len(trial.failures),
                  "ok" if dense_ok else "leaves the limits")
+        # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
+        wound = _rewound_start(kin, trial, q_first)
+        if wound is not None and not any(s is not None and np.max(np.abs(wound - s)) < 1e-6
+                                         for s in seeds):
+            seeds.insert(attempt + 1, wound)
     t_ik = time.perf_counter() - t0
     for rec in wik.failures:
         failures.append({**rec, "cl_index": int(loop[rec["cl_index"]])})
@@ -341,10 +380,15 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     pin = None
     spin_mode = "search"
     dev = np.full(len(order), options.blend_deviation)
-    for attempt in range(6):
-        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
+    # the program's targets: the CL targets, then via targets where the program's orientation
+    # would stray from the executed one (``via``: True for those; they are added below)
+    X_in, cone_in, via = X_ik.copy(), wt.cone_axis_H[order].copy(), np.zeros(len(order), bool)
+    via_round = 0
+    for attempt in range(6 + options.via_rounds):
+        cp = cut_path(X_in, cone_in, wt.cone_half_angle, step=options.dense_step,
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
+        via_cp = via.copy()
         if spin_mode == "search" and options.spin_search:
             X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
                                                wrist_margin=options.ik.min_wrist,
@@ -378,7 +422,25 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                          for q in cut.q])
         low = dist < options.min_clearance - _DISTANCE_SLACK
         if not low.any():
-            break
+            add = _via_samples(cp.X_HT, cp.target_index, options.program_orientation)
+            if add.size == 0 or via_round >= options.via_rounds:
+                break
+            # a via target on the executed path where the program's slerp strays most, and the
+            # cut planned again through them (blends, axis and spin see the new targets)
+            via_round += 1
+            at = np.searchsorted(cp.target_index, add)
+            f = (cp.s[add] - cp.s[cp.target_index[at - 1]]) / (
+                cp.s[cp.target_index[at]] - cp.s[cp.target_index[at - 1]])
+            cone_new = (1 - f)[:, None] * cone_in[at - 1] + f[:, None] * cone_in[at]
+            X_in = np.insert(X_in, at, cp.X_HT[add], axis=0)
+            cone_in = np.insert(cone_in, at, cone_new / np.linalg.norm(cone_new, axis=1,
+                                                                       keepdims=True), axis=0)
+            dev = np.insert(dev, at, np.minimum(dev[at - 1], dev[at]))
+            via = np.insert(via, at, True)
+            log.info("window %d: %d via targets where the program's orientation strays more "
+                     "than %.1f mrad (round %d)", w, len(add), 1e3 * options.program_orientation,
+                     via_round)
+            continue
         if dist.min() < options.min_clearance - 0.5e-3 and spin_mode != "ik":
             # far below the bound: the spin put the spindle body into the hub (pinning the
             # axis cannot fix that); fall back to the IK's spin
@@ -394,7 +456,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
         pin = new_iv if pin is None else np.vstack([pin, new_iv])
         # and round the corners there less (a blend cuts the corner by up to its deviation)
         tight = np.unique(np.searchsorted(cp.s[cp.target_index], cp.s[near]))
-        tight = np.clip(np.concatenate([tight - 1, tight]), 0, len(order) - 1)
+        tight = np.clip(np.concatenate([tight - 1, tight]), 0, len(X_in) - 1)
         dev[tight] *= 0.25
         log.info("window %d: %d samples under the clearance; pinning the axis and tightening "
                  "the blends around them (attempt %d)", w, int(low.sum()), attempt + 1)
@@ -413,21 +475,71 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                                     cut.q[cp.target_index[j]])[0][0]
                           for j in range(len(cp.X_target))])
     bad = np.flatnonzero(np.any(~np.isfinite(q_targets), axis=1))
+    cl_of = np.full(len(via_cp), -1)
+    cl_of[~via_cp] = order
     for j in bad:
-        failures.append(dict(window=w, cl_index=int(order[j]), stage="dense",
+        failures.append(dict(window=w, cl_index=int(cl_of[j]), stage="dense",
                              reason="program target unreachable with the smoothed orientation"))
     if bad.size:
         return None
+    stray = _program_orientation_error(cp.X_HT, cp.target_index)
+    if stray.max() > Tolerances().orientation_match:
+        k = int(np.argmax(stray))
+        failures.append(dict(window=w, cl_index=-1, stage="dense", sample=k,
+                             reason=f"program orientation strays {1e3 * stray[k]:.1f} mrad from "
+                                    f"the executed cut (via targets: {int(via_cp.sum())})"))
     t_dense = time.perf_counter() - t1
     return _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik,
                                 cp.X_target, cut, q_targets, dist,
-                                np.zeros(len(order), bool), t_ik, t_dense, zones=cp.zone)
+                                np.zeros(len(order), bool), t_ik, t_dense, zones=cp.zone,
+                                via=via_cp)
+
+
+def _program_orientation_error(X: np.ndarray, target_index: np.ndarray) -> np.ndarray:
+    """(N,) angle [rad] between each dense pose's orientation and the program's: the slerp
+    between the targets at dense samples ``target_index`` that bracket it, at the fraction of
+    its projection on their chord (as a controller interpolates a linear move, and as the
+    verifier's ``orientation_agreement`` reads the program)."""
+    X = np.asarray(X, float)
+    ti = np.asarray(target_index)
+    n = np.arange(len(X))
+    k = np.clip(np.searchsorted(ti, n, side="right") - 1, 0, len(ti) - 2)
+    a, b = ti[k], ti[k + 1]
+    d = X[b, :3, 3] - X[a, :3, 3]
+    f = np.clip(np.sum((X[:, :3, 3] - X[a, :3, 3]) * d, axis=1)
+                / np.maximum(np.sum(d * d, axis=1), 1e-18), 0.0, 1.0)
+    Ra, Rb = X[a, :3, :3], X[b, :3, :3]
+    rv = Rotation.from_matrix(np.einsum("nji,njk->nik", Ra, Rb)).as_rotvec()
+    R_prog = Ra @ Rotation.from_rotvec(f[:, None] * rv).as_matrix()
+    rel = np.einsum("nji,njk->nik", R_prog, X[:, :3, :3])
+    return np.linalg.norm(Rotation.from_matrix(rel).as_rotvec(), axis=1)
+
+
+def _via_samples(X: np.ndarray, target_index: np.ndarray, tol: float) -> np.ndarray:
+    """Dense samples to make via targets: in each move between consecutive targets whose
+    program orientation strays more than ``tol`` (:func:`_program_orientation_error`), the
+    sample where it strays most (sorted; never a target itself)."""
+    err = _program_orientation_error(X, target_index)
+    ti = np.asarray(target_index)
+    out = []
+    for a, b in zip(ti[:-1], ti[1:], strict=True):
+        if b - a < 2:
+            continue
+        j = a + 1 + int(np.argmax(err[a + 1:b]))
+        if err[j] > tol:
+            out.append(j)
+    return np.asarray(out, int)
 
 
 def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik, X_cut,
-                         cut, q_targets, dist, reverted, t_ik, t_dense, zones=None):
-    """Approach/retract, timing and statistics of a window whose cut is tracked."""
+                         cut, q_targets, dist, reverted, t_ik, t_dense, zones=None, via=None):
+    """Approach/retract, timing and statistics of a window whose cut is tracked.
+
+    ``X_cut``/``q_targets``: the program's cut targets, the CL targets in ``order`` with via
+    targets between them where ``via`` (bool per target) is True.
+    """
     params = options.params
+    via = np.zeros(len(q_targets), bool) if via is None else np.asarray(via, bool)
     dmin = float(np.min(dist))
     # approach and retract along the tool axis
     X0, Xe = X_cut[0], X_cut[-1]
@@ -462,9 +574,25 @@ def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, 
     t_time = time.perf_counter() - t2
     w = wt.window_index
     zones = np.zeros(len(order)) if zones is None else zones
-    cut_targets = [_target(kin, q_targets[j], w, "cut", int(i), params.grinding_speed, "linear",
-                           wt.p_HC[i], wt.n_H[i], zone=float(zones[j]))
-                   for j, i in enumerate(order)]
+    cut_targets = []
+    cl_rows = np.flatnonzero(~via)
+    for j in range(len(q_targets)):
+        if not via[j]:
+            i = int(order[np.searchsorted(cl_rows, j)])
+            p_HC, n_H = wt.p_HC[i], wt.n_H[i]
+        else:
+            # a via cuts the edge between its CL neighbours: their chord point and normal at
+            # its share of the travel between them
+            a, b = cl_rows[cl_rows < j][-1], cl_rows[cl_rows > j][0]
+            s_a, s_j, s_b = cut.s[cut.target_index[[a, j, b]]]
+            f = (s_j - s_a) / max(s_b - s_a, 1e-12)
+            ia, ib = (int(order[np.searchsorted(cl_rows, r)]) for r in (a, b))
+            p_HC = (1 - f) * wt.p_HC[ia] + f * wt.p_HC[ib]
+            n_H = (1 - f) * wt.n_H[ia] + f * wt.n_H[ib]
+            n_H = n_H / np.linalg.norm(n_H)
+            i = -1
+        cut_targets.append(_target(kin, q_targets[j], w, "cut", i, params.grinding_speed,
+                                   "linear", p_HC, n_H, zone=float(zones[j])))
     stretches = [
         _Stretch("approach", w, timed_app, [_target(kin, q_app[-1], w, "approach", int(good[0]),
                                                     options.approach_speed, "linear",
@@ -474,7 +602,7 @@ def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, 
                                                    options.approach_speed, "linear")]),
     ]
     q_deg = np.degrees(cut.q)
-    box_share = _box_share(wt, order, q_targets, kin)
+    box_share = _box_share(wt, order, q_targets[cl_rows], kin)
     v_cut = timed_cut.v_tcp[1:-1]
     band = params.grinding_speed * 0.05
     stats = dict(
@@ -493,8 +621,9 @@ def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, 
         if len(v_cut) else 0.0,
         ik_seconds=t_ik, dense_seconds=t_dense, timing_seconds=t_time, ik=wik.stats,
         joint_fit_deviation_m=fit_dev,
-        orientation_smoothing_rad=float(np.max(_angle(X_ik, X_cut))),
-        q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets.tolist(),
+        orientation_smoothing_rad=float(np.max(_angle(X_ik, X_cut[cl_rows]))),
+        via_targets=int(via.sum()),
+        q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets[cl_rows].tolist(),
         cl_order=[int(i) for i in order])
     return stretches, stats, q_app[0]
 

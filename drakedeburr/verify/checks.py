@@ -28,7 +28,7 @@ import datetime as _dt
 import logging
 import time as _time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -49,6 +49,42 @@ _KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
 
 
 # ----------------------------------------------------------------------------- geometry helpers
+def _point_moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
+    """Like :func:`_point_segment` for trajectory samples in time order against a program's
+    moves run in order: each sample is put on a move such that the move index never decreases
+    along the samples and the summed distance is least (dynamic programming over samples x
+    moves). The nearest move alone is ambiguous where the path comes back: a closed window
+    loop ends on its first CL point, where its last samples are as near the start of the first
+    move as the end of the last (and the spin there may differ by a turn of the wrist).
+
+    Written by hand: a monotone assignment of points to polyline segments is a few lines of
+    dynamic programming; no library offers it.
+
+    Returns:
+        (d (N,), move index (N,), fraction along it (N,)).
+    """
+    n, S = len(p), len(a)
+    ab = b - a
+    L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    ap = p[:, None, :] - a[None]
+    F = np.clip(np.einsum("nsk,sk->ns", ap, ab) / L2, 0.0, 1.0)
+    D = np.linalg.norm(ap - F[..., None] * ab[None], axis=2)
+    idx = np.arange(S)
+    back = np.empty((n, S), np.int32)
+    cost = D[0].copy()
+    for i in range(1, n):
+        best = np.minimum.accumulate(cost)
+        # the latest position of the running minimum: the best earlier-or-same move
+        back[i] = np.maximum.accumulate(np.where(cost <= best, idx, 0))
+        cost = D[i] + best
+    m = np.empty(n, int)
+    m[-1] = int(np.argmin(cost))
+    for i in range(n - 1, 0, -1):
+        m[i - 1] = back[i, m[i]]
+    r = np.arange(n)
+    return D[r, m], m, F[r, m]
+
+
 def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray, chunk: int = 256):
     """Distance of points to a set of segments.
 
@@ -242,6 +278,33 @@ class _WindowRef:
     cl_of: dict
     tool_path: object = None
     source: str = "ToolPath"
+    #: via targets (``cl_index`` -1 between CL targets): target -> (CL before, CL after,
+    #: share of the travel between their targets), so a via stands for the edge chord point
+    via_of: dict = field(default_factory=dict)
+
+    def anchor(self, k: int) -> tuple[int, int, float] | None:
+        """The CL point target ``k`` stands for, as (CL a, CL b, share from a to b)."""
+        if k in self.cl_of:
+            return self.cl_of[k], self.cl_of[k], 0.0
+        return self.via_of.get(k)
+
+
+def _via_anchors(targets, w: int, cl_of: dict) -> dict:
+    """Via targets of window ``w``: each between the CL targets before and after it, at its
+    share of the target polyline's length between them (the verifier's own reading, from the
+    targets' tool points; not the planner's ``p_HC``)."""
+    out = {}
+    ks = [k for k, t in enumerate(targets) if t.window_index == w and t.segment == "cut"
+          and t.cl_index < 0]
+    for k in ks:
+        a = next((j for j in range(k - 1, -1, -1) if j in cl_of), None)
+        b = next((j for j in range(k + 1, len(targets)) if j in cl_of), None)
+        if a is None or b is None or targets[b].window_index != w:
+            continue
+        P = np.array([targets[j].X_HT[:3, 3] for j in range(a, b + 1)])
+        run = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+        out[k] = (cl_of[a], cl_of[b], float(run[k - a] / max(run[-1], 1e-15)))
+    return out
 
 
 def _window_ref(w, targets, tool_path, edge, params) -> _WindowRef | None:
@@ -252,7 +315,7 @@ def _window_ref(w, targets, tool_path, edge, params) -> _WindowRef | None:
         bounds = getattr(tool_path, "bounds", None) or (
             params.bounds_large if edge.kind == "large" else params.bounds_small)
         return _WindowRef(np.asarray(tool_path.p_HC, float), np.asarray(tool_path.R_HL, float),
-                          bounds, cl_of, tool_path)
+                          bounds, cl_of, tool_path, via_of=_via_anchors(targets, w, cl_of))
     if edge is None or edge.t_H is None or edge.n_wall_H is None or not ks:
         return None
     from scipy.spatial import cKDTree
@@ -534,7 +597,7 @@ def verify_plan(
         idx = np.flatnonzero(seg_index == si)
         P0 = np.array([targets[k - 1].X_HT[:3, 3] for k in ks])
         P1 = np.array([targets[k].X_HT[:3, 3] for k in ks])
-        d, m, f = _point_segment(p_all[idx], P0, P1)
+        d, m, f = _point_moves_in_order(p_all[idx], P0, P1)
         path_dev[idx] = d
         seg_k[idx] = np.asarray(ks)[m]
         seg_f[idx] = f
@@ -630,19 +693,25 @@ def verify_plan(
             continue
         k1 = seg_k[idx]
         k0 = k1 - 1
-        if any(k not in ref.cl_of for k in np.concatenate([k0, k1])):
+        anchors = {int(k): ref.anchor(int(k)) for k in np.unique(np.concatenate([k0, k1]))}
+        if any(a is None for a in anchors.values()):
             continue
-        cl0 = np.array([ref.cl_of[k] for k in k0])
-        cl1 = np.array([ref.cl_of[k] for k in k1])
+        # the CL point each move end stands for (a via: the chord point between its CL points)
+        an0 = np.array([anchors[int(k)] for k in k0])
+        an1 = np.array([anchors[int(k)] for k in k1])
+        ca0, cb0, g0 = an0[:, 0].astype(int), an0[:, 1].astype(int), an0[:, 2]
+        ca1, cb1, g1 = an1[:, 0].astype(int), an1[:, 1].astype(int), an1[:, 2]
         f = seg_f[idx]
         p_HC = ref.p_HC
+        P0 = (1 - g0)[:, None] * p_HC[ca0] + g0[:, None] * p_HC[cb0]
+        P1 = (1 - g1)[:, None] * p_HC[ca1] + g1[:, None] * p_HC[cb1]
 
-        def p_TC(k, cl, p_HC=p_HC):
+        def p_TC(k, p):
             X = np.asarray(targets[k].X_HT)
-            return X[:3, :3].T @ (p_HC[cl] - X[:3, 3])
+            return X[:3, :3].T @ (p - X[:3, 3])
 
-        off = np.array([(1 - fi) * p_TC(a_, c0) + fi * p_TC(b_, c1)
-                        for a_, b_, c0, c1, fi in zip(k0, k1, cl0, cl1, f, strict=True)])
+        off = np.array([(1 - fi) * p_TC(a_, pa) + fi * p_TC(b_, pb)
+                        for a_, b_, pa, pb, fi in zip(k0, k1, P0, P1, f, strict=True)])
         C = np.einsum("nij,nj->ni", X_HT_all[idx, :3, :3], off) + p_all[idx]
         contact[idx] = C
         d, E = _closed_polyline_distance(C, edge, tree)
@@ -660,7 +729,8 @@ def verify_plan(
         jc = int(np.argmax(dc))
         coverage[w] = (float(dc[jc]), jc)
         # theta box: executed axis in the interpolated local frame (the source's bounds)
-        R_loc = _lerp_frames(ref.R_HL[cl0], ref.R_HL[cl1], f)
+        R_loc = _lerp_frames(_lerp_frames(ref.R_HL[ca0], ref.R_HL[cb0], g0),
+                             _lerp_frames(ref.R_HL[ca1], ref.R_HL[cb1], g1), f)
         tA, tB = angles_from_axis_H(R_loc, R[:, :, 2])  # the executed +Z_T
         theta_A[idx], theta_B[idx] = tA, tB
         lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
@@ -672,7 +742,11 @@ def verify_plan(
         if tp_w is not None and getattr(tp_w, "cone_axis_H", None) is not None:
             half = _cone_half_angle(plan, w, tp_w)
             c_H = np.asarray(tp_w.cone_axis_H, float)
-            c = (1 - f)[:, None] * c_H[cl0] + f[:, None] * c_H[cl1]
+            c0 = (1 - g0)[:, None] * c_H[ca0] + g0[:, None] * c_H[cb0]
+            c1 = (1 - g1)[:, None] * c_H[ca1] + g1[:, None] * c_H[cb1]
+            c0 /= np.linalg.norm(c0, axis=1, keepdims=True)
+            c1 /= np.linalg.norm(c1, axis=1, keepdims=True)
+            c = (1 - f)[:, None] * c0 + f[:, None] * c1
             c /= np.linalg.norm(c, axis=1, keepdims=True)
             ang = np.arccos(np.clip(np.sum(c * R[:, :, 2], axis=1), -1.0, 1.0))
             cone_margin[idx] = half - ang
