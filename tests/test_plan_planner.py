@@ -47,6 +47,25 @@ def planned(request):
     return cell, wt, plan
 
 
+def _target_cone_axes(tg, wt):
+    """Cone axis at each target: its CL point's; a via target's interpolated between its CL
+    neighbours by the length of the target polyline (the test's own reading)."""
+    P = np.array([t.X_HT[:3, 3] for t in tg])
+    run = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+    cl = np.array([t.cl_index for t in tg])
+    known = np.flatnonzero(cl >= 0)
+    out = np.empty((len(tg), 3))
+    for k in range(len(tg)):
+        if cl[k] >= 0:
+            out[k] = wt.cone_axis_H[cl[k]]
+            continue
+        a, b = known[known < k][-1], known[known > k][0]
+        f = (run[k] - run[a]) / (run[b] - run[a])
+        c = (1 - f) * wt.cone_axis_H[cl[a]] + f * wt.cone_axis_H[cl[b]]
+        out[k] = c / np.linalg.norm(c)
+    return out
+
+
 def _segment_and_fraction(p, poly):
     """For each point of p (N, 3): the index of the nearest polyline segment and the fraction
     along it."""
@@ -71,7 +90,10 @@ def test_plan_has_no_failures_and_the_expected_structure(planned):
     assert plan.failures == ()
     assert [s.kind for s in plan.segments] == ["home", "approach", "cut", "retract", "home"]
     cut = [t for t in plan.targets if t.segment == "cut"]
-    assert [t.cl_index for t in cut] == list(range(1, len(wt)))
+    # every CL point in order; via targets (cl_index -1) only between them
+    assert [t.cl_index for t in cut if t.cl_index >= 0] == list(range(1, len(wt)))
+    assert all(t.cl_index == -1 for t in cut if t.cl_index < 0) and cut[-1].cl_index >= 0
+    assert sum(t.cl_index < 0 for t in cut) == plan.meta["windows"][0]["via_targets"]
     assert plan.targets[0].motion == "joint" and cut[0].motion == "linear"
     assert np.all(np.diff(plan.trajectory.t) > 0)
     np.testing.assert_allclose(plan.trajectory.q[0], cell.q_home)
@@ -111,8 +133,8 @@ def test_dense_recheck_of_the_cut(planned):
     # axis inside the cone, the cone axis interpolated along each linear move like the axis
     axis = -X[:, :3, 2]
     seg_k, frac = _segment_and_fraction(p, poly)
-    cl = np.clip([t.cl_index for t in tg], 0, None)
-    c0, c1 = wt.cone_axis_H[cl[seg_k]], wt.cone_axis_H[cl[seg_k + 1]]
+    c_tg = _target_cone_axes(tg, wt)
+    c0, c1 = c_tg[seg_k], c_tg[seg_k + 1]
     cone = (1 - frac)[:, None] * c0 + frac[:, None] * c1
     cone /= np.linalg.norm(cone, axis=1, keepdims=True)
     ang = np.arccos(np.clip(np.sum(axis * cone, 1), -1, 1))

@@ -177,14 +177,15 @@ def test_samples_are_put_on_the_moves_in_execution_order():
     """A closed loop ends on its first point: the nearest move alone puts the last samples on
     the first move (where the program's orientation may differ by a wrist turn); the monotone
     assignment keeps them on the last move. Distances and fractions are the true ones."""
-    from drakedeburr.verify.checks import _point_moves_in_order, _point_segment
+    from drakedeburr.verify.checks import _point_segment
+    from drakedeburr.verify.program_reading import moves_in_order
 
     corners = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], float)
     a, b = corners[:-1], corners[1:]
     t = np.linspace(0, 4, 401)
     k = np.minimum(t.astype(int), 3)
     p = a[k] + (t - k)[:, None] * (b[k] - a[k]) + np.array([0, 0, 1e-4])  # 0.1 mm above
-    d, m, f = _point_moves_in_order(p, a, b)
+    d, m, f = moves_in_order(p, a, b)
     assert np.all(np.diff(m) >= 0) and m[-1] == 3 and m[0] == 0
     np.testing.assert_allclose(d, 1e-4, atol=1e-12)
     np.testing.assert_allclose(a[m] + f[:, None] * (b[m] - a[m]) + [0, 0, 1e-4], p, atol=1e-12)
@@ -193,5 +194,5 @@ def test_samples_are_put_on_the_moves_in_execution_order():
     # a sample that strays towards an earlier move still counts on the current one
     q = p.copy()
     q[250] = [0.5, 0.02, 0.0]  # on move 2's time but next to move 0
-    _, m2, _ = _point_moves_in_order(q, a, b)
+    _, m2, _ = moves_in_order(q, a, b)
     assert np.all(np.diff(m2) >= 0) and m2[250] == 2

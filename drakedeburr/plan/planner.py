@@ -25,7 +25,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
@@ -38,6 +37,7 @@ from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
+from drakedeburr.verify.program_reading import program_orientation_error
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
 
@@ -422,7 +422,8 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                          for q in cut.q])
         low = dist < options.min_clearance - _DISTANCE_SLACK
         if not low.any():
-            add = _via_samples(cp.X_HT, cp.target_index, options.program_orientation)
+            add = _via_samples(cp.X_HT, cp.X_target, cp.target_index,
+                               options.program_orientation)
             if add.size == 0 or via_round >= options.via_rounds:
                 break
             # a via target on the executed path where the program's slerp strays most, and the
@@ -482,7 +483,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                              reason="program target unreachable with the smoothed orientation"))
     if bad.size:
         return None
-    stray = _program_orientation_error(cp.X_HT, cp.target_index)
+    stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > Tolerances().orientation_match:
         k = int(np.argmax(stray))
         failures.append(dict(window=w, cl_index=-1, stage="dense", sample=k,
@@ -495,40 +496,19 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                                 via=via_cp)
 
 
-def _program_orientation_error(X: np.ndarray, target_index: np.ndarray) -> np.ndarray:
-    """(N,) angle [rad] between each dense pose's orientation and the program's: the slerp
-    between the targets at dense samples ``target_index`` that bracket it, at the fraction of
-    its projection on their chord (as a controller interpolates a linear move, and as the
-    verifier's ``orientation_agreement`` reads the program)."""
-    X = np.asarray(X, float)
-    ti = np.asarray(target_index)
-    n = np.arange(len(X))
-    k = np.clip(np.searchsorted(ti, n, side="right") - 1, 0, len(ti) - 2)
-    a, b = ti[k], ti[k + 1]
-    d = X[b, :3, 3] - X[a, :3, 3]
-    f = np.clip(np.sum((X[:, :3, 3] - X[a, :3, 3]) * d, axis=1)
-                / np.maximum(np.sum(d * d, axis=1), 1e-18), 0.0, 1.0)
-    Ra, Rb = X[a, :3, :3], X[b, :3, :3]
-    rv = Rotation.from_matrix(np.einsum("nji,njk->nik", Ra, Rb)).as_rotvec()
-    R_prog = Ra @ Rotation.from_rotvec(f[:, None] * rv).as_matrix()
-    rel = np.einsum("nji,njk->nik", R_prog, X[:, :3, :3])
-    return np.linalg.norm(Rotation.from_matrix(rel).as_rotvec(), axis=1)
-
-
-def _via_samples(X: np.ndarray, target_index: np.ndarray, tol: float) -> np.ndarray:
-    """Dense samples to make via targets: in each move between consecutive targets whose
-    program orientation strays more than ``tol`` (:func:`_program_orientation_error`), the
-    sample where it strays most (sorted; never a target itself)."""
-    err = _program_orientation_error(X, target_index)
-    ti = np.asarray(target_index)
+def _via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
+                 tol: float) -> np.ndarray:
+    """Dense samples to make via targets: on each move of the program whose orientation strays
+    more than ``tol`` from the executed poses ``X`` (read as the verifier reads it,
+    :func:`drakedeburr.verify.program_reading.program_orientation_error`), the sample where it
+    strays most (sorted; never a target's own sample)."""
+    err, move = program_orientation_error(X, X_targets)
+    err[np.asarray(target_index)] = 0.0
     out = []
-    for a, b in zip(ti[:-1], ti[1:], strict=True):
-        if b - a < 2:
-            continue
-        j = a + 1 + int(np.argmax(err[a + 1:b]))
-        if err[j] > tol:
-            out.append(j)
-    return np.asarray(out, int)
+    for k in np.unique(move[err > tol]):
+        on = np.flatnonzero(move == k)
+        out.append(int(on[np.argmax(err[on])]))
+    return np.asarray(sorted(set(out)), int)
 
 
 def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik, X_cut,

@@ -35,6 +35,7 @@ import numpy as np
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, angles_from_axis_H
+from drakedeburr.verify.program_reading import moves_in_order, rot_angle, slerp_pairs
 from drakedeburr.verify.report import CheckItem, VerificationReport
 
 __all__ = ["verify_plan", "LINEAR_KINDS"]
@@ -49,42 +50,6 @@ _KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
 
 
 # ----------------------------------------------------------------------------- geometry helpers
-def _point_moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
-    """Like :func:`_point_segment` for trajectory samples in time order against a program's
-    moves run in order: each sample is put on a move such that the move index never decreases
-    along the samples and the summed distance is least (dynamic programming over samples x
-    moves). The nearest move alone is ambiguous where the path comes back: a closed window
-    loop ends on its first CL point, where its last samples are as near the start of the first
-    move as the end of the last (and the spin there may differ by a turn of the wrist).
-
-    Written by hand: a monotone assignment of points to polyline segments is a few lines of
-    dynamic programming; no library offers it.
-
-    Returns:
-        (d (N,), move index (N,), fraction along it (N,)).
-    """
-    n, S = len(p), len(a)
-    ab = b - a
-    L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    ap = p[:, None, :] - a[None]
-    F = np.clip(np.einsum("nsk,sk->ns", ap, ab) / L2, 0.0, 1.0)
-    D = np.linalg.norm(ap - F[..., None] * ab[None], axis=2)
-    idx = np.arange(S)
-    back = np.empty((n, S), np.int32)
-    cost = D[0].copy()
-    for i in range(1, n):
-        best = np.minimum.accumulate(cost)
-        # the latest position of the running minimum: the best earlier-or-same move
-        back[i] = np.maximum.accumulate(np.where(cost <= best, idx, 0))
-        cost = D[i] + best
-    m = np.empty(n, int)
-    m[-1] = int(np.argmin(cost))
-    for i in range(n - 1, 0, -1):
-        m[i - 1] = back[i, m[i]]
-    r = np.arange(n)
-    return D[r, m], m, F[r, m]
-
-
 def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray, chunk: int = 256):
     """Distance of points to a set of segments.
 
@@ -136,21 +101,6 @@ def _closed_polyline_distance(p: np.ndarray, loop: np.ndarray, tree=None):
             best[better] = d[better]
             best_pt[better] = c[better]
     return best, best_pt
-
-
-def _rot_angle(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
-    """Angles [rad] of the relative rotations of (N, 3, 3) stacks."""
-    tr = np.einsum("nij,nij->n", Ra, Rb)
-    return np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
-
-
-def _slerp_pairs(R0: np.ndarray, R1: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) rotations a fraction f (N,) of the way from R0[i] to R1[i]."""
-    from scipy.spatial.transform import Rotation
-
-    r0 = Rotation.from_matrix(R0)
-    rel = (r0.inv() * Rotation.from_matrix(R1)).as_rotvec()
-    return (r0 * Rotation.from_rotvec(rel * f[:, None])).as_matrix()
 
 
 def _lerp_frames(R0: np.ndarray, R1: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -560,7 +510,7 @@ def verify_plan(
     X_HT_t = kin.X_HT(tgt_q)
     pos_err = np.array([np.linalg.norm(X_HT_t[k, :3, 3] - targets[k].X_HT[:3, 3])
                         for k in range(len(targets))])
-    rot_err = _rot_angle(X_HT_t[:, :3, :3], np.array([t.X_HT[:3, :3] for t in targets]))
+    rot_err = rot_angle(X_HT_t[:, :3, :3], np.array([t.X_HT[:3, :3] for t in targets]))
     X_WF_t = kin.X_WF(tgt_q)
     wf_err = np.array([np.linalg.norm(X_WF_t[k, :3, 3] - targets[k].X_WF[:3, 3])
                        for k in range(len(targets))])
@@ -597,13 +547,13 @@ def verify_plan(
         idx = np.flatnonzero(seg_index == si)
         P0 = np.array([targets[k - 1].X_HT[:3, 3] for k in ks])
         P1 = np.array([targets[k].X_HT[:3, 3] for k in ks])
-        d, m, f = _point_moves_in_order(p_all[idx], P0, P1)
+        d, m, f = moves_in_order(p_all[idx], P0, P1)
         path_dev[idx] = d
         seg_k[idx] = np.asarray(ks)[m]
         seg_f[idx] = f
-        R_prog = _slerp_pairs(np.array([targets[k - 1].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
+        R_prog = slerp_pairs(np.array([targets[k - 1].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
                               np.array([targets[k].X_HT[:3, :3] for k in np.asarray(ks)[m]]), f)
-        orient_dev[idx] = _rot_angle(R_prog, X_HT_all[idx, :3, :3])
+        orient_dev[idx] = rot_angle(R_prog, X_HT_all[idx, :3, :3])
         # program samples vs the trajectory's path in this segment
         prog_pts = []
         for k in ks:
