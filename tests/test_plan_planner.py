@@ -239,54 +239,67 @@ def test_rewound_start_turns_the_wrist_away_from_the_limit_it_ran_into():
     assert mut._rewound_start(kin, SimpleNamespace(q=run4, ok=np.ones(50, bool)), q4) is None
 
 
-@pytest.mark.slow
-def test_program_orientation_follows_the_executed_cut_with_via_targets():
-    """h5_straight window 1 (real chain) turns the tool faster near its fillets than a slerp
-    between the CL targets follows (up to ~9-11 mrad off before via targets existed). Re-checked
-    independently with Drake FK of the timed trajectory: the program (slerp between consecutive
-    cut targets, the controller's interpolation) stays within the verifier's 10 mrad; every CL
-    point is still a target, in order; vias are on the executed path and between their CL
-    neighbours on the edge chord."""
+def _program_orientation_worst(plan, cell):
+    """The test's own reading of the cut's program against its trajectory (Drake FK): the
+    trajectory passes each target at its closest approach (searched in order); between two
+    passages the program's orientation is the slerp of the two targets at the share of the
+    travel made. Returns the largest angle [rad]."""
     from scipy.spatial.transform import Rotation, Slerp
 
-    from drakedeburr.cell.station import load_cell
-
-    plan = mut.plan_hub("tool_in_hand", "h5_straight", source="toolpath",
-                        options=mut.PlanOptions(windows=(1,)))
-    assert plan.failures == ()
-    cell = load_cell("tool_in_hand", "h5_straight")
     seg = next(s for s in plan.segments if s.kind == "cut")
     tg = plan.targets[seg.target_range[0] - 1:seg.target_range[1]]
-    cl = [t.cl_index for t in tg]
-    vias = [k for k, c in enumerate(cl) if c < 0]
-    assert vias, "expected via targets on this window"
-    assert plan.meta["windows"][0]["via_targets"] == len(vias)
-    m = plan.meta["windows"][0]["cl_points"]
-    assert [c for c in cl if c >= 0] == [0, *range(1, m), 0]  # approach end, loop closed
-    # each target on the executed path: the trajectory passes through it (Drake FK)
-    tt = np.linspace(*seg.t_range, 6000)
+    tt = np.linspace(*seg.t_range, 8000)
     X = np.array([cell.X_HT(q).GetAsMatrix4() for q in plan.trajectory.value(tt)])
     p = X[:, :3, 3]
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    passage, lo = [], 0
+    for k, t in enumerate(tg):
+        hi = len(p) if k == len(tg) - 1 else min(len(p), lo + 400)
+        j = lo + int(np.argmin(np.linalg.norm(p[lo:hi] - t.X_HT[:3, 3], axis=1)))
+        passage.append(j)
+        lo = j
+    worst = 0.0
+    for k in range(len(tg) - 1):
+        a, b = passage[k], passage[k + 1]
+        if b <= a:
+            continue
+        f = (s[a:b + 1] - s[a]) / max(s[b] - s[a], 1e-15)
+        R = Slerp([0, 1], Rotation.from_matrix([tg[k].X_HT[:3, :3], tg[k + 1].X_HT[:3, :3]]))(f)
+        err = (R.inv() * Rotation.from_matrix(X[a:b + 1, :3, :3])).magnitude()
+        worst = max(worst, float(err.max()))
+    return worst, tg
+
+
+@pytest.mark.slow
+def test_program_orientation_follows_the_executed_cut_with_via_targets():
+    """h5_split's small window 3 (real chain) turns the tool by up to ~0.1 rad per CL move at
+    its tight corners, unevenly: planned without via targets, the program (slerp between
+    consecutive targets, as a controller interpolates) strays more than the verifier's 10 mrad
+    from the executed cut; with them it stays inside. Re-checked independently (Drake FK of the
+    timed trajectory, the test's own reading); every CL point is still a target, in order;
+    vias lie on the executed path and between their CL neighbours on the edge chord."""
+    from drakedeburr.cell.station import load_cell
+
+    cell = load_cell("tool_in_hand", "h5_split")
+    bare = mut.plan_hub("tool_in_hand", "h5_split", source="toolpath",
+                        options=mut.PlanOptions(windows=(3,), via_rounds=0))
+    plan = mut.plan_hub("tool_in_hand", "h5_split", source="toolpath",
+                        options=mut.PlanOptions(windows=(3,)))
+    assert plan.failures == ()
+    worst_bare, _ = _program_orientation_worst(bare, cell)
+    worst, tg = _program_orientation_worst(plan, cell)
+    assert worst_bare > Tolerances().orientation_match
+    assert worst <= Tolerances().orientation_match
+    cl = [t.cl_index for t in tg]
+    vias = [k for k, c in enumerate(cl) if c < 0]
+    assert vias and plan.meta["windows"][0]["via_targets"] == len(vias)
+    m = plan.meta["windows"][0]["cl_points"]
+    assert [c for c in cl if c >= 0] == [0, *range(1, m), 0]  # approach end, loop closed
+    seg = next(s for s in plan.segments if s.kind == "cut")
+    tt = np.linspace(*seg.t_range, 6000)
+    p = np.array([cell.X_HT(q).GetAsMatrix4()[:3, 3] for q in plan.trajectory.value(tt)])
     for k in vias:
         assert np.min(np.linalg.norm(p - tg[k].X_HT[:3, 3], axis=1)) < 0.3e-3
         a, b = tg[k - 1].p_HC, tg[k + 1].p_HC
         f = (tg[k].p_HC - a) @ (b - a) / ((b - a) @ (b - a))
         assert 0 < f < 1 and np.linalg.norm(a + f * (b - a) - tg[k].p_HC) < 1e-9
-    # program orientation vs the trajectory: every sample against the slerp of the move it
-    # projects onto
-    P = np.array([t.X_HT[:3, 3] for t in tg])
-    worst = 0.0
-    for k in range(1, len(tg)):
-        d = P[k] - P[k - 1]
-        f = (p - P[k - 1]) @ d / (d @ d)
-        foot = P[k - 1] + np.clip(f, 0, 1)[:, None] * d
-        on = (f >= 0) & (f <= 1) & (np.linalg.norm(p - foot, axis=1) < 0.05e-3)
-        if not on.any():
-            continue
-        R = Slerp([0, 1], Rotation.from_matrix([tg[k - 1].X_HT[:3, :3], tg[k].X_HT[:3, :3]]))(
-            f[on])
-        err = (R.inv() * Rotation.from_matrix(X[on, :3, :3])).magnitude()
-        worst = max(worst, float(err.max()))
-    # the planner aims at half the verifier's 10 mrad (PlanOptions.program_orientation); this
-    # window strays 8.5-9.3 mrad without vias, so 7.5 mrad tells the two apart
-    assert worst <= 0.75 * Tolerances().orientation_match

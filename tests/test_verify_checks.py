@@ -196,3 +196,30 @@ def test_samples_are_put_on_the_moves_in_execution_order():
     q[250] = [0.5, 0.02, 0.0]  # on move 2's time but next to move 0
     _, m2, _ = moves_in_order(q, a, b)
     assert np.all(np.diff(m2) >= 0) and m2[250] == 2
+
+
+def test_travel_fractions_follow_the_progress_not_the_projection():
+    """Round a 90 deg corner with an arc: the travel share grows with the tool's progress and
+    reaches 1 at the move's end (midway between its last sample and the next move's first),
+    where the projection on the move's segment lags behind."""
+    from drakedeburr.verify.program_reading import moves_in_order, travel_fractions
+
+    a = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+    b = np.array([[1.0, 0, 0], [1.0, 1, 0]])
+    r = 0.2  # corner rounded by a quarter circle from (0.8, 0) to (1, 0.2)
+    line1 = np.column_stack([np.linspace(0, 0.8, 81), np.zeros(81), np.zeros(81)])
+    th = np.linspace(0, np.pi / 2, 32)[1:]
+    arc = np.column_stack([0.8 + r * np.sin(th), r - r * np.cos(th), np.zeros(len(th))])
+    line2 = np.column_stack([np.ones(80), np.linspace(0.21, 1.0, 80), np.zeros(80)])
+    p = np.vstack([line1, arc, line2])
+    _, m, f_proj = moves_in_order(p, a, b)
+    f = travel_fractions(p, m)
+    assert np.all(np.diff(m) >= 0) and m[0] == 0 and m[-1] == 1
+    for k in (0, 1):
+        fk = f[m == k]
+        assert np.all(np.diff(fk) > 0)  # strictly growing with the travel
+    assert f[0] == 0.0 and f[-1] == 1.0
+    # at the end of move 0 (on the arc) the tool has all but finished the move; its projection
+    # on the move's segment lags (the path bends away from it)
+    last0 = np.flatnonzero(m == 0)[-1]
+    assert f[last0] > 0.99 and f_proj[last0] < 0.95

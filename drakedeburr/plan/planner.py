@@ -99,7 +99,7 @@ class PlanOptions:
         program_orientation: largest angle [rad] between the executed tool orientation and the
             program's (slerp between consecutive targets, as a controller interpolates); where
             the smooth cut turns faster than that allows, via targets (``cl_index`` -1) are
-            added on the executed path (half the verifier's ``Tolerances.orientation_match``).
+            added on the executed path (60 % of the verifier's ``Tolerances.orientation_match``).
         via_rounds: rounds of via insertion (each re-plans the cut through the new targets).
     """
 
@@ -127,7 +127,7 @@ class PlanOptions:
     spin_search: bool = True
     spin_band: float = 1.2
     program_orientation: float = field(
-        default_factory=lambda: 0.5 * Tolerances().orientation_match)
+        default_factory=lambda: 0.6 * Tolerances().orientation_match)
     via_rounds: int = 4
 
 
@@ -507,7 +507,11 @@ def _via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
     out = []
     for k in np.unique(move[err > tol]):
         on = np.flatnonzero(move == k)
-        out.append(int(on[np.argmax(err[on])]))
+        # in the middle half of a move of >= 4 samples: a via next to a target (or on a move
+        # shorter than the sampling) only shortens moves below what the reading resolves
+        mid = on[len(on) // 4:len(on) - len(on) // 4]
+        if len(on) >= 4 and len(mid):
+            out.append(int(mid[np.argmax(err[mid])]))
     return np.asarray(sorted(set(out)), int)
 
 

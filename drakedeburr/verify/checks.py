@@ -35,7 +35,12 @@ import numpy as np
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, angles_from_axis_H
-from drakedeburr.verify.program_reading import moves_in_order, rot_angle, slerp_pairs
+from drakedeburr.verify.program_reading import (
+    moves_in_order,
+    rot_angle,
+    slerp_pairs,
+    travel_fractions,
+)
 from drakedeburr.verify.report import CheckItem, VerificationReport
 
 __all__ = ["verify_plan", "LINEAR_KINDS"]
@@ -551,8 +556,11 @@ def verify_plan(
         path_dev[idx] = d
         seg_k[idx] = np.asarray(ks)[m]
         seg_f[idx] = f
+        # orientation at the share of each move travelled (program_reading: the projection
+        # stands still in a corner zone while the tool turns on)
         R_prog = slerp_pairs(np.array([targets[k - 1].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
-                              np.array([targets[k].X_HT[:3, :3] for k in np.asarray(ks)[m]]), f)
+                             np.array([targets[k].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
+                             travel_fractions(p_all[idx], m))
         orient_dev[idx] = rot_angle(R_prog, X_HT_all[idx, :3, :3])
         # program samples vs the trajectory's path in this segment
         prog_pts = []
