@@ -100,7 +100,7 @@ class PlanOptions:
             program's (slerp between consecutive targets, as a controller interpolates); where
             the smooth cut turns faster than that allows, via targets (``cl_index`` -1) are
             added on the executed path (60 % of the verifier's ``Tolerances.orientation_match``).
-        via_rounds: rounds of via insertion (each re-plans the cut through the new targets).
+        via_rounds: rounds of via insertion.
     """
 
     params: ProcessParameters | None = None
@@ -128,7 +128,7 @@ class PlanOptions:
     spin_band: float = 1.2
     program_orientation: float = field(
         default_factory=lambda: 0.6 * Tolerances().orientation_match)
-    via_rounds: int = 4
+    via_rounds: int = 8
 
 
 @dataclass
@@ -380,15 +380,10 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     pin = None
     spin_mode = "search"
     dev = np.full(len(order), options.blend_deviation)
-    # the program's targets: the CL targets, then via targets where the program's orientation
-    # would stray from the executed one (``via``: True for those; they are added below)
-    X_in, cone_in, via = X_ik.copy(), wt.cone_axis_H[order].copy(), np.zeros(len(order), bool)
-    via_round = 0
-    for attempt in range(6 + options.via_rounds):
-        cp = cut_path(X_in, cone_in, wt.cone_half_angle, step=options.dense_step,
+    for attempt in range(6):
+        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
-        via_cp = via.copy()
         if spin_mode == "search" and options.spin_search:
             X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
                                                wrist_margin=options.ik.min_wrist,
@@ -422,26 +417,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                          for q in cut.q])
         low = dist < options.min_clearance - _DISTANCE_SLACK
         if not low.any():
-            add = _via_samples(cp.X_HT, cp.X_target, cp.target_index,
-                               options.program_orientation)
-            if add.size == 0 or via_round >= options.via_rounds:
-                break
-            # a via target on the executed path where the program's slerp strays most, and the
-            # cut planned again through them (blends, axis and spin see the new targets)
-            via_round += 1
-            at = np.searchsorted(cp.target_index, add)
-            f = (cp.s[add] - cp.s[cp.target_index[at - 1]]) / (
-                cp.s[cp.target_index[at]] - cp.s[cp.target_index[at - 1]])
-            cone_new = (1 - f)[:, None] * cone_in[at - 1] + f[:, None] * cone_in[at]
-            X_in = np.insert(X_in, at, cp.X_HT[add], axis=0)
-            cone_in = np.insert(cone_in, at, cone_new / np.linalg.norm(cone_new, axis=1,
-                                                                       keepdims=True), axis=0)
-            dev = np.insert(dev, at, np.minimum(dev[at - 1], dev[at]))
-            via = np.insert(via, at, True)
-            log.info("window %d: %d via targets where the program's orientation strays more "
-                     "than %.1f mrad (round %d)", w, len(add), 1e3 * options.program_orientation,
-                     via_round)
-            continue
+            break
         if dist.min() < options.min_clearance - 0.5e-3 and spin_mode != "ik":
             # far below the bound: the spin put the spindle body into the hub (pinning the
             # axis cannot fix that); fall back to the IK's spin
@@ -457,7 +433,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
         pin = new_iv if pin is None else np.vstack([pin, new_iv])
         # and round the corners there less (a blend cuts the corner by up to its deviation)
         tight = np.unique(np.searchsorted(cp.s[cp.target_index], cp.s[near]))
-        tight = np.clip(np.concatenate([tight - 1, tight]), 0, len(X_in) - 1)
+        tight = np.clip(np.concatenate([tight - 1, tight]), 0, len(order) - 1)
         dev[tight] *= 0.25
         log.info("window %d: %d samples under the clearance; pinning the axis and tightening "
                  "the blends around them (attempt %d)", w, int(low.sum()), attempt + 1)
@@ -471,7 +447,10 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     if not np.all(cut.ok):
         return None
     failures += _clearance_records(w, checker, cut, dist, options.min_clearance - _DISTANCE_SLACK)
-    # the program's targets: the CL targets' tool points with the smooth orientation there
+    # the program's targets: the CL targets' tool points with the smooth orientation there,
+    # and via targets on the executed cut where the program would stray from it
+    cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
+    cut = replace(cut, target_index=cp.target_index)
     q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
                                     cut.q[cp.target_index[j]])[0][0]
                           for j in range(len(cp.X_target))])
@@ -507,12 +486,39 @@ def _via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
     out = []
     for k in np.unique(move[err > tol]):
         on = np.flatnonzero(move == k)
-        # in the middle half of a move of >= 4 samples: a via next to a target (or on a move
+        # in the middle half of a move of >= 3 samples: a via next to a target (or on a move
         # shorter than the sampling) only shortens moves below what the reading resolves
         mid = on[len(on) // 4:len(on) - len(on) // 4]
-        if len(on) >= 4 and len(mid):
+        if len(on) >= 3 and len(mid):
             out.append(int(mid[np.argmax(err[mid])]))
     return np.asarray(sorted(set(out)), int)
+
+
+def _add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.05e-3):
+    """The cut program with via targets: executed poses (position and orientation of a dense
+    sample of the cut) made targets where the program's orientation strays more than ``tol``
+    (:func:`_via_samples`), for up to ``rounds`` rounds. The executed cut is not changed: a via
+    lies on it, so the program only gains a vertex on the path it already runs. Its zone: 45 %
+    of the shorter of its two moves, rounded down to ``zone_quantum`` (at least that; a zone
+    of 0 would be a stop). Returns (CutPath with the vias, via mask per target)."""
+    via = np.zeros(len(cp.target_index), bool)
+    for k in range(rounds):
+        add = _via_samples(cp.X_HT, cp.X_target, cp.target_index, tol)
+        if add.size == 0:
+            break
+        at = np.searchsorted(cp.target_index, add)
+        ti = np.insert(cp.target_index, at, add)
+        Xt = np.insert(cp.X_target, at, cp.X_HT[add], axis=0)
+        via = np.insert(via, at, True)
+        zone = np.insert(cp.zone, at, 0.0)
+        P = Xt[:, :3, 3]
+        for j in np.flatnonzero(via & (zone == 0.0)):
+            leg = 0.45 * min(np.linalg.norm(P[j] - P[j - 1]), np.linalg.norm(P[j + 1] - P[j]))
+            zone[j] = max(zone_quantum, np.floor(leg / zone_quantum) * zone_quantum)
+        cp = replace(cp, target_index=ti, X_target=Xt, zone=zone)
+        log.info("window %d: %d via targets where the program's orientation strays more than "
+                 "%.1f mrad (round %d)", window, len(add), 1e3 * tol, k + 1)
+    return cp, via
 
 
 def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik, X_cut,
