@@ -277,7 +277,8 @@ WIN = 0  # h5_split's large window 0
 def test_program_orientation_follows_the_executed_cut_with_via_targets():
     """h5_split window 0 (real chain) turns the tool unevenly at its corners: planned without
     via targets, the program (slerp between consecutive targets, as a controller interpolates)
-    strays ~14 mrad from the executed cut, more than the verifier's 10 mrad; with them ~6 mrad. Re-checked independently (Drake FK of the
+    strays ~14 mrad from the executed cut, more than the verifier's 10 mrad; with them ~6 mrad.
+    Re-checked independently (Drake FK of the
     timed trajectory, the test's own reading); every CL point is still a target, in order;
     vias lie on the executed path and between their CL neighbours on the edge chord."""
     from drakedeburr.cell.station import load_cell
