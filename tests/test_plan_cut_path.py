@@ -94,3 +94,24 @@ def test_cut_path_keeps_targets_and_orthonormal_frames():
     ang = np.arccos(np.clip(np.sum(-R[:, :, 2] * c[0], 1), -1, 1))
     assert ang.max() <= 0.1
     assert _dist_to_polyline(cp.X_HT[:, :3, 3], P).max() <= 0.02e-3 * 1.01
+
+
+def test_least_axis_curvature_matches_the_precessing_cone_analytically():
+    """A circle of radius r whose cones (half-angle alpha) lean beta toward its centre: the
+    least-curvature axis precesses at beta - alpha from the vertical, |a''| = sin(beta -
+    alpha) / r^2 (a point on a circle of radius sin(beta - alpha) on the unit sphere, turning
+    1/r per metre); no other axis curve inside the cones does better (by symmetry the minimax
+    curve is that circle). A straight path with one cone needs none."""
+    r, beta, alpha = 0.02, 0.35, 0.12
+    th = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    p = np.column_stack([r * np.cos(th), r * np.sin(th), np.zeros_like(th)])
+    inward = -p / r
+    cone = np.cos(beta) * np.array([0, 0, 1.0]) + np.sin(beta) * inward
+    k = mut.least_axis_curvature(p, cone, alpha, closed=True, step=0.25e-3)
+    expect = np.sin(beta - alpha) / r ** 2
+    # the gnomonic coordinates about the vertical stretch the circle by 1/cos(beta - alpha)
+    assert expect * 0.97 <= k <= expect / np.cos(beta - alpha) ** 2 * 1.02, (k, expect)
+    line = np.column_stack([np.linspace(0, 0.1, 50), np.zeros(50), np.zeros(50)])
+    k0 = mut.least_axis_curvature(line, np.tile([0.0, 0.3, 1.0], (50, 1)) / np.hypot(0.3, 1.0),
+                              0.1, closed=False)
+    assert abs(k0) < 1e-3

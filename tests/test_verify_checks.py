@@ -198,28 +198,45 @@ def test_samples_are_put_on_the_moves_in_execution_order():
     assert np.all(np.diff(m2) >= 0) and m2[250] == 2
 
 
-def test_travel_fractions_follow_the_progress_not_the_projection():
-    """Round a 90 deg corner with an arc: the travel share grows with the tool's progress and
-    reaches 1 at the move's end (midway between its last sample and the next move's first),
-    where the projection on the move's segment lags behind."""
-    from drakedeburr.verify.program_reading import moves_in_order, travel_fractions
+def test_passing_fractions_follow_the_progress_not_the_projection():
+    """Round a 90 deg corner with an arc: the corner target is passed where the path comes
+    nearest to it (the arc's middle); the travel share grows with the tool's progress through
+    the zone, where the projection on the move's segment lags behind."""
+    from drakedeburr.verify.program_reading import moves_in_order, passing_fractions
 
-    a = np.array([[0.0, 0, 0], [1.0, 0, 0]])
-    b = np.array([[1.0, 0, 0], [1.0, 1, 0]])
+    targets = np.array([[0.0, 0, 0], [1.0, 0, 0], [1.0, 1, 0]])
     r = 0.2  # corner rounded by a quarter circle from (0.8, 0) to (1, 0.2)
     line1 = np.column_stack([np.linspace(0, 0.8, 81), np.zeros(81), np.zeros(81)])
     th = np.linspace(0, np.pi / 2, 32)[1:]
     arc = np.column_stack([0.8 + r * np.sin(th), r - r * np.cos(th), np.zeros(len(th))])
     line2 = np.column_stack([np.ones(80), np.linspace(0.21, 1.0, 80), np.zeros(80)])
     p = np.vstack([line1, arc, line2])
-    _, m, f_proj = moves_in_order(p, a, b)
-    f = travel_fractions(p, m)
+    m, f = passing_fractions(p, targets)
+    _, m_proj, f_proj = moves_in_order(p, targets[:-1], targets[1:])
     assert np.all(np.diff(m) >= 0) and m[0] == 0 and m[-1] == 1
     for k in (0, 1):
-        fk = f[m == k]
-        assert np.all(np.diff(fk) > 0)  # strictly growing with the travel
+        assert np.all(np.diff(f[m == k]) > 0)  # strictly growing with the travel
     assert f[0] == 0.0 and f[-1] == 1.0
-    # at the end of move 0 (on the arc) the tool has all but finished the move; its projection
-    # on the move's segment lags (the path bends away from it)
+    # the move changes at the arc's middle (th = 45 deg, halfway between samples 95 and 96)
+    assert np.flatnonzero(m == 1)[0] == 96
+    # there the tool has all but finished move 0; its projection on the segment lags
     last0 = np.flatnonzero(m == 0)[-1]
     assert f[last0] > 0.99 and f_proj[last0] < 0.95
+    # true share of the travel between passing points (arc length of the samples)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    np.testing.assert_allclose(f[m == 0], s[m == 0] / (0.5 * (s[95] + s[96])), atol=1e-4)
+
+
+def test_passing_fractions_resolve_moves_shorter_than_the_sampling():
+    """Moves of 0.25 mm read from samples 0.5 mm apart (a tight corner's program against the
+    verifier's 0.5 mm re-check): each sample gets its exact move and share, as it would from
+    samples ten times denser."""
+    from drakedeburr.verify.program_reading import passing_fractions
+
+    x_t = np.concatenate([[0.0], np.cumsum(np.full(40, 0.25e-3))])  # 10 mm in 0.25 mm moves
+    targets = np.column_stack([x_t, np.zeros(41), np.zeros(41)])
+    for step in (0.5e-3, 0.05e-3, 0.37e-3):
+        x = np.append(np.arange(0.0, x_t[-1], step), x_t[-1])
+        m, f = passing_fractions(np.column_stack([x, np.zeros_like(x), np.zeros_like(x)]),
+                                 targets)
+        np.testing.assert_allclose(x_t[m] + f * 0.25e-3, x, atol=1e-12)

@@ -35,7 +35,8 @@ from scipy.spatial.transform import Rotation, Slerp
 
 log = logging.getLogger(__name__)
 
-__all__ = ["BlendedPath", "blend_corners", "smooth_axes", "CutPath", "cut_path"]
+__all__ = ["BlendedPath", "blend_corners", "smooth_axes", "least_axis_curvature", "CutPath",
+           "cut_path"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -236,6 +237,59 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     uu = res.GetSolution(u)
     v = np.column_stack([uu, np.ones(N)]) @ E.T
     return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def least_axis_curvature(p: np.ndarray, cone_axis: np.ndarray, half_angle: float, *,
+                         closed: bool = True, step: float = 0.5e-3) -> float:
+    """The least peak ``|d2a/ds2|`` [rad/m^2] of any tool-axis curve a(s) inside the cones
+    along a path: a lower bound on what the orientation box asks of the robot. At a constant
+    feed ``v`` the axis' angular acceleration is ``|d2a/ds2| v^2``; if that exceeds what the
+    wrist can give, no planner can hold the feed through the turn and the TCP must slow down.
+
+    A second-order cone program (Drake ``MathematicalProgram`` + Clarabel) on gnomonic
+    coordinates about the mean cone axis (as :func:`smooth_axes`): minimise t subject to the
+    cone at every sample and ``|u[i-1] - 2 u[i] + u[i+1]| / h^2 <= t``. The gnomonic map
+    stretches angles by up to 1/cos^2 of the tilt from the mean axis (under 1.3 for the
+    source's boxes): the figure is an estimate of that accuracy, not a certificate.
+
+    Args:
+        p: (M, 3) path points [m] (e.g. the CL points) in order; cone_axis: (M, 3) unit cone
+            axes there; half_angle: cone half-angle [rad].
+        closed: the path returns from the last point to the first.
+        step: sample spacing along the path [m].
+
+    Returns:
+        The bound [rad/m^2] (NaN if the program fails).
+    """
+    from pydrake.solvers import ClarabelSolver, MathematicalProgram
+
+    P = np.asarray(p, float)
+    C = np.asarray(cone_axis, float)
+    if closed:
+        P, C = np.vstack([P, P[:1]]), np.vstack([C, C[:1]])
+    ts = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+    n = max(3, int(np.ceil(ts[-1] / step)))
+    s = np.linspace(0.0, ts[-1], n + 1)
+    if closed:
+        s = s[:-1]  # the end is the start
+    h = ts[-1] / n
+    c = _axes_interp(ts, C, s)
+    E = _basis(np.mean(c, axis=0))
+    cl = c @ E
+    N = len(s)
+    prog = MathematicalProgram()
+    u = prog.NewContinuousVariables(N, 2, "u")
+    t = prog.NewContinuousVariables(1, "t")[0]
+    cos_a = np.cos(half_angle)
+    for i in range(N):
+        _add_cone(prog, u[i], cl[i], cos_a)
+    rows = range(N) if closed else range(1, N - 1)
+    for i in rows:
+        d2 = (u[(i - 1) % N] - 2.0 * u[i] + u[(i + 1) % N]) / h ** 2
+        prog.AddLorentzConeConstraint(np.concatenate([[t], d2]))
+    prog.AddLinearCost(t)
+    res = ClarabelSolver().Solve(prog)
+    return float(res.GetSolution(t)) if res.is_success() else float("nan")
 
 
 @dataclass(frozen=True, eq=False)

@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
+from drakedeburr.plan.cut_path import least_axis_curvature
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.io import _jsonable
@@ -37,7 +38,12 @@ from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
-from drakedeburr.verify.program_reading import program_orientation_error
+from drakedeburr.verify.program_reading import (
+    program_orientation_error,
+    program_orientations,
+    rot_angle,
+    slerp_pairs,
+)
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
 
@@ -101,6 +107,9 @@ class PlanOptions:
             the smooth cut turns faster than that allows, via targets (``cl_index`` -1) are
             added on the executed path (60 % of the verifier's ``Tolerances.orientation_match``).
         via_rounds: rounds of via insertion.
+        conform_program: where the program still strays after the vias (moves too short for
+            one), pull the executed orientation onto the program's there
+            (:func:`_conform_to_program`).
     """
 
     params: ProcessParameters | None = None
@@ -129,6 +138,7 @@ class PlanOptions:
     program_orientation: float = field(
         default_factory=lambda: 0.6 * Tolerances().orientation_match)
     via_rounds: int = 8
+    conform_program: bool = True
 
 
 @dataclass
@@ -370,7 +380,46 @@ def _plan_window_once(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray,
 def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good, order, X_ik,
                            t_ik):
     """The executed cut as a smooth path (:mod:`drakedeburr.plan.cut_path`): blended corners
-    within ``blend_deviation`` of the linear program, the smoothest axis inside the cones."""
+    within ``blend_deviation`` of the linear program, the smoothest axis inside the cones.
+
+    Sampled every ``options.dense_step`` of travel, and again at half that where the program
+    has moves the sampling cannot resolve (:func:`_between_samples_error`)."""
+    step = options.dense_step
+    while True:
+        records: list[dict] = []
+        out = _blended_cut(cell, kin, checker, wt, options, records, wik, good, order, X_ik,
+                           t_ik, step, refine=step == options.dense_step)
+        if isinstance(out, str):
+            step *= 0.5
+            log.info("window %d: between its samples the cut would stray from the program's "
+                     "orientation; sampling it every %.3f mm", wt.window_index, step * 1e3)
+            continue
+        failures += records
+        return out
+
+
+def _between_samples_error(kin, cut, cp) -> float:
+    """Largest angle [rad] between the program's orientation and the executed one *between*
+    the dense samples, where the timed trajectory runs on the joint spline through them
+    (:func:`drakedeburr.plan.timing.joint_spline`): read at the quarter points of every
+    interval together with the samples, as the verifier reads the trajectory. Where the
+    program's moves are shorter than the sampling and turn the tool, the spline cannot follow
+    its orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
+    25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm)."""
+    from drakedeburr.plan.timing import joint_spline
+
+    sp = joint_spline(cut.s, cut.q)
+    ds = np.diff(cut.s)
+    s_all = np.sort(np.concatenate([cut.s] + [cut.s[:-1] + f * ds for f in (0.25, 0.5, 0.75)]))
+    X = kin.X_HT_from_q(sp(s_all))
+    return float(program_orientation_error(X, cp.X_target)[0].max())
+
+
+def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_ik, t_ik,
+                 step: float, refine: bool):
+    """One try of :func:`_finish_window_blended` at sampling ``step``: the window's stretches,
+    None, or "finer" (``refine`` and the trajectory would stray from the program between the
+    samples, :func:`_between_samples_error`)."""
     from drakedeburr.plan.cut_path import cut_path
     from drakedeburr.plan.interpolate import DensePath
     from drakedeburr.plan.spin import optimize_spin, spin_frames
@@ -381,7 +430,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     spin_mode = "search"
     dev = np.full(len(order), options.blend_deviation)
     for attempt in range(6):
-        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=options.dense_step,
+        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=step,
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
         if spin_mode == "search" and options.spin_search:
@@ -426,7 +475,7 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
             spin_mode = "ik"
             continue
         # keep the IK's (clearance-checked) axis around the samples that came too close
-        near = np.convolve(low.astype(float), np.ones(2 * int(3e-3 / options.dense_step) + 1),
+        near = np.convolve(low.astype(float), np.ones(2 * int(3e-3 / step) + 1),
                            mode="same") > 0
         margin = 3e-3
         new_iv = np.column_stack([cp.s[low] - margin, cp.s[low] + margin])
@@ -451,6 +500,8 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
     # and via targets on the executed cut where the program would stray from it
     cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
     cut = replace(cut, target_index=cp.target_index)
+    if options.conform_program:
+        cp, cut, dist = _conform_to_program(kin, checker, cp, cut, dist, options, w)
     q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
                                     cut.q[cp.target_index[j]])[0][0]
                           for j in range(len(cp.X_target))])
@@ -462,6 +513,8 @@ def _finish_window_blended(cell, kin, checker, wt, options, failures, wik, good,
                              reason="program target unreachable with the smoothed orientation"))
     if bad.size:
         return None
+    if refine and _between_samples_error(kin, cut, cp) > 0.8 * Tolerances().orientation_match:
+        return "finer"
     stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > Tolerances().orientation_match:
         k = int(np.argmax(stray))
@@ -519,6 +572,47 @@ def _add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.
         log.info("window %d: %d via targets where the program's orientation strays more than "
                  "%.1f mrad (round %d)", window, len(add), 1e3 * tol, k + 1)
     return cp, via
+
+
+def _conform_to_program(kin, checker, cp, cut, dist, options, window: int,
+                        ramp: float = 1.5e-3):
+    """Where the program's orientation still strays more than ``options.program_orientation``
+    after the vias (moves too short for a via: a tight corner of a small window, 0.25-0.5 mm
+    moves over which the smooth executed orientation turns unevenly), the executed orientation
+    is pulled onto the program's (each move's slerp, as a controller runs it) there, fading
+    back to the smooth one over ``ramp`` of travel either side. The targets keep their poses
+    (the program is unchanged); the joints are re-tracked and the change is kept only if they
+    stay reachable, without jumps and at least as clear of the hub as the smooth cut was (or
+    the clearance bound). Returns (CutPath, DensePath, distances), changed or not."""
+    tol = options.program_orientation
+    R_prog, move = program_orientations(cp.X_HT, cp.X_target)
+    err = rot_angle(R_prog, cp.X_HT[:, :3, :3])
+    err[cp.target_index] = 0.0
+    if err.max() <= tol:
+        return cp, cut, dist
+    on = np.isin(move, np.unique(move[err > tol]))
+    s_on = cp.s[on]
+    gap = np.abs(cp.s[:, None] - s_on[None]).min(axis=1)
+    wgt = np.clip(1.0 - gap / ramp, 0.0, 1.0)
+    ch = np.flatnonzero(wgt > 0)
+    X = cp.X_HT.copy()
+    X[ch, :3, :3] = slerp_pairs(cp.X_HT[ch, :3, :3], R_prog[ch], wgt[ch])
+    q, ok = kin.track(kin.X_WF_from_X_HT(X), cut.q[0])
+    jumps = np.max(np.abs(np.diff(q, axis=0)), axis=1) if len(q) > 1 else np.zeros(0)
+    if not (np.all(ok) and np.all(jumps <= options.max_joint_jump)):
+        log.info("window %d: the program's orientation at %d samples leaves the joints' reach; "
+                 "keeping the smooth cut", window, int(on.sum()))
+        return cp, cut, dist
+    d_new = dist.copy()
+    d_new[ch] = [checker.min_distance(qi, options.min_clearance + 1e-3)[0] for qi in q[ch]]
+    floor = np.minimum(dist[ch], options.min_clearance) - _DISTANCE_SLACK
+    if np.any(d_new[ch] < floor):
+        log.info("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "
+                 "keeping the smooth cut", window, int(on.sum()), 1e3 * d_new[ch].min())
+        return cp, cut, dist
+    log.info("window %d: executed orientation pulled onto the program's on %d samples "
+             "(strayed up to %.1f mrad)", window, int(on.sum()), 1e3 * err.max())
+    return replace(cp, X_HT=X), replace(cut, X_HT=X, q=q, ok=ok), d_new
 
 
 def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, X_ik, X_cut,
@@ -613,6 +707,8 @@ def _approach_time_stats(kin, checker, wt, options, failures, wik, good, order, 
         joint_fit_deviation_m=fit_dev,
         orientation_smoothing_rad=float(np.max(_angle(X_ik, X_cut[cl_rows]))),
         via_targets=int(via.sum()),
+        least_axis_acceleration_radps2=params.grinding_speed ** 2 * least_axis_curvature(
+            wt.p_HC, wt.cone_axis_H, wt.cone_half_angle, closed=wt.closed),
         q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=q_targets[cl_rows].tolist(),
         cl_order=[int(i) for i in order])
     return stretches, stats, q_app[0]

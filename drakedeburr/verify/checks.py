@@ -37,9 +37,9 @@ from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, angles_from_axis_H
 from drakedeburr.verify.program_reading import (
     moves_in_order,
+    passing_fractions,
     rot_angle,
     slerp_pairs,
-    travel_fractions,
 )
 from drakedeburr.verify.report import CheckItem, VerificationReport
 
@@ -556,11 +556,19 @@ def verify_plan(
         path_dev[idx] = d
         seg_k[idx] = np.asarray(ks)[m]
         seg_f[idx] = f
-        # orientation at the share of each move travelled (program_reading: the projection
-        # stands still in a corner zone while the tool turns on)
-        R_prog = slerp_pairs(np.array([targets[k - 1].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
-                             np.array([targets[k].X_HT[:3, :3] for k in np.asarray(ks)[m]]),
-                             travel_fractions(p_all[idx], m))
+        # orientation at the share of each move travelled between passing its targets
+        # (program_reading: the projection stands still in a corner zone while the tool turns
+        # on); a stretch of moves that is not one chain of targets is read by the projection
+        ka = np.asarray(ks)
+        if len(idx) >= 2 and np.all(np.diff(ka) == 1):
+            chain = np.arange(ka[0] - 1, ka[-1] + 1)
+            m_o, f_o = passing_fractions(p_all[idx], np.array([targets[k].X_HT[:3, 3]
+                                                               for k in chain]))
+            k_o = ka[m_o]
+        else:
+            k_o, f_o = ka[m], f
+        R_prog = slerp_pairs(np.array([targets[k - 1].X_HT[:3, :3] for k in k_o]),
+                             np.array([targets[k].X_HT[:3, :3] for k in k_o]), f_o)
         orient_dev[idx] = rot_angle(R_prog, X_HT_all[idx, :3, :3])
         # program samples vs the trajectory's path in this segment
         prog_pts = []

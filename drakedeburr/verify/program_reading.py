@@ -5,10 +5,11 @@ orientation slerped between theirs in step with the tool's progress along the mo
 dense executed path against such a program: each sample is put on the move it is executed on
 (in execution order); its position is compared with the move's segment (projection), its
 orientation with the slerp of the move's targets at the share of the travel the path has made
-between the move's start and end (the midpoints between the last sample of one move and the
-first of the next). The projection alone would misread the progress where the path rounds a
-corner (in a zone the projection stands still while the tool moves on), and near tight corners
-the tool turns by 0.1-0.3 rad per move.
+between passing the move's start and end targets (where it comes nearest to each). The
+projection alone would misread the progress where the path rounds a corner (in a zone the
+projection stands still while the tool moves on), and counting samples would misread moves
+shorter than the sampling; near tight corners moves are 0.25-0.5 mm long and the tool turns
+by 0.1-0.3 rad per move.
 
 Shared by the verifier (``path_deviation``, ``orientation_agreement``) and the planner, which
 adds via targets where this reading strays from its executed cut - so that both judge the
@@ -19,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["moves_in_order", "travel_fractions", "rot_angle", "slerp_pairs",
-           "program_orientation_error"]
+__all__ = ["moves_in_order", "passing_fractions", "rot_angle", "slerp_pairs",
+           "program_orientations", "program_orientation_error"]
 
 
 def moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
@@ -59,21 +60,35 @@ def moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
     return D[r, m], m, F[r, m]
 
 
-def travel_fractions(p: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """(N,) share of each sample's move travelled when the path reaches it: samples ``p``
-    (N, 3) in order on moves ``m`` (non-decreasing, :func:`moves_in_order`); a move runs from
-    the midpoint between its first sample and the previous move's last to the same point at
-    its end (the path's ends: its first and last sample)."""
+def passing_fractions(p: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where along the program each executed sample is: the move it is on and the share of
+    that move travelled.
+
+    A target is *passed* where the executed path comes nearest to it (a corner zone's middle;
+    the target itself where the path runs through it), found to a fraction of a chord on the
+    polyline of the samples, in order (:func:`moves_in_order` with the roles swapped: targets
+    on the path's chords). A sample between the passing points of targets k and k + 1 is on
+    move k, at the share of the executed travel between them. Unlike the projection on the
+    move's segment this keeps growing through a corner zone (where the projection stands
+    still while the tool turns on), and unlike a count of samples it does not depend on how
+    densely the path was sampled (moves of 0.25 mm at a tight corner are shorter than the
+    0.5 mm sampling).
+
+    Args:
+        p: (N, 3) executed samples in travel order, N >= 2; P: (K, 3) the program's targets
+            of that stretch in order, K >= 2, the first where it starts.
+
+    Returns:
+        (move index (N,) in [0, K - 2], share of it travelled (N,) in [0, 1]).
+    """
     p = np.asarray(p, float)
-    m = np.asarray(m)
+    P = np.asarray(P, float)
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-    change = np.flatnonzero(np.diff(m) != 0)  # last sample of each run but the final one
-    cut = 0.5 * (s[change] + s[change + 1])
-    start = np.concatenate([[s[0]], cut])
-    end = np.concatenate([cut, [s[-1]]])
-    run = np.concatenate([[0], np.cumsum(np.diff(m) != 0)])  # run index of each sample
-    span = np.maximum(end[run] - start[run], 1e-15)
-    return np.clip((s - start[run]) / span, 0.0, 1.0)
+    _, j, f = moves_in_order(P, p[:-1], p[1:])
+    s_pass = s[j] + f * (s[j + 1] - s[j])
+    m = np.clip(np.searchsorted(s_pass, s, side="right") - 1, 0, len(P) - 2)
+    span = np.maximum(s_pass[m + 1] - s_pass[m], 1e-15)
+    return m, np.clip((s - s_pass[m]) / span, 0.0, 1.0)
 
 
 def rot_angle(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
@@ -91,6 +106,25 @@ def slerp_pairs(R0: np.ndarray, R1: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (r0 * Rotation.from_rotvec(rel * f[:, None])).as_matrix()
 
 
+def program_orientations(X: np.ndarray, X_targets: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """The program's orientation where each executed pose is: the slerp of the move the sample
+    is on, at the share of the move travelled (:func:`passing_fractions`).
+
+    Args:
+        X: (N, 4, 4) executed poses in travel order; X_targets: (K, 4, 4) the program's
+            targets of that stretch, the first where it starts.
+
+    Returns:
+        (rotations (N, 3, 3), move index (N,): the sample lies on the move from target m to
+        m + 1).
+    """
+    X = np.asarray(X, float)
+    Xt = np.asarray(X_targets, float)
+    m, f = passing_fractions(X[:, :3, 3], Xt[:, :3, 3])
+    return slerp_pairs(Xt[m, :3, :3], Xt[m + 1, :3, :3], f), m
+
+
 def program_orientation_error(X: np.ndarray, X_targets: np.ndarray
                               ) -> tuple[np.ndarray, np.ndarray]:
     """Angle [rad] between each executed pose's orientation and the program's there.
@@ -102,9 +136,5 @@ def program_orientation_error(X: np.ndarray, X_targets: np.ndarray
     Returns:
         (error (N,), move index (N,): the sample lies on the move from target m to m + 1).
     """
-    X = np.asarray(X, float)
-    Xt = np.asarray(X_targets, float)
-    _, m, _ = moves_in_order(X[:, :3, 3], Xt[:-1, :3, 3], Xt[1:, :3, 3])
-    f = travel_fractions(X[:, :3, 3], m)
-    R_prog = slerp_pairs(Xt[m, :3, :3], Xt[m + 1, :3, :3], f)
-    return rot_angle(R_prog, X[:, :3, :3]), m
+    R_prog, m = program_orientations(X, X_targets)
+    return rot_angle(R_prog, np.asarray(X, float)[:, :3, :3]), m
