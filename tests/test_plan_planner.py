@@ -313,3 +313,20 @@ def test_program_orientation_follows_the_executed_cut_with_via_targets():
         a, b = tg[k - 1].p_HC, tg[k + 1].p_HC
         f = (tg[k].p_HC - a) @ (b - a) / ((b - a) @ (b - a))
         assert 0 < f < 1 and np.linalg.norm(a + f * (b - a) - tg[k].p_HC) < 1e-9
+
+
+def test_a_slow_window_is_planned_again_with_the_other_spin_rule_and_the_faster_kept():
+    """``retry_in_band`` above every window's share forces the second plan (the other
+    warm-start spin rule); the window kept is the faster clean one of the two plans each rule
+    gives on its own, and below every share nothing is re-planned."""
+    from dataclasses import replace
+
+    base = mut.PlanOptions(windows=(0,), retry_in_band=0.0)
+    rule_a = mut.plan_hub("tool_in_hand", "h5_straight", source="edges", options=base)
+    rule_b = mut.plan_hub("tool_in_hand", "h5_straight", source="edges",
+                          options=replace(base, ik=replace(base.ik, seed_spin="frame")))
+    forced = mut.plan_hub("tool_in_hand", "h5_straight", source="edges",
+                          options=replace(base, retry_in_band=1.01))
+    assert rule_a.failures == () and rule_b.failures == () and forced.failures == ()
+    cut = [p.meta["windows"][0]["cut_seconds"] for p in (rule_a, rule_b, forced)]
+    assert cut[2] == pytest.approx(min(cut[:2]), rel=1e-9)

@@ -268,6 +268,8 @@ def least_axis_curvature(p: np.ndarray, cone_axis: np.ndarray, half_angle: float
     if closed:
         P, C = np.vstack([P, P[:1]]), np.vstack([C, C[:1]])
     ts = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+    if ts[-1] < 3.0 * step:
+        return 0.0  # a stretch shorter than three samples asks no curvature of the axis
     n = max(3, int(np.ceil(ts[-1] / step)))
     s = np.linspace(0.0, ts[-1], n + 1)
     if closed:

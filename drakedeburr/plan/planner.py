@@ -110,6 +110,9 @@ class PlanOptions:
         conform_program: where the program still strays after the vias (moves too short for
             one), pull the executed orientation onto the program's there
             (:func:`_conform_to_program`).
+        retry_in_band: a window planned without failure records but with less than this share
+            of its cut within +-5 % of the grinding speed is planned again with the other
+            warm-start spin rule, and the faster of the two kept.
     """
 
     params: ProcessParameters | None = None
@@ -139,6 +142,7 @@ class PlanOptions:
         default_factory=lambda: 0.6 * Tolerances().orientation_match)
     via_rounds: int = 8
     conform_program: bool = True
+    retry_in_band: float = 0.5
 
 
 @dataclass
@@ -216,15 +220,28 @@ def _plan_window(cell, kin, checker, wt: WindowTargets, q_from: np.ndarray, opti
     """Approach, cut and retract of one window; None when the window cannot be planned.
 
     Planned with the IK's warm-start spin rule, and again with the other rule when that leaves
-    failure records (the better result is kept): the spin picked target by target decides how
-    far the wrist winds around the loop, and each rule winds some window into its J4/J6 limits
-    where the other does not.
+    failure records (the better result is kept) or holds less than ``options.retry_in_band`` of
+    the cut in the speed band (the faster clean one is kept): the spin picked target by target
+    decides how far the wrist winds around the loop, and each rule winds some window into its
+    J4/J6 limits, or slowly around, where the other does not.
     """
     first: list = []
     res = _plan_window_once(cell, kin, checker, wt, q_from, options, first, progress)
-    if res is not None and not first:
-        return res
     other = "frame" if options.ik.seed_spin == "joint_cost" else "joint_cost"
+    if res is not None and not first:
+        band = res[1]["speed_in_band_fraction"]
+        if band >= options.retry_in_band:
+            return res
+        # clean but slow: the other rule may wind the wrist less (workpiece cell)
+        log.info("window %d: %.0f %% of the cut in the speed band; planning it again with the "
+                 "%r warm-start spin", wt.window_index, 100 * band, other)
+        second: list = []
+        res2 = _plan_window_once(cell, kin, checker, wt, q_from,
+                                 replace(options, ik=replace(options.ik, seed_spin=other)),
+                                 second, progress)
+        if res2 is not None and not second and res2[1]["cut_seconds"] < res[1]["cut_seconds"]:
+            return res2
+        return res
     log.info("window %d: %d failure records; planning it again with the %r warm-start spin",
              wt.window_index, len(first), other)
     second: list = []
@@ -434,9 +451,12 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
                       spin_sigma=options.spin_sigma, axis_margin=options.axis_margin, pin=pin,
                       deviation=dev)
         if spin_mode == "search" and options.spin_search:
+            # the spin program keeps its travel resolution (every 2nd sample at the base step)
+            # when the cut is sampled more finely
             X_spin, spin_stats = optimize_spin(kin, cp.X_HT, cp.s, wik.q[good[0]],
                                                wrist_margin=options.ik.min_wrist,
-                                               psi_ref=cp.psi_ik, band=options.spin_band)
+                                               psi_ref=cp.psi_ik, band=options.spin_band,
+                                               stride=max(1, round(2 * options.dense_step / step)))
             if spin_stats["ok"]:
                 X_tg = cp.X_target.copy()
                 X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
