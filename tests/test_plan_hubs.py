@@ -14,15 +14,7 @@ from drakedeburr.resources import hub_names
 
 HUBS = hub_names()
 
-# known short (issue #5, docs/plan.md "Limits"): in the workpiece cell h5_split's large windows,
-# every h6_curved window and h5_straight window 4 (49 %) hold the TCP speed within +-5 % on less
-# than half of the cutting even after re-planning with the other spin rule (the wrist works near
-# its singularity and J4/J6 wind; the hub test asks for half)
-_KNOWN = {("h5_split", "workpiece"), ("h5_straight", "workpiece"), ("h6_curved", "workpiece")}
-REAL_CHAIN = [pytest.param(hub, mode, "toolpath", marks=pytest.mark.xfail(
-                  reason="TCP speed band under 50 % in the workpiece cell (issue #5)",
-                  strict=False)) if (hub, mode) in _KNOWN
-              else (hub, mode, "toolpath") for hub in HUBS for mode in ("tool", "workpiece")]
+REAL_CHAIN = [(hub, mode, "toolpath") for hub in HUBS for mode in ("tool", "workpiece")]
 EDGES = [(hub, mode, "edges") for hub in HUBS for mode in ("tool", "workpiece")]
 
 

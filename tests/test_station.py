@@ -96,10 +96,10 @@ def test_documented_placements(cell):
         assert np.degrees(np.arccos(z_F @ z_T)) == pytest.approx(45.0, abs=1e-9)
     else:
         X_WT = cell.X_WT(q)
-        np.testing.assert_allclose(X_WT.translation()[:2], [0.75, 0.0], atol=1e-12)
+        np.testing.assert_allclose(X_WT.translation(), [0.90, 0.0, 0.448], atol=1e-12)
         np.testing.assert_allclose(X_WT.rotation().matrix()[:, 2], [0, 0, 1], atol=1e-12)
         X_FH = cell.X_WF(q).inverse().multiply(cell.X_WH(q))
-        np.testing.assert_allclose(X_FH.translation(), [0, 0, 0.24], atol=1e-12)
+        np.testing.assert_allclose(X_FH.translation(), [0, 0, 0.30], atol=1e-12)
         np.testing.assert_allclose(X_FH.rotation().matrix(), np.eye(3), atol=1e-12)
 
 

@@ -170,13 +170,15 @@ class SpindleStand:
     """Fixed spindle on a floor stand (workpiece-in-hand). SI units.
 
     Stand frame: origin on the floor at the column axis, +Z up. The spindle axis is vertical,
-    burr pointing up, nose at height ``nose_height``.
+    burr pointing up, nose at height ``nose_height`` (1.20 m: with the robot on its 0.8 m pedestal
+    the cutting point is 0.45 m above the robot base, where the forearm presents the face-down
+    hub with the wrist far from its singularity; docs/cell.md, "Workpiece cell layout study").
     """
 
     column_width: float = 0.14
     base_size: float = 0.40
     base_thickness: float = 0.03
-    nose_height: float = 0.80
+    nose_height: float = 1.20
     body_diameter: float = 80e-3
     body_length: float = 250e-3
     burr: BurrGeometry = field(default_factory=BurrGeometry)

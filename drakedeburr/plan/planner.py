@@ -521,7 +521,11 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
     cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
     cut = replace(cut, target_index=cp.target_index)
     if options.conform_program:
-        cp, cut, dist = _conform_to_program(kin, checker, cp, cut, dist, options, w)
+        from drakedeburr.plan.cut_path import _axes_interp
+
+        cone_dense = _axes_interp(cp.s[cp.target_index[~via_cp]], wt.cone_axis_H[order], cp.s)
+        cp, cut, dist = _conform_to_program(kin, checker, cp, cut, dist, options, w,
+                                            cone_dense, wt.cone_half_angle)
     q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
                                     cut.q[cp.target_index[j]])[0][0]
                           for j in range(len(cp.X_target))])
@@ -595,7 +599,8 @@ def _add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.
 
 
 def _conform_to_program(kin, checker, cp, cut, dist, options, window: int,
-                        ramp: float = 1.5e-3):
+                        cone_axis: np.ndarray, half_angle: float, ramp: float = 1.5e-3,
+                        cone_margin: float = 1e-3):
     """Where the program's orientation still strays more than ``options.program_orientation``
     after the vias (moves too short for a via: a tight corner of a small window, 0.25-0.5 mm
     moves over which the smooth executed orientation turns unevenly), the executed orientation
@@ -603,7 +608,10 @@ def _conform_to_program(kin, checker, cp, cut, dist, options, window: int,
     back to the smooth one over ``ramp`` of travel either side. The targets keep their poses
     (the program is unchanged); the joints are re-tracked and the change is kept only if they
     stay reachable, without jumps and at least as clear of the hub as the smooth cut was (or
-    the clearance bound). Returns (CutPath, DensePath, distances), changed or not."""
+    the clearance bound), and only if the tool axis stays ``cone_margin`` inside its cone
+    (``cone_axis`` per dense sample, tip -> spindle) or no farther out than the smooth cut's:
+    near a tight corner the chord of a slerp can cut across the turning cone. Returns
+    (CutPath, DensePath, distances), changed or not."""
     tol = options.program_orientation
     R_prog, move = program_orientations(cp.X_HT, cp.X_target)
     err = rot_angle(R_prog, cp.X_HT[:, :3, :3])
@@ -617,6 +625,13 @@ def _conform_to_program(kin, checker, cp, cut, dist, options, window: int,
     ch = np.flatnonzero(wgt > 0)
     X = cp.X_HT.copy()
     X[ch, :3, :3] = slerp_pairs(cp.X_HT[ch, :3, :3], R_prog[ch], wgt[ch])
+    c = np.asarray(cone_axis, float)[ch]
+    before = np.arccos(np.clip(np.sum(c * -cp.X_HT[ch, :3, 2], axis=1), -1.0, 1.0))
+    after = np.arccos(np.clip(np.sum(c * -X[ch, :3, 2], axis=1), -1.0, 1.0))
+    if np.any(after > np.maximum(half_angle - cone_margin, before)):
+        log.info("window %d: the program's orientation leaves the tool axis' cone (by %.2f mrad); "
+                 "keeping the smooth cut", window, 1e3 * float(np.max(after - half_angle)))
+        return cp, cut, dist
     q, ok = kin.track(kin.X_WF_from_X_HT(X), cut.q[0])
     jumps = np.max(np.abs(np.diff(q, axis=0)), axis=1) if len(q) > 1 else np.zeros(0)
     if not (np.all(ok) and np.all(jumps <= options.max_joint_jump)):
