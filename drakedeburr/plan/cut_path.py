@@ -285,10 +285,15 @@ def least_axis_curvature(p: np.ndarray, cone_axis: np.ndarray, half_angle: float
     cos_a = np.cos(half_angle)
     for i in range(N):
         _add_cone(prog, u[i], cl[i], cos_a)
+    # |u[i-1] - 2 u[i] + u[i+1]| / h^2 <= t as a linear map into the Lorentz cone
+    A = np.zeros((3, 7))
+    A[0, 0] = 1.0
+    for j in range(2):
+        A[1 + j, [1 + j, 3 + j, 5 + j]] = np.array([1.0, -2.0, 1.0]) / h ** 2
     rows = range(N) if closed else range(1, N - 1)
     for i in rows:
-        d2 = (u[(i - 1) % N] - 2.0 * u[i] + u[(i + 1) % N]) / h ** 2
-        prog.AddLorentzConeConstraint(np.concatenate([[t], d2]))
+        prog.AddLorentzConeConstraint(
+            A, np.zeros(3), np.concatenate([[t], u[(i - 1) % N], u[i], u[(i + 1) % N]]))
     prog.AddLinearCost(t)
     res = ClarabelSolver().Solve(prog)
     return float(res.GetSolution(t)) if res.is_success() else float("nan")
