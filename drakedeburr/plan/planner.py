@@ -27,14 +27,14 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
-from drakedeburr.plan.cut_path import least_axis_curvature
+from drakedeburr.plan.cut_path import _axes_interp, least_axis_curvature
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.io import _jsonable
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.smoothing import smooth_orientations
 from drakedeburr.plan.targets import contact_geometry, tool_point_H
-from drakedeburr.plan.timing import TimedPath, TimingLimits, time_path
+from drakedeburr.plan.timing import TimedPath, TimingLimits, joint_spline, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
@@ -423,8 +423,6 @@ def _between_samples_error(kin, cut, cp) -> float:
     program's moves are shorter than the sampling and turn the tool, the spline cannot follow
     its orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
     25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm)."""
-    from drakedeburr.plan.timing import joint_spline
-
     sp = joint_spline(cut.s, cut.q)
     ds = np.diff(cut.s)
     s_all = np.sort(np.concatenate([cut.s] + [cut.s[:-1] + f * ds for f in (0.25, 0.5, 0.75)]))
@@ -521,8 +519,6 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
     cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
     cut = replace(cut, target_index=cp.target_index)
     if options.conform_program:
-        from drakedeburr.plan.cut_path import _axes_interp
-
         cone_dense = _axes_interp(cp.s[cp.target_index[~via_cp]], wt.cone_axis_H[order], cp.s)
         cp, cut, dist = _conform_to_program(kin, checker, cp, cut, dist, options, w,
                                             cone_dense, wt.cone_half_angle)
