@@ -7,8 +7,12 @@
    same window (or its first ``--naive-points`` points) with its accuracy at the CL points.
 3. Timing cross-check: Drake's TOPP-RA (AddFrameTranslationalSpeedLimit) on the same cut path
    vs the planner's own passes: duration and the speed overshoot between grid points.
+4. ``--accel-sweep``: how the speed band and the cut time depend on the robot model's
+   acceleration limits, which are assumed values (``PlanOptions.acceleration_scale`` on the
+   joint accelerations and the TCP path acceleration cap), on windows 0-1 of the hub; the
+   x1 row is the baseline of the same run.
 
-Run:  PYTHONPATH=. python benchmarks/bench_plan.py [--quick] [--hub NAME]
+Run:  PYTHONPATH=. python benchmarks/bench_plan.py [--quick] [--hub NAME] [--accel-sweep]
 """
 
 from __future__ import annotations
@@ -122,12 +126,40 @@ def toppra_check(cell, plan):
     return seconds, sdot.end_time(), float(v.max())
 
 
+def accel_sweep(cell, wts, hub_name: str, scales=(1.0, 2.0, 4.0, 10.0, 20.0)) -> None:
+    """Plan the same windows with the model's acceleration limits scaled; print the share of
+    each window's cutting within +-5 % of the grinding speed and the cut time vs the physical
+    limit (edge length / grinding speed), per scale."""
+    from drakedeburr.plan.planner import PlanOptions, plan_windows
+
+    rows = []
+    base_cut = None
+    for f in scales:
+        t0 = time.perf_counter()
+        plan = plan_windows(cell, wts, scenario="tool_in_hand", hub=hub_name,
+                            options=PlanOptions(acceleration_scale=f))
+        sec = time.perf_counter() - t0
+        ws = plan.meta["windows"]
+        cut = sum(w["cut_seconds"] for w in ws)
+        base_cut = cut if base_cut is None else base_cut
+        band = ", ".join(f"{100 * w['speed_in_band_fraction']:.0f} %" for w in ws)
+        ratio = ", ".join(f"{w['cut_seconds'] / (w['tool_travel_m'] / 0.15):.2f}" for w in ws)
+        rows.append([f"x{f:g}", band, ratio, f"{cut:.2f}", f"{cut / base_cut:.2f}",
+                     len(plan.failures), f"{sec:.0f}"])
+    print(f"\nacceleration limits scaled (windows {[w.window_index for w in wts]}, "
+          "tool in hand; target: >= 95 % in band, cut <= 1.05x):\n")
+    _table(rows, ["accelerations", "in band per window", "cut / limit per window", "cut s",
+                  "vs x1", "failures", "plan s"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two windows, 40-point naive KTO")
     ap.add_argument("--hub", default=None)
     ap.add_argument("--source", default="auto", choices=("auto", "toolpath", "edges"))
     ap.add_argument("--naive-points", type=int, default=None)
+    ap.add_argument("--accel-sweep", action="store_true",
+                    help="also plan windows 0-1 with the acceleration limits x1, x2, x4, x10, x20")
     args = ap.parse_args()
 
     from drakedeburr.cell.station import load_cell
@@ -214,6 +246,9 @@ def main() -> None:
         print(f"\nTOPP-RA on window {ws[0]['window']}'s cut: {ts * 1e3:.0f} ms, duration "
               f"{dur:.2f} s vs ours {ws[0]['cut_seconds']:.2f} s; max dense TCP speed "
               f"{vmax * 1e3:.1f} mm/s (limit 150)")
+    if args.accel_sweep:
+        accel_sweep(cell, wts[:2], hub_name, scales=(1.0, 4.0) if args.quick else
+                    (1.0, 2.0, 4.0, 10.0, 20.0))
 
 
 if __name__ == "__main__":

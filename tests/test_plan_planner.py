@@ -330,3 +330,37 @@ def test_a_slow_window_is_planned_again_with_the_other_spin_rule_and_the_faster_
     assert rule_a.failures == () and rule_b.failures == () and forced.failures == ()
     cut = [p.meta["windows"][0]["cut_seconds"] for p in (rule_a, rule_b, forced)]
     assert cut[2] == pytest.approx(min(cut[:2]), rel=1e-9)
+
+
+def test_acceleration_scale_times_the_cut_to_the_scaled_limits():
+    """The what-if factor on the model's accelerations: the same fillet stretch planned with 4x
+    the accelerations is timed faster, its dense joint accelerations stay within 4x the model's
+    limits and exceed the model's own somewhere (the factor is what the timing used); a factor
+    that is not a positive number is refused by name."""
+    from dataclasses import replace
+
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
+    from drakedeburr.plan.kinematics import cell_kinematics
+
+    with pytest.raises(ValueError, match="acceleration_scale"):
+        mut.PlanOptions(acceleration_scale=0.0)
+    cell = load_cell("tool_in_hand", DEFAULT_HUB)
+    full = mut.window_targets_for_hub(load_hub(DEFAULT_HUB), source="toolpath", windows=[0])[0]
+    wt = _fillet_stretch(full)
+    base = mut.PlanOptions(retry_in_band=0.0)
+    plans = [mut.plan_windows(cell, [wt], scenario="tool_in_hand", hub=DEFAULT_HUB,
+                              options=replace(base, acceleration_scale=f)) for f in (1.0, 4.0)]
+    assert all(p.failures == () for p in plans)
+    cut = [p.meta["windows"][0]["cut_seconds"] for p in plans]
+    assert cut[1] < 0.95 * cut[0]
+    a_max = np.asarray(cell_kinematics(cell).a_max)
+    ratios = []
+    for p in plans:
+        seg = next(s for s in p.segments if s.kind == "cut")
+        tt = np.linspace(*seg.t_range, 4000)
+        qdd = np.asarray(p.trajectory.derivative(tt, 2))
+        qdd = qdd if qdd.shape[0] == len(tt) else qdd.T
+        ratios.append(float(np.max(np.abs(qdd) / a_max)))
+    assert ratios[0] <= 1.0 + 1e-3
+    assert 1.0 < ratios[1] <= 4.0 + 4e-3

@@ -20,6 +20,7 @@ the flange.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
@@ -113,6 +114,13 @@ class PlanOptions:
         retry_in_band: a window planned without failure records but with less than this share
             of its cut within +-5 % of the grinding speed is planned again with the other
             warm-start spin rule, and the faster of the two kept.
+        acceleration_scale: what-if factor on the robot model's joint acceleration limits and
+            on ``tcp_acceleration`` (1: plan to the model). The model's accelerations are
+            assumed values (``models/robots/irb1600_10_120.sdf``); this factor measures how the
+            speed band and cycle time depend on them (``benchmarks/bench_plan.py --accel-sweep``).
+            The verifier checks the model's own limits, so a plan made with a factor above 1
+            fails its acceleration check: to plan for a robot whose real accelerations are
+            known, put them in the model instead.
     """
 
     params: ProcessParameters | None = None
@@ -143,6 +151,12 @@ class PlanOptions:
     via_rounds: int = 8
     conform_program: bool = True
     retry_in_band: float = 0.5
+    acceleration_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):
+            raise ValueError("PlanOptions.acceleration_scale must be a positive number, got "
+                             f"{self.acceleration_scale!r}")
 
 
 @dataclass
@@ -154,8 +168,9 @@ class _Stretch:
 
 
 def _limits(kin: CellKinematics, v_cap: float, options: PlanOptions) -> TimingLimits:
-    return TimingLimits(v_cap=v_cap, a_cap=options.tcp_acceleration,
-                        v_max=tuple(kin.v_max), a_max=tuple(kin.a_max))
+    f = options.acceleration_scale
+    return TimingLimits(v_cap=v_cap, a_cap=options.tcp_acceleration * f,
+                        v_max=tuple(kin.v_max), a_max=tuple(np.asarray(kin.a_max) * f))
 
 
 def _time_cartesian(kin, q, s, X, v_cap, options, interpolate: bool = False
