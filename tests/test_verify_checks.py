@@ -177,8 +177,8 @@ def test_samples_are_put_on_the_moves_in_execution_order():
     """A closed loop ends on its first point: the nearest move alone puts the last samples on
     the first move (where the program's orientation may differ by a wrist turn); the monotone
     assignment keeps them on the last move. Distances and fractions are the true ones."""
+    from drakedeburr.plan.program_reading import moves_in_order
     from drakedeburr.verify.checks import _point_segment
-    from drakedeburr.verify.program_reading import moves_in_order
 
     corners = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], float)
     a, b = corners[:-1], corners[1:]
@@ -202,7 +202,7 @@ def test_passing_fractions_follow_the_progress_not_the_projection():
     """Round a 90 deg corner with an arc: the corner target is passed where the path comes
     nearest to it (the arc's middle); the travel share grows with the tool's progress through
     the zone, where the projection on the move's segment lags behind."""
-    from drakedeburr.verify.program_reading import moves_in_order, passing_fractions
+    from drakedeburr.plan.program_reading import moves_in_order, passing_fractions
 
     targets = np.array([[0.0, 0, 0], [1.0, 0, 0], [1.0, 1, 0]])
     r = 0.2  # corner rounded by a quarter circle from (0.8, 0) to (1, 0.2)
@@ -231,7 +231,7 @@ def test_passing_fractions_resolve_moves_shorter_than_the_sampling():
     """Moves of 0.25 mm read from samples 0.5 mm apart (a tight corner's program against the
     verifier's 0.5 mm re-check): each sample gets its exact move and share, as it would from
     samples ten times denser."""
-    from drakedeburr.verify.program_reading import passing_fractions
+    from drakedeburr.plan.program_reading import passing_fractions
 
     x_t = np.concatenate([[0.0], np.cumsum(np.full(40, 0.25e-3))])  # 10 mm in 0.25 mm moves
     targets = np.column_stack([x_t, np.zeros(41), np.zeros(41)])

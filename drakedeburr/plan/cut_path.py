@@ -36,7 +36,7 @@ from scipy.spatial.transform import Rotation, Slerp
 log = logging.getLogger(__name__)
 
 __all__ = ["BlendedPath", "blend_corners", "smooth_axes", "least_axis_curvature", "CutPath",
-           "cut_path"]
+           "cut_path", "axes_interp"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,7 +275,7 @@ def least_axis_curvature(p: np.ndarray, cone_axis: np.ndarray, half_angle: float
     if closed:
         s = s[:-1]  # the end is the start
     h = ts[-1] / n
-    c = _axes_interp(ts, C, s)
+    c = axes_interp(ts, C, s)
     E = _basis(np.mean(c, axis=0))
     cl = c @ E
     N = len(s)
@@ -368,7 +368,7 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
         sig = spin_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
         quat = gaussian_filter1d(quat, sig, axis=0, mode="nearest")
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
-    c_rot = _axes_interp(ts, cone_axis_H, bp.s)
+    c_rot = axes_interp(ts, cone_axis_H, bp.s)
     a = smooth_axes(bp.s, -R[:, :, 2], c_rot, half_angle, margin=axis_margin, w_rate=w_rate,
                     w_curv=w_curv, pin=_in_intervals(bp.s, pin), pin_axes=a_ik,
                     pin_angle=pin_angle)
@@ -412,7 +412,7 @@ def _fixed_spin(R: np.ndarray, x_targets: np.ndarray) -> np.ndarray:
     return out
 
 
-def _axes_interp(ts: np.ndarray, axes: np.ndarray, s: np.ndarray) -> np.ndarray:
+def axes_interp(ts: np.ndarray, axes: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Unit axes interpolated linearly in ``ts`` and renormalised."""
     axes = np.asarray(axes, float)
     out = np.column_stack([np.interp(s, ts, axes[:, j]) for j in range(3)])

@@ -28,23 +28,23 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
-from drakedeburr.plan.cut_path import _axes_interp, least_axis_curvature
+from drakedeburr.plan.cut_path import axes_interp, least_axis_curvature
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.io import _jsonable
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
+from drakedeburr.plan.program_reading import (
+    program_orientation_error,
+    program_orientations,
+    rot_angle,
+    slerp_pairs,
+)
 from drakedeburr.plan.smoothing import smooth_orientations
 from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.timing import TimedPath, TimingLimits, joint_spline, time_path
 from drakedeburr.plan.transitions import approach_pose, joint_move
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
-from drakedeburr.verify.program_reading import (
-    program_orientation_error,
-    program_orientations,
-    rot_angle,
-    slerp_pairs,
-)
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
 
@@ -534,7 +534,7 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
     cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
     cut = replace(cut, target_index=cp.target_index)
     if options.conform_program:
-        cone_dense = _axes_interp(cp.s[cp.target_index[~via_cp]], wt.cone_axis_H[order], cp.s)
+        cone_dense = axes_interp(cp.s[cp.target_index[~via_cp]], wt.cone_axis_H[order], cp.s)
         cp, cut, dist = _conform_to_program(kin, checker, cp, cut, dist, options, w,
                                             cone_dense, wt.cone_half_angle)
     q_targets = np.array([kin.track(kin.X_WF_from_X_HT(cp.X_target[j][None]),
@@ -567,7 +567,7 @@ def _via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
                  tol: float) -> np.ndarray:
     """Dense samples to make via targets: on each move of the program whose orientation strays
     more than ``tol`` from the executed poses ``X`` (read as the verifier reads it,
-    :func:`drakedeburr.verify.program_reading.program_orientation_error`), the sample where it
+    :func:`drakedeburr.plan.program_reading.program_orientation_error`), the sample where it
     strays most (sorted; never a target's own sample)."""
     err, move = program_orientation_error(X, X_targets)
     err[np.asarray(target_index)] = 0.0

@@ -35,7 +35,7 @@ import numpy as np
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, angles_from_axis_H
-from drakedeburr.verify.program_reading import (
+from drakedeburr.plan.program_reading import (
     moves_in_order,
     passing_fractions,
     rot_angle,
