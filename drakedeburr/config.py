@@ -73,6 +73,9 @@ class Tolerances:
     min_clearance: float = 2e-3  # [m] except the burr contact pair
     speed_band: float = 0.05  # [-] +-5 % of the grinding speed
     speed_band_fraction: float = 0.95  # [-] share of cutting inside the band
+    # [-] every slow stretch inside a cut has a joint at this share of its acceleration or
+    # speed limit (advisory; the planner times to 90 % of the accelerations, 95 % of the speeds)
+    forced_slowdown: float = 0.85
     cone_slack: float = 1e-6  # [rad] numerical slack on cone checks
     dense_step: float = 0.5e-3  # [m] tool travel between dense re-check samples
     fk_match: float = 1e-9  # [m] model FK vs analytic FK

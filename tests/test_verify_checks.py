@@ -240,3 +240,47 @@ def test_passing_fractions_resolve_moves_shorter_than_the_sampling():
         m, f = passing_fractions(np.column_stack([x, np.zeros_like(x), np.zeros_like(x)]),
                                  targets)
         np.testing.assert_allclose(x_t[m] + f * 0.25e-3, x, atol=1e-12)
+
+
+def test_slow_stretches_are_located_and_needless_slack_is_named():
+    """The good plan leaves the band only where its cuts start and stop at rest, and every
+    such stretch lies at a cut end; a stretch slowed for no reason (time warped, path kept)
+    fails the band, and the advisory ``tcp_speed_forced`` names its window with no joint near a
+    limit there, at the tool travel where the warp slows the tool."""
+    good = vs.verify(vs.good_plan())
+    assert "tcp_speed_forced" not in good.failed + good.advisory_failed
+    band = good.item("tcp_speed_band")
+    for w, info in band.per_window.items():
+        st = info["slow_stretches"]
+        assert st and {s["at"] for s in st} <= {"start", "end"}, (w, st)
+        assert st[0]["from_m"] == 0.0 and st[0]["at"] == "start"
+        assert st[-1]["at"] == "end"
+        # the in-band share and the stretches cover the cut exactly once
+        slow = sum(s["to_m"] - s["from_m"] for s in st)
+        assert slow == pytest.approx((1 - info["fraction_in_band"]) * st[-1]["to_m"], rel=1e-9)
+
+    plan = vs.good_plan()
+    bad = faults.slow_down_stretch(plan, window=1, start=0.3, end=0.7, factor=2.0)
+    report = vs.verify(bad)
+    assert "tcp_speed_band" in report.failed
+    assert "tcp_speed_forced" in report.advisory_failed
+    item = report.item("tcp_speed_forced")
+    assert item.window == 1 and item.value < 0.3
+    inside = [s for s in report.item("tcp_speed_band").per_window[1]["slow_stretches"]
+              if s["at"] == "inside"]
+    assert len(inside) == 1
+    # independent: the tool travel of the warp's middle (FK along the cut's knots)
+    cell, _ = vs.cell_and_hub()
+    from drakedeburr.plan.kinematics import cell_kinematics
+
+    kin = cell_kinematics(cell)
+    seg = next(s for s in bad.segments if s.kind == "cut" and s.window_index == 1)
+    tt = np.linspace(*seg.t_range, 4000)
+    p = kin.X_HT_from_q(bad.trajectory.value(tt))[:, :3, 3]
+    run = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    seg0 = next(s for s in plan.segments if s.kind == "cut" and s.window_index == 1)
+    t_mid = seg0.t_range[0] + 0.5 * (seg0.t_range[1] - seg0.t_range[0])
+    t_mid_bad = float(np.interp(t_mid, plan.trajectory.t, bad.trajectory.t))
+    s_mid = float(np.interp(t_mid_bad, tt, run))
+    assert inside[0]["from_m"] < s_mid < inside[0]["to_m"]
+    assert inside[0]["min_mps"] == pytest.approx(vs.PARAMS.grinding_speed / 2.0, rel=0.05)

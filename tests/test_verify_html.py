@@ -37,6 +37,11 @@ def test_html_is_self_contained(report_file):
         assert f'id="plot-{key}"><svg' in text
     assert text.count('class="item"') == len(report.items)
     assert 'iframe id="replay"' in text and "srcdoc=" in text
+    # one row per slow stretch of the speed band (the good plan: each cut's start and end)
+    stretches = sum(len(i["slow_stretches"])
+                    for i in report.item("tcp_speed_band").per_window.values())
+    table = text.split('id="slow-stretches"')[1].split("</table>")[0]
+    assert stretches >= 2 and table.count("<tr><td>") == stretches
     # nothing fetched from outside the file: no http(s) src/href attributes
     for attr in ('src="http', "src='http", 'href="http', "href='http"):
         assert attr not in text.split('srcdoc="')[0]

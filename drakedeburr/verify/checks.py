@@ -55,6 +55,34 @@ _KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
 
 
 # ----------------------------------------------------------------------------- geometry helpers
+def _slow_stretches(inside: np.ndarray, ds: np.ndarray, v_mid: np.ndarray, qd: np.ndarray,
+                    qdd: np.ndarray, vlim: np.ndarray, alim: np.ndarray) -> list[dict]:
+    """The stretches of one window's cut outside the speed band, in order: where they lie
+    (``from_m``/``to_m``: tool travel from the cut's start), the slowest speed, whether the
+    stretch touches the cut's start or end (``at``: "start"/"end", where the tool starts or stops
+    at rest) or lies inside it, and the joint limit nearest to binding there (largest
+    |qd|/limit or |qdd|/limit over the stretch's samples: ``joint``, ``limit``, ``ratio``).
+
+    ``inside`` (M,) marks the intervals between the M + 1 samples that are in the band; ``ds``
+    and ``v_mid`` are their lengths and mid speeds; ``qd``/``qdd`` (M + 1, 6) at the samples.
+    """
+    run = np.concatenate([[0.0], np.cumsum(ds)])
+    out = np.diff(np.concatenate([[0], (~inside).astype(int), [0]]))
+    starts, ends = np.flatnonzero(out == 1), np.flatnonzero(out == -1)
+    rv, ra = np.abs(qd) / vlim, np.abs(qdd) / alim
+    stretches = []
+    for a, b in zip(starts, ends, strict=True):  # intervals a..b-1, samples a..b
+        peak_v, peak_a = rv[a:b + 1].max(axis=0), ra[a:b + 1].max(axis=0)
+        j = int(np.argmax(np.maximum(peak_v, peak_a)))
+        kind = "speed" if peak_v[j] > peak_a[j] else "acceleration"
+        stretches.append({
+            "from_m": float(run[a]), "to_m": float(run[b]),
+            "min_mps": float(v_mid[a:b].min()),
+            "at": "start" if a == 0 else "end" if b == len(inside) else "inside",
+            "joint": f"J{j + 1}", "limit": kind, "ratio": float(max(peak_v[j], peak_a[j]))})
+    return stretches
+
+
 def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray, chunk: int = 256):
     """Distance of points to a set of segments.
 
@@ -917,6 +945,7 @@ def verify_plan(
     v_g = params.grinding_speed
     band_per_window = {}
     worst_frac, worst_w = 1.0, None
+    least_bound, least_at = np.inf, None  # the least-forced slow stretch inside a cut
     for w in cut_windows:
         idx = np.flatnonzero((win_all == w) & (kind_all == _KIND_CODE["cut"]))
         if len(idx) < 2:
@@ -925,15 +954,32 @@ def verify_plan(
         vm = 0.5 * (v_all[idx][1:] + v_all[idx][:-1])
         inside = np.abs(vm / v_g - 1.0) <= tol.speed_band
         frac = float(dsw[inside].sum() / max(dsw.sum(), 1e-300))
+        stretches = _slow_stretches(inside, dsw, vm, qd_all[idx],
+                                    traj.derivative(ts_all[idx], 2), vlim, alim)
         band_per_window[w] = {"fraction_in_band": frac, "min_mps": float(v_all[idx].min()),
-                              "max_mps": float(v_all[idx].max())}
+                              "max_mps": float(v_all[idx].max()), "slow_stretches": stretches}
         if frac < worst_frac:
             worst_frac, worst_w = frac, w
+        for st in stretches:
+            if st["at"] == "inside" and st["ratio"] < least_bound:
+                least_bound, least_at = st["ratio"], (w, st)
     items.append(CheckItem(
         "tcp_speed_band", worst_frac >= tol.speed_band_fraction, worst_frac,
         tol.speed_band_fraction, "-", ">=", window=worst_w,
         detail=f"share of cutting travel within +-{tol.speed_band * 100:.0f} % of "
                f"{v_g * 1e3:.0f} mm/s (worst window)", per_window=band_per_window))
+    forced = 1.0 if least_at is None else float(least_bound)
+    items.append(CheckItem(
+        "tcp_speed_forced", forced >= tol.forced_slowdown, forced, tol.forced_slowdown, "ratio",
+        ">=", required=False, window=None if least_at is None else least_at[0],
+        detail=("no slow stretch inside a cut" if least_at is None else
+                "the stretches of the cuts slower than the band (away from the cut ends, which "
+                "start and stop at rest): the least, over them, of the largest share of a "
+                "joint's acceleration or speed limit used in the stretch (at the bound or "
+                "above: the robot's limits, not the plan, set the speed there); least at "
+                f"window {least_at[0]}, {1e3 * least_at[1]['from_m']:.1f}-"
+                f"{1e3 * least_at[1]['to_m']:.1f} mm of its cut, {least_at[1]['joint']} "
+                f"{least_at[1]['limit']}")))
     seg_speed = np.array([max([targets[k].speed for k in range(*s.target_range)
                                if k < len(targets)] or [np.inf]) for s in segments])
     v_lim_all = (1 + tol.speed_band) * np.where(kind_all == _KIND_CODE["cut"], v_g,

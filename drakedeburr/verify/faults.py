@@ -12,7 +12,8 @@ import numpy as np
 
 from drakedeburr.plan.types import JointTrajectory, Plan
 
-__all__ = ["shift_knot_into_hub", "speed_up_segment", "drop_window", "cut_knot_index"]
+__all__ = ["shift_knot_into_hub", "speed_up_segment", "slow_down_stretch", "drop_window",
+           "cut_knot_index"]
 
 
 def cut_knot_index(plan: Plan, window: int, fraction: float = 0.5) -> int:
@@ -67,6 +68,33 @@ def speed_up_segment(plan: Plan, segment: int, factor: float) -> Plan:
     segments = tuple(replace(s, t_range=retime(*s.t_range)) for s in plan.segments)
     return replace(plan, segments=segments,
                    trajectory=JointTrajectory(t=new_t, q=traj.q.copy(), qd=qd))
+
+
+def slow_down_stretch(plan: Plan, window: int, start: float, end: float, factor: float) -> Plan:
+    """Slow a stretch of a window's cut down for no reason (a plan with needless slack): time
+    runs ``k(t)`` times slower, ``k`` rising from 1 to ``factor`` and back as a raised cosine
+    over the fractions ``start``..``end`` of the cut's duration. The knots keep their joints;
+    their times are warped exactly (the integral of ``k``) and their velocities divided by
+    ``k``; later times shift. The path is unchanged, the joint accelerations only fall."""
+    seg = next(s for s in plan.segments if s.kind == "cut" and s.window_index == window)
+    c0, c1 = seg.t_range
+    ta, tb = c0 + start * (c1 - c0), c0 + end * (c1 - c0)
+    width = tb - ta
+
+    def warp(t):
+        t = np.asarray(t, float)
+        x = np.clip(t - ta, 0.0, width)
+        return t + 0.5 * (factor - 1.0) * (x - width / (2 * np.pi) * np.sin(2 * np.pi * x / width))
+
+    def k(t):
+        x = np.clip(np.asarray(t, float) - ta, 0.0, width)
+        return 1.0 + 0.5 * (factor - 1.0) * (1.0 - np.cos(2 * np.pi * x / width))
+
+    traj = plan.trajectory
+    segments = tuple(replace(s, t_range=(float(warp(s.t_range[0])), float(warp(s.t_range[1]))))
+                     for s in plan.segments)
+    return replace(plan, segments=segments, trajectory=JointTrajectory(
+        t=warp(traj.t), q=traj.q.copy(), qd=np.asarray(traj.qd, float) / k(traj.t)[:, None]))
 
 
 def drop_window(plan: Plan, window: int) -> Plan:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr._io import atomic_write_text
+from drakedeburr.units import mm_from_m, mm_s_from_m_s
 from drakedeburr.verify.report import VerificationReport, report_dict
 
 __all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html"]
@@ -238,6 +239,8 @@ def report_html(report: VerificationReport, *, replay_html: str | None = None) -
                                          "cl_chord_error"):
             per_window.append(f"<h3>{html.escape(it.name)}</h3><pre>"
                               f"{html.escape(_pretty(doc, it.name))}</pre>")
+        if it.name == "tcp_speed_band" and it.per_window:
+            per_window.append(_slow_stretch_table(it.per_window))
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>drakedeburr verification: {html.escape(str(info['hub']))}</title>
@@ -261,6 +264,22 @@ run {html.escape(str(report.run.get('timestamp', '')))}.</p>
 {replay}
 </body></html>
 """
+
+
+def _slow_stretch_table(per_window: dict) -> str:
+    """Where each window's cut leaves the speed band and which joint limit sets the speed."""
+    rows = []
+    for w, info in per_window.items():
+        for st in info.get("slow_stretches", []):
+            rows.append(
+                f"<tr><td>{html.escape(str(w))}</td><td>{mm_from_m(st['from_m']):.1f} - "
+                f"{mm_from_m(st['to_m']):.1f}</td><td>{mm_s_from_m_s(st['min_mps']):.1f}</td>"
+                f"<td>{html.escape(st['at'])}</td><td>{html.escape(st['joint'])} "
+                f"{html.escape(st['limit'])}</td><td>{100 * st['ratio']:.0f} %</td></tr>")
+    return ("<h3>slow stretches (outside the speed band)</h3>"
+            '<table id="slow-stretches"><thead><tr><th>window</th><th>tool travel [mm]</th>'
+            "<th>slowest [mm/s]</th><th>where</th><th>nearest limit</th><th>share of it</th>"
+            f"</tr></thead><tbody>{''.join(rows)}</tbody></table>")
 
 
 def _pretty(doc: dict, name: str) -> str:
