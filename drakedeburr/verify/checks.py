@@ -56,12 +56,15 @@ _KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
 
 # ----------------------------------------------------------------------------- geometry helpers
 def _slow_stretches(inside: np.ndarray, ds: np.ndarray, v_mid: np.ndarray, qd: np.ndarray,
-                    qdd: np.ndarray, vlim: np.ndarray, alim: np.ndarray) -> list[dict]:
+                    qdd: np.ndarray, vlim: np.ndarray, alim: np.ndarray,
+                    reach: float = 2e-3) -> list[dict]:
     """The stretches of one window's cut outside the speed band, in order: where they lie
     (``from_m``/``to_m``: tool travel from the cut's start), the slowest speed, whether the
     stretch touches the cut's start or end (``at``: "start"/"end", where the tool starts or stops
     at rest) or lies inside it, and the joint limit nearest to binding there (largest
-    |qd|/limit or |qdd|/limit over the stretch's samples: ``joint``, ``limit``, ``ratio``).
+    |qd|/limit or |qdd|/limit over the stretch's samples and those within ``reach`` of tool
+    travel either side - the limit that holds the speed down can bind just before the speed
+    leaves the band: ``joint``, ``limit``, ``ratio``).
 
     ``inside`` (M,) marks the intervals between the M + 1 samples that are in the band; ``ds``
     and ``v_mid`` are their lengths and mid speeds; ``qd``/``qdd`` (M + 1, 6) at the samples.
@@ -72,7 +75,9 @@ def _slow_stretches(inside: np.ndarray, ds: np.ndarray, v_mid: np.ndarray, qd: n
     rv, ra = np.abs(qd) / vlim, np.abs(qdd) / alim
     stretches = []
     for a, b in zip(starts, ends, strict=True):  # intervals a..b-1, samples a..b
-        peak_v, peak_a = rv[a:b + 1].max(axis=0), ra[a:b + 1].max(axis=0)
+        lo = int(np.searchsorted(run, run[a] - reach))
+        hi = int(np.searchsorted(run, run[b] + reach, side="right"))
+        peak_v, peak_a = rv[lo:hi].max(axis=0), ra[lo:hi].max(axis=0)
         j = int(np.argmax(np.maximum(peak_v, peak_a)))
         kind = "speed" if peak_v[j] > peak_a[j] else "acceleration"
         stretches.append({
@@ -976,7 +981,8 @@ def verify_plan(
                 "the stretches of the cuts slower than the band (away from the cut ends, which "
                 "start and stop at rest): the least, over them, of the largest share of a "
                 "joint's acceleration or speed limit used in the stretch (at the bound or "
-                "above: the robot's limits, not the plan, set the speed there); least at "
+                "above: the timing is at the robot's limits along this joint path, though "
+                "another joint path may be faster there); least at "
                 f"window {least_at[0]}, {1e3 * least_at[1]['from_m']:.1f}-"
                 f"{1e3 * least_at[1]['to_m']:.1f} mm of its cut, {least_at[1]['joint']} "
                 f"{least_at[1]['limit']}")))

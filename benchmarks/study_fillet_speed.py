@@ -1,0 +1,207 @@
+"""Study: how fast can a fillet be cut at all? (issue 5's speed band, planner-independent)
+
+The planner cuts a window slower than the +-5 % band around each fillet (the joint
+accelerations bind there). This study asks a joint-space optimiser the same question with every
+freedom the planner has and none of its choices: around each slow stretch of a planned window,
+one Drake KinematicTrajectoryOptimization (SNOPT) over the joints, warm-started from the plan,
+with the tool point on the plan's executed path (+-0.02 mm every 1 mm), the tool axis inside
+its cone (interpolated between the CL points, 2 mrad inside), 2 mm clearance (burr contact
+excepted), the joint speed (95 %) and acceleration (90 %) limits the planner times to, and the
+plan's joints and path velocity at both ends of the stretch. The speed along the stretch is
+prescribed: 143 mm/s (inside the band) with a raised-cosine dip to 50 mm/s of a given width
+centred on the plan's slowest point (no dip: constant 143 mm/s). The result is re-checked
+densely with the cell's own FK and distance queries (not SNOPT's word): a profile is *held*
+when the tool stays within 0.05 mm of the path, the axis at most 2 mrad outside its cone, the
+clearance at least 1.98 mm and every joint acceleration within the model's limit.
+
+The narrowest dip held at each fillet is how much of the window a (locally) optimal joint path
+must still cut outside the band; it is evidence, not a proof (SNOPT is a local solver).
+
+Run:  PYTHONPATH=. python benchmarks/study_fillet_speed.py [--hub NAME] [--window W]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+V_BAND = 0.143  # [m/s] inside +-5 % of 150 mm/s
+V_DIP = 0.050  # [m/s] the dip's slowest speed
+HALF_SPAN = 0.05  # [m] optimised stretch: the slowest point +- this
+
+
+def _profile(s, v_hi, dip):
+    """Times t(s) of a speed profile along s: v_hi with a raised-cosine dip (centre, width,
+    v_low) or none."""
+    sg = np.linspace(s[0], s[-1], 4001)
+    v = np.full_like(sg, v_hi)
+    if dip is not None:
+        c, w, v_lo = dip
+        x = np.clip((sg - (c - w / 2)) / w, 0, 1)
+        v = v_hi - (v_hi - v_lo) * 0.5 * (1 - np.cos(2 * np.pi * x))
+    t = np.concatenate([[0], np.cumsum(np.diff(sg) / (0.5 * (v[1:] + v[:-1])))])
+    return sg, t
+
+
+def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_points=24):
+    """One KTO over the stretch (s, q, p: the plan's samples) with the prescribed profile;
+    returns (held, SNOPT success, max path deviation, least cone margin, least clearance,
+    largest acceleration ratio, seconds)."""
+    from pydrake.multibody.inverse_kinematics import (
+        AngleBetweenVectorsConstraint,
+        MinimumDistanceLowerBoundConstraint,
+        PositionConstraint,
+    )
+    from pydrake.planning import KinematicTrajectoryOptimization
+    from pydrake.solvers import SnoptSolver, SolverOptions
+
+    from drakedeburr.plan.cut_path import axes_interp
+
+    sg, tg = _profile(s, V_BAND, dip)
+    T = tg[-1]
+
+    def r_of(x):
+        return np.interp(x, sg, tg) / T
+
+    dq = np.gradient(q, s, axis=0)
+    vmax, amax = np.asarray(kin.v_max), np.asarray(kin.a_max)
+    ctx = checker.plant_context
+    kto = KinematicTrajectoryOptimization(6, control_points, spline_order=4)
+    prog = kto.get_mutable_prog()
+    kto.AddDurationConstraint(T, T)
+    kto.AddPositionBounds(cell.q_lower, cell.q_upper)
+    kto.AddVelocityBounds(-0.95 * vmax, 0.95 * vmax)
+    kto.AddAccelerationBounds(-0.9 * amax, 0.9 * amax)
+    kto.AddPathPositionConstraint(q[0], q[0], 0.0)
+    kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
+    kto.AddPathVelocityConstraint(dq[0] * V_BAND * T, dq[0] * V_BAND * T, 0.0)
+    kto.AddPathVelocityConstraint(dq[-1] * V_BAND * T, dq[-1] * V_BAND * T, 1.0)
+    dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
+    keep = [dist]  # the program refers to the constraints: keep them alive
+    s_c = np.linspace(s[0], s[-1], int((s[-1] - s[0]) / 1e-3) + 1)[1:-1]
+    p_c = np.column_stack([np.interp(s_c, s, p[:, j]) for j in range(3)])
+    c_c = axes_interp(cone_s, cones, s_c)
+    for r, pt, c in zip(r_of(s_c), p_c, c_c, strict=True):
+        pc = PositionConstraint(cell.plant, cell.hub_frame, pt - 2e-5, pt + 2e-5,
+                                cell.tool_frame, np.zeros(3), ctx)
+        ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, c, cell.tool_frame,
+                                           np.array([0, 0, -1.0]), 0.0, half_angle - 2e-3, ctx)
+        keep += [pc, ac]
+        for con in (pc, ac, dist):
+            kto.AddPathPositionConstraint(con, float(r))
+    # warm start: least-squares B-spline through the plan's joints at the prescribed timing
+    basis = kto.basis()
+    rs = np.clip(r_of(s), 0, 1 - 1e-12)
+    B = np.array([[basis.EvaluateBasisFunctionI(i, r) for i in range(control_points)]
+                  for r in rs])
+    prog.SetInitialGuess(kto.control_points(), np.linalg.lstsq(B, q, rcond=None)[0].T)
+    prog.SetInitialGuess(kto.duration(), T)
+    kto.AddPathLengthCost(1e-3)
+    opts = SolverOptions()
+    opts.SetOption(SnoptSolver().solver_id(), "Major iterations limit", 500)
+    opts.SetOption(SnoptSolver().solver_id(), "Iterations limit", 200000)
+    t0 = time.perf_counter()
+    res = SnoptSolver().Solve(prog, None, opts)
+    sec = time.perf_counter() - t0
+    del keep
+    traj = kto.ReconstructTrajectory(res)
+    tt = np.linspace(traj.start_time(), traj.end_time(), 1500)
+    Q = np.array([traj.value(t).ravel() for t in tt])
+    Qdd = np.array([traj.EvalDerivative(t, 2).ravel() for t in tt])
+    X = kin.X_HT_from_q(Q)
+    P = X[:, :3, 3]
+    a, b = p[:-1], p[1:]
+    ab = b - a
+    f = np.clip(np.einsum("kj,nkj->nk", ab, P[:, None] - a[None]) / np.sum(ab * ab, 1), 0, 1)
+    near = a[None] + f[:, :, None] * ab[None]
+    dev = np.linalg.norm(P[:, None] - near, axis=2)
+    k = np.argmin(dev, axis=1)
+    s_at = s[k] + f[np.arange(len(k)), k] * np.linalg.norm(ab[k], axis=1)
+    axis = -X[:, :3, 2]
+    ang = np.arccos(np.clip(np.sum(axes_interp(cone_s, cones, s_at) * axis, 1), -1, 1))
+    margin = float(np.min(half_angle - ang))
+    clear = float(checker.min_distances(Q[::10], 0.01).min())
+    acc = float(np.max(np.abs(Qdd) / amax))
+    dmax = float(dev.min(axis=1).max())
+    held = dmax <= 0.05e-3 and margin >= -2e-3 and clear >= 1.98e-3 and acc <= 1.0
+    return held, res.is_success(), dmax, margin, clear, acc, sec
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--hub", default=None)
+    ap.add_argument("--window", type=int, default=0)
+    args = ap.parse_args()
+
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
+    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
+    from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
+
+    hub_name = args.hub or DEFAULT_HUB
+    cell = load_cell("tool_in_hand", hub_name)
+    kin = cell_kinematics(cell)
+    checker = ClearanceChecker(cell)
+    wt = window_targets_for_hub(load_hub(hub_name), source="toolpath",
+                                windows=[args.window])[0]
+    plan = plan_windows(cell, [wt], scenario="tool_in_hand", hub=hub_name)
+    seg = next(sg for sg in plan.segments if sg.kind == "cut")
+    tr = plan.trajectory
+    sel = (tr.t >= seg.t_range[0]) & (tr.t <= seg.t_range[1])
+    q, t = tr.q[sel], tr.t[sel]
+    p = kin.X_HT_from_q(q)[:, :3, 3]
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    v = np.concatenate([[0], np.diff(s) / np.diff(t)])
+    # cone axes along the executed path: each CL target's at its nearest sample
+    tg = [x for x in plan.targets[seg.target_range[0]:seg.target_range[1]] if x.cl_index >= 0]
+    at = np.argmin(np.linalg.norm(np.array([x.X_HT[:3, 3] for x in tg])[:, None] - p[None],
+                                  axis=2), axis=1)
+    order = np.argsort(at)
+    cone_s = s[at[order]]
+    cones = wt.cone_axis_H[np.array([x.cl_index for x in tg])[order]]
+    L = s[-1]
+    slow = (v < 0.95 * 0.150) & (s > 0.02) & (s < L - 0.02)
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], slow.astype(int), [0]])))
+    runs = runs.reshape(-1, 2)
+    merged = [list(runs[0])] if len(runs) else []
+    for a, b in runs[1:]:  # one fillet: slow runs less than 20 mm apart
+        if s[a] - s[merged[-1][1] - 1] < 0.02:
+            merged[-1][1] = b
+        else:
+            merged.append([a, b])
+    band = plan.meta["windows"][0]["speed_in_band_fraction"]
+    print(f"## fillet speed study: hub {hub_name}, window {args.window} (tool in hand), "
+          f"cut {1e3 * L:.0f} mm, planner {100 * band:.0f} % in band\n")
+    print("fillet mm   planner: slow mm  slowest mm/s | constant 143  dip 10 mm  dip 20 mm  "
+          "dip 40 mm  -> narrowest dip held")
+    need, widths = 0.0, (None, 0.010, 0.020, 0.040)
+    for a, b in merged:
+        c_i = a + int(np.argmin(v[a:b]))
+        lo = np.searchsorted(s, max(s[c_i] - HALF_SPAN, 0.01))
+        hi = np.searchsorted(s, min(s[c_i] + HALF_SPAN, L - 0.01))
+        cells, narrowest = [], None
+        for width in widths:
+            dip = None if width is None else (s[c_i], width, V_DIP)
+            held, ok, dmax, margin, clear, acc, sec = hold(
+                cell, kin, checker, s[lo:hi + 1], q[lo:hi + 1], p[lo:hi + 1], cone_s, cones,
+                wt.cone_half_angle, dip)
+            cells.append(f"{'held' if held else 'no'} ({1e3 * margin:+.0f} mrad)")
+            if held:
+                narrowest = 0.0 if width is None else width
+                break
+        need += widths[-1] if narrowest is None else narrowest
+        print(f"{1e3 * s[a]:5.0f}-{1e3 * s[b - 1]:3.0f}  {1e3 * (s[b - 1] - s[a]):14.0f}  "
+              f"{1e3 * v[a:b].min():12.0f} | {'  '.join(cells)}  -> "
+              f"{'none of these' if narrowest is None else f'{1e3 * narrowest:.0f} mm'}")
+    ends = 2 * 0.150 ** 2 / (2 * 3.0)  # rest-to-rest ramps at the 3 m/s^2 TCP cap
+    print(f"\nslow travel a locally optimal path still needs: the narrowest dip held at each "
+          f"fillet (counted as {1e3 * widths[-1]:.0f} mm where none of them was) and the "
+          f"rest-to-rest ends ({1e3 * ends:.1f} mm): {1e3 * (need + ends):.0f} mm of "
+          f"{1e3 * L:.0f} -> at most {100 * (1 - (need + ends) / L):.0f} % of this window in "
+          f"the band (planner: {100 * band:.0f} %)")
+
+
+if __name__ == "__main__":
+    main()
