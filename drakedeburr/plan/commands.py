@@ -31,6 +31,10 @@ def _run_plan(args: argparse.Namespace) -> int:
     from drakedeburr.plan.planner import PlanOptions, plan_hub
 
     options = replace(PlanOptions(), windows=_parse_windows(args.windows))
+    if args.fillets:
+        from drakedeburr.plan.fillets import FilletOptions
+
+        options = replace(options, fillets=FilletOptions())
     plan = plan_hub(args.scenario, args.hub, args.mode, source=args.source, options=options,
                     progress=tqdm_progress("plan"))
     out = Path(args.output or f"plan_{plan.hub}_{plan.mode}")
@@ -107,6 +111,9 @@ def register(subparsers) -> None:
                         "auto (orientation stage when usable)")
     p.add_argument("-o", "--output", default=None, help="plan folder (default plan_<hub>_<mode>)")
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
+    p.add_argument("--fillets", action="store_true",
+                   help="re-plan the tool orientation by a KTO where a cut slows at a fillet "
+                        "(faster cut, ~3x the planning time; docs/plan.md)")
     p.set_defaults(_run=_run_plan)
 
     e = subparsers.add_parser(

@@ -29,6 +29,7 @@ import numpy as np
 
 from drakedeburr.config import ProcessParameters, Tolerances
 from drakedeburr.plan.cut_path import axes_interp, least_axis_curvature
+from drakedeburr.plan.fillets import FilletOptions, orientation_by_kto, slow_stretches
 from drakedeburr.plan.ik import IkOptions, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.io import _jsonable
@@ -121,6 +122,9 @@ class PlanOptions:
             The verifier checks the model's own limits, so a plan made with a factor above 1
             fails its acceleration check: to plan for a robot whose real accelerations are
             known, put them in the model instead.
+        fillets: fillet repair (:mod:`drakedeburr.plan.fillets`): where the timed cut falls
+            below the speed band, a KTO over the joints may find a tool orientation that holds
+            the feed; None: off.
     """
 
     params: ProcessParameters | None = None
@@ -152,6 +156,7 @@ class PlanOptions:
     conform_program: bool = True
     retry_in_band: float = 0.5
     acceleration_scale: float = 1.0
+    fillets: FilletOptions | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):
@@ -529,6 +534,10 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
     if not np.all(cut.ok):
         return None
     failures += _clearance_records(w, checker, cut, dist, options.min_clearance - _DISTANCE_SLACK)
+    if options.fillets is not None:
+        cone_now = axes_interp(cp.s[cp.target_index], wt.cone_axis_H[order], cp.s)
+        cp, cut, dist = _repair_fillets(cell, kin, checker, cp, cut, dist, cone_now,
+                                        wt.cone_half_angle, options, w)
     # the program's targets: the CL targets' tool points with the smooth orientation there,
     # and via targets on the executed cut where the program would stray from it
     cp, via_cp = _add_vias(cp, options.program_orientation, options.via_rounds, w)
@@ -561,6 +570,62 @@ def _blended_cut(cell, kin, checker, wt, options, failures, wik, good, order, X_
                                 cp.X_target, cut, q_targets, dist,
                                 np.zeros(len(order), bool), t_ik, t_dense, zones=cp.zone,
                                 via=via_cp)
+
+
+def _repair_fillets(cell, kin, checker, cp, cut, dist, cone, half_angle, options, window):
+    """The cut with the KTO's orientation (:func:`drakedeburr.plan.fillets.orientation_by_kto`)
+    on each stretch around a fillet where the timed cut falls below the speed band, each kept
+    only if the whole cut then times faster, the axis stays 1 mrad inside its cone, the joints
+    track on the same configuration without jumps and no sample loses clearance (below the
+    bound). Returns (CutPath, DensePath, distances), changed or not."""
+    fo = options.fillets
+    v_g = options.params.grinding_speed
+    lim = _limits(kin, v_g, options)
+    s = cut.s
+
+    def duration(q, X):
+        return float(time_path(s, q, X[:, :3, 3], lim).t[-1])
+
+    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim)
+    X, q, d, best = cut.X_HT, cut.q, dist, float(base.t[-1])
+    for _a, _b, c in slow_stretches(s, base.v_tcp, (1 - Tolerances().speed_band) * v_g):
+        lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
+        hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
+        if hi - lo < 20:
+            continue
+        st = slice(lo, hi + 1)
+        R = orientation_by_kto(cell, kin, checker, s[st], q[st], X[st, :3, 3], cone[st],
+                               half_angle, fo.speed_share * v_g, np.asarray(lim.a_max),
+                               np.asarray(lim.v_max), fo)
+        if R is None:
+            continue
+        ang = np.arccos(np.clip(np.sum(cone[st] * -R[:, :, 2], axis=1), -1.0, 1.0))
+        if np.any(ang > half_angle - 1e-3):
+            log.info("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
+                     "was", window, 1e3 * s[c])
+            continue
+        Xn = X.copy()
+        Xn[st, :3, :3] = R
+        qn, ok = kin.track(kin.X_WF_from_X_HT(Xn), q[0])
+        jumps = np.max(np.abs(np.diff(qn, axis=0)), axis=1)
+        if not (np.all(ok) and np.all(jumps <= options.max_joint_jump)):
+            continue
+        dn = d.copy()
+        dn[st] = [checker.min_distance(qi, options.min_clearance + 1e-3)[0] for qi in qn[st]]
+        if np.any(dn[st] < np.minimum(d[st], options.min_clearance) - _DISTANCE_SLACK):
+            log.info("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
+                     "as it was", window, 1e3 * s[c])
+            continue
+        t_new = duration(qn, Xn)
+        log.info("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
+                 1e3 * s[c], 1e3 * base.v_tcp[c], best, t_new)
+        if t_new < best - 1e-3:
+            X, q, d, best = Xn, qn, dn, t_new
+    if X is cut.X_HT:
+        return cp, cut, dist
+    X_tg = cp.X_target.copy()
+    X_tg[:, :3, :3] = X[cp.target_index, :3, :3]
+    return replace(cp, X_HT=X, X_target=X_tg), replace(cut, X_HT=X, q=q), d
 
 
 def _via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,

@@ -1,0 +1,155 @@
+"""Fillet repair: a joint-space optimisation of the tool orientation where the cut slows down.
+
+The cut's orientation program (smoothest axis in the cones, spin by dynamic programming) is
+chosen before timing; at some fillets another orientation lets the robot hold the feed. Around
+each stretch where the timed cut falls below the speed band, one Drake
+KinematicTrajectoryOptimization over the joints finds such a path: tool point on the executed
+path (+-``position_tolerance`` every ``constraint_step``), tool axis inside its cone, clearance,
+joint speed/acceleration bounds at a prescribed constant speed, the cut's joints and path
+velocity at both ends. Its tool *orientation* is then taken at every dense sample of the
+stretch (the positions stay exactly on the executed path; the analytic IK re-solves the joints)
+and the change is kept only if the whole cut then times faster, stays inside the cones, as clear
+of the hub as before and on one configuration.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+__all__ = ["FilletOptions", "slow_stretches", "orientation_by_kto"]
+
+
+@dataclass(frozen=True)
+class FilletOptions:
+    """Settings of the fillet repair.
+
+    Attributes:
+        speed_share: the prescribed constant speed as a share of the grinding speed.
+        half_span: the optimised stretch reaches this far either side of the slowest point [m].
+        control_points: B-spline control points of one stretch's KTO.
+        constraint_step: tool travel between the KTO's path constraints [m].
+        position_tolerance: half-width of the tool point's box at each constraint [m].
+        acceleration_share: share of the joint acceleration limits the KTO may use (the
+            re-solved positions add a little joint noise the timing must absorb).
+        cone_margin: the KTO keeps the axis this far inside its cone [rad].
+        iterations: SNOPT major iterations.
+        minor_iterations: SNOPT's total minor iterations (an infeasible stretch spends them).
+    """
+
+    speed_share: float = 0.96
+    half_span: float = 0.05
+    control_points: int = 24
+    constraint_step: float = 1e-3
+    position_tolerance: float = 0.02e-3
+    acceleration_share: float = 0.75
+    cone_margin: float = 5e-3
+    iterations: int = 300
+    minor_iterations: int = 200000
+    clearance_in_kto: bool = True
+
+
+def slow_stretches(s: np.ndarray, v: np.ndarray, v_band: float, keep_off: float = 0.02,
+                   merge: float = 0.02) -> list[tuple[int, int, int]]:
+    """Stretches of a timed cut below ``v_band`` away from its rest-to-rest ends (``keep_off``
+    of travel), runs closer than ``merge`` joined: (first sample, last sample, slowest)."""
+    slow = (v < v_band) & (s > keep_off) & (s < s[-1] - keep_off)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], slow.astype(int), [0]])))
+    runs: list[list[int]] = []
+    for a, b in edges.reshape(-1, 2):
+        if runs and s[a] - s[runs[-1][1]] < merge:
+            runs[-1][1] = b - 1
+        else:
+            runs.append([a, b - 1])
+    return [(a, b, a + int(np.argmin(v[a:b + 1]))) for a, b in runs]
+
+
+def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray,
+                       cone: np.ndarray, half_angle: float, speed: float, a_max: np.ndarray,
+                       v_max: np.ndarray, options: FilletOptions) -> np.ndarray | None:
+    """Tool orientations (N, 3, 3) at the samples (s, q, p: travel, joints, tool points of a
+    stretch of the executed cut; ``cone``: (N, 3) cone axes tip -> spindle) from one KTO at the
+    constant ``speed``, or None if SNOPT found no solution. Written here, not taken from a
+    library, because Drake's KTO is the library: this only states the stretch's problem."""
+    from pydrake.multibody.inverse_kinematics import (
+        AngleBetweenVectorsConstraint,
+        MinimumDistanceLowerBoundConstraint,
+        PositionConstraint,
+    )
+    from pydrake.planning import KinematicTrajectoryOptimization
+    from pydrake.solvers import SnoptSolver, SolverOptions
+
+    from drakedeburr.plan.cut_path import axes_interp
+
+    L = float(s[-1] - s[0])
+    T = L / speed
+    dq = np.gradient(q, s, axis=0)
+    ctx = checker.plant_context
+    n = options.control_points
+    kto = KinematicTrajectoryOptimization(6, n, spline_order=4)
+    prog = kto.get_mutable_prog()
+    kto.AddDurationConstraint(T, T)
+    kto.AddPositionBounds(cell.q_lower, cell.q_upper)
+    kto.AddVelocityBounds(-0.95 * v_max, 0.95 * v_max)
+    a = options.acceleration_share * a_max
+    kto.AddAccelerationBounds(-a, a)
+    kto.AddPathPositionConstraint(q[0], q[0], 0.0)
+    kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
+    kto.AddPathVelocityConstraint(dq[0] * L, dq[0] * L, 0.0)
+    kto.AddPathVelocityConstraint(dq[-1] * L, dq[-1] * L, 1.0)
+    dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
+    keep = [dist]  # the program holds references only: keep the constraints alive
+    s_c = np.linspace(s[0], s[-1], int(L / options.constraint_step) + 1)[1:-1]
+    p_c = np.column_stack([np.interp(s_c, s, p[:, j]) for j in range(3)])
+    c_c = axes_interp(s, cone, s_c)
+    tol = options.position_tolerance
+    for sc, pt, c in zip(s_c, p_c, c_c, strict=True):
+        r = float((sc - s[0]) / L)
+        pc = PositionConstraint(cell.plant, cell.hub_frame, pt - tol, pt + tol, cell.tool_frame,
+                                np.zeros(3), ctx)
+        ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, c, cell.tool_frame,
+                                           np.array([0.0, 0.0, -1.0]), 0.0,
+                                           half_angle - options.cone_margin, ctx)
+        keep += [pc, ac]
+        for con in (pc, ac, dist) if options.clearance_in_kto else (pc, ac):
+            kto.AddPathPositionConstraint(con, r)
+    basis = kto.basis()
+    rs = np.clip((s - s[0]) / L, 0.0, 1.0 - 1e-12)
+    B = np.array([[basis.EvaluateBasisFunctionI(i, r) for i in range(n)] for r in rs])
+    prog.SetInitialGuess(kto.control_points(), np.linalg.lstsq(B, q, rcond=None)[0].T)
+    prog.SetInitialGuess(kto.duration(), T)
+    kto.AddPathLengthCost(1e-3)
+    opts = SolverOptions()
+    opts.SetOption(SnoptSolver().solver_id(), "Major iterations limit", options.iterations)
+    opts.SetOption(SnoptSolver().solver_id(), "Iterations limit", options.minor_iterations)
+    t0 = time.perf_counter()
+    res = SnoptSolver().Solve(prog, None, opts)
+    log.info("fillet KTO over %.0f mm at %.0f mm/s: %s (SNOPT info %d) in %.1f s", 1e3 * L,
+             1e3 * speed, res.is_success(), res.get_solver_details().info,
+             time.perf_counter() - t0)
+    del keep
+    if not res.is_success():
+        return None
+    traj = kto.ReconstructTrajectory(res)
+    # the KTO's tool orientation where its tool point passes each sample: its tool path at a
+    # fine time grid, each sample projected on it
+    tt = np.linspace(traj.start_time(), traj.end_time(), 20 * len(s))
+    Qk = traj.vector_values(tt).T
+    Pk = kin.X_HT_from_q(Qk)[:, :3, 3]
+    seg = Pk[1:] - Pk[:-1]
+    near = np.clip(np.searchsorted(np.linspace(0, 1, len(tt)), rs), 1, len(tt) - 1)
+    t_at = np.empty(len(s))
+    for i, (pt, k) in enumerate(zip(p, near, strict=True)):
+        lo, hi = max(k - 40, 0), min(k + 40, len(seg))
+        d = seg[lo:hi]
+        f = np.clip(np.einsum("ij,ij->i", pt - Pk[lo:hi], d) / np.maximum(
+            np.einsum("ij,ij->i", d, d), 1e-30), 0, 1)
+        e = np.linalg.norm(Pk[lo:hi] + f[:, None] * d - pt, axis=1)
+        j = int(np.argmin(e))
+        t_at[i] = tt[lo + j] + f[j] * (tt[lo + j + 1] - tt[lo + j])
+    return kin.X_HT_from_q(traj.vector_values(t_at).T)[:, :3, :3]
