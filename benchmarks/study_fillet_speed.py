@@ -49,64 +49,18 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     """One KTO over the stretch (s, q, p: the plan's samples) with the prescribed profile;
     returns (held, SNOPT success, max path deviation, least cone margin, least clearance,
     largest acceleration ratio, seconds)."""
-    from pydrake.multibody.inverse_kinematics import (
-        AngleBetweenVectorsConstraint,
-        MinimumDistanceLowerBoundConstraint,
-        PositionConstraint,
-    )
-    from pydrake.planning import KinematicTrajectoryOptimization
-    from pydrake.solvers import SnoptSolver, SolverOptions
-
     from drakedeburr.plan.cut_path import axes_interp
+    from drakedeburr.plan.fillets import FilletOptions, stretch_kto
 
     sg, tg = _profile(s, V_BAND, dip)
-    T = tg[-1]
-
-    def r_of(x):
-        return np.interp(x, sg, tg) / T
-
-    dq = np.gradient(q, s, axis=0)
-    vmax, amax = np.asarray(kin.v_max), np.asarray(kin.a_max)
-    ctx = checker.plant_context
-    kto = KinematicTrajectoryOptimization(6, control_points, spline_order=4)
-    prog = kto.get_mutable_prog()
-    kto.AddDurationConstraint(T, T)
-    kto.AddPositionBounds(cell.q_lower, cell.q_upper)
-    kto.AddVelocityBounds(-0.95 * vmax, 0.95 * vmax)
-    kto.AddAccelerationBounds(-0.9 * amax, 0.9 * amax)
-    kto.AddPathPositionConstraint(q[0], q[0], 0.0)
-    kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
-    kto.AddPathVelocityConstraint(dq[0] * V_BAND * T, dq[0] * V_BAND * T, 0.0)
-    kto.AddPathVelocityConstraint(dq[-1] * V_BAND * T, dq[-1] * V_BAND * T, 1.0)
-    dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
-    keep = [dist]  # the program refers to the constraints: keep them alive
-    s_c = np.linspace(s[0], s[-1], int((s[-1] - s[0]) / 1e-3) + 1)[1:-1]
-    p_c = np.column_stack([np.interp(s_c, s, p[:, j]) for j in range(3)])
-    c_c = axes_interp(cone_s, cones, s_c)
-    for r, pt, c in zip(r_of(s_c), p_c, c_c, strict=True):
-        pc = PositionConstraint(cell.plant, cell.hub_frame, pt - 2e-5, pt + 2e-5,
-                                cell.tool_frame, np.zeros(3), ctx)
-        ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, c, cell.tool_frame,
-                                           np.array([0, 0, -1.0]), 0.0, half_angle - 2e-3, ctx)
-        keep += [pc, ac]
-        for con in (pc, ac, dist):
-            kto.AddPathPositionConstraint(con, float(r))
-    # warm start: least-squares B-spline through the plan's joints at the prescribed timing
-    basis = kto.basis()
-    rs = np.clip(r_of(s), 0, 1 - 1e-12)
-    B = np.array([[basis.EvaluateBasisFunctionI(i, r) for i in range(control_points)]
-                  for r in rs])
-    prog.SetInitialGuess(kto.control_points(), np.linalg.lstsq(B, q, rcond=None)[0].T)
-    prog.SetInitialGuess(kto.duration(), T)
-    kto.AddPathLengthCost(1e-3)
-    opts = SolverOptions()
-    opts.SetOption(SnoptSolver().solver_id(), "Major iterations limit", 500)
-    opts.SetOption(SnoptSolver().solver_id(), "Iterations limit", 200000)
+    amax = np.asarray(kin.a_max)
     t0 = time.perf_counter()
-    res = SnoptSolver().Solve(prog, None, opts)
+    res, traj = stretch_kto(
+        cell, checker, s, q, p, axes_interp(cone_s, cones, s), half_angle, np.interp(s, sg, tg),
+        amax, np.asarray(kin.v_max),
+        FilletOptions(control_points=control_points, acceleration_share=0.9, cone_margin=2e-3,
+                      iterations=500))
     sec = time.perf_counter() - t0
-    del keep
-    traj = kto.ReconstructTrajectory(res)
     tt = np.linspace(traj.start_time(), traj.end_time(), 1500)
     Q = np.array([traj.value(t).ravel() for t in tt])
     Qdd = np.array([traj.EvalDerivative(t, 2).ravel() for t in tt])

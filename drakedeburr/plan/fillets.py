@@ -22,7 +22,7 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FilletOptions", "slow_stretches", "orientation_by_kto"]
+__all__ = ["FilletOptions", "slow_stretches", "stretch_kto", "orientation_by_kto"]
 
 
 @dataclass(frozen=True)
@@ -69,13 +69,15 @@ def slow_stretches(s: np.ndarray, v: np.ndarray, v_band: float, keep_off: float 
     return [(a, b, a + int(np.argmin(v[a:b + 1]))) for a, b in runs]
 
 
-def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray,
-                       cone: np.ndarray, half_angle: float, speed: float, a_max: np.ndarray,
-                       v_max: np.ndarray, options: FilletOptions) -> np.ndarray | None:
-    """Tool orientations (N, 3, 3) at the samples (s, q, p: travel, joints, tool points of a
-    stretch of the executed cut; ``cone``: (N, 3) cone axes tip -> spindle) from one KTO at the
-    constant ``speed``, or None if SNOPT found no solution. Written here, not taken from a
-    library, because Drake's KTO is the library: this only states the stretch's problem."""
+def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone: np.ndarray,
+                half_angle: float, t: np.ndarray, a_max: np.ndarray, v_max: np.ndarray,
+                options: FilletOptions):
+    """One KTO over a stretch of the executed cut (s, q, p: travel, joints, tool points at its
+    samples; ``cone``: (N, 3) cone axes tip -> spindle) with a prescribed timing ``t`` (N,)
+    (times at the samples from 0; a constant speed v: (s - s[0]) / v). Returns (SNOPT result,
+    its trajectory). Not a library's because Drake's KTO is the library: this states the
+    stretch's problem (path constraints at ``options.constraint_step``, bounds, the cut's joints
+    and path velocity at both ends) and warm-starts it from the cut."""
     from pydrake.multibody.inverse_kinematics import (
         AngleBetweenVectorsConstraint,
         MinimumDistanceLowerBoundConstraint,
@@ -86,9 +88,9 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
 
     from drakedeburr.plan.cut_path import axes_interp
 
-    L = float(s[-1] - s[0])
-    T = L / speed
-    dq = np.gradient(q, s, axis=0)
+    T = float(t[-1])
+    r = np.asarray(t, float) / T
+    dq_dr = np.gradient(q, r, axis=0)  # path velocity in the KTO's normalised time
     ctx = checker.plant_context
     n = options.control_points
     kto = KinematicTrajectoryOptimization(6, n, spline_order=4)
@@ -100,16 +102,16 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
     kto.AddAccelerationBounds(-a, a)
     kto.AddPathPositionConstraint(q[0], q[0], 0.0)
     kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
-    kto.AddPathVelocityConstraint(dq[0] * L, dq[0] * L, 0.0)
-    kto.AddPathVelocityConstraint(dq[-1] * L, dq[-1] * L, 1.0)
+    kto.AddPathVelocityConstraint(dq_dr[0], dq_dr[0], 0.0)
+    kto.AddPathVelocityConstraint(dq_dr[-1], dq_dr[-1], 1.0)
     dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
     keep = [dist]  # the program holds references only: keep the constraints alive
+    L = float(s[-1] - s[0])
     s_c = np.linspace(s[0], s[-1], int(L / options.constraint_step) + 1)[1:-1]
     p_c = np.column_stack([np.interp(s_c, s, p[:, j]) for j in range(3)])
     c_c = axes_interp(s, cone, s_c)
     tol = options.position_tolerance
-    for sc, pt, c in zip(s_c, p_c, c_c, strict=True):
-        r = float((sc - s[0]) / L)
+    for r_c, pt, c in zip(np.interp(s_c, s, r), p_c, c_c, strict=True):
         pc = PositionConstraint(cell.plant, cell.hub_frame, pt - tol, pt + tol, cell.tool_frame,
                                 np.zeros(3), ctx)
         ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, c, cell.tool_frame,
@@ -117,10 +119,10 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
                                            half_angle - options.cone_margin, ctx)
         keep += [pc, ac]
         for con in (pc, ac, dist) if options.clearance_in_kto else (pc, ac):
-            kto.AddPathPositionConstraint(con, r)
+            kto.AddPathPositionConstraint(con, float(r_c))
     basis = kto.basis()
-    rs = np.clip((s - s[0]) / L, 0.0, 1.0 - 1e-12)
-    B = np.array([[basis.EvaluateBasisFunctionI(i, r) for i in range(n)] for r in rs])
+    B = np.array([[basis.EvaluateBasisFunctionI(i, x) for i in range(n)]
+                  for x in np.clip(r, 0.0, 1.0 - 1e-12)])
     prog.SetInitialGuess(kto.control_points(), np.linalg.lstsq(B, q, rcond=None)[0].T)
     prog.SetInitialGuess(kto.duration(), T)
     kto.AddPathLengthCost(1e-3)
@@ -129,13 +131,22 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
     opts.SetOption(SnoptSolver().solver_id(), "Iterations limit", options.minor_iterations)
     t0 = time.perf_counter()
     res = SnoptSolver().Solve(prog, None, opts)
-    log.info("fillet KTO over %.0f mm at %.0f mm/s: %s (SNOPT info %d) in %.1f s", 1e3 * L,
-             1e3 * speed, res.is_success(), res.get_solver_details().info,
-             time.perf_counter() - t0)
+    log.info("fillet KTO over %.0f mm in %.3f s: %s (SNOPT info %d) in %.1f s", 1e3 * L, T,
+             res.is_success(), res.get_solver_details().info, time.perf_counter() - t0)
     del keep
+    return res, kto.ReconstructTrajectory(res)
+
+
+def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray,
+                       cone: np.ndarray, half_angle: float, speed: float, a_max: np.ndarray,
+                       v_max: np.ndarray, options: FilletOptions) -> np.ndarray | None:
+    """Tool orientations (N, 3, 3) at the samples of a stretch (see :func:`stretch_kto`) from
+    its KTO at the constant ``speed``, or None if SNOPT found no solution."""
+    res, traj = stretch_kto(cell, checker, s, q, p, cone, half_angle, (s - s[0]) / speed, a_max,
+                            v_max, options)
     if not res.is_success():
         return None
-    traj = kto.ReconstructTrajectory(res)
+    rs = (s - s[0]) / (s[-1] - s[0])
     # the KTO's tool orientation where its tool point passes each sample: its tool path at a
     # fine time grid, each sample projected on it
     tt = np.linspace(traj.start_time(), traj.end_time(), 20 * len(s))
