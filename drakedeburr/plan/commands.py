@@ -113,7 +113,7 @@ def register(subparsers) -> None:
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
     p.add_argument("--fillets", action="store_true",
                    help="re-plan the tool orientation by a KTO where a cut slows at a fillet "
-                        "(faster cut, ~3x the planning time; docs/plan.md)")
+                        "(faster cut, several times the planning time; docs/plan.md)")
     p.set_defaults(_run=_run_plan)
 
     e = subparsers.add_parser(
