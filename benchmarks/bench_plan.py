@@ -11,8 +11,11 @@
    acceleration limits, which are assumed values (``PlanOptions.acceleration_scale`` on the
    joint accelerations and the TCP path acceleration cap), on windows 0-1 of the hub; the
    x1 row is the baseline of the same run.
+5. ``--fillets``: the same hub planned again with the fillet repair (``PlanOptions.fillets``):
+   cut time, share in band and planning time per window against the run of item 1.
 
 Run:  PYTHONPATH=. python benchmarks/bench_plan.py [--quick] [--hub NAME] [--accel-sweep]
+      [--fillets]
 """
 
 from __future__ import annotations
@@ -152,12 +155,39 @@ def accel_sweep(cell, wts, hub_name: str, scales=(1.0, 2.0, 4.0, 10.0, 20.0)) ->
                   "vs x1", "failures", "plan s"])
 
 
+def fillet_compare(cell, wts, hub_name: str, plan, t_plan: float) -> None:
+    """Plan the same windows with the fillet repair; print each window's cut time and share in
+    band without/with it and the planning times (the run without is item 1's)."""
+    from drakedeburr.plan.fillets import FilletOptions
+    from drakedeburr.plan.planner import PlanOptions, plan_windows
+
+    t0 = time.perf_counter()
+    fixed = plan_windows(cell, wts, scenario="tool_in_hand", hub=hub_name,
+                         options=PlanOptions(fillets=FilletOptions()))
+    t_fixed = time.perf_counter() - t0
+    rows = []
+    for a, b in zip(plan.meta["windows"], fixed.meta["windows"], strict=True):
+        rows.append([a["window"], f"{a['cut_seconds']:.2f}", f"{b['cut_seconds']:.2f}",
+                     f"{b['cut_seconds'] / a['cut_seconds']:.2f}",
+                     f"{100 * a['speed_in_band_fraction']:.0f} %",
+                     f"{100 * b['speed_in_band_fraction']:.0f} %"])
+    print("\nfillet repair (PlanOptions.fillets), same windows:\n")
+    _table(rows, ["win", "cut s without", "cut s with", "ratio", "in band without",
+                  "in band with"])
+    m0, m1 = plan.meta, fixed.meta
+    print(f"\ncycle {m0['cycle_seconds']:.2f} s -> {m1['cycle_seconds']:.2f} s "
+          f"({m1['cycle_seconds'] / m0['cycle_seconds']:.3f}x); planning {t_plan:.1f} s -> "
+          f"{t_fixed:.1f} s ({t_fixed / t_plan:.1f}x); failure records {len(fixed.failures)}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two windows, 40-point naive KTO")
     ap.add_argument("--hub", default=None)
     ap.add_argument("--source", default="auto", choices=("auto", "toolpath", "edges"))
     ap.add_argument("--naive-points", type=int, default=None)
+    ap.add_argument("--fillets", action="store_true",
+                    help="also plan the hub with the fillet repair (same run, vs without)")
     ap.add_argument("--accel-sweep", action="store_true",
                     help="also plan windows 0-1 with the acceleration limits x1, x2, x4, x10, x20")
     args = ap.parse_args()
@@ -246,6 +276,8 @@ def main() -> None:
         print(f"\nTOPP-RA on window {ws[0]['window']}'s cut: {ts * 1e3:.0f} ms, duration "
               f"{dur:.2f} s vs ours {ws[0]['cut_seconds']:.2f} s; max dense TCP speed "
               f"{vmax * 1e3:.1f} mm/s (limit 150)")
+    if args.fillets:
+        fillet_compare(cell, wts, hub_name, plan, t_plan)
     if args.accel_sweep:
         accel_sweep(cell, wts[:2], hub_name, scales=(1.0, 4.0) if args.quick else
                     (1.0, 2.0, 4.0, 10.0, 20.0))
