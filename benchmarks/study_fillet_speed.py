@@ -51,6 +51,7 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     largest acceleration ratio, seconds)."""
     from drakedeburr.plan.cut_path import axes_interp
     from drakedeburr.plan.fillets import FilletOptions, stretch_kto
+    from drakedeburr.verify.checks import _point_segment
 
     sg, tg = _profile(s, V_BAND, dip)
     amax = np.asarray(kin.a_max)
@@ -66,19 +67,14 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     Qdd = np.array([traj.EvalDerivative(t, 2).ravel() for t in tt])
     X = kin.X_HT_from_q(Q)
     P = X[:, :3, 3]
-    a, b = p[:-1], p[1:]
-    ab = b - a
-    f = np.clip(np.einsum("kj,nkj->nk", ab, P[:, None] - a[None]) / np.sum(ab * ab, 1), 0, 1)
-    near = a[None] + f[:, :, None] * ab[None]
-    dev = np.linalg.norm(P[:, None] - near, axis=2)
-    k = np.argmin(dev, axis=1)
-    s_at = s[k] + f[np.arange(len(k)), k] * np.linalg.norm(ab[k], axis=1)
+    dev, k, f = _point_segment(P, p[:-1], p[1:])  # the verifier's point-to-path reading
+    s_at = s[k] + f * np.diff(s)[k]
     axis = -X[:, :3, 2]
     ang = np.arccos(np.clip(np.sum(axes_interp(cone_s, cones, s_at) * axis, 1), -1, 1))
     margin = float(np.min(half_angle - ang))
     clear = float(checker.min_distances(Q[::10], 0.01).min())
     acc = float(np.max(np.abs(Qdd) / amax))
-    dmax = float(dev.min(axis=1).max())
+    dmax = float(dev.max())
     held = dmax <= 0.05e-3 and margin >= -2e-3 and clear >= 1.98e-3 and acc <= 1.0
     return held, res.is_success(), dmax, margin, clear, acc, sec
 

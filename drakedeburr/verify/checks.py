@@ -951,6 +951,9 @@ def verify_plan(
     band_per_window = {}
     worst_frac, worst_w = 1.0, None
     least_bound, least_at = np.inf, None  # the least-forced slow stretch inside a cut
+    is_cut = kind_all == _KIND_CODE["cut"]
+    qdd_cut = np.zeros_like(qd_all)  # joint accelerations at the cut samples (one spline)
+    qdd_cut[is_cut] = traj.derivative(ts_all[is_cut], 2)
     for w in cut_windows:
         idx = np.flatnonzero((win_all == w) & (kind_all == _KIND_CODE["cut"]))
         if len(idx) < 2:
@@ -959,8 +962,7 @@ def verify_plan(
         vm = 0.5 * (v_all[idx][1:] + v_all[idx][:-1])
         inside = np.abs(vm / v_g - 1.0) <= tol.speed_band
         frac = float(dsw[inside].sum() / max(dsw.sum(), 1e-300))
-        stretches = _slow_stretches(inside, dsw, vm, qd_all[idx],
-                                    traj.derivative(ts_all[idx], 2), vlim, alim)
+        stretches = _slow_stretches(inside, dsw, vm, qd_all[idx], qdd_cut[idx], vlim, alim)
         band_per_window[w] = {"fraction_in_band": frac, "min_mps": float(v_all[idx].min()),
                               "max_mps": float(v_all[idx].max()), "slow_stretches": stretches}
         if frac < worst_frac:
