@@ -10,7 +10,7 @@ of the material into the opening (WindowEdge.n_wall_H). Point-cloud procedure, a
    n n^T splits the neighbourhood into the two faces meeting at the edge;
 3. key points (curvature > ``key_point_curvature``, 0.12 1/mm) get a local curved-surface fit
    (a Gaussian-weighted quadric height field, refitted once in its own tangent frame), the
-   others a RANSAC plane (open3d ``segment_plane``, 0.1 mm threshold) refined by least squares
+   others a RANSAC plane (seeded, 0.1 mm threshold) refined by least squares
    on its inliers. A plane that does not describe the surface *at* the CL point (the point off
    the plane, or the points next to it not inliers - RANSAC found a flat stretch beside a
    fillet whose curvature is just under the threshold) is rejected for the curved fit;
@@ -109,18 +109,38 @@ def _fold(cos: np.ndarray) -> np.ndarray:
     return np.abs(np.arccos(np.clip(cos, -1.0, 1.0)) - np.pi / 2)
 
 
+def _ransac_plane(pts: np.ndarray, threshold: float, seed: int,
+                  iterations: int = 200) -> np.ndarray:
+    """Inlier indices of the RANSAC plane with the most points within ``threshold``.
+
+    Written here, vectorised over the candidate planes with a seeded numpy generator, because
+    open3d's ``segment_plane`` (0.20) returns different planes for the same points and seed
+    from call to call (measured: 2-3 distinct planes in 30 calls, also with one OpenMP thread),
+    and a plan must not depend on the run.
+    """
+    rng = np.random.default_rng(seed)
+    n = len(pts)
+    tri = np.array([rng.choice(n, 3, replace=False) for _ in range(iterations)])
+    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    nrm = np.cross(b - a, c - a)
+    size = np.linalg.norm(nrm, axis=1)
+    ok = size > 1e-15
+    nrm = nrm[ok] / size[ok, None]
+    d = np.abs((pts[None] - a[ok][:, None]) @ nrm[..., None])[..., 0]  # (K, N)
+    inliers = d <= threshold
+    if not len(inliers):
+        return np.arange(n)
+    return np.flatnonzero(inliers[int(np.argmax(inliers.sum(axis=1)))])
+
+
 def _plane_normal(pts: np.ndarray, p0: np.ndarray, threshold: float, seed: int,
                   local_radius: float) -> np.ndarray | None:
-    """RANSAC plane (open3d ``segment_plane``) refined by least squares on its inliers; None
+    """RANSAC plane (:func:`_ransac_plane`) refined by least squares on its inliers; None
     when the plane is not the local surface at p0 (p0 farther than 2 thresholds from it, or
     fewer than 80 % of the points within ``local_radius`` of p0 are inliers) - e.g. a
     fillet next to a flat stretch, where RANSAC finds the flat stretch."""
-    import open3d as o3d
-
-    pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
-    o3d.utility.random.seed(seed)
-    _, inliers = pc.segment_plane(distance_threshold=threshold, ransac_n=3, num_iterations=200)
-    q = pts[np.asarray(inliers)] if len(inliers) >= 3 else pts
+    inliers = _ransac_plane(pts, threshold, seed)
+    q = pts[inliers] if len(inliers) >= 3 else pts
     c = q.mean(axis=0)
     _, _, vt = np.linalg.svd(q - c, full_matrices=False)
     n = vt[2]
@@ -201,8 +221,6 @@ def inner_normals_from_cloud(
     Raises:
         InputError: a CL point has too few neighbours (names the window and the point).
     """
-    import open3d as o3d
-
     params = params or ProcessParameters()
     p = np.asarray(cloud.p_S, float)
     if p.ndim != 2 or p.shape[1] != 3 or len(p) < min_neighbours:
@@ -210,22 +228,7 @@ def inner_normals_from_cloud(
     from threadpoolctl import threadpool_limits
 
     r = params.normal_search_radius
-    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
-    # keep only the scan near this window's edge (per-point normals need a margin of KNN)
-    lo = cl.p_HC.min(axis=0) - 2 * r
-    hi = cl.p_HC.max(axis=0) + 2 * r
-    pcd = pcd.crop(o3d.geometry.AxisAlignedBoundingBox(lo, hi))
-    if voxel_size > 0:
-        pcd = pcd.voxel_down_sample(voxel_size)
-    full_tree = o3d.geometry.KDTreeFlann(pcd)
-    near: set[int] = set()
-    for p_C in cl.p_HC:
-        near.update(full_tree.search_radius_vector_3d(p_C, r + 2e-3)[1])
-    pcd = pcd.select_by_index(sorted(near))
-    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn))
-    pts = np.asarray(pcd.points)
-    nrm = np.asarray(pcd.normals)
-    tree = o3d.geometry.KDTreeFlann(pcd)
+    pts, nrm, tree = _window_cloud(p, cl, r, voxel_size, knn)
     m = len(cl.p_HC)
     w = cl.window_index
     z_loop = loop_axis(cl.p_HC)
@@ -247,30 +250,70 @@ def inner_normals_from_cloud(
                     f"{np.round(p_C * 1e3, 2).tolist()} mm: only {k} scan points within "
                     f"{r * 1e3:.1f} mm (need {min_neighbours}); is the scan registered to H and "
                     "does it cover this edge?")
-            idx = np.asarray(idx)
-            labels = _kmeans_split(nrm[idx], seed)
             key = cl.kappa[i] > params.key_point_curvature
-            label = "quadric" if key else "plane"
-            for c in range(2):
-                q = pts[idx[labels == c]]
-                side_pts[i, c] = q.mean(axis=0) if len(q) else p_C
-                if len(q) < 6:
-                    fitted[i, c] = _principal(nrm[idx[labels == c]]) if len(q) else z_loop
-                    continue
-                n_fit = None
-                if not key:
-                    n_fit = _plane_normal(q, p_C, params.ransac_threshold, seed,
-                                          2 * quadric_sigma)
-                    if n_fit is None:  # not planar at this point after all: curved fit
-                        label = "quadric (plane rejected)"
-                if n_fit is None:
-                    n0 = _principal(nrm[idx[labels == c]])
-                    n_fit = _quadric_normal(q, p_C, n0, cl.t_H[i], quadric_sigma, 0.5 * r)
-                fitted[i, c] = n_fit
+            label = _fit_point(pts, nrm, np.asarray(idx), p_C, cl.t_H[i], key, params, seed,
+                               quadric_sigma, z_loop, fitted[i], side_pts[i])
             method.append(label)
             if progress is not None:
                 progress(i + 1, m, f"window {w}")
-    # 4. consistent grouping along the curve (source's angle test)
+    n_wall, n_face, disagree = _group_and_sign(fitted, side_pts, cl, z_loop)
+    return NormalEstimate(w, n_wall, n_face, tuple(method), counts, disagree)
+
+
+def _window_cloud(p: np.ndarray, cl: ClPath, r: float, voxel_size: float, knn: int):
+    """The scan near one window's CL points (voxel-filtered, with per-point normals):
+    (points (N, 3), normals (N, 3), open3d KD-tree)."""
+    import open3d as o3d
+
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
+    # keep only the scan near this window's edge (per-point normals need a margin of KNN)
+    lo = cl.p_HC.min(axis=0) - 2 * r
+    hi = cl.p_HC.max(axis=0) + 2 * r
+    pcd = pcd.crop(o3d.geometry.AxisAlignedBoundingBox(lo, hi))
+    if voxel_size > 0:
+        pcd = pcd.voxel_down_sample(voxel_size)
+    full_tree = o3d.geometry.KDTreeFlann(pcd)
+    near: set[int] = set()
+    for p_C in cl.p_HC:
+        near.update(full_tree.search_radius_vector_3d(p_C, r + 2e-3)[1])
+    pcd = pcd.select_by_index(sorted(near))
+    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn))
+    return np.asarray(pcd.points), np.asarray(pcd.normals), o3d.geometry.KDTreeFlann(pcd)
+
+
+def _fit_point(pts, nrm, idx, p_C, t_C, key: bool, params, seed: int, quadric_sigma: float,
+               z_loop, fitted_out: np.ndarray, side_out: np.ndarray) -> str:
+    """The two faces meeting at one CL point: k-means splits its neighbourhood ``idx`` into
+    two clusters, each fitted by a RANSAC plane (or, at a key point or where the plane is
+    rejected, a local quadric). Writes the normals (2, 3) and cluster centroids (2, 3) into
+    ``fitted_out``/``side_out``; returns the fit's label."""
+    labels = _kmeans_split(nrm[idx], seed)
+    label = "quadric" if key else "plane"
+    r = params.normal_search_radius
+    for c in range(2):
+        q = pts[idx[labels == c]]
+        side_out[c] = q.mean(axis=0) if len(q) else p_C
+        if len(q) < 6:
+            fitted_out[c] = _principal(nrm[idx[labels == c]]) if len(q) else z_loop
+            continue
+        n_fit = None
+        if not key:
+            n_fit = _plane_normal(q, p_C, params.ransac_threshold, seed, 2 * quadric_sigma)
+            if n_fit is None:  # not planar at this point after all: curved fit
+                label = "quadric (plane rejected)"
+        if n_fit is None:
+            n0 = _principal(nrm[idx[labels == c]])
+            n_fit = _quadric_normal(q, p_C, n0, t_C, quadric_sigma, 0.5 * r)
+        fitted_out[c] = n_fit
+    return label
+
+
+def _group_and_sign(fitted: np.ndarray, side_pts: np.ndarray, cl: ClPath, z_loop: np.ndarray):
+    """The two normals per point grouped consistently along the curve (the source's angle
+    test), the inner side chosen (the group farther from the loop axis) and both signed out of
+    the material: (n_wall (M, 3), n_face (M, 3), points where the source's centroid sign test
+    disagrees)."""
+    m = len(fitted)
     order = np.zeros(m, int)  # which of the two fitted normals is in group A
     ref = fitted[0, 0]
     for i in range(1, m):
@@ -280,24 +323,22 @@ def inner_normals_from_cloud(
     rows = np.arange(m)
     group_a, group_b = fitted[rows, order], fitted[rows, 1 - order]
     side_a, side_b = side_pts[rows, order], side_pts[rows, 1 - order]
-    # 5. inner side: the group farther from the loop axis (folded angle)
     if _fold(group_a @ z_loop).mean() <= _fold(group_b @ z_loop).mean():
         n_wall, n_face, wall_side, face_side = group_a, group_b, side_a, side_b
     else:
         n_wall, n_face, wall_side, face_side = group_b, group_a, side_b, side_a
-    # 6. sign: out of the material (away from the other face's points)
+    # sign: out of the material (away from the other face's points)
     flip = np.einsum("ij,ij->i", n_wall, face_side - cl.p_HC) > 0
     n_wall = np.where(flip[:, None], -n_wall, n_wall)
     flip_f = np.einsum("ij,ij->i", n_face, wall_side - cl.p_HC) > 0
     n_face = np.where(flip_f[:, None], -n_face, n_face)
     n_wall, n_face = _perpendicular_to_edge(n_wall, cl.t_H), _perpendicular_to_edge(n_face, cl.t_H)
     to_centroid = cl.p_HC.mean(axis=0) - cl.p_HC
-    source_says = np.einsum("ij,ij->i", n_wall, to_centroid) > 0
-    disagree = np.flatnonzero(~source_says)
+    disagree = np.flatnonzero(~(np.einsum("ij,ij->i", n_wall, to_centroid) > 0))
     if disagree.size:
-        log.info("window %d: the source's centroid sign test disagrees at %d point(s)", w,
-                 disagree.size)
-    return NormalEstimate(w, n_wall, n_face, tuple(method), counts, disagree)
+        log.info("window %d: the source's centroid sign test disagrees at %d point(s)",
+                 cl.window_index, disagree.size)
+    return n_wall, n_face, disagree
 
 
 def inner_normals_from_mesh(
