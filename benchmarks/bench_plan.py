@@ -25,6 +25,8 @@ import time
 
 import numpy as np
 
+from drakedeburr.config import load_config
+
 
 def _table(rows, header):
     w = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]
@@ -139,7 +141,7 @@ def accel_sweep(cell, wts, hub_name: str, scales=(1.0, 2.0, 4.0, 10.0, 20.0)) ->
     base_cut = None
     for f in scales:
         t0 = time.perf_counter()
-        plan = plan_windows(cell, wts, scenario="tool_in_hand", hub=hub_name,
+        plan = plan_windows(cell, wts, load_config("tool_in_hand", hub_name),
                             options=PlanOptions(acceleration_scale=f))
         sec = time.perf_counter() - t0
         ws = plan.meta["windows"]
@@ -162,7 +164,7 @@ def fillet_compare(cell, wts, hub_name: str, plan, t_plan: float) -> None:
     from drakedeburr.plan.planner import PlanOptions, plan_windows
 
     t0 = time.perf_counter()
-    fixed = plan_windows(cell, wts, scenario="tool_in_hand", hub=hub_name,
+    fixed = plan_windows(cell, wts, load_config("tool_in_hand", hub_name),
                          options=PlanOptions(fillets=FilletOptions()))
     t_fixed = time.perf_counter() - t0
     rows = []
@@ -206,7 +208,7 @@ def main() -> None:
                                  windows=(0, 1) if args.quick else None)
     t_targets = time.perf_counter() - t0
     t0 = time.perf_counter()
-    plan = plan_windows(cell, wts, scenario="tool_in_hand", hub=hub_name)
+    plan = plan_windows(cell, wts, load_config("tool_in_hand", hub_name))
     t_plan = time.perf_counter() - t0
     m = plan.meta
     ws = m["windows"]

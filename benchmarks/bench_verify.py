@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from drakedeburr.cell.station import load_cell
-from drakedeburr.config import ProcessParameters
+from drakedeburr.config import Config, ProcessParameters, Recipe, default_tolerances
 from drakedeburr.hub.model import load_hub
 from drakedeburr.verify.batch import verify_all
 from drakedeburr.verify.checks import verify_plan
@@ -42,7 +42,8 @@ def main() -> None:
     cell = load_cell(plan.scenario, plan.hub)
     t_load = time.perf_counter() - t0
     t0 = time.perf_counter()
-    report = verify_plan(plan, params=params, expected_windows=windows, cell=cell, hub_model=hub)
+    config = Config("tool_in_hand", args.hub, Recipe(process=params), default_tolerances())
+    report = verify_plan(plan, config, expected_windows=windows, cell=cell, hub_model=hub)
     t_verify = time.perf_counter() - t0
     n = report.settings["samples"]
     print("## 1. verification time per hub")

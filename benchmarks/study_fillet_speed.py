@@ -27,6 +27,8 @@ import time
 
 import numpy as np
 
+from drakedeburr.config import load_config
+
 V_BAND = 0.143  # [m/s] inside +-5 % of 150 mm/s
 V_DIP = 0.050  # [m/s] the dip's slowest speed
 HALF_SPAN = 0.05  # [m] optimised stretch: the slowest point +- this
@@ -51,7 +53,7 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     largest acceleration ratio, seconds)."""
     from drakedeburr.plan.cut_path import axes_interp
     from drakedeburr.plan.fillets import FilletOptions, stretch_kto
-    from drakedeburr.verify.checks import _point_segment
+    from drakedeburr.verify.geometry import point_segment
 
     sg, tg = _profile(s, V_BAND, dip)
     amax = np.asarray(kin.a_max)
@@ -67,7 +69,7 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     Qdd = np.array([traj.EvalDerivative(t, 2).ravel() for t in tt])
     X = kin.X_HT_from_q(Q)
     P = X[:, :3, 3]
-    dev, k, f = _point_segment(P, p[:-1], p[1:])  # the verifier's point-to-path reading
+    dev, k, f = point_segment(P, p[:-1], p[1:])  # the verifier's point-to-path reading
     s_at = s[k] + f * np.diff(s)[k]
     axis = -X[:, :3, 2]
     ang = np.arccos(np.clip(np.sum(axes_interp(cone_s, cones, s_at) * axis, 1), -1, 1))
@@ -96,7 +98,7 @@ def main() -> None:
     checker = ClearanceChecker(cell)
     wt = window_targets_for_hub(load_hub(hub_name), source="toolpath",
                                 windows=[args.window])[0]
-    plan = plan_windows(cell, [wt], scenario="tool_in_hand", hub=hub_name)
+    plan = plan_windows(cell, [wt], load_config("tool_in_hand", hub_name))
     seg = next(sg for sg in plan.segments if sg.kind == "cut")
     tr = plan.trajectory
     sel = (tr.t >= seg.t_range[0]) & (tr.t <= seg.t_range[1])

@@ -1,6 +1,17 @@
-"""Process numbers and tolerances, each defined once (SPEC.md §S3, Tab. 7 of the source).
+"""The one configuration of a run: process recipe, acceptance thresholds and tolerances.
 
-Frozen dataclasses; load overrides from YAML with :func:`load_config`.
+Everything a run depends on besides its input files is here, defined once (SPEC.md §S3, Tab. 7
+of the source), in frozen dataclasses:
+
+* :class:`ProcessParameters` - the deburring process (speeds, depth of cut, tilt boxes, path
+  thresholds); a part's ``process.yaml`` (beside its model) overrides the defaults;
+* :class:`Acceptance` - thresholds on *process figures* (share of the cut at the feed, cycle
+  ratio, theta-box share, J6 ranges): ``None`` (the default) reports the figure against its
+  physical bound without judging it; a part's recipe may set a threshold under ``acceptance:``;
+* :class:`Tolerances` - what the verifier and the planner accept (clearance, deviations,
+  limits, sampling): the code's values, never a recipe's;
+* :class:`Config` - all three plus the scenario, hub and robot of a run, loaded once by
+  :func:`load_config` and passed explicitly through plan, verify and export.
 """
 
 from __future__ import annotations
@@ -8,14 +19,16 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
 
 from drakedeburr.errors import InputError
 
-__all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "load_config",
-           "process_parameters", "PROCESS_FILE"]
+__all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "Acceptance", "Recipe",
+           "Config", "load_config", "load_recipe", "default_tolerances", "process_parameters",
+           "dataclass_from_yaml", "recipe_from_record", "SOURCE_TARGETS", "PROCESS_FILE"]
 
 #: a part's process recipe, beside its model (e.g. ``models/hubs/<name>/process.yaml``)
 PROCESS_FILE = "process.yaml"
@@ -36,14 +49,25 @@ class OrientationBounds:
                              f"got [{self.theta_min}, {self.theta_max}]")
 
 
+def _positive(obj, *names: str) -> None:
+    for name in names:
+        v = getattr(obj, name)
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+            raise ValueError(f"{type(obj).__name__}.{name} must be a positive number, got {v!r}")
+
+
 @dataclass(frozen=True)
 class ProcessParameters:
     """Deburring process (source Tab. 7). SI units."""
 
-    grinding_speed: float = 0.150  # [m/s] tool speed along a window edge
+    grinding_speed: float = 0.150  # [m/s] tool speed along a window edge (the feed)
     window_switch_speed: float = 0.450  # [m/s] moves between windows
     purge_speed: float = 0.600  # [m/s]
     home_speed: float = 0.600  # [m/s] return home
+    approach_speed: float = 0.050  # [m/s] approach/retract along the tool axis
+    # [m/s^2] TCP path acceleration the cut is timed with (ramps at its start and end); the
+    # verifier counts it as a binding limit where the tool runs below the feed
+    tcp_acceleration: float = 3.0
     spindle_air_pressure: float = 0.15e6  # [Pa] floating spindle radial compliance
     depth_of_cut_large: float = 1.5e-3  # [m] large windows
     depth_of_cut_small: float = 1.2e-3  # [m] small windows
@@ -63,21 +87,55 @@ class ProcessParameters:
     chamfer_width_min: float = 0.50e-3  # [m] T/CAAMTB 126-2023
     chamfer_width_max: float = 1.50e-3  # [m]
 
+    def __post_init__(self) -> None:
+        _positive(self, "grinding_speed", "window_switch_speed", "purge_speed", "home_speed",
+                  "approach_speed", "tcp_acceleration", "depth_of_cut_large",
+                  "depth_of_cut_small", "l_max", "delta_max")
+
+    def depth_of_cut(self, kind: str) -> float:
+        """Depth of cut [m] of a "large" or "small" window."""
+        return self.depth_of_cut_large if kind == "large" else self.depth_of_cut_small
+
+    def bounds(self, kind: str) -> OrientationBounds:
+        """The (theta_A, theta_B) box of a "large" or "small" window."""
+        return self.bounds_large if kind == "large" else self.bounds_small
+
+
+@dataclass(frozen=True)
+class Acceptance:
+    """Thresholds a part's recipe sets on process figures; None: reported with its bound, not
+    judged. The source's own targets are :data:`SOURCE_TARGETS` (shown beside the figures)."""
+
+    speed_band_fraction: float | None = None  # [-] share of cutting travel at the feed
+    cycle_time_ratio: float | None = None  # [-] cycle time / edge length over the feed
+    theta_box_share: float | None = None  # [-] share of cut samples inside the theta box
+    j6_range_large: float | None = None  # [rad] J6 range over a large window's cut
+    j6_range_small: float | None = None  # [rad] over a small window's cut
+
+
+#: the source's targets for the process figures (SPEC S3 §7, Tab. 7): for reference only
+SOURCE_TARGETS = Acceptance(speed_band_fraction=0.95, cycle_time_ratio=1.05,
+                            theta_box_share=1.0, j6_range_large=0.3491, j6_range_small=0.1745)
+
 
 @dataclass(frozen=True)
 class Tolerances:
-    """Acceptance tolerances used by planning and verification. SI units."""
+    """What verification (and planning, where it must meet it) accepts. SI units. The code's
+    values: a part's recipe does not change them."""
 
     path_deviation: float = 0.05e-3  # [m] tool point vs commanded Cartesian path
     edge_deviation: float = 0.17e-3  # [m] tool point vs true edge (delta_max + 0.05 mm)
     min_clearance: float = 2e-3  # [m] except the burr contact pair
-    speed_band: float = 0.05  # [-] +-5 % of the grinding speed
-    speed_band_fraction: float = 0.95  # [-] share of cutting inside the band
-    # [-] every slow stretch inside a cut has a joint at this share of its acceleration or
-    # speed limit (advisory; the planner times to 90 % of the accelerations, 95 % of the speeds)
+    speed_band: float = 0.05  # [-] +-5 %: "at the feed", and the overspeed allowance
+    # [-] wherever the tool runs below the feed (or below the programmed speed), some limit
+    # must be used to at least this share there: a joint's speed or acceleration, or the TCP
+    # acceleration (the planner times to 90 % of the joint accelerations, 95 % of the speeds)
     forced_slowdown: float = 0.85
     cone_slack: float = 1e-6  # [rad] numerical slack on cone checks
     dense_step: float = 0.5e-3  # [m] tool travel between dense re-check samples
+    time_step: float = 0.02  # [s] longest time between trajectory samples
+    # [m] tool travel between samples on home/transition joint moves (away from the edge)
+    joint_move_step: float = 2e-3
     fk_match: float = 1e-9  # [m] model FK vs analytic FK
     on_surface: float = 1e-6  # [m] edge loops on the mesh surface
     registration_inlier_distance: float = 0.3e-3  # [m] scan point counts as on the hub model
@@ -90,9 +148,6 @@ class Tolerances:
     orientation_match: float = 10e-3
     wrist_margin: float = 0.15  # [rad] smallest |J5| allowed (J5 = 0 is the wrist singularity)
     min_manipulability: float = 1e-4  # [-] |det J| of the flange Jacobian (advisory)
-    cycle_time_ratio: float = 1.05  # [-] cycle time / physical limit target (advisory)
-    j6_range_large: float = 0.3491  # [rad] 20 deg: paper's J6 range on large windows (advisory)
-    j6_range_small: float = 0.1745  # [rad] 10 deg: on small windows (advisory)
     query_distance: float = 0.02  # [m] distances above this are reported as "> this" (verify)
     # [m] how far a hub's convex collision pieces may reach past its true surface (the hub
     # generator splits any piece reaching > 0.5 mm into a window opening); allowed on top of
@@ -100,56 +155,174 @@ class Tolerances:
     collision_model_excess: float = 0.5e-3
 
 
-def _overrides(cls, path: Path) -> dict:
-    """The fields of dataclass ``cls`` set by the YAML mapping in ``path``, validated."""
+def default_tolerances(**overrides: Any) -> Tolerances:
+    """The tolerances (the one place they are constructed), with ``overrides`` (e.g. a coarse
+    ``dense_step`` for a smoke test)."""
+    return Tolerances(**overrides)
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """A part's process recipe: process parameters and acceptance thresholds, and where they
+    came from (``source``: the recipe file, or "defaults")."""
+
+    process: ProcessParameters = field(default_factory=ProcessParameters)
+    acceptance: Acceptance = field(default_factory=Acceptance)
+    source: str = "defaults"
+
+
+@dataclass(frozen=True)
+class Config:
+    """One run's configuration (see module docstring).
+
+    Attributes:
+        scenario: bundled scenario name or YAML path.
+        hub: hub name or folder ("" when not tied to a hub).
+        recipe: the part's recipe.
+        tolerances: acceptance tolerances and sampling.
+        robot: arm name (None: the scenario's own arm).
+    """
+
+    scenario: str
+    hub: str
+    recipe: Recipe
+    tolerances: Tolerances
+    robot: str | None = None
+
+    @property
+    def process(self) -> ProcessParameters:
+        return self.recipe.process
+
+    @property
+    def acceptance(self) -> Acceptance:
+        return self.recipe.acceptance
+
+    def to_record(self) -> dict:
+        """JSON-ready record (what a plan keeps of the configuration it was made with)."""
+        return {"scenario": str(self.scenario), "hub": str(self.hub), "robot": self.robot,
+                "recipe_source": self.recipe.source,
+                "process": dataclasses.asdict(self.recipe.process),
+                "acceptance": dataclasses.asdict(self.recipe.acceptance),
+                "tolerances": dataclasses.asdict(self.tolerances)}
+
+
+def _value(cls, key: str, value: Any, where: str) -> Any:
+    if key.startswith("bounds_"):
+        try:
+            return OrientationBounds(**value)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{where}: {key}: expected {{theta_min: .., theta_max: ..}} [rad] "
+                             f"({exc})") from exc
+    return value
+
+
+def _fields(cls, data: Any, where: str, skip: tuple[str, ...] = ()) -> dict:
+    """The fields of dataclass ``cls`` set by mapping ``data``, unknown keys refused."""
+    if not isinstance(data, dict):
+        raise InputError(f"{where}: expected a mapping of {cls.__name__} fields, "
+                         f"got {type(data).__name__}")
+    names = {f.name for f in dataclasses.fields(cls)}
+    out = {}
+    for key, value in data.items():
+        if key in skip:
+            continue
+        if key not in names:
+            raise InputError(f"{where}: unknown {cls.__name__} field {key!r}; "
+                             f"known: {sorted(names)}")
+        out[key] = _value(cls, key, value, where)
+    return out
+
+
+def _read_yaml(path: Path) -> Any:
     try:
-        data = yaml.safe_load(path.read_text()) or {}
+        return yaml.safe_load(path.read_text()) or {}
     except yaml.YAMLError as exc:
         raise InputError(f"{path}: not valid YAML ({exc})") from exc
-    if not isinstance(data, dict):
-        raise InputError(f"{path}: expected a mapping of {cls.__name__} fields, "
-                         f"got {type(data).__name__}")
-    names = {f.name: f for f in dataclasses.fields(cls)}
-    kwargs = {}
-    for key, value in data.items():
-        if key not in names:
-            raise InputError(f"{path}: unknown {cls.__name__} field {key!r}; "
-                             f"known: {sorted(names)}")
-        if key.startswith("bounds_"):
-            try:
-                value = OrientationBounds(**value)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"{path}: {key}: expected {{theta_min: .., theta_max: ..}} "
-                                 f"[rad] ({exc})") from exc
-        kwargs[key] = value
-    return kwargs
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror})") from exc
 
 
-def load_config(cls, path: str | Path):
+def _build(cls, kwargs: dict, where: str):
+    try:
+        return cls(**kwargs)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{where}: {exc}") from exc
+
+
+def dataclass_from_yaml(cls, path: str | Path):
     """Instantiate dataclass ``cls`` from a YAML mapping, overriding its defaults.
 
     Unknown keys are an error that names the file and the key.
     """
     path = Path(path)
-    return cls(**_overrides(cls, path))
+    return _build(cls, _fields(cls, _read_yaml(path), str(path)), str(path))
 
 
-def process_parameters(folder: str | Path | None = None, **overrides) -> ProcessParameters:
-    """One part's process parameters: the defaults (source Tab. 7 and the theta boxes of its
-    section 2.3), then ``process.yaml`` in the part's folder when it has one, then
-    ``overrides`` (e.g. a command-line grinding speed).
+def load_recipe(folder: str | Path | None = None, **process_overrides: Any) -> Recipe:
+    """A part's recipe: the defaults (source Tab. 7 and the theta boxes of its section 2.3),
+    then ``process.yaml`` in the part's folder when it has one (ProcessParameters fields, and
+    an optional ``acceptance:`` mapping of :class:`Acceptance` fields), then
+    ``process_overrides`` that are not None (e.g. a command-line grinding speed).
 
-    A part's recipe lives beside its model because it belongs to the part: a deep-dish hub
-    needs a smaller tilt than the source's flat-faced hub so the spindle body clears the dish
-    (``models/hubs/h5_deepdish/process.yaml``). The planner and the verifier both read it.
+    A part's recipe lives beside its model because it belongs to the part; the planner and the
+    verifier both read it from the :class:`Config`.
 
     Raises:
         InputError: the file is malformed (names the file and the field).
     """
-    kwargs = {}
+    kwargs: dict = {}
+    acceptance = Acceptance()
+    source = "defaults"
     if folder is not None:
         f = Path(folder) / PROCESS_FILE
         if f.is_file():
-            kwargs = _overrides(ProcessParameters, f)
-    kwargs.update({k: v for k, v in overrides.items() if v is not None})
-    return ProcessParameters(**kwargs)
+            data = _read_yaml(f)
+            kwargs = _fields(ProcessParameters, data, str(f), skip=("acceptance",))
+            if isinstance(data, dict) and "acceptance" in data:
+                acc = _fields(Acceptance, data["acceptance"] or {}, f"{f}: acceptance")
+                acceptance = _build(Acceptance, acc, f"{f}: acceptance")
+            source = str(f)
+    given = {k: v for k, v in process_overrides.items() if v is not None}
+    kwargs.update(given)
+    where = source + (f" with {sorted(given)} given" if given else "")
+    return Recipe(process=_build(ProcessParameters, kwargs, where), acceptance=acceptance,
+                  source=where)
+
+
+def process_parameters(folder: str | Path | None = None, **overrides: Any) -> ProcessParameters:
+    """The process parameters of a part's recipe (:func:`load_recipe`)."""
+    return load_recipe(folder, **overrides).process
+
+
+def load_config(scenario: str, hub: str | Path, *,
+                robot: str | None = None, tolerances: Tolerances | None = None,
+                recipe: Recipe | None = None, **process_overrides: Any) -> Config:
+    """Load a run's configuration once: the hub's recipe (``process.yaml`` in its folder, with
+    ``process_overrides``, or ``recipe`` as given) and the tolerances.
+
+    Args:
+        scenario: bundled scenario name or YAML path.
+        hub: bundled hub name or folder.
+        robot: arm name (None: the scenario's own).
+        tolerances: replaces the default tolerances (e.g. coarse sampling for a smoke test).
+        recipe: use this recipe instead of reading the hub's (e.g. the one a plan recorded).
+        process_overrides: ProcessParameters fields over the hub's recipe (None: not given).
+    """
+    from drakedeburr.resources import resolve_hub_dir
+
+    if recipe is None:
+        recipe = load_recipe(resolve_hub_dir(hub), **process_overrides)
+    elif any(v is not None for v in process_overrides.values()):
+        recipe = dataclasses.replace(recipe, process=dataclasses.replace(
+            recipe.process, **{k: v for k, v in process_overrides.items() if v is not None}))
+    return Config(scenario=str(scenario), hub=str(hub), recipe=recipe,
+                  tolerances=tolerances or default_tolerances(), robot=robot)
+
+
+def recipe_from_record(record: dict, where: str = "plan") -> Recipe:
+    """The recipe a plan recorded (:meth:`Config.to_record`)."""
+    proc = _fields(ProcessParameters, dict(record.get("process") or {}), f"{where}: process")
+    acc = _fields(Acceptance, dict(record.get("acceptance") or {}), f"{where}: acceptance")
+    return Recipe(process=_build(ProcessParameters, proc, where),
+                  acceptance=_build(Acceptance, acc, where),
+                  source=str(record.get("recipe_source", where)))

@@ -56,6 +56,7 @@ def run_demo(
         Summary mapping: hub, scenario, passed, timings [s] and ``outputs`` (name -> path).
     """
     from drakedeburr._io import atomic_write_json
+    from drakedeburr.config import load_config
     from drakedeburr.path import cl_table
     from drakedeburr.plan import (
         PlanOptions,
@@ -71,6 +72,7 @@ def run_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     hub = hub or _default_hub()
+    config = load_config(scenario, hub)
     outputs: dict[str, str] = {}
     timings: dict[str, float] = {}
 
@@ -84,14 +86,14 @@ def run_demo(
     windows = (0,) if test_mode else None
     log.info("demo 2/4: planning %s in %s (%s)", hub, scenario,
              "window 0 only (test mode)" if test_mode else "all windows")
-    plan = plan_hub(scenario, hub, options=PlanOptions(windows=windows), progress=progress)
+    plan = plan_hub(config, options=PlanOptions(windows=windows), progress=progress)
     outputs["plan"] = str(save_plan(plan, out / "plan"))
     outputs["joints_csv"] = str(write_joint_csv(plan, out / "joints.csv"))
     timings["plan"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     log.info("demo 3/4: independent verification")
-    report = verify_plan(plan, expected_windows=list(windows) if windows else None)
+    report = verify_plan(plan, config, expected_windows=list(windows) if windows else None)
     outputs["report_json"] = str(write_report_json(report, out / "report.json"))
     replay = meshcat_replay_html(plan)
     outputs["report_html"] = str(write_report_html(report, out / "report.html",

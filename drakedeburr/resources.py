@@ -18,6 +18,7 @@ __all__ = [
     "hubs_dir",
     "hub_dir",
     "hub_names",
+    "resolve_hub_dir",
     "scenario_path",
     "scenario_names",
     "add_package_to",
@@ -67,6 +68,18 @@ def hub_dir(name: str) -> Path:
             f"no bundled hub {name!r}; available: {', '.join(hub_names()) or '(none)'}"
         )
     return path
+
+
+def resolve_hub_dir(name_or_dir: str | Path) -> Path:
+    """A hub folder from a bundled name (``h5_split``), a folder, or a file inside it."""
+    path = Path(name_or_dir)
+    if path.is_file() and path.name in ("hub.yaml", "hub.sdf", "hub.obj", "edges.npz"):
+        path = path.parent
+    if path.is_dir():
+        if not (path / "hub.yaml").is_file():
+            raise FileNotFoundError(f"{path}: not a hub model folder (no hub.yaml)")
+        return path.resolve()
+    return hub_dir(str(name_or_dir))
 
 
 def scenario_names() -> list[str]:

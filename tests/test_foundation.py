@@ -41,12 +41,12 @@ def test_units_round_trip():
 def test_config_from_yaml(tmp_path):
     f = tmp_path / "p.yaml"
     f.write_text("grinding_speed: 0.1\nbounds_small: {theta_min: 0.1, theta_max: 0.2}\n")
-    p = config_mut.load_config(config_mut.ProcessParameters, f)
+    p = config_mut.dataclass_from_yaml(config_mut.ProcessParameters, f)
     assert p.grinding_speed == 0.1 and p.bounds_small.theta_max == 0.2
     assert p.bounds_large.theta_min == pytest.approx(0.26)
     f.write_text("grinding_sped: 0.1\n")
     with pytest.raises(ValueError, match="unknown ProcessParameters field 'grinding_sped'"):
-        config_mut.load_config(config_mut.ProcessParameters, f)
+        config_mut.dataclass_from_yaml(config_mut.ProcessParameters, f)
 
 
 def test_process_parameters_of_a_part(tmp_path):

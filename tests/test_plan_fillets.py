@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import drakedeburr.plan.fillets as mut
+from drakedeburr.config import load_config
 from drakedeburr.plan.planner import PlanOptions, plan_hub
 from drakedeburr.resources import hub_names
 
@@ -30,17 +31,16 @@ def test_fillet_repair_cuts_faster_and_still_passes_the_verifier():
     more of it in the band, the planner leaves no failure record, and the verifier's dense
     re-check (own FK, distances, cones, program reading) passes every required item of the
     window but the speed band, as without the repair."""
-    from drakedeburr.verify.batch import hub_process
-    from drakedeburr.verify.checks import verify_plan
+    from drakedeburr.verify.checks import config_for_plan, verify_plan
 
-    plans = [plan_hub("tool_in_hand", "h5_straight", source="toolpath",
+    plans = [plan_hub(load_config("tool_in_hand", "h5_straight"), source="toolpath",
                       options=PlanOptions(windows=(0,), fillets=f))
              for f in (None, mut.FilletOptions())]
     assert all(p.failures == () for p in plans)
     before, after = (p.meta["windows"][0] for p in plans)
     assert after["cut_seconds"] < 0.9 * before["cut_seconds"]
     assert after["speed_in_band_fraction"] > before["speed_in_band_fraction"] + 0.05
-    report = verify_plan(plans[1], params=hub_process("h5_straight"), expected_windows=[0])
+    report = verify_plan(plans[1], config_for_plan(plans[1]), expected_windows=[0])
     assert set(report.failed) <= {"tcp_speed_band"}, report.failed
     assert report.item("cone").passed and report.item("clearance").value >= 2e-3
     assert report.item("tcp_speed_band").value > before["speed_in_band_fraction"]

@@ -21,10 +21,12 @@ EDGES = [(hub, mode, "edges") for hub in HUBS for mode in ("tool", "workpiece")]
 @pytest.mark.slow
 @pytest.mark.parametrize(("hub", "mode", "source"), EDGES + REAL_CHAIN)
 def test_whole_hub_plans(hub, mode, source):
+    from drakedeburr.config import load_config
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.planner import plan_hub
 
-    plan = plan_hub(hub=hub, mode=mode, source=source)
+    scenario = "tool_in_hand" if mode == "tool" else "workpiece_in_hand"
+    plan = plan_hub(load_config(scenario, hub), source=source)
     assert plan.failures == ()
     planned = [w["window"] for w in plan.meta["windows"]]
     assert planned == [w.index for w in load_hub(hub).windows]
@@ -54,10 +56,9 @@ def _independently_verified(plan, hub):
     position/velocity/acceleration limits, program orientation; every required item passes
     but the speed band, which must still hold on over half of the cutting, and where it does
     not hold a joint limit sets the speed along the planned joint path."""
-    from drakedeburr.verify.batch import hub_process
-    from drakedeburr.verify.checks import verify_plan
+    from drakedeburr.verify.checks import config_for_plan, verify_plan
 
-    report = verify_plan(plan, params=hub_process(hub))
+    report = verify_plan(plan, config_for_plan(plan))
     failed = {it.name for it in report.items if it.required and not it.passed}
     assert failed <= _KNOWN_SHORT, [str(report.item(n)) for n in failed - _KNOWN_SHORT]
     assert report.item("tcp_speed_band").value >= 0.5

@@ -3,7 +3,13 @@ import pytest
 
 import drakedeburr.plan.io as mut
 from drakedeburr.errors import InputError
-from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
+from drakedeburr.plan.types import (
+    CartesianTarget,
+    FailureRecord,
+    JointTrajectory,
+    Plan,
+    PlanSegment,
+)
 
 
 def _plan(failures=()):
@@ -35,14 +41,17 @@ def _plan(failures=()):
 
 
 def test_save_load_round_trip(tmp_path):
-    plan = _plan(failures=({"window": 0, "cl_index": 3, "stage": "ik", "reason": "x"},))
+    rec = FailureRecord(window=0, kind="ik", reason="x", point=3, value=1e-3, limit=2e-3,
+                        unit="m", where={"pair": ["a", "b"]}, tried=("seed",))
+    plan = _plan(failures=(rec,))
     mut.save_plan(plan, tmp_path / "p")
     back = mut.load_plan(tmp_path / "p")
     np.testing.assert_array_equal(back.trajectory.q, plan.trajectory.q)
     assert back.targets[0].p_HC is None and back.targets[0].motion == "joint"
     np.testing.assert_array_equal(back.targets[2].p_HC, plan.targets[2].p_HC)
     assert [s.t_range for s in back.segments] == [(0.0, 1.0), (1.0, 2.0)]
-    assert back.failures[0]["cl_index"] == 3 and back.meta["note"] == 1.5
+    assert back.failures == (rec,) and back.failures[0].where == rec.where
+    assert back.meta["note"] == 1.5
 
 
 def test_load_rejects_other_versions(tmp_path):
@@ -78,7 +87,7 @@ def test_program_from_plan_is_consistent_and_writes(tmp_path):
 def test_export_cli_refuses_failed_plan_unless_forced(tmp_path):
     from drakedeburr.cli import main
 
-    mut.save_plan(_plan(failures=({"window": 0, "cl_index": 1, "stage": "ik", "reason": "x"},)),
+    mut.save_plan(_plan(failures=(FailureRecord(window=0, kind="ik", reason="x", point=1),)),
                   tmp_path / "p")
     out = tmp_path / "d.mod"
     assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out)]) == 2

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import drakedeburr.plan.planner as mut
-from drakedeburr.config import Tolerances
+from drakedeburr.config import Tolerances, load_config
 from drakedeburr.plan.window_targets import WindowTargets
 from drakedeburr.resources import hub_names
 
@@ -43,7 +43,7 @@ def planned(request):
         full = mut.window_targets_for_hub(load_hub(hub), source="toolpath", windows=[0])[0]
         assert full.tool_path is not None
         wt = _fillet_stretch(full)
-    plan = mut.plan_windows(cell, [wt], scenario=scenario, hub=hub)
+    plan = mut.plan_windows(cell, [wt], load_config(scenario, hub))
     return cell, wt, plan
 
 
@@ -177,8 +177,8 @@ def test_unreachable_window_is_reported_not_raised(planned):
                         n_H=wt.n_H, axis_H=wt.axis_H, cone_axis_H=wt.cone_axis_H,
                         cone_half_angle=wt.cone_half_angle, depth_of_cut=wt.depth_of_cut,
                         closed=False)
-    plan = mut.plan_windows(cell, [far])
-    assert any(f["window"] == 7 and f["stage"] == "window" for f in plan.failures)
+    plan = mut.plan_windows(cell, [far], load_config("tool_in_hand", "h5_straight"))
+    assert any(f.window == 7 and f.kind == "window" for f in plan.failures)
     assert [s.kind for s in plan.segments] == ["home"]
 
 
@@ -215,6 +215,7 @@ def test_rewound_start_turns_the_wrist_away_from_the_limit_it_ran_into():
 
     from drakedeburr.cell.station import load_cell
     from drakedeburr.plan.kinematics import cell_kinematics
+    from drakedeburr.plan.window import rewound_start
 
     kin = cell_kinematics(load_cell("workpiece_in_hand", hub_names()[0]))
     q0 = np.array([0.0, 0.3, 0.2, 0.1, 0.8, 0.5])
@@ -222,21 +223,21 @@ def test_rewound_start_turns_the_wrist_away_from_the_limit_it_ran_into():
     run = q0 + wind * np.array([0, 0, 0, 0.3, 0, kin.q_lower[5] + 0.05 - q0[5]])
     trial = SimpleNamespace(q=np.vstack([run, np.full((3, 6), np.nan)]),
                             ok=np.r_[np.ones(50, bool), np.zeros(3, bool)])
-    out = mut._rewound_start(kin, trial, q0)
+    out = rewound_start(kin, trial, q0)
     assert out is not None and out[5] == pytest.approx(q0[5] + 2 * np.pi)
     assert np.array_equal(out[:5], q0[:5]) and kin.within_limits(out[None])[0]
     # the other way round: J6 ran into +400 deg from a start the turn cannot come back from
     run_up = q0 + wind * np.array([0, 0, 0, 0, 0, kin.q_upper[5] - 0.1 - q0[5]])
-    out = mut._rewound_start(kin, SimpleNamespace(q=run_up, ok=np.ones(50, bool)), q0)
+    out = rewound_start(kin, SimpleNamespace(q=run_up, ok=np.ones(50, bool)), q0)
     assert out[5] == pytest.approx(q0[5] - 2 * np.pi)
     # no limit reached: no new start; a start a turn cannot move (J4 at +150 deg, +-200 deg
     # limits, ran into the upper one: -210 deg is outside) neither
-    assert mut._rewound_start(kin, SimpleNamespace(q=q0 + 0 * wind, ok=np.ones(50, bool)),
+    assert rewound_start(kin, SimpleNamespace(q=q0 + 0 * wind, ok=np.ones(50, bool)),
                               q0) is None
     q4 = q0.copy()
     q4[3] = np.radians(150)
     run4 = q4 + wind * np.array([0, 0, 0, kin.q_upper[3] - 0.1 - q4[3], 0, 0])
-    assert mut._rewound_start(kin, SimpleNamespace(q=run4, ok=np.ones(50, bool)), q4) is None
+    assert rewound_start(kin, SimpleNamespace(q=run4, ok=np.ones(50, bool)), q4) is None
 
 
 def _program_orientation_worst(plan, cell):
@@ -286,12 +287,12 @@ def test_program_orientation_follows_the_executed_cut_with_via_targets():
     from drakedeburr.cell.station import load_cell
 
     cell = load_cell("tool_in_hand", "h5_split")
-    bare = mut.plan_hub("tool_in_hand", "h5_split", source="toolpath",
+    bare = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
                         options=mut.PlanOptions(windows=(WIN,), via_rounds=0,
                                                 conform_program=False))
-    vias_only = mut.plan_hub("tool_in_hand", "h5_split", source="toolpath",
+    vias_only = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
                              options=mut.PlanOptions(windows=(WIN,), conform_program=False))
-    plan = mut.plan_hub("tool_in_hand", "h5_split", source="toolpath",
+    plan = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
                         options=mut.PlanOptions(windows=(WIN,)))
     assert plan.failures == ()
     worst_bare, _ = _program_orientation_worst(bare, cell)
@@ -322,10 +323,10 @@ def test_a_slow_window_is_planned_again_with_the_other_spin_rule_and_the_faster_
     from dataclasses import replace
 
     base = mut.PlanOptions(windows=(0,), retry_in_band=0.0)
-    rule_a = mut.plan_hub("tool_in_hand", "h5_straight", source="edges", options=base)
-    rule_b = mut.plan_hub("tool_in_hand", "h5_straight", source="edges",
+    rule_a = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges", options=base)
+    rule_b = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges",
                           options=replace(base, ik=replace(base.ik, seed_spin="frame")))
-    forced = mut.plan_hub("tool_in_hand", "h5_straight", source="edges",
+    forced = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges",
                           options=replace(base, retry_in_band=1.01))
     assert rule_a.failures == () and rule_b.failures == () and forced.failures == ()
     cut = [p.meta["windows"][0]["cut_seconds"] for p in (rule_a, rule_b, forced)]
@@ -349,7 +350,7 @@ def test_acceleration_scale_times_the_cut_to_the_scaled_limits():
     full = mut.window_targets_for_hub(load_hub(DEFAULT_HUB), source="toolpath", windows=[0])[0]
     wt = _fillet_stretch(full)
     base = mut.PlanOptions(retry_in_band=0.0)
-    plans = [mut.plan_windows(cell, [wt], scenario="tool_in_hand", hub=DEFAULT_HUB,
+    plans = [mut.plan_windows(cell, [wt], load_config("tool_in_hand", DEFAULT_HUB),
                               options=replace(base, acceleration_scale=f)) for f in (1.0, 4.0)]
     assert all(p.failures == () for p in plans)
     cut = [p.meta["windows"][0]["cut_seconds"] for p in plans]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import pytest
 import verify_support as vs
 
+from drakedeburr.config import load_config
 from drakedeburr.verify.report import report_json
 
 
@@ -17,7 +18,7 @@ from drakedeburr.verify.report import report_json
 def test_plan_hub_window_is_verified():
     from drakedeburr.plan.planner import PlanOptions, plan_hub
 
-    plan = plan_hub(vs.SCENARIO, vs.HUB, options=PlanOptions(windows=(0,)))
+    plan = plan_hub(load_config(vs.SCENARIO, vs.HUB), options=PlanOptions(windows=(0,)))
     a = vs.verify(plan, expected_windows=[0], params=None)
     for name in ("structure", "fk_agreement", "target_consistency", "windows", "rest_at_ends",
                  "configuration"):

@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 
 import drakedeburr.post.virtual_tcp as mut
+from drakedeburr.config import load_config
 from drakedeburr.post.opw import fk_opw
 from drakedeburr.post.opw_ik import arm_branches, solve_path
 from drakedeburr.resources import hub_names
@@ -64,7 +65,7 @@ def wih():
 
     cell = load_cell("workpiece_in_hand", DEFAULT_HUB)
     wt = WindowTargets.from_window_edge(load_hub(DEFAULT_HUB).windows[0]).stretch(0, 16)
-    plan = plan_windows(cell, [wt], scenario="workpiece_in_hand", hub=DEFAULT_HUB)
+    plan = plan_windows(cell, [wt], load_config("workpiece_in_hand", DEFAULT_HUB))
     assert plan.failures == () and plan.mode == "workpiece"
     seg = next(s for s in plan.segments if s.kind == "cut")
     a, b = seg.target_range

@@ -10,14 +10,21 @@ from __future__ import annotations
 
 import functools
 
-from drakedeburr.config import ProcessParameters, Tolerances
+from drakedeburr.config import Config, ProcessParameters, Recipe, default_tolerances
 
 HUB = "h5_straight"
 SCENARIO = "tool_in_hand"
 WINDOWS = (0, 1)
 PARAMS = ProcessParameters(grinding_speed=0.075)
 #: cheaper sampling for the fault tests (knots are always sampled)
-COARSE = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1, "joint_move_step": 10e-3}
+COARSE = {"dense_step": 2e-3, "time_step": 0.1, "joint_move_step": 10e-3}
+
+
+def config(params=PARAMS, **sampling) -> Config:
+    """The verify tests' configuration: ``params`` (None: the process defaults) and the
+    default tolerances with ``sampling`` overrides."""
+    return Config(SCENARIO, HUB, Recipe(process=params or ProcessParameters()),
+                  default_tolerances(**sampling))
 
 
 @functools.cache
@@ -39,11 +46,11 @@ def verify(plan, coarse: bool = True, **kwargs):
     from drakedeburr.verify.checks import verify_plan
 
     cell, hub = cell_and_hub()
-    params = kwargs.pop("params", PARAMS) or ProcessParameters()  # None: the process defaults
-    options = dict(COARSE) if coarse else {}
-    options.update(kwargs)
-    options.setdefault("expected_windows", list(WINDOWS))
-    return verify_plan(plan, params=params, cell=cell, hub_model=hub, **options)
+    params = kwargs.pop("params", PARAMS)
+    sampling = dict(COARSE) if coarse else {}
+    sampling.update(kwargs.pop("sampling", {}))
+    kwargs.setdefault("expected_windows", list(WINDOWS))
+    return verify_plan(plan, config(params, **sampling), cell=cell, hub_model=hub, **kwargs)
 
 
 @functools.cache

@@ -102,16 +102,9 @@ def read_obj(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
 def resolve_hub_dir(name_or_dir: str | Path) -> Path:
     """A hub folder from a bundled name (``h5_split``), a folder, or a file inside it."""
-    path = Path(name_or_dir)
-    if path.is_file() and path.name in ("hub.yaml", "hub.sdf", "hub.obj", "edges.npz"):
-        path = path.parent
-    if path.is_dir():
-        if not (path / "hub.yaml").is_file():
-            raise FileNotFoundError(f"{path}: not a hub model folder (no hub.yaml)")
-        return path.resolve()
-    from drakedeburr.resources import hub_dir
+    from drakedeburr.resources import resolve_hub_dir as _resolve
 
-    return hub_dir(str(name_or_dir))
+    return _resolve(name_or_dir)
 
 
 def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:

@@ -35,8 +35,14 @@ def _run_plan(args: argparse.Namespace) -> int:
         from drakedeburr.plan.fillets import FilletOptions
 
         options = replace(options, fillets=FilletOptions())
-    plan = plan_hub(args.scenario, args.hub, args.mode, source=args.source, options=options,
-                    progress=tqdm_progress("plan"))
+    scenario = args.scenario
+    if args.mode is not None:
+        scenario = "tool_in_hand" if args.mode == "tool" else "workpiece_in_hand"
+    from drakedeburr.config import load_config
+    from drakedeburr.hub import DEFAULT_HUB
+
+    config = load_config(scenario, args.hub or DEFAULT_HUB)
+    plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
     out = Path(args.output or f"plan_{plan.hub}_{plan.mode}")
     save_plan(plan, out)
     write_joint_csv(plan, out / "joints.csv")
@@ -47,7 +53,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     m = plan.meta
     print(f"plan written to {out}: {len(m['windows'])} windows, cycle {m['cycle_seconds']:.2f} s "
           f"(cutting {m['cutting_seconds']:.2f} s vs {m['physical_cut_seconds']:.2f} s at "
-          f"{m['options']['params']['grinding_speed'] * 1e3:.0f} mm/s), "
+          f"{config.process.grinding_speed * 1e3:.0f} mm/s), "
           f"{len(plan.failures)} failure records")
     for w in m["windows"]:
         print(f"  window {w['window']} ({w['kind']}): {w['reached']}/{w['cl_points']} CL, "
@@ -102,7 +108,8 @@ def register(subparsers) -> None:
                     "any point failed (the plan is still written, failures listed).")
     p.add_argument("scenario", nargs="?", default="tool_in_hand",
                    help="bundled scenario name or YAML path (default tool_in_hand)")
-    p.add_argument("--hub", default=None, help="bundled hub name or folder (default: first)")
+    p.add_argument("--hub", default=None,
+                   help="bundled hub name or folder (default: the default hub)")
     p.add_argument("--mode", choices=("tool", "workpiece"), default=None,
                    help="use the bundled tool_in_hand / workpiece_in_hand scenario")
     p.add_argument("--windows", default=None, help="comma-separated window numbers (default all)")

@@ -22,7 +22,7 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FilletOptions", "slow_stretches", "stretch_kto", "orientation_by_kto"]
+__all__ = ["FilletOptions", "slow_stretches", "stretch_kto", "orientation_by_kto", "repair_fillets"]
 
 
 @dataclass(frozen=True)
@@ -164,3 +164,72 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
         j = int(np.argmin(e))
         t_at[i] = tt[lo + j] + f[j] * (tt[lo + j + 1] - tt[lo + j])
     return kin.X_HT_from_q(traj.vector_values(t_at).T)[:, :3, :3]
+
+
+def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s_c: float):
+    """The cut with the KTO's orientation ``R`` on the samples ``st``, or None when it leaves
+    the cone, the joints' reach or loses clearance: (poses, joints, distances)."""
+    from drakedeburr.plan.kinematics import DISTANCE_SLACK
+
+    ang = np.arccos(np.clip(np.sum(cone[st] * -R[:, :, 2], axis=1), -1.0, 1.0))
+    if np.any(ang > half_angle - 1e-3):
+        log.info("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
+                 "was", window, 1e3 * s_c)
+        return None
+    Xn = X.copy()
+    Xn[st, :3, :3] = R
+    qn, ok = ctx.kin.track(ctx.kin.X_WF_from_X_HT(Xn), q[0])
+    jumps = np.max(np.abs(np.diff(qn, axis=0)), axis=1)
+    if not (np.all(ok) and np.all(jumps <= ctx.options.max_joint_jump)):
+        return None
+    dn = d.copy()
+    dn[st] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in qn[st]]
+    if np.any(dn[st] < np.minimum(d[st], ctx.min_clearance) - DISTANCE_SLACK):
+        log.info("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
+                 "as it was", window, 1e3 * s_c)
+        return None
+    return Xn, qn, dn
+
+
+def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
+    """The cut with the KTO's orientation (:func:`orientation_by_kto`) on each stretch around a
+    fillet where the timed cut falls below the speed band, each kept only if the whole cut then
+    times faster, the axis stays 1 mrad inside its cone, the joints track on the same
+    configuration without jumps and no sample loses clearance (below the bound). ``ctx`` is the
+    planner's :class:`drakedeburr.plan.options.PlanContext`. Returns (CutPath, DensePath,
+    distances), changed or not."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.timing import time_path
+
+    fo = ctx.options.fillets
+    v_g = ctx.process.grinding_speed
+    lim = ctx.limits(v_g)
+    s = cut.s
+    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim)
+    X, q, d, best = cut.X_HT, cut.q, dist, float(base.t[-1])
+    band = (1 - ctx.config.tolerances.speed_band) * v_g
+    for _a, _b, c in slow_stretches(s, base.v_tcp, band):
+        lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
+        hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
+        if hi - lo < 20:
+            continue
+        st = slice(lo, hi + 1)
+        R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, s[st], q[st], X[st, :3, 3],
+                               cone[st], half_angle, fo.speed_share * v_g,
+                               np.asarray(lim.a_max), np.asarray(lim.v_max), fo)
+        if R is None:
+            continue
+        new = _repair_one(ctx, cp, X, q, d, cone, half_angle, st, R, window, s[c])
+        if new is None:
+            continue
+        t_new = float(time_path(s, new[1], new[0][:, :3, 3], lim).t[-1])
+        log.info("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
+                 1e3 * s[c], 1e3 * base.v_tcp[c], best, t_new)
+        if t_new < best - 1e-3:
+            (X, q, d), best = new, t_new
+    if X is cut.X_HT:
+        return cp, cut, dist
+    X_tg = cp.X_target.copy()
+    X_tg[:, :3, :3] = X[cp.target_index, :3, :3]
+    return replace(cp, X_HT=X, X_target=X_tg), replace(cut, X_HT=X, q=q), d

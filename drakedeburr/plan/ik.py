@@ -41,8 +41,18 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from drakedeburr.plan.ik_seeds import (
+    JOINT_WEIGHTS,
+    analytic_accept,
+    analytic_seed,
+    clearance_seed,
+    cone_clearance_probe,
+    recheck,
+    seed_by_spin,
+    unreachable,
+)
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
-from drakedeburr.plan.targets import X_HT_from_axis
+from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["IkOptions", "WindowIk", "solve_window_ik", "seed_by_spin", "cone_clearance_probe"]
 
@@ -77,7 +87,7 @@ class IkOptions:
             keep 2 mm; where the cone leaves no room for the margin (a few fillet points) the
             target takes the bare bound and the dense check of the executed motion decides.
         analytic_first: accept the analytic warm start when it already meets every
-            constraint of the program (see :func:`_analytic_accept`) and run the Drake program
+            constraint of the program (see :func:`analytic_accept`) and run the Drake program
             only where it does not. The warm start puts the axis exactly on the preferred axis
             (the axis cost at its minimum, zero) with the smallest spin change, so the Drake
             solve would only trade a few mrad of axis for spin; it costs ~30 ms a point
@@ -92,7 +102,7 @@ class IkOptions:
     min_distance: float = 2.1e-3
     influence_distance: float = 2e-3
     axis_weight: float = 10.0
-    joint_weights: tuple[float, ...] = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
+    joint_weights: tuple[float, ...] = JOINT_WEIGHTS
     trust_region: float = 0.35
     snopt_major_iterations: int = 100
     ipopt_max_iterations: int = 50
@@ -120,7 +130,7 @@ class WindowIk:
         ok: (M,) bool, the point met every constraint on re-check.
         X_HT: (M, 4, 4) achieved tool poses in H (analytic FK) [m].
         clearance: (M,) minimum distance [m] (capped at ``influence + bound``).
-        failures: per-point failure records (dicts).
+        failures: per-point failure records.
         stats: timings and solver counts.
     """
 
@@ -128,217 +138,8 @@ class WindowIk:
     ok: np.ndarray
     X_HT: np.ndarray
     clearance: np.ndarray
-    failures: tuple[dict, ...] = ()
+    failures: tuple[FailureRecord, ...] = ()
     stats: dict = field(default_factory=dict)
-
-
-def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
-                 axis_H: np.ndarray, t_H: np.ndarray, q_ref: np.ndarray,
-                 options: IkOptions = IkOptions(), count: int = 1) -> np.ndarray | None:
-    """Best joint vector for one target over a sweep of spins and all IK branches.
-
-    Score: same branch as ``q_ref`` first, then weighted distance to ``q_ref``; candidates with
-    |J5| < ``min_wrist``, outside the limits or in collision are dropped.
-
-    Args:
-        p_HT: (3,) tool point [m]; axis_H: (3,) preferred axis; t_H: (3,) feed tangent.
-        q_ref: (6,) reference joints (e.g. home or the previous window's end) [rad].
-
-        count: > 1 returns a list of up to ``count`` distinct seeds (J4/J6 differing by more
-            than 0.5 rad), best first, for window-level retries.
-
-    Returns:
-        (6,) joints [rad], or None when no spin/branch reaches (a list when count > 1).
-    """
-    spins = np.linspace(-np.pi, np.pi, options.spin_samples, endpoint=False)
-    k = len(spins)
-    X_HT = X_HT_from_axis(np.repeat(p_HT[None], k, 0), np.repeat(axis_H[None], k, 0),
-                          np.repeat(t_H[None], len(spins), 0), spins)
-    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X_HT))
-    b_ref = kin.branch_of(q_ref)
-    cands, scores = [], []
-    w = np.array([2.0, 2.0, 1.5, 0.5, 0.5, 0.5])
-    centre = np.concatenate([q_ref[:3], 0.5 * (kin.q_lower + kin.q_upper)[3:]])
-    for k in range(q_all.shape[0]):
-        for b in range(8):
-            q = q_all[k, b]
-            if np.any(np.isnan(q)):
-                continue
-            # turns of J4/J6 nearest the middle of their range (a window winds the wrist by up
-            # to ~100 deg: start it centred), the arm nearest q_ref
-            q = centre + np.mod(q - centre + np.pi, 2 * np.pi) - np.pi
-            if not kin.within_limits(q) or abs(q[4]) < options.min_wrist:
-                continue
-            score = (float(w[:3] @ np.abs(q - q_ref)[:3]) + float(w[3:] @ np.abs(q - centre)[3:])
-                     + (0.0 if np.all(branches[b] == b_ref) else 100.0))
-            cands.append(q)
-            scores.append(score)
-    if not cands:
-        return None if count == 1 else []
-    ranked = np.argsort(scores)
-    if checker is None and count == 1:
-        return cands[ranked[0]]
-    # the IK's distance constraint can tilt the axis inside the cone: a seed needs clearance
-    # from the arm and cell, not the full bound at the burr (that depends on the axis only)
-    picked: list[np.ndarray] = []
-    best, best_d = None, -np.inf
-    for j in ranked[:max(12, 6 * count)]:
-        if any(np.max(np.abs(cands[j][[3, 5]] - p[[3, 5]])) < 0.5 for p in picked):
-            continue
-        d = np.inf if checker is None else checker.min_distance(cands[j], options.min_distance)[0]
-        if d >= options.min_distance:
-            picked.append(cands[j])
-            if len(picked) >= count:
-                break
-        elif d > best_d + 1e-4:
-            best, best_d = cands[j], d
-    if count > 1:
-        return picked or ([best] if best is not None and best_d > 0.0 else [])
-    if picked:
-        return picked[0]
-    return best if best_d > 0.0 else None
-
-
-def _analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
-                   axis_H: np.ndarray, q_prev: np.ndarray,
-                   weights: tuple[float, ...] = IkOptions.joint_weights,
-                   spin_span: float = 0.5, spin_samples: int = 21) -> np.ndarray:
-    """Seed that already meets position and preferred axis exactly, with the spin about the
-    axis that minimises the program's own joint cost ``sum w_j (q_j - q_prev_j)^2``: spins
-    within ``spin_span`` of the previous pose's X_T projected normal to the new axis, solved
-    by the analytic IK on the previous configuration's branch. Falls back to ``q_prev``."""
-    z = -axis_H / np.linalg.norm(axis_H)
-    x = X_prev[:3, 0] - (X_prev[:3, 0] @ z) * z
-    if np.linalg.norm(x) < 1e-6:
-        return q_prev
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    psi = np.linspace(-spin_span, spin_span, spin_samples)
-    X = np.repeat(np.eye(4)[None], spin_samples, axis=0)
-    X[:, :3, 0] = np.cos(psi)[:, None] * x + np.sin(psi)[:, None] * y
-    X[:, :3, 1] = -np.sin(psi)[:, None] * x + np.cos(psi)[:, None] * y
-    X[:, :3, 2] = z
-    X[:, :3, 3] = p_HT
-    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
-    match = np.flatnonzero(np.all(branches == kin.branch_of(q_prev)[None], axis=1))
-    if match.size == 0:
-        return q_prev
-    cand = q_all[:, match[0]]
-    cand = q_prev + np.mod(cand - q_prev + np.pi, 2 * np.pi) - np.pi  # no 2 pi turns
-    good = ~np.any(np.isnan(cand), axis=1) & kin.within_limits(cand)
-    good &= np.max(np.abs(cand - q_prev), axis=1) <= 0.6
-    if not good.any():
-        return q_prev
-    cost = np.where(good, np.sum(np.asarray(weights) * (cand - q_prev) ** 2, axis=1), np.inf)
-    return cand[int(np.argmin(cost))]
-
-
-def _cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
-    """``count`` unit axes at ``angle`` from the unit axis ``c``, evenly around it."""
-    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(c, e1)
-    return [np.cos(angle) * c + np.sin(angle) * (np.cos(f) * e1 + np.sin(f) * e2)
-            for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
-
-
-def _clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
-                    p_HT: np.ndarray, cone_axis_H: np.ndarray, half_angle: float,
-                    pref_axis_H: np.ndarray, q_prev: np.ndarray, reach: float,
-                    samples: int = 12, lift: float = 0.0) -> np.ndarray | None:
-    """Analytic seed at the axis of most clearance among the preferred axis, the cone axis and
-    ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
-    ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
-    c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    axes = [pref_axis_H, c] + _cone_ring(c, 0.8 * half_angle, samples)
-    best, best_d = None, -np.inf
-    for a in axes:
-        q = _analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
-        if q is q_prev:
-            continue
-        d = checker.min_distance(q, reach)[0]
-        if d > best_d:
-            best, best_d = q, d
-    return best
-
-
-def _analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarray,
-                     anchor: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray, half: float,
-                     options: IkOptions, lift: float, reach: float):
-    """The analytic warm start as the target's solution when it meets every constraint of the
-    Drake program: position and cone (re-checked by FK), joint limits, the trust region about
-    the previous target, the wrist branch and margin, and the clearance bound. Returns
-    ``(X_HT, clearance)`` or None (then the Drake program runs)."""
-    if q is anchor or np.max(np.abs(q - anchor)) > options.trust_region:
-        return None
-    if abs(q[4]) < options.min_wrist or np.sign(q[4]) != np.sign(anchor[4]):
-        return None
-    good, _, _, X = _recheck(kin, q, p_HT, cone_axis_H, half, options, lift)
-    if not good:
-        return None
-    dist = checker.min_distance(q, reach)[0]
-    if dist < options.min_distance:
-        return None
-    return X, dist
-
-
-def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
-                         cone_axis_H: np.ndarray, half_angle: float, pref_axis_H: np.ndarray,
-                         t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
-                         bound: float = 2.05e-3, min_wrist: float = 0.25,
-                         rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98), ring_axes: int = 16,
-                         spins: int = 24, per_axis: int = 24) -> dict:
-    """Is there any admissible pose at a target? A sampled search of the whole cone.
-
-    Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings``
-    x half-angle; for each, ``spins`` spins about it and every analytic IK branch (J4/J6 turned
-    into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis`` of them
-    queried for signed distance. Stops at the first pose with ``bound`` clearance.
-
-    Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
-    clears the cell: the tool or the theta box has to change) from a solver failure (a pose
-    exists; the returned one seeds the retry). The search is sampled, so only a best pose more
-    than 0.2 mm short of the bound ends the target's retries and labels it unreachable; nearer
-    misses go on to the distance-constrained retries, which can still find the bound.
-
-    Returns:
-        ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
-    """
-    c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    axes = [pref_axis_H / np.linalg.norm(pref_axis_H), c]
-    for ring in rings:
-        if ring > 0:
-            axes += _cone_ring(c, ring * half_angle, ring_axes)
-    psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
-    best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
-    b_ref = kin.branch_of(q_ref)
-    for a in axes:
-        X = X_HT_from_axis(np.repeat((p_HQ + lift * a)[None], spins, 0),
-                           np.repeat(a[None], spins, 0), np.repeat(t_H[None], spins, 0), psi)
-        q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
-        # the reference configuration's branch first, then the others
-        order = np.argsort([0 if np.all(b == b_ref) else 1 for b in branches], kind="stable")
-        q = q_all[:, order].transpose(1, 0, 2).reshape(-1, 6)
-        q = q[~np.any(np.isnan(q), axis=1)]
-        for j in (3, 5):
-            q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
-            q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
-        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
-        for qq in q[:: max(1, len(q) // per_axis)]:
-            d, pair = checker.min_distance(qq, bound + 1e-3)
-            best["queries"] += 1
-            if d > best["best_clearance"]:
-                best.update(best_clearance=float(d), pair=pair, q=qq.copy())
-            if d >= bound:
-                best["feasible"] = True
-                return best
-    return best
-
-
-def _unreachable(probe: dict, options: IkOptions) -> bool:
-    """The probe's best pose is more than 0.2 mm short of the bound (the sampled search may
-    miss a pose within that; the retries may still find it)."""
-    return not probe["feasible"] and probe["best_clearance"] < options.min_distance_floor - 0.2e-3
 
 
 def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
@@ -393,18 +194,6 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H:
     return bool(result.is_success()), result.GetSolution(q)
 
 
-def _recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray,
-             half_angle: float, options: IkOptions,
-             lift: float = 0.0) -> tuple[bool, float, float, np.ndarray]:
-    """Independent check of a solution with the analytic FK: (ok, position error, cone angle)."""
-    X = kin.X_HT_from_q(q)
-    err = float(np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HT))
-    ang = float(np.arccos(np.clip(-X[:3, 2] @ cone_axis_H, -1.0, 1.0)))
-    ok = (err <= 10 * options.position_tolerance and ang <= half_angle + 1e-6
-          and bool(kin.within_limits(q)))
-    return ok, err, ang, X
-
-
 def solve_window_ik(
     cell,
     kin: CellKinematics,
@@ -442,140 +231,186 @@ def solve_window_ik(
             from the face more per radian.
 
     Returns:
-        WindowIk; failures are listed per point (``{"window", "cl_index", "stage", "reason",
-        ...}``), never raised.
+        WindowIk; failures are listed per point (:class:`FailureRecord`), never raised.
     """
     from pydrake.solvers import IpoptSolver, SnoptSolver
 
-    snopt, ipopt = SnoptSolver(), IpoptSolver()
-    solvers = [s for s in (snopt, ipopt) if s.available() and s.enabled()]
+    solvers = [s for s in (SnoptSolver(), IpoptSolver()) if s.available() and s.enabled()]
     half = max(float(cone_half_angle), 1e-3)
     m = len(p_HT)
+    counts = dict.fromkeys(("distance", "fallback", "retry", "analytic", "probe"), 0)
+    run = _WindowRun(cell=cell, kin=kin, checker=checker, solvers=solvers, options=options,
+                     lift=lift, half=half,
+                     reach=options.min_distance + options.influence_distance, counts=counts)
     q_out = np.full((m, 6), np.nan)
     X_out = np.full((m, 4, 4), np.nan)
     ok = np.zeros(m, bool)
     clearance = np.zeros(m)
-    failures: list[dict] = []
-    n_dist = n_fallback = n_retry = n_analytic = n_probe = 0
-    reach = options.min_distance + options.influence_distance
+    failures: list[FailureRecord] = []
     t0 = time.perf_counter()
     p_T_pref = p_HT + lift * pref_axis_H  # T itself at the preferred axis (seeds)
-    q_prev = None
-    i_prev = -1
+    q_prev, i_prev = None, -1
     for i in range(m):
         if q_prev is None:
             q_seed = (q_first if q_first is not None and i == 0 else
                       seed_by_spin(kin, checker, p_T_pref[i], pref_axis_H[i], t_H[i], q_ref,
                                    options))
             if q_seed is None:
-                failures.append(dict(window=window_index, cl_index=i, stage="ik",
-                                     reason="no IK branch reaches the first target"))
+                failures.append(FailureRecord(window=window_index, kind="ik", point=i,
+                                              reason="no IK branch reaches the first target"))
                 continue
             anchor = q_seed
         else:
             anchor = q_prev
-            q_seed = _analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev,
+            q_seed = analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev,
                                     options.joint_weights,
                                     spin_span=0.5 if options.seed_spin == "joint_cost" else 0.0,
                                     spin_samples=21 if options.seed_spin == "joint_cost" else 1)
-        done = False
-        best = None
-        probe = None
-        if options.analytic_first and q_prev is not None:
-            acc = _analytic_accept(kin, checker, q_seed, anchor, p_HT[i], cone_axis_H[i], half,
-                                   options, lift, reach)
-            if acc is not None:
-                n_analytic += 1
-                best = (q_seed, acc[0], acc[1], 0.0, 0.0)
-                done = True
-        for attempt in range(0 if done else options.retries + 1):
-            start_with_distance = False
-            # from the second retry on, ask only for the acceptance bound, not the margin
-            opts = options if attempt < 2 else replace(
-                options, min_distance=min(options.min_distance, options.min_distance_floor))
-            if attempt == 1 and probe is None:
-                # the program failed from the warm start: is there any admissible pose at all?
-                probe = cone_clearance_probe(kin, checker, p_HT[i], cone_axis_H[i], half,
-                                             pref_axis_H[i], t_H[i], anchor, lift=lift,
-                                             bound=options.min_distance_floor,
-                                             min_wrist=options.min_wrist)
-                n_probe += 1
-                if _unreachable(probe, options):
-                    break  # far from any admissible pose: no seed can help (reported below)
-            if attempt > 0:
-                n_retry += 1
-                reseed = None
-                if attempt == 1 and probe["q"] is not None and np.max(
-                        np.abs(probe["q"] - anchor)) <= options.trust_region:
-                    reseed = probe["q"]  # the probe's pose: admissible and clear
-                    start_with_distance = True
-                elif attempt in (1, 2) and i_prev >= 0:
-                    # where the preferred axis is too close to the hub (concave fillets), seed
-                    # from the axis in the cone with the most clearance, distance-active at once
-                    reseed = _clearance_seed(kin, checker, X_out[i_prev], p_HT[i],
-                                             cone_axis_H[i], half, pref_axis_H[i], q_prev,
-                                             reach, lift=lift)
-                    start_with_distance = reseed is not None
-                if reseed is None:
-                    reseed = seed_by_spin(kin, checker, p_T_pref[i], pref_axis_H[i], t_H[i],
-                                          anchor, options)
-                if reseed is None:
-                    break
-                q_seed = reseed
-            with_distance = start_with_distance
-            for s_idx, solver in enumerate(solvers):
-                if s_idx > 0:
-                    n_fallback += 1
-                success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
-                                          pref_axis_H[i], anchor, q_seed, with_distance, solver,
-                                          opts, lift)
-                good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts, lift)
-                dist = checker.min_distance(q, reach)[0]
-                if good and dist < opts.min_distance - 1e-5 and not with_distance:
-                    # lazy collision constraint: re-solve with it from this solution
-                    with_distance = True
-                    n_dist += 1
-                    success, q = _solve_point(cell, checker, p_HT[i], cone_axis_H[i], half,
-                                              pref_axis_H[i], anchor, q, True, solver, opts,
-                                              lift)
-                    good, err, ang, X = _recheck(kin, q, p_HT[i], cone_axis_H[i], half, opts,
-                                                 lift)
-                    dist = checker.min_distance(q, reach)[0]
-                best = (q, X, dist, err, ang)
-                if good and dist >= opts.min_distance - 1e-5:
-                    done = True
-                    break
-            if done:
-                break
+        target = _Target(p_HT[i], cone_axis_H[i], pref_axis_H[i], t_H[i])
+        prev = None if q_prev is None else (q_prev, X_out[i_prev])
+        done, best, probe = _solve_target(run, target, q_seed, anchor, prev)
         if best is not None:
             q_out[i], X_out[i], clearance[i] = best[0], best[1], best[2]
         if done:
             ok[i] = True
-            q_prev = q_out[i]
-            i_prev = i
+            q_prev, i_prev = q_out[i], i
         else:
-            rec = dict(window=window_index, cl_index=i, stage="ik", reason="IK failed")
-            if best is not None:
-                rec.update(position_error=best[3], cone_angle=best[4], clearance=best[2])
-                met = best[3] <= 1e-5 and best[4] <= half + 1e-6
-                rec["reason"] = "clearance below bound" if met else "position/cone not met"
-            if probe is not None and _unreachable(probe, options):
-                rec.update(cone_best_clearance=probe["best_clearance"],
-                           blocking_pair=list(probe["pair"]))
-                rec["reason"] = (
-                    f"unreachable: no tool axis in the cone ({np.degrees(half):.1f} deg) and "
-                    f"spin clears the cell; best {probe['best_clearance'] * 1e3:.2f} mm "
-                    f"({probe['pair'][0]} vs {probe['pair'][1]})")
-            failures.append(rec)
+            failures.append(_failure(run, window_index, i, best, probe))
         if progress is not None:
             progress(i + 1, m, f"window {window_index} IK")
     dt = time.perf_counter() - t0
+    c = run.counts
     stats = dict(points=m, seconds=dt, seconds_per_point=dt / max(m, 1),
-                 distance_resolves=n_dist, ipopt_fallbacks=n_fallback, retries=n_retry,
-                 analytic_accepted=n_analytic, cone_probes=n_probe,
+                 distance_resolves=c["distance"], ipopt_fallbacks=c["fallback"],
+                 retries=c["retry"], analytic_accepted=c["analytic"], cone_probes=c["probe"],
                  failed=int(m - ok.sum()))
     log.info("window %d: IK %d/%d points in %.2f s (%.1f ms/point), %d analytic warm starts "
              "accepted, %d distance re-solves", window_index, int(ok.sum()), m, dt,
-             1e3 * stats["seconds_per_point"], n_analytic, n_dist)
+             1e3 * stats["seconds_per_point"], c["analytic"], c["distance"])
     return WindowIk(q=q_out, ok=ok, X_HT=X_out, clearance=clearance, failures=tuple(failures),
                     stats=stats)
+
+
+@dataclass(frozen=True, eq=False)
+class _WindowRun:
+    """What every target of one window's IK is solved with (``counts``: solver counters)."""
+
+    cell: object
+    kin: CellKinematics
+    checker: ClearanceChecker
+    solvers: list
+    options: IkOptions
+    lift: float
+    half: float
+    reach: float
+    counts: dict
+
+
+@dataclass(frozen=True, eq=False)
+class _Target:
+    """One CL target: the constrained point, cone axis, preferred axis and tangent (in H)."""
+
+    p_HT: np.ndarray
+    cone_axis_H: np.ndarray
+    pref_axis_H: np.ndarray
+    t_H: np.ndarray
+
+
+def _reseed(run: _WindowRun, tg: _Target, attempt: int, probe, anchor, prev):
+    """The seed of a retry: the cone probe's pose (attempt 1, when within the trust region),
+    else the axis in the cone with the most clearance (attempts 1-2, distance-active at once),
+    else the spin sweep. Returns (seed or None, start with the distance constraint)."""
+    opt = run.options
+    if attempt == 1 and probe["q"] is not None and np.max(
+            np.abs(probe["q"] - anchor)) <= opt.trust_region:
+        return probe["q"], True  # the probe's pose: admissible and clear
+    if attempt in (1, 2) and prev is not None:
+        # where the preferred axis is too close to the hub (concave fillets), seed from the
+        # axis in the cone with the most clearance, distance-active at once
+        seed = clearance_seed(run.kin, run.checker, prev[1], tg.p_HT, tg.cone_axis_H, run.half,
+                               tg.pref_axis_H, prev[0], run.reach, lift=run.lift)
+        if seed is not None:
+            return seed, True
+    p_T = tg.p_HT + run.lift * tg.pref_axis_H
+    return seed_by_spin(run.kin, run.checker, p_T, tg.pref_axis_H, tg.t_H, anchor, opt), False
+
+
+def _solve_with(run: _WindowRun, tg: _Target, solver, anchor, q_seed, with_distance, opts):
+    """One solve (and a lazy re-solve with the distance constraint when the solution comes
+    too close), re-checked by the analytic FK: ((q, X, clearance, position error, cone angle),
+    accepted, whether the distance constraint is now on - it stays on for the next solver)."""
+    args = (run.cell, run.checker, tg.p_HT, tg.cone_axis_H, run.half, tg.pref_axis_H, anchor)
+    _, q = _solve_point(*args, q_seed, with_distance, solver, opts, run.lift)
+    good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_axis_H, run.half, opts, run.lift)
+    dist = run.checker.min_distance(q, run.reach)[0]
+    if good and dist < opts.min_distance - 1e-5 and not with_distance:
+        # lazy collision constraint: re-solve with it from this solution
+        with_distance = True
+        run.counts["distance"] += 1
+        _, q = _solve_point(*args, q, True, solver, opts, run.lift)
+        good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_axis_H, run.half, opts,
+                                     run.lift)
+        dist = run.checker.min_distance(q, run.reach)[0]
+    return (q, X, dist, err, ang), good and dist >= opts.min_distance - 1e-5, with_distance
+
+
+def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
+    """One target: the analytic warm start if it is admissible, else the NLP from the seed,
+    with retries from other seeds (after a cone probe tells an unreachable target). Returns
+    (done, best (q, X, clearance, position error, cone angle) or None, probe or None)."""
+    opt = run.options
+    if opt.analytic_first and prev is not None:
+        acc = analytic_accept(run.kin, run.checker, q_seed, anchor, tg.p_HT, tg.cone_axis_H,
+                               run.half, opt, run.lift, run.reach)
+        if acc is not None:
+            run.counts["analytic"] += 1
+            return True, (q_seed, acc[0], acc[1], 0.0, 0.0), None
+    best, probe = None, None
+    for attempt in range(opt.retries + 1):
+        with_distance = False
+        # from the second retry on, ask only for the acceptance bound, not the margin
+        opts = opt if attempt < 2 else replace(
+            opt, min_distance=min(opt.min_distance, opt.min_distance_floor))
+        if attempt == 1 and probe is None:
+            # the program failed from the warm start: is there any admissible pose at all?
+            probe = cone_clearance_probe(run.kin, run.checker, tg.p_HT, tg.cone_axis_H, run.half,
+                                         tg.pref_axis_H, tg.t_H, anchor, lift=run.lift,
+                                         bound=opt.min_distance_floor, min_wrist=opt.min_wrist)
+            run.counts["probe"] += 1
+            if unreachable(probe, opt):
+                break  # far from any admissible pose: no seed can help (reported)
+        if attempt > 0:
+            run.counts["retry"] += 1
+            q_seed, with_distance = _reseed(run, tg, attempt, probe, anchor, prev)
+            if q_seed is None:
+                break
+        for s_idx, solver in enumerate(run.solvers):
+            if s_idx > 0:
+                run.counts["fallback"] += 1
+            best, accepted, with_distance = _solve_with(run, tg, solver, anchor, q_seed,
+                                                        with_distance, opts)
+            if accepted:
+                return True, best, probe
+    return False, best, probe
+
+
+def _failure(run: _WindowRun, window: int, i: int, best, probe) -> FailureRecord:
+    """The failure record of a target the IK could not meet."""
+    reason, where, value, limit, unit = "IK failed", {}, None, None, ""
+    if best is not None:
+        where = dict(position_error=best[3], cone_angle=best[4], clearance=best[2])
+        met = best[3] <= 1e-5 and best[4] <= run.half + 1e-6
+        reason = "clearance below bound" if met else "position/cone not met"
+        if met:
+            value, limit, unit = float(best[2]), run.options.min_distance_floor, "m"
+    if probe is not None and unreachable(probe, run.options):
+        where.update(cone_best_clearance=probe["best_clearance"],
+                     blocking_pair=list(probe["pair"]))
+        value, limit, unit = (float(probe["best_clearance"]), run.options.min_distance_floor,
+                              "m")
+        reason = (f"unreachable: no tool axis in the cone ({np.degrees(run.half):.1f} deg) and "
+                  f"spin clears the cell; best {probe['best_clearance'] * 1e3:.2f} mm "
+                  f"({probe['pair'][0]} vs {probe['pair'][1]})")
+    return FailureRecord(window=window, kind="ik", point=i, reason=reason, value=value,
+                         limit=limit, unit=unit, where=where,
+                         tried=(f"{run.options.retries + 1} seeds", "SNOPT then IPOPT"))

@@ -30,6 +30,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.plan.types import (
     TOOL_PATH_ARRAYS,
     CartesianTarget,
+    FailureRecord,
     JointTrajectory,
     Plan,
     PlanSegment,
@@ -37,18 +38,19 @@ from drakedeburr.plan.types import (
 )
 from drakedeburr.units import deg_from_rad
 
-__all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv",
+__all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv", "jsonable",
            "program_from_plan"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 1
 
 
-def _jsonable(obj):
+def jsonable(obj):
+    """``obj`` with numpy values as Python ones and non-finite floats as None."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         return obj.tolist()
     if isinstance(obj, (np.floating, np.integer, np.bool_)):
@@ -94,8 +96,8 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
         segments=[dict(window_index=s.window_index, kind=s.kind,
                        target_range=list(s.target_range), t_range=list(s.t_range))
                   for s in plan.segments],
-        failures=_jsonable(list(plan.failures)),
-        meta=_jsonable(plan.meta),
+        failures=[jsonable(f.to_dict()) for f in plan.failures],
+        meta=jsonable(plan.meta),
         tool_paths=tp_docs,
     )
     atomic_write_json(folder / "plan.json", doc, indent=1)
@@ -157,7 +159,8 @@ def load_plan(path: str | Path) -> Plan:
     return Plan(scenario=doc["scenario"], hub=doc["hub"], mode=doc["mode"], X_WH=arr["X_WH"],
                 targets=tuple(targets), segments=segments,
                 trajectory=JointTrajectory(t=arr["t"], q=arr["q"], qd=arr["qd"]),
-                tool_path=tuple(records) or None, failures=tuple(doc["failures"]),
+                tool_path=tuple(records) or None,
+                failures=tuple(FailureRecord.from_dict(f) for f in doc["failures"]),
                 meta=doc["meta"])
 
 

@@ -19,7 +19,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics"]
+__all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "DISTANCE_SLACK"]
+
+# numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
+# few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
+DISTANCE_SLACK = 1e-6
 
 
 @dataclass(frozen=True, eq=False)

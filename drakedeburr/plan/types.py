@@ -19,7 +19,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-__all__ = ["SegmentKind", "CartesianTarget", "PlanSegment", "JointTrajectory", "Plan"]
+__all__ = ["SegmentKind", "CartesianTarget", "PlanSegment", "JointTrajectory", "Plan",
+           "FailureRecord"]
 
 SegmentKind = Literal["home", "approach", "cut", "retract", "transition"]
 
@@ -105,6 +106,55 @@ class PlanSegment:
     t_range: tuple[float, float]
 
 
+@dataclass(frozen=True)
+class FailureRecord:
+    """Something the planner could not do, where, by how much, and what it tried.
+
+    Attributes:
+        window: the window (-1: a move between windows or home).
+        kind: what failed: "ik" (a CL target), "window" (the window skipped), "dense" (the
+            executed motion), "approach" / "retract", "program" (the program's targets),
+            "transition" / "home" (joint moves).
+        reason: one line for a human.
+        point: CL point index in the window's ToolPath (-1: none).
+        value, limit, unit: the measured figure and the bound it missed (SI unit), if any.
+        where: location details (e.g. ``sample``, ``samples``, ``s_range_mm``, ``pair``).
+        tried: what the planner tried before recording the failure.
+    """
+
+    window: int
+    kind: str
+    reason: str
+    point: int = -1
+    value: float | None = None
+    limit: float | None = None
+    unit: str = ""
+    where: dict = field(default_factory=dict, hash=False, compare=False)
+    tried: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        return {"window": self.window, "kind": self.kind, "reason": self.reason,
+                "point": self.point, "value": self.value, "limit": self.limit,
+                "unit": self.unit, "where": dict(self.where), "tried": list(self.tried)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FailureRecord:
+        """From :meth:`to_dict`'s mapping (unknown keys go into ``where``)."""
+        known = {"window", "kind", "reason", "point", "value", "limit", "unit", "where",
+                 "tried"}
+        where = dict(d.get("where") or {})
+        where.update({k: v for k, v in d.items() if k not in known})
+        return cls(window=int(d.get("window", -1)), kind=str(d.get("kind", "")),
+                   reason=str(d.get("reason", "")), point=int(d.get("point", -1)),
+                   value=d.get("value"), limit=d.get("limit"), unit=str(d.get("unit", "")),
+                   where=where, tried=tuple(d.get("tried") or ()))
+
+    def __str__(self) -> str:
+        head = f"window {self.window}" if self.window >= 0 else "between windows"
+        point = f", CL point {self.point}" if self.point >= 0 else ""
+        return f"{head}{point} ({self.kind}): {self.reason}"
+
+
 @dataclass(frozen=True, eq=False)
 class Plan:
     """A complete deburring plan for one hub in one cell.
@@ -118,7 +168,7 @@ class Plan:
         segments: stretches of the program/trajectory, in order.
         trajectory: the timed joint trajectory simulating the program.
         tool_path: the orientation stage's ToolPath per window this plan came from.
-        failures: per-point failure records (empty when every point planned).
+        failures: what could not be planned (empty when every point planned).
         meta: solver statistics, versions, timings.
     """
 
@@ -130,7 +180,7 @@ class Plan:
     segments: tuple[PlanSegment, ...]
     trajectory: JointTrajectory
     tool_path: Any = None
-    failures: tuple[dict, ...] = ()
+    failures: tuple[FailureRecord, ...] = ()
     meta: dict = field(default_factory=dict)
 
 

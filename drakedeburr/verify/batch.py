@@ -20,7 +20,7 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.errors import InputError
 from drakedeburr.viz.scene import collect_here
 
-__all__ = ["BatchJob", "hub_folders", "run_job", "verify_all", "summary_markdown"]
+__all__ = ["BatchJob", "hub_folders", "make_plan", "run_job", "verify_all", "summary_markdown"]
 
 log = logging.getLogger(__name__)
 
@@ -37,8 +37,7 @@ class BatchJob:
         windows: windows to plan and expect (None: all).
         quick: coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate.
         html: also write ``report.html`` (without the Meshcat replay).
-        grinding_speed: override of the process speed [m/s] (None: the hub's, see
-            :func:`hub_process`).
+        grinding_speed: override of the process speed [m/s] (None: the hub's recipe).
     """
 
     scenario: str
@@ -63,36 +62,21 @@ def hub_folders(root: str | Path) -> list[Path]:
     return hubs
 
 
-def hub_process(hub: str | None, grinding_speed: float | None = None):
-    """The process parameters a hub is planned and verified with: its ``process.yaml`` over the
-    defaults (:func:`drakedeburr.config.process_parameters`), ``grinding_speed`` [m/s] over
-    both; the defaults alone for a hub that is not found (e.g. a plan of a removed hub)."""
-    from drakedeburr.config import process_parameters
-    from drakedeburr.hub.model import resolve_hub_dir
-
-    folder = None
-    if hub:
-        try:
-            folder = resolve_hub_dir(hub)
-        except FileNotFoundError:
-            log.warning("hub %s not found: default process parameters", hub)
-    return process_parameters(folder, grinding_speed=grinding_speed)
-
-
-def make_plan(scenario: str, hub: str, planner: str, windows, params, progress=None):
+def make_plan(config, planner: str, windows, progress=None):
     """Plan a hub with the chosen planner (used by the CLI and the batch jobs)."""
     if planner == "reference":
         from drakedeburr.verify.synthetic import reference_plan
 
-        return reference_plan(scenario, hub, windows, params=params, progress=progress)
+        return reference_plan(config.scenario, config.hub, windows, params=config.process,
+                              progress=progress)
     if planner == "plan_hub":
         try:
             from drakedeburr.plan.planner import PlanOptions, plan_hub
         except ImportError as exc:
             raise InputError("the planning stage (drakedeburr.plan.planner.plan_hub) is not "
                              "available; use --planner reference") from exc
-        options = PlanOptions(params=params, windows=tuple(windows) if windows else None)
-        return plan_hub(scenario, hub, options=options, progress=progress)
+        options = PlanOptions(windows=tuple(windows) if windows else None)
+        return plan_hub(config, options=options, progress=progress)
     raise InputError(f"unknown planner {planner!r} (plan_hub or reference)")
 
 
@@ -101,24 +85,23 @@ _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 def run_job(job: BatchJob) -> dict:
     """Plan + verify one hub; never raises (errors become a row with ``error``)."""
-    from drakedeburr.config import Tolerances
-    from drakedeburr.verify.checks import verify_plan
+    from drakedeburr.verify.checks import QUICK_SAMPLING, verify_plan
     from drakedeburr.verify.report import write_report_json
 
     started = time.perf_counter()
     row = {"scenario": Path(job.scenario).stem, "hub": Path(job.hub).name, "passed": False,
            "failed": [], "advisory_failed": [], "error": None}
     try:
-        params = hub_process(job.hub, job.grinding_speed)
+        from drakedeburr.config import default_tolerances, load_config
+
+        tol = default_tolerances(**QUICK_SAMPLING) if job.quick else None
+        config = load_config(job.scenario, job.hub, tolerances=tol,
+                             grinding_speed=job.grinding_speed)
         t0 = time.perf_counter()
-        plan = make_plan(job.scenario, job.hub, job.planner, job.windows, params)
+        plan = make_plan(config, job.planner, job.windows)
         row["plan_s"] = time.perf_counter() - t0
-        kwargs = {}
-        if job.quick:
-            kwargs = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1,
-                      "joint_move_step": 10e-3}
         t0 = time.perf_counter()
-        report = verify_plan(plan, params=params, expected_windows=job.windows, **kwargs)
+        report = verify_plan(plan, config, expected_windows=job.windows)
         row["verify_s"] = time.perf_counter() - t0
         out = Path(job.out_dir)
         write_report_json(report, out / "report.json")

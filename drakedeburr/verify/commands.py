@@ -96,32 +96,40 @@ def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
     return str(res.dir)
 
 
-def _run_verify(args: argparse.Namespace) -> int:
-    from drakedeburr.cli import tqdm_progress
-    from drakedeburr.config import Tolerances
-    from drakedeburr.verify.batch import hub_process, make_plan
-    from drakedeburr.verify.checks import verify_plan
-    from drakedeburr.verify.report import write_report_json
+def _config(args: argparse.Namespace, scenario: str, hub: str):
+    from drakedeburr.config import load_config
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+    return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed)
+
+
+def _tolerances(args: argparse.Namespace):
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.verify.checks import QUICK_SAMPLING
+
+    return default_tolerances(**QUICK_SAMPLING) if args.quick else None
+
+
+def _run_verify(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.verify.batch import make_plan
+    from drakedeburr.verify.checks import config_for_plan, verify_plan
+    from drakedeburr.verify.report import write_report_json
+
     windows = _windows(args.windows)
     kind, *rest = _resolve_target(args.target, args.scenario)
     if kind == "plan":
         plan = _load_plan(rest[0])
-        params = hub_process(plan.hub, speed)
+        speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+        config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
     else:
         scenario, hub = rest
         if Path(hub).suffix.lower() in _MESH_SUFFIXES:
             hub = _import_mesh(hub, args)
-        params = hub_process(hub, speed)
-        plan = make_plan(scenario, hub, args.planner, windows, params,
-                         progress=tqdm_progress("plan"))
-    kwargs = {}
-    if args.quick:
-        kwargs = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1,
-                  "joint_move_step": 10e-3}
-    report = verify_plan(plan, params=params, expected_windows=windows,
-                         progress=tqdm_progress("verify"), **kwargs)
+        config = _config(args, scenario, hub)
+        plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
+    report = verify_plan(plan, config, expected_windows=windows,
+                         progress=tqdm_progress("verify"))
     out_json = Path(args.json) if args.json else None
     if out_json is None and args.out:
         out_json = Path(args.out) / "report.json"

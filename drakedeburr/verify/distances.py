@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DistanceProbe", "PairDistances"]
+__all__ = ["DistanceProbe", "PairDistances", "measure_samples"]
 
 
 @dataclass(frozen=True)
@@ -226,3 +226,42 @@ class DistanceProbe:
                     best[kind] = (float(d), (self.names[a], self.names[b]))
         return PairDistances(best[0][0], best[0][1], best[1][0], best[1][1], best[2][0],
                              best[2][1])
+
+
+def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1):
+    """Distances, the Drake-plant FK cross-check and the manipulability at every sample
+    -> :class:`drakedeburr.verify.sampling.Distances`.
+
+    The flange pose and the tool pose relative to the hub are read from the Drake plant at
+    each sample and compared with the verifier's analytic ones (``samples.X_WF``/``X_HT``).
+    """
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    from drakedeburr.verify.sampling import Distances
+
+    probe = DistanceProbe(cell, tol.query_distance)
+    plant, pc = cell.plant, probe.plant_context
+    n = len(samples)
+    clear, selfd, burr = np.full(n, np.inf), np.full(n, np.inf), np.full(n, np.inf)
+    clear_pair, self_pair, burr_pair = [("", "")] * n, [("", "")] * n, [("", "")] * n
+    manip = np.full(n, np.nan)
+    fk_diff = 0.0
+    every = max(1, n // 50)
+    for i in range(n):
+        d = probe.measure(samples.q[i])  # sets the positions in probe's context
+        X_WF_d = cell.flange_frame.CalcPoseInWorld(pc).GetAsMatrix4()
+        X_HT_d = cell.tool_frame.CalcPose(pc, cell.hub_frame).GetAsMatrix4()
+        fk_diff = max(fk_diff, float(np.abs(X_WF_d - samples.X_WF[i]).max()),
+                      float(np.abs(X_HT_d - samples.X_HT[i]).max()))
+        J = plant.CalcJacobianSpatialVelocity(pc, JacobianWrtVariable.kQDot, cell.flange_frame,
+                                              np.zeros(3), plant.world_frame(),
+                                              plant.world_frame())
+        manip[i] = abs(float(np.linalg.det(J)))
+        clear[i], clear_pair[i] = d.clearance, d.clearance_pair
+        selfd[i], self_pair[i] = d.self_distance, d.self_pair
+        burr[i], burr_pair[i] = d.burr, d.burr_pair
+        if progress is not None and (i % every == 0 or i == n - 1):
+            progress(n_segments + int(n_segments * (i + 1) / n), 2 * n_segments, "distances")
+    return Distances(clearance=clear, clearance_pair=tuple(clear_pair), self_distance=selfd,
+                     self_pair=tuple(self_pair), burr=burr, burr_pair=tuple(burr_pair),
+                     manipulability=manip, fk_difference=fk_diff)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,9 +39,7 @@ from drakedeburr.frames.local_frames import (
 )
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
 
-__all__ = ["reference_plan", "greedy_cl_indices", "solve_pose_newton"]
-
-_PARAMS = ProcessParameters()
+__all__ = ["reference_plan", "ReferenceOptions", "greedy_cl_indices", "solve_pose_newton"]
 
 log = logging.getLogger(__name__)
 
@@ -91,13 +90,14 @@ def _rotation_log(R: np.ndarray) -> np.ndarray:
 
 
 def solve_pose_newton(cell, X_HT: np.ndarray, q0: np.ndarray, *, iterations: int = 20,
-                      tol: float = 1e-12) -> tuple[np.ndarray, float]:
+                      tol: float = 1e-12, context=None) -> tuple[np.ndarray, float]:
     """Joints putting tool frame T at ``X_HT`` relative to the hub frame H, by Newton steps.
 
     Args:
         cell: a :class:`drakedeburr.cell.Cell`.
         X_HT: (4, 4) wanted pose of T in H [m].
         q0: (6,) start [rad] (close to the answer: this is a local method).
+        context: a plant context to reuse (default: a new one).
 
     Returns:
         (q, residual): joints [rad] and the final pose error (rotation [rad] + position [m]).
@@ -105,7 +105,7 @@ def solve_pose_newton(cell, X_HT: np.ndarray, q0: np.ndarray, *, iterations: int
     from pydrake.multibody.tree import JacobianWrtVariable
 
     plant = cell.plant
-    context = cell._cache.setdefault("newton_context", plant.CreateDefaultContext())
+    context = context if context is not None else plant.CreateDefaultContext()
     q = np.array(q0, float)
     err = np.inf
     for _ in range(iterations):
@@ -122,7 +122,7 @@ def solve_pose_newton(cell, X_HT: np.ndarray, q0: np.ndarray, *, iterations: int
     return q, err
 
 
-def _ik_drake(cell, X_HT: np.ndarray, q_seed: np.ndarray) -> np.ndarray:
+def _ik_drake(cell, X_HT: np.ndarray, q_seed: np.ndarray, context) -> np.ndarray:
     """Global-ish IK for the first pose of a window (position + orientation, from a seed)."""
     from pydrake.math import RotationMatrix
     from pydrake.multibody.inverse_kinematics import InverseKinematics
@@ -153,7 +153,8 @@ def _ik_drake(cell, X_HT: np.ndarray, q_seed: np.ndarray) -> np.ndarray:
             prog.SetInitialGuess(q, seed)
             result = Solve(prog)
             if result.is_success():
-                q_sol, err = solve_pose_newton(cell, X_HT, result.GetSolution(q))
+                q_sol, err = solve_pose_newton(cell, X_HT, result.GetSolution(q),
+                                               context=context)
                 if err <= 1e-9:
                     return q_sol
     raise RuntimeError("reference_plan: no IK solution for a window's first pose")
@@ -223,120 +224,79 @@ def _interp_pose(X0: np.ndarray, X1: np.ndarray, f: np.ndarray) -> np.ndarray:
     return out
 
 
-def reference_plan(
-    scenario: str = "tool_in_hand",
-    hub: str = "h5_straight",
-    windows: Sequence[int] | None = None,
-    *,
-    theta: dict[int, tuple[float, float]] | None = None,
-    cl_chord_height: float = 0.01e-3,
-    retract: float = 0.04,
-    sample_step: float = 1e-3,
-    ramp_time: float = 0.1,
-    spin_direction_H: Sequence[float] = (1.0, 0.0, 0.0),
-    contact_radius: float = 1.5e-3,
-    bounds: OrientationBounds | None = None,
-    fixed_axis_H: Sequence[float] = (0.0, 0.0, 1.0),
-    box_margin: float = 0.05,
-    axis_tilt: dict[int, float] | None = None,
-    params: ProcessParameters = _PARAMS,
-    progress: Callable[[int, int, str], None] | None = None,
-) -> Plan:
-    """Build the reference plan (see module docstring).
+@dataclass(frozen=True)
+class ReferenceOptions:
+    """Settings of :func:`reference_plan` (see its docstring for each)."""
 
-    Args:
-        scenario: bundled scenario name or path.
-        hub: bundled hub name or hub folder.
-        windows: window indices to include (default: all, in index order).
-        theta: optional {window: (theta_A, theta_B)} [rad]: that window's axis at these fixed
-            angles in the local frame (the source's way; the axis then swings with the frame
-            at every fillet, which at 150 mm/s exceeds the wrist's limits: see docs/verify.md).
-            Other windows use ``fixed_axis_H``.
-        cl_chord_height: chord-height error of the CL points [m].
-        retract: approach/retract distance along the tool axis [m].
-        sample_step: tool travel between trajectory knots on linear moves [m].
-        ramp_time: duration of each speed ramp [s].
-        spin_direction_H: hub-frame direction +X_T starts from (then transported without
-            twist along the edge).
-        bounds: (theta_A, theta_B) box written into every ToolPath (default: for ``theta``
-            windows the kind's bounds from ``params``; otherwise the range the fixed axis
-            spans, widened by ``box_margin``).
-        fixed_axis_H: tool axis (tip -> spindle) in H of the fixed-axis windows.
-        box_margin: [rad] margin of the data-derived box.
-        axis_tilt: {window: angle [rad]}: tilt that window's axis about +Y_H *after* its box
-            is set (a plan that must fail the cone check).
-        contact_radius: radius of the flank circle that touches the edge [m] (below the
-            burr's nominal contact radius keeps the shank farther from the edge).
-        params: process parameters (speeds, bounds, depth of cut).
-        progress: optional callback (done, total, label).
+    theta: dict[int, tuple[float, float]] | None = None
+    cl_chord_height: float = 0.01e-3
+    retract: float = 0.04
+    sample_step: float = 1e-3
+    ramp_time: float | None = None
+    spin_direction_H: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    contact_radius: float = 1.5e-3
+    bounds: OrientationBounds | None = None
+    fixed_axis_H: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    box_margin: float = 0.05
+    axis_tilt: dict[int, float] | None = None
 
-    Returns:
-        A :class:`~drakedeburr.plan.types.Plan` with ``tool_path`` = {window: ToolPath}.
-    """
-    from drakedeburr.cell.station import load_cell
-    from drakedeburr.cell.tools import BURR
-    from drakedeburr.hub.model import load_hub
-    from drakedeburr.orientation.orient import cone_half_angles
-    from drakedeburr.orientation.types import ToolPath
-    from drakedeburr.path.types import ClPath
 
-    cell = load_cell(scenario, hub)
-    hub_model = load_hub(hub)
-    chosen = list(range(len(hub_model.windows))) if windows is None else list(windows)
-    X_WH = cell.X_WH(cell.q_home).GetAsMatrix4()
-    spin_H = np.asarray(spin_direction_H, float)
+class _Builder:
+    """The program and the knots of a reference plan, built move by move."""
 
-    targets: list[CartesianTarget] = []
-    segments: list[PlanSegment] = []
-    knots_t: list[float] = []
-    knots_q: list[np.ndarray] = []
-    knots_qd: list[np.ndarray] = []
-    tool_paths = {}
+    def __init__(self, cell, params: ProcessParameters, opt: ReferenceOptions) -> None:
+        self.cell, self.params, self.opt = cell, params, opt
+        self.context = cell.plant.CreateDefaultContext()
+        self.targets: list[CartesianTarget] = []
+        self.segments: list[PlanSegment] = []
+        self.t: list[float] = []
+        self.q: list[np.ndarray] = []
+        self.qd: list[np.ndarray] = []
 
-    def X_WF(q):
-        return cell.X_WF(q).GetAsMatrix4()
-
-    def add_target(window, kind, cl_index, X_HT, q, speed):
+    def add_target(self, window, kind, cl_index, X_HT, q, speed) -> None:
         # home and transition targets are reached by joint moves (MoveAbsJ / PTP / J)
-        targets.append(CartesianTarget(window_index=window, segment=kind, cl_index=cl_index,
-                                       X_HT=np.asarray(X_HT, float), X_WF=X_WF(q),
-                                       q=np.asarray(q, float).copy(), speed=float(speed),
-                                       motion="joint" if kind in ("home", "transition")
-                                       else "linear"))
+        self.targets.append(CartesianTarget(
+            window_index=window, segment=kind, cl_index=cl_index,
+            X_HT=np.asarray(X_HT, float), X_WF=self.cell.X_WF(q).GetAsMatrix4(),
+            q=np.asarray(q, float).copy(), speed=float(speed),
+            motion="joint" if kind in ("home", "transition") else "linear"))
 
-    def append_knots(t, q, qd):
-        t0 = knots_t[-1] if knots_t else 0.0
-        start = 1 if knots_t else 0  # first knot duplicates the previous end
-        for i in range(start, len(t)):
-            knots_t.append(t0 + float(t[i]))
-            knots_q.append(np.asarray(q[i], float))
-            knots_qd.append(np.asarray(qd[i], float))
+    def add_segment(self, window: int, kind: str, k0: int, t0: float) -> None:
+        self.segments.append(PlanSegment(window, kind, (k0, len(self.targets)), (t0, self.t[-1])))
 
-    def joint_move(q_to, v_tcp):
-        q_from = knots_q[-1]
+    def append_knots(self, t, q, qd) -> None:
+        t0 = self.t[-1] if self.t else 0.0
+        for i in range(1 if self.t else 0, len(t)):  # the first knot repeats the previous end
+            self.t.append(t0 + float(t[i]))
+            self.q.append(np.asarray(q[i], float))
+            self.qd.append(np.asarray(qd[i], float))
+
+    def joint_move(self, q_to, v_tcp) -> float:
+        """A cubic joint move from the last knot, slow enough for the joint and TCP limits."""
+        cell = self.cell
+        q_from = self.q[-1]
         dq = np.abs(q_to - q_from)
         v_lim = 0.8 * np.asarray(cell.v_upper)
         a_lim = 0.8 * np.asarray(cell.a_upper)
         T = max(0.2, float(np.max(1.5 * dq / v_lim)), float(np.max(np.sqrt(6 * dq / a_lim))))
         for _ in range(30):  # lengthen until the TCP speed keeps below 90 % of the limit
-            tau = np.linspace(0, 1, 101)
-            sig = 3 * tau**2 - 2 * tau**3
+            sig = 3 * np.linspace(0, 1, 101) ** 2 - 2 * np.linspace(0, 1, 101) ** 3
             p = np.array([cell.X_HT(q_from + (q_to - q_from) * s).translation() for s in sig])
-            v = np.linalg.norm(np.diff(p, axis=0), axis=1).max() / (T / 100)
-            if v <= 0.9 * v_tcp:
+            if np.linalg.norm(np.diff(p, axis=0), axis=1).max() / (T / 100) <= 0.9 * v_tcp:
                 break
             T *= 1.2
-        append_knots(np.array([0.0, T]), np.stack([q_from, q_to]), np.zeros((2, 6)))
+        self.append_knots(np.array([0.0, T]), np.stack([q_from, q_to]), np.zeros((2, 6)))
         return T
 
-    def linear_chain(poses: list[np.ndarray], v: float, q_start: np.ndarray):
+    def linear_chain(self, poses: list[np.ndarray], v: float, q_start: np.ndarray):
         """Linear moves through ``poses`` at speed v, stopping at both ends. Returns the joints
         at every pose."""
-        # dense samples along each move
+        from scipy.interpolate import CubicSpline
+
         Xs, s_acc, at_target = [poses[0]], [0.0], [0]
         for X0, X1 in zip(poses[:-1], poses[1:], strict=True):
             length = float(np.linalg.norm(X1[:3, 3] - X0[:3, 3]))
-            n = max(1, int(np.ceil(length / sample_step)))
+            n = max(1, int(np.ceil(length / self.opt.sample_step)))
             f = np.arange(1, n + 1) / n
             Xs.extend(_interp_pose(X0, X1, f))
             s_acc.extend(s_acc[-1] + f * length)
@@ -345,151 +305,206 @@ def reference_plan(
         q = np.zeros((len(Xs), 6))
         prev = q_start
         for i, X in enumerate(Xs):
-            prev, err = solve_pose_newton(cell, X, prev)
+            prev, err = solve_pose_newton(self.cell, X, prev, context=self.context)
             if err > 1e-9:
                 raise RuntimeError(f"reference_plan: Newton IK failed ({err:.3g}) on a linear move")
             q[i] = prev
-        t, sdot, _ = _ramp_times(s_acc, s_acc[-1], v, ramp_time, True, True)
+        # raised-cosine ramps whose peak acceleration (pi v / (2 t_ramp)) is the process's TCP
+        # acceleration: the plan starts and stops as fast as the process allows
+        t_ramp = self.opt.ramp_time or np.pi * v / (2.0 * self.params.tcp_acceleration)
+        t, sdot, _ = _ramp_times(s_acc, s_acc[-1], v, t_ramp, True, True)
         # slopes from a C2 spline through the IK samples: consistent knot velocities keep the
         # Hermite pieces' accelerations at the path's own (corner) curvature
-        from scipy.interpolate import CubicSpline
-
-        dq_ds = CubicSpline(s_acc, q, axis=0)(s_acc, 1)
-        qd = dq_ds * sdot[:, None]
+        qd = CubicSpline(s_acc, q, axis=0)(s_acc, 1) * sdot[:, None]
         qd[0] = 0.0
         qd[-1] = 0.0
-        append_knots(t, q, qd)
+        self.append_knots(t, q, qd)
         return q[at_target]
 
-    # start at home, at rest
-    add_target(-1, "home", -1, cell.X_HT(cell.q_home).GetAsMatrix4(), cell.q_home,
-               params.home_speed)
-    knots_t.append(0.0)
-    knots_q.append(np.asarray(cell.q_home, float))
-    knots_qd.append(np.zeros(6))
 
+def _window_axes(w: int, edge, R_HL: np.ndarray, params, opt: ReferenceOptions):
+    """-> (up_H (M, 3) tip -> spindle, theta_A, theta_B, box, cone axis +Z_T, inner, outer)."""
+    from drakedeburr.orientation.orient import cone_half_angles
+
+    m = len(R_HL)
+    if opt.theta is not None and w in opt.theta:
+        # the source's way: fixed angles in the local frame (the axis swings with it)
+        box = opt.bounds or params.bounds(edge.kind)
+        a, b = opt.theta[w]
+        up_H = -(R_HL @ axis_from_angles(a, b))
+        th_A, th_B = np.full(m, a), np.full(m, b)
+    else:
+        # one fixed axis per window: no swing, so the joints stay slow at any feed
+        up_H = np.tile(np.asarray(opt.fixed_axis_H, float) / np.linalg.norm(opt.fixed_axis_H),
+                       (m, 1))
+        th_A, th_B = angles_from_axis_H(R_HL, -up_H)
+        box = opt.bounds or OrientationBounds(
+            float(min(th_A.min(), th_B.min())) - opt.box_margin,
+            float(max(th_A.max(), th_B.max())) + opt.box_margin)
+    mid = 0.5 * (box.theta_min + box.theta_max)
+    cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
+    inner, outer = cone_half_angles(box)
+    if not (opt.theta is not None and w in opt.theta):
+        # the reference plan's admissible cone: 0.1 rad about its fixed axis
+        cone_axis_H = -up_H.copy()
+        inner = outer = 0.1
+        tilt = (opt.axis_tilt or {}).get(w, 0.0)
+        if tilt:
+            from scipy.spatial.transform import Rotation
+
+            up_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(up_H)
+    return up_H, th_A, th_B, box, cone_axis_H, inner, outer
+
+
+def _window_tool_path(w: int, edge, idx: np.ndarray, X_WH, params, opt: ReferenceOptions):
+    """The window's ToolPath (CL points on the true edge, local frames, the reference axes)."""
+    from pydrake.math import RigidTransform
+
+    from drakedeburr.orientation.types import ToolPath
+    from drakedeburr.path.types import ClPath
+
+    p_HC = edge.p_HE[idx]
+    t_H = edge.t_H[idx] / np.linalg.norm(edge.t_H[idx], axis=1, keepdims=True)
+    # the project's local frames and angle convention (drakedeburr.frames.local_frames)
+    R_HL = R_HL_from_normals(t_H, edge.n_wall_H[idx], name=f"window {w}")
+    up_H, th_A, th_B, box, cone_axis_H, inner, outer = _window_axes(w, edge, R_HL, params, opt)
+    seg = np.linalg.norm(np.diff(np.vstack([edge.p_HE, edge.p_HE[:1]]), axis=0), axis=1)
+    arc_all = np.concatenate([[0.0], np.cumsum(seg)])
+    total = float(arc_all[-1])
+    cl = ClPath(window_index=w, kind=edge.kind, method="reference_greedy",
+                u=arc_all[idx] / total, p_HC=p_HC, t_H=t_H, kappa=np.zeros(len(idx)),
+                arc_length=arc_all[idx], total_length=total, metrics={})
+    return ToolPath(
+        window_index=w, kind=edge.kind, cl_path=cl, X_WH=RigidTransform(X_WH), p_HC=p_HC,
+        R_HL=R_HL, axis_H=-up_H, theta_A=th_A, theta_B=th_B,
+        bounds=box, cone_axis_H=cone_axis_H, cone_half_angle=inner,
+        cone_outer_half_angle=outer, depth_of_cut=params.depth_of_cut(edge.kind),
+        model="reference", solver="none", objective=0.0, success=True, solve_seconds=0.0,
+        stats={}, message="reference plan (fixed angles)")
+
+
+def _window_poses(tp, opt: ReferenceOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Tool poses at the CL points and the loop's closing pose: spin by parallel transport (no
+    twist about the axis) from ``opt.spin_direction_H``; the edge touches the flank at radius
+    ``opt.contact_radius`` (T sits on the axis at that circle's height)."""
+    from drakedeburr.cell.tools import BURR
+
+    z_T, N, p_HC = tp.axis_H, tp.R_HL[:, :, 0], tp.p_HC
+    m = len(p_HC)
+    X_HT = np.tile(np.eye(4), (m, 1, 1))
+    x = np.asarray(opt.spin_direction_H, float).copy()
+    # the flank point at radius r lies (apex - r/tan) along +Z_T from the apex
+    dz = (BURR.contact_radius - opt.contact_radius) / np.tan(BURR.cone_half_angle)
+    for i in range(m):
+        x = x - (x @ z_T[i]) * z_T[i]
+        x /= np.linalg.norm(x)
+        n_perp = N[i] - (N[i] @ z_T[i]) * z_T[i]
+        n_perp /= np.linalg.norm(n_perp)
+        X_HT[i, :3, :3] = np.column_stack([x, np.cross(z_T[i], x), z_T[i]])
+        X_HT[i, :3, 3] = p_HC[i] + opt.contact_radius * n_perp - dz * z_T[i]
+    # closing the loop: the last move returns to CL point 0 with the transported spin
+    x = x - (x @ z_T[0]) * z_T[0]
+    x /= np.linalg.norm(x)
+    X_close = X_HT[0].copy()
+    X_close[:3, :3] = np.column_stack([x, np.cross(z_T[0], x), z_T[0]])
+    return X_HT, X_close
+
+
+def _add_window(b: _Builder, w: int, tp, X_HT: np.ndarray, X_close: np.ndarray) -> None:
+    """Transition, approach, the closed cut and the retract of one window."""
+    params, retract = b.params, b.opt.retract
+    up = -tp.axis_H[0]
+    X_up = X_HT[0].copy()
+    X_up[:3, 3] += retract * up
+    X_end_up = X_close.copy()
+    X_end_up[:3, 3] += retract * up
+    k0, t0 = len(b.targets), b.t[-1]
+    q_up = _ik_drake(b.cell, X_up, b.q[-1], b.context)
+    b.joint_move(q_up, params.window_switch_speed)
+    b.add_target(-1, "transition", -1, X_up, q_up, params.window_switch_speed)
+    b.add_segment(-1, "transition", k0, t0)
+    k0, t0 = len(b.targets), b.t[-1]
+    qs = b.linear_chain([X_up, X_HT[0]], params.grinding_speed, q_up)
+    b.add_target(w, "approach", 0, X_HT[0], qs[-1], params.grinding_speed)
+    b.add_segment(w, "approach", k0, t0)
+    k0, t0 = len(b.targets), b.t[-1]
+    loop = [X_HT[i] for i in range(len(X_HT))] + [X_close]
+    qs = b.linear_chain(loop, params.grinding_speed, qs[-1])
+    for i in range(1, len(loop)):
+        b.add_target(w, "cut", i % len(X_HT), loop[i], qs[i], params.grinding_speed)
+    b.add_segment(w, "cut", k0, t0)
+    k0, t0 = len(b.targets), b.t[-1]
+    qs = b.linear_chain([X_close, X_end_up], params.grinding_speed, qs[-1])
+    b.add_target(w, "retract", -1, X_end_up, qs[-1], params.grinding_speed)
+    b.add_segment(w, "retract", k0, t0)
+
+
+def reference_plan(
+    scenario: str,
+    hub: str,
+    windows: Sequence[int] | None = None,
+    *,
+    params: ProcessParameters,
+    options: ReferenceOptions = ReferenceOptions(),
+    progress: Callable[[int, int, str], None] | None = None,
+) -> Plan:
+    """Build the reference plan (see module docstring).
+
+    Args:
+        scenario: bundled scenario name or path.
+        hub: bundled hub name or hub folder.
+        windows: window indices to include (default: all, in index order).
+        params: process parameters (speeds, bounds, depth of cut): the run's recipe.
+        options (:class:`ReferenceOptions`):
+            theta: optional {window: (theta_A, theta_B)} [rad]: that window's axis at these
+                fixed angles in the local frame (the source's way; the axis then swings with
+                the frame at every fillet, which at 150 mm/s exceeds the wrist's limits: see
+                docs/verify.md). Other windows use ``fixed_axis_H``.
+            cl_chord_height: chord-height error of the CL points [m].
+            retract: approach/retract distance along the tool axis [m].
+            sample_step: tool travel between trajectory knots on linear moves [m].
+            ramp_time: duration of each speed ramp [s] (None: the raised cosine whose peak
+                acceleration is the process's TCP acceleration).
+            spin_direction_H: hub-frame direction +X_T starts from (then transported without
+                twist along the edge).
+            contact_radius: radius of the flank circle that touches the edge [m].
+            bounds: (theta_A, theta_B) box written into every ToolPath (default: for ``theta``
+                windows the kind's bounds from ``params``; otherwise the range the fixed axis
+                spans, widened by ``box_margin`` [rad]).
+            fixed_axis_H: tool axis (tip -> spindle) in H of the fixed-axis windows.
+            axis_tilt: {window: angle [rad]}: tilt that window's axis about +Y_H *after* its
+                box is set (a plan that must fail the cone check).
+        progress: optional callback (done, total, label).
+
+    Returns:
+        A :class:`~drakedeburr.plan.types.Plan` with ``tool_path`` = {window: ToolPath}.
+    """
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub.model import load_hub
+
+    cell = load_cell(scenario, hub)
+    hub_model = load_hub(hub)
+    chosen = list(range(len(hub_model.windows))) if windows is None else list(windows)
+    X_WH = cell.X_WH(cell.q_home).GetAsMatrix4()
+    b = _Builder(cell, params, options)
+    X_home = cell.X_HT(cell.q_home).GetAsMatrix4()
+    b.add_target(-1, "home", -1, X_home, cell.q_home, params.home_speed)
+    b.append_knots([0.0], [np.asarray(cell.q_home, float)], [np.zeros(6)])
+    tool_paths = {}
     for n_done, w in enumerate(chosen):
         edge = hub_model.windows[w]
-        idx = greedy_cl_indices(edge.p_HE, cl_chord_height, params.l_max)
-        p_HC = edge.p_HE[idx]
-        t_H = edge.t_H[idx] / np.linalg.norm(edge.t_H[idx], axis=1, keepdims=True)
-        n_H = edge.n_wall_H[idx]
-        # the project's local frames and angle convention (drakedeburr.frames.local_frames)
-        R_HL = R_HL_from_normals(t_H, n_H, name=f"window {w}")
-        N = R_HL[:, :, 0]
-        if theta is not None and w in theta:
-            # the source's way: fixed angles in the local frame (the axis swings with it)
-            box = bounds or (params.bounds_large if edge.kind == "large" else params.bounds_small)
-            a, b = theta[w]
-            up_H = -(R_HL @ axis_from_angles(a, b))  # tip -> spindle
-            th_A, th_B = np.full(len(idx), a), np.full(len(idx), b)
-        else:
-            # one fixed axis per window: no swing, so the joints stay slow at any feed
-            up_H = np.tile(np.asarray(fixed_axis_H, float) / np.linalg.norm(fixed_axis_H),
-                           (len(idx), 1))
-            th_A, th_B = angles_from_axis_H(R_HL, -up_H)
-            if bounds is not None:
-                box = bounds
-            else:
-                box = OrientationBounds(float(min(th_A.min(), th_B.min())) - box_margin,
-                                        float(max(th_A.max(), th_B.max())) + box_margin)
-        mid = 0.5 * (box.theta_min + box.theta_max)
-        cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
-        inner, outer = cone_half_angles(box)
-        if not (theta is not None and w in theta):
-            # the reference plan's admissible cone: 0.1 rad about its fixed axis
-            cone_axis_H = -up_H.copy()
-            inner = outer = 0.1
-            tilt = (axis_tilt or {}).get(w, 0.0)
-            if tilt:
-                from scipy.spatial.transform import Rotation
-
-                up_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(up_H)
-        depth = params.depth_of_cut_large if edge.kind == "large" else params.depth_of_cut_small
-
-        seg = np.linalg.norm(np.diff(np.vstack([edge.p_HE, edge.p_HE[:1]]), axis=0), axis=1)
-        arc_all = np.concatenate([[0.0], np.cumsum(seg)])
-        total = float(arc_all[-1])
-        cl = ClPath(window_index=w, kind=edge.kind, method="reference_greedy",
-                    u=arc_all[idx] / total, p_HC=p_HC, t_H=t_H, kappa=np.zeros(len(idx)),
-                    arc_length=arc_all[idx], total_length=total, metrics={})
-        from pydrake.math import RigidTransform
-
-        tool_paths[w] = ToolPath(
-            window_index=w, kind=edge.kind, cl_path=cl, X_WH=RigidTransform(X_WH), p_HC=p_HC,
-            R_HL=R_HL, axis_H=-up_H, theta_A=th_A, theta_B=th_B,
-            bounds=box, cone_axis_H=cone_axis_H, cone_half_angle=inner,
-            cone_outer_half_angle=outer, depth_of_cut=depth, model="reference",
-            solver="none", objective=0.0, success=True, solve_seconds=0.0, stats={},
-            message="reference plan (fixed angles)")
-
-        # tool poses at the CL points: spin by parallel transport (no twist about the axis),
-        # starting from the hub direction spin_H; the edge touches the flank at radius
-        # contact_radius (T sits on the axis at that circle's height)
-        z_T = -up_H
-        X_HT = np.tile(np.eye(4), (len(idx), 1, 1))
-        x = spin_H.copy()
-        apex = BURR.apex_offset
-        for i in range(len(idx)):
-            x = x - (x @ z_T[i]) * z_T[i]
-            x /= np.linalg.norm(x)
-            n_perp = N[i] - (N[i] @ z_T[i]) * z_T[i]
-            n_perp /= np.linalg.norm(n_perp)
-            X_HT[i, :3, :3] = np.column_stack([x, np.cross(z_T[i], x), z_T[i]])
-            # the flank point at radius r lies (apex - r/tan) along +Z_T from the apex ...
-            dz = BURR.contact_radius / np.tan(BURR.cone_half_angle) - contact_radius / np.tan(
-                BURR.cone_half_angle)
-            X_HT[i, :3, 3] = p_HC[i] + contact_radius * n_perp - dz * z_T[i]
-        del apex
-        # closing the loop: the last move returns to CL point 0 with the transported spin
-        x = x - (x @ z_T[0]) * z_T[0]
-        x /= np.linalg.norm(x)
-        X_close = X_HT[0].copy()
-        X_close[:3, :3] = np.column_stack([x, np.cross(z_T[0], x), z_T[0]])
-        X_up = X_HT[0].copy()
-        X_up[:3, 3] += retract * up_H[0]
-        X_end_up = X_close.copy()
-        X_end_up[:3, 3] += retract * up_H[0]
-
-        # joint move to above the first CL point
-        k0 = len(targets)
-        q_up = _ik_drake(cell, X_up, knots_q[-1])
-        t0 = knots_t[-1]
-        joint_move(q_up, params.window_switch_speed)
-        add_target(-1, "transition", -1, X_up, q_up, params.window_switch_speed)
-        segments.append(PlanSegment(-1, "transition", (k0, k0 + 1), (t0, knots_t[-1])))
-        # approach
-        t0 = knots_t[-1]
-        qs = linear_chain([X_up, X_HT[0]], params.grinding_speed, q_up)
-        add_target(w, "approach", 0, X_HT[0], qs[-1], params.grinding_speed)
-        segments.append(PlanSegment(w, "approach", (k0 + 1, k0 + 2), (t0, knots_t[-1])))
-        # cut around the closed edge, back to the first point
-        t0 = knots_t[-1]
-        loop = [X_HT[i] for i in range(len(idx))] + [X_close]
-        qs = linear_chain(loop, params.grinding_speed, qs[-1])
-        k1 = len(targets)
-        for i in range(1, len(loop)):
-            add_target(w, "cut", i % len(idx), loop[i], qs[i], params.grinding_speed)
-        segments.append(PlanSegment(w, "cut", (k1, len(targets)), (t0, knots_t[-1])))
-        # retract
-        t0 = knots_t[-1]
-        qs = linear_chain([X_close, X_end_up], params.grinding_speed, qs[-1])
-        add_target(w, "retract", -1, X_end_up, qs[-1], params.grinding_speed)
-        segments.append(PlanSegment(w, "retract", (len(targets) - 1, len(targets)),
-                                    (t0, knots_t[-1])))
+        idx = greedy_cl_indices(edge.p_HE, options.cl_chord_height, params.l_max)
+        tool_paths[w] = tp = _window_tool_path(w, edge, idx, X_WH, params, options)
+        _add_window(b, w, tp, *_window_poses(tp, options))
         if progress is not None:
             progress(n_done + 1, len(chosen), f"window {w}")
-
-    t0 = knots_t[-1]
-    joint_move(np.asarray(cell.q_home, float), params.home_speed)
-    add_target(-1, "home", -1, cell.X_HT(cell.q_home).GetAsMatrix4(), cell.q_home,
-               params.home_speed)
-    segments.append(PlanSegment(-1, "home", (len(targets) - 1, len(targets)), (t0, knots_t[-1])))
-
-    trajectory = JointTrajectory(t=np.asarray(knots_t), q=np.asarray(knots_q),
-                                 qd=np.asarray(knots_qd))
+    k0, t0 = len(b.targets), b.t[-1]
+    b.joint_move(np.asarray(cell.q_home, float), params.home_speed)
+    b.add_target(-1, "home", -1, X_home, cell.q_home, params.home_speed)
+    b.add_segment(-1, "home", k0, t0)
+    trajectory = JointTrajectory(t=np.asarray(b.t), q=np.asarray(b.q), qd=np.asarray(b.qd))
     return Plan(scenario=str(scenario), hub=str(hub), mode=cell.mode, X_WH=X_WH,
-                targets=tuple(targets), segments=tuple(segments), trajectory=trajectory,
+                targets=tuple(b.targets), segments=tuple(b.segments), trajectory=trajectory,
                 tool_path=tool_paths, failures=(),
                 meta={"planner": "drakedeburr.verify.synthetic.reference_plan",
                       "windows": chosen})

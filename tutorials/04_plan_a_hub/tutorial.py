@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from drakedeburr.cell.station import load_cell  # noqa: E402
+from drakedeburr.config import load_config
 from drakedeburr.hub import DEFAULT_HUB, load_hub  # noqa: E402
 from drakedeburr.plan import (  # noqa: E402
     PlanOptions,
@@ -77,7 +78,7 @@ def main() -> None:
 
     # 3. plan -------------------------------------------------------------------------------
     options = PlanOptions()
-    plan = plan_windows(cell, windows, scenario="tool_in_hand", hub=hub_name, options=options)
+    plan = plan_windows(cell, windows, load_config("tool_in_hand", hub_name), options=options)
     m = plan.meta
     print(f"plan: {len(plan.targets)} targets, cycle {m['cycle_seconds']:.2f} s, cutting "
           f"{m['cutting_seconds']:.2f} s (physical limit {m['physical_cut_seconds']:.2f} s), "
@@ -127,7 +128,7 @@ def main() -> None:
     # several times the planning time, so it is off by default
     from drakedeburr.plan.fillets import FilletOptions
 
-    fixed = plan_windows(cell, windows[:1], scenario="tool_in_hand", hub=hub_name,
+    fixed = plan_windows(cell, windows[:1], load_config("tool_in_hand", hub_name),
                          options=replace(options, fillets=FilletOptions()))
     assert not fixed.failures, fixed.failures[:3]
     a, b = m["windows"][0], fixed.meta["windows"][0]
@@ -156,7 +157,7 @@ def main() -> None:
     else:
         wp_windows = windows
     wp_cell = load_cell("workpiece_in_hand", hub_name)
-    wp = plan_windows(wp_cell, wp_windows, scenario="workpiece_in_hand", hub=hub_name)
+    wp = plan_windows(wp_cell, wp_windows, load_config("workpiece_in_hand", hub_name))
     print(f"workpiece in hand: cycle {wp.meta['cycle_seconds']:.2f} s, {len(wp.failures)} failures")
     assert not wp.failures, wp.failures[:3]
 

@@ -21,9 +21,10 @@ import json
 from pathlib import Path
 
 from drakedeburr.cell.station import load_cell
-from drakedeburr.config import ProcessParameters, Tolerances
+from drakedeburr.config import Config, ProcessParameters, Recipe, default_tolerances, load_config
 from drakedeburr.hub.model import load_hub
 from drakedeburr.verify import faults, reference_plan, verify_plan, write_report_json
+from drakedeburr.verify.checks import QUICK_SAMPLING
 from drakedeburr.verify.html import meshcat_replay_html, write_report_html
 
 
@@ -57,7 +58,8 @@ def main() -> None:
         from drakedeburr.plan.planner import PlanOptions, plan_hub
 
         params = ProcessParameters()
-        plan = plan_hub("tool_in_hand", args.hub, options=PlanOptions(windows=tuple(windows)))
+        plan = plan_hub(load_config("tool_in_hand", args.hub),
+                        options=PlanOptions(windows=tuple(windows)))
     else:
         plan = reference_plan("tool_in_hand", args.hub, windows, params=params)
     print(f"plan: {len(plan.targets)} targets, {len(plan.trajectory.t)} knots, "
@@ -65,8 +67,10 @@ def main() -> None:
 
     # 2. verify (one cell and hub model shared by all runs below)
     cell, hub = load_cell(plan.scenario, plan.hub), load_hub(plan.hub)
-    common = {"params": params, "expected_windows": windows, "cell": cell, "hub_model": hub}
-    report = verify_plan(plan, **common)
+    # one configuration: the recipe (here: the process at the plan's speed) and the tolerances
+    config = Config("tool_in_hand", args.hub, Recipe(process=params), default_tolerances())
+    common = {"expected_windows": windows, "cell": cell, "hub_model": hub}
+    report = verify_plan(plan, config, **common)
     show("the plan", report)
     for name in ("path_deviation", "edge_deviation", "clearance", "tcp_speed_band",
                  "joint_acceleration", "wrist_singularity"):
@@ -80,8 +84,8 @@ def main() -> None:
     print(f"wrote {out / 'report.json'} and {out / 'report.html'}")
 
     # 4. faults: each must fail with the right item named
-    quick = {"tolerances": Tolerances(dense_step=2e-3), "time_step": 0.1,
-             "joint_move_step": 10e-3} if args.test_mode else {}
+    quick = Config("tool_in_hand", args.hub, Recipe(process=params),
+                   default_tolerances(**QUICK_SAMPLING)) if args.test_mode else config
     k = faults.cut_knot_index(plan, windows[0])
     cases = {
         "knot pushed 5 mm into the hub": (faults.shift_knot_into_hub(plan, k, 0.005, cell),
@@ -94,7 +98,7 @@ def main() -> None:
         cases["window dropped"] = (faults.drop_window(plan, windows[-1]), "windows")
     caught = {}
     for title, (bad, expected) in cases.items():
-        r = verify_plan(bad, **common, **quick)
+        r = verify_plan(bad, quick, **common)
         show(title, r)
         caught[title] = {"expected": expected, "failed": r.failed,
                          "named": expected in r.failed}

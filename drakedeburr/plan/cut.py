@@ -1,0 +1,227 @@
+"""The executed cut of a window: a smooth path through its CL targets' tool points
+(:mod:`drakedeburr.plan.cut_path`: corners blended within ``blend_deviation`` of the linear
+program, the smoothest axis inside the cones), the spin about the axis chosen by dynamic
+programming (:mod:`drakedeburr.plan.spin`), tracked by the analytic IK on the window's
+configuration every ``dense_step`` of travel and checked for clearance and joint jumps.
+
+Where samples come too close to the hub the IK's (clearance-checked) axis is pinned around
+them and the blends tightened; where the program's moves are shorter than the sampling the cut
+is sampled again at half the step (:func:`between_samples_error`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from drakedeburr.plan.cut_path import axes_interp, cut_path
+from drakedeburr.plan.interpolate import DensePath
+from drakedeburr.plan.kinematics import DISTANCE_SLACK
+from drakedeburr.plan.options import PlanContext
+from drakedeburr.plan.program_reading import program_orientation_error
+from drakedeburr.plan.results import WindowPlan, WindowStatus
+from drakedeburr.plan.spin import optimize_spin, spin_frames
+from drakedeburr.plan.timing import joint_spline
+from drakedeburr.plan.types import FailureRecord
+
+__all__ = ["execute_cut", "between_samples_error", "clearance_records", "motion_records"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class _Try:
+    """One try of the executed cut at one sampling step."""
+
+    cp: object  # CutPath
+    cut: DensePath
+    dist: np.ndarray
+    spin_mode: str
+
+
+def clearance_records(window: int, checker, cut, dist: np.ndarray,
+                      bound: float) -> list[FailureRecord]:
+    """One failure record per stretch of the executed cut under the clearance bound: where it
+    starts and ends (sample index and tool travel), its least clearance and the closest pair."""
+    low = dist < bound
+    out = []
+    k = 0
+    while k < len(low):
+        if not low[k]:
+            k += 1
+            continue
+        end = k
+        while end + 1 < len(low) and low[end + 1]:
+            end += 1
+        j = k + int(np.argmin(dist[k:end + 1]))
+        d, pair = checker.min_distance(cut.q[j], bound + 1e-3)
+        out.append(FailureRecord(
+            window=window, kind="dense", value=float(d), limit=float(bound), unit="m",
+            where=dict(sample=int(j), samples=[int(k), int(end)],
+                       s_range_mm=[float(cut.s[k] * 1e3), float(cut.s[end] * 1e3)],
+                       pair=list(pair)),
+            reason=f"clearance {d * 1e3:.3f} mm on the executed motion over "
+                   f"{cut.s[k] * 1e3:.1f}-{cut.s[end] * 1e3:.1f} mm of the cut "
+                   f"({end - k + 1} samples; {pair[0]} vs {pair[1]})"))
+        k = end + 1
+    return out
+
+
+def motion_records(window: int, cut, max_jump: float) -> list[FailureRecord]:
+    """Failure records of joint jumps between dense samples and unreachable samples."""
+    out = []
+    jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
+    for k in np.flatnonzero(~(jumps <= max_jump)):
+        out.append(FailureRecord(window=window, kind="dense", value=float(jumps[k]),
+                                 limit=max_jump, unit="rad", where=dict(sample=int(k)),
+                                 reason=f"joint jump {float(jumps[k]):.3g} rad between dense "
+                                        "samples"))
+    for k in np.flatnonzero(~cut.ok):
+        out.append(FailureRecord(window=window, kind="dense", where=dict(sample=int(k)),
+                                 reason="dense sample unreachable on the window's "
+                                        "configuration"))
+    return out
+
+
+def between_samples_error(kin, cut, cp) -> float:
+    """Largest angle [rad] between the program's orientation and the executed one *between*
+    the dense samples, where the timed trajectory runs on the joint spline through them
+    (:func:`drakedeburr.plan.timing.joint_spline`): read at the quarter points of every
+    interval together with the samples, as the verifier reads the trajectory. Where the
+    program's moves are shorter than the sampling and turn the tool, the spline cannot follow
+    its orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
+    25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm)."""
+    sp = joint_spline(cut.s, cut.q)
+    ds = np.diff(cut.s)
+    s_all = np.sort(np.concatenate([cut.s] + [cut.s[:-1] + f * ds for f in (0.25, 0.5, 0.75)]))
+    X = kin.X_HT_from_q(sp(s_all))
+    return float(program_orientation_error(X, cp.X_target)[0].max())
+
+
+def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, t_ik: float,
+                failures: list[FailureRecord]) -> WindowPlan:
+    """The window's executed cut, program, approach, retract and timing (module docstring),
+    sampled every ``options.dense_step`` of travel and again at half that where the program has
+    moves the sampling cannot resolve."""
+    from drakedeburr.plan.program_fit import fit_program
+
+    step = ctx.options.dense_step
+    t1 = time.perf_counter()
+    X_ik = wik.X_HT[good]
+    while True:
+        records: list[FailureRecord] = []
+        tr = _track_cut(ctx, wt, wik, good, order, X_ik, step, records)
+        if not np.all(tr.cut.ok):
+            return WindowPlan.skipped(wt.window_index, WindowStatus.MOTION_FAILED,
+                                      failures + records)
+        out = fit_program(ctx, wt, tr, order, records, refine=step == ctx.options.dense_step)
+        if out == "finer":
+            step *= 0.5
+            log.info("window %d: between its samples the cut would stray from the program's "
+                     "orientation; sampling it every %.3f mm", wt.window_index, step * 1e3)
+            continue
+        if isinstance(out, WindowStatus):
+            return WindowPlan.skipped(wt.window_index, out, failures + records)
+        from drakedeburr.plan.finish import finish_window
+
+        return finish_window(ctx, wt, wik, good, order, X_ik, out, failures + records, t_ik,
+                             time.perf_counter() - t1)
+
+
+def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: int):
+    """The cut path with its spin: searched (:func:`optimize_spin`) or the IK's, smoothed.
+    Returns (CutPath, spin mode used)."""
+    opt = ctx.options
+    if spin_mode == "search" and opt.spin_search:
+        # the spin program keeps its travel resolution (every 2nd sample at the base step)
+        # when the cut is sampled more finely
+        X_spin, stats = optimize_spin(ctx.kin, cp.X_HT, cp.s, q0, wrist_margin=opt.ik.min_wrist,
+                                      psi_ref=cp.psi_ik, band=opt.spin_band,
+                                      stride=max(1, round(2 * opt.dense_step / step)))
+        if stats["ok"]:
+            X_tg = cp.X_target.copy()
+            X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
+            return replace(cp, X_HT=X_spin, X_target=X_tg), spin_mode
+        log.info("window %d: spin search failed (%s); using the IK's spin", w, stats["reason"])
+        spin_mode = "ik"
+    # the IK's own spin (clearance-checked at the targets), smoothed
+    X_sp = cp.X_HT.copy()
+    X_sp[:, :3, :3] = spin_frames(cp.X_HT[:, :3, :3], cp.psi_ik)
+    X_tg = cp.X_target.copy()
+    X_tg[:, :3, :3] = X_sp[cp.target_index, :3, :3]
+    return replace(cp, X_HT=X_sp, X_target=X_tg), spin_mode
+
+
+def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
+               records: list) -> _Try:
+    """Track the executed cut at sampling ``step``; where samples come too close to the hub,
+    pin the axis and tighten the blends around them and try again (up to 6 times)."""
+    opt, kin, w = ctx.options, ctx.kin, wt.window_index
+    pin = None
+    spin_mode = "search"
+    dev = np.full(len(order), opt.blend_deviation)
+    q0 = wik.q[good[0]]
+    for attempt in range(6):
+        dist = None
+        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=step,
+                      spin_sigma=opt.spin_sigma, axis_margin=opt.axis_margin, pin=pin,
+                      deviation=dev)
+        cp, spin_mode = _spin(ctx, cp, q0, step, spin_mode, w)
+        q_d, ok_d = kin.track(kin.X_WF_from_X_HT(cp.X_HT), q0)
+        cut = DensePath(X_HT=cp.X_HT, s=cp.s, target_index=cp.target_index, q=q_d, ok=ok_d)
+        jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
+        if not (np.all(cut.ok) and np.all(jumps <= opt.max_joint_jump)):
+            if spin_mode != "ik":
+                log.info("window %d: searched spin leaves the limits or jumps; using the IK's "
+                         "spin", w)
+                spin_mode = "ik"
+                continue
+            break
+        dist = np.array([ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0]
+                         for q in cut.q])
+        low = dist < ctx.min_clearance - DISTANCE_SLACK
+        if not low.any():
+            break
+        if dist.min() < ctx.min_clearance - 0.5e-3 and spin_mode != "ik":
+            # far below the bound: the spin put the spindle body into the hub (pinning the
+            # axis cannot fix that); fall back to the IK's spin
+            log.info("window %d: %.2f mm clearance with the searched spin; using the IK's spin",
+                     w, dist.min() * 1e3)
+            spin_mode = "ik"
+            continue
+        pin, dev = _pin_and_tighten(cp, low, step, pin, dev, len(order))
+        log.info("window %d: %d samples under the clearance; pinning the axis and tightening "
+                 "the blends around them (attempt %d)", w, int(low.sum()), attempt + 1)
+    records += motion_records(w, cut, opt.max_joint_jump)
+    if not np.all(cut.ok):
+        dist = np.full(len(cut.s), np.nan)
+    else:
+        if dist is None:  # left the loop before measuring this cut (joint jumps)
+            dist = np.array([ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0]
+                             for q in cut.q])
+        records += clearance_records(w, ctx.checker, cut, dist,
+                                     ctx.min_clearance - DISTANCE_SLACK)
+    return _Try(cp=cp, cut=cut, dist=dist, spin_mode=spin_mode)
+
+
+def _pin_and_tighten(cp, low: np.ndarray, step: float, pin, dev: np.ndarray, n: int):
+    """Keep the IK's (clearance-checked) axis within 3 mm of the samples that came too close,
+    and round the corners there less (a blend cuts the corner by up to its deviation)."""
+    near = np.convolve(low.astype(float), np.ones(2 * int(3e-3 / step) + 1), mode="same") > 0
+    margin = 3e-3
+    new_iv = np.column_stack([cp.s[low] - margin, cp.s[low] + margin])
+    pin = new_iv if pin is None else np.vstack([pin, new_iv])
+    tight = np.unique(np.searchsorted(cp.s[cp.target_index], cp.s[near]))
+    tight = np.clip(np.concatenate([tight - 1, tight]), 0, n - 1)
+    dev = dev.copy()
+    dev[tight] *= 0.25
+    return pin, dev
+
+
+def cone_of_cut(wt, order: np.ndarray, cp, via: np.ndarray | None = None) -> np.ndarray:
+    """The cone axis at every dense sample of the cut (interpolated between the CL targets)."""
+    ti = cp.target_index if via is None else cp.target_index[~via]
+    return axes_interp(cp.s[ti], wt.cone_axis_H[order], cp.s)

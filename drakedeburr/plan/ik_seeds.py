@@ -1,0 +1,243 @@
+"""Seeds of the window IK (:mod:`drakedeburr.plan.ik`): the analytic OPW IK swept over the
+spin for a window's first target, the previous solution re-posed on the next target, the axis
+in the cone with the most clearance, and the cone probe that tells a target no pose in the cone
+can reach from one the solver missed."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
+from drakedeburr.plan.targets import X_HT_from_axis
+
+if TYPE_CHECKING:
+    from drakedeburr.plan.ik import IkOptions
+
+#: (6,) default weights of the IK's ``q - q_prev`` cost (wrist joints cheaper)
+JOINT_WEIGHTS = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
+
+__all__ = ["JOINT_WEIGHTS", "seed_by_spin", "cone_clearance_probe", "analytic_seed",
+           "analytic_accept", "clearance_seed", "unreachable", "recheck"]
+
+
+def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
+                 axis_H: np.ndarray, t_H: np.ndarray, q_ref: np.ndarray,
+                 options: IkOptions, count: int = 1) -> np.ndarray | None:
+    """Best joint vector for one target over a sweep of spins and all IK branches.
+
+    Score: same branch as ``q_ref`` first, then weighted distance to ``q_ref``; candidates with
+    |J5| < ``min_wrist``, outside the limits or in collision are dropped.
+
+    Args:
+        p_HT: (3,) tool point [m]; axis_H: (3,) preferred axis; t_H: (3,) feed tangent.
+        q_ref: (6,) reference joints (e.g. home or the previous window's end) [rad].
+
+        count: > 1 returns a list of up to ``count`` distinct seeds (J4/J6 differing by more
+            than 0.5 rad), best first, for window-level retries.
+
+    Returns:
+        (6,) joints [rad], or None when no spin/branch reaches (a list when count > 1).
+    """
+    spins = np.linspace(-np.pi, np.pi, options.spin_samples, endpoint=False)
+    k = len(spins)
+    X_HT = X_HT_from_axis(np.repeat(p_HT[None], k, 0), np.repeat(axis_H[None], k, 0),
+                          np.repeat(t_H[None], len(spins), 0), spins)
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X_HT))
+    b_ref = kin.branch_of(q_ref)
+    cands, scores = [], []
+    w = np.array([2.0, 2.0, 1.5, 0.5, 0.5, 0.5])
+    centre = np.concatenate([q_ref[:3], 0.5 * (kin.q_lower + kin.q_upper)[3:]])
+    for k in range(q_all.shape[0]):
+        for b in range(8):
+            q = q_all[k, b]
+            if np.any(np.isnan(q)):
+                continue
+            # turns of J4/J6 nearest the middle of their range (a window winds the wrist by up
+            # to ~100 deg: start it centred), the arm nearest q_ref
+            q = centre + np.mod(q - centre + np.pi, 2 * np.pi) - np.pi
+            if not kin.within_limits(q) or abs(q[4]) < options.min_wrist:
+                continue
+            score = (float(w[:3] @ np.abs(q - q_ref)[:3]) + float(w[3:] @ np.abs(q - centre)[3:])
+                     + (0.0 if np.all(branches[b] == b_ref) else 100.0))
+            cands.append(q)
+            scores.append(score)
+    if not cands:
+        return None if count == 1 else []
+    ranked = np.argsort(scores)
+    if checker is None and count == 1:
+        return cands[ranked[0]]
+    # the IK's distance constraint can tilt the axis inside the cone: a seed needs clearance
+    # from the arm and cell, not the full bound at the burr (that depends on the axis only)
+    picked: list[np.ndarray] = []
+    best, best_d = None, -np.inf
+    for j in ranked[:max(12, 6 * count)]:
+        if any(np.max(np.abs(cands[j][[3, 5]] - p[[3, 5]])) < 0.5 for p in picked):
+            continue
+        d = np.inf if checker is None else checker.min_distance(cands[j], options.min_distance)[0]
+        if d >= options.min_distance:
+            picked.append(cands[j])
+            if len(picked) >= count:
+                break
+        elif d > best_d + 1e-4:
+            best, best_d = cands[j], d
+    if count > 1:
+        return picked or ([best] if best is not None and best_d > 0.0 else [])
+    if picked:
+        return picked[0]
+    return best if best_d > 0.0 else None
+
+
+def analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
+                   axis_H: np.ndarray, q_prev: np.ndarray,
+                   weights: tuple[float, ...] = JOINT_WEIGHTS,
+                   spin_span: float = 0.5, spin_samples: int = 21) -> np.ndarray:
+    """Seed that already meets position and preferred axis exactly, with the spin about the
+    axis that minimises the program's own joint cost ``sum w_j (q_j - q_prev_j)^2``: spins
+    within ``spin_span`` of the previous pose's X_T projected normal to the new axis, solved
+    by the analytic IK on the previous configuration's branch. Falls back to ``q_prev``."""
+    z = -axis_H / np.linalg.norm(axis_H)
+    x = X_prev[:3, 0] - (X_prev[:3, 0] @ z) * z
+    if np.linalg.norm(x) < 1e-6:
+        return q_prev
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    psi = np.linspace(-spin_span, spin_span, spin_samples)
+    X = np.repeat(np.eye(4)[None], spin_samples, axis=0)
+    X[:, :3, 0] = np.cos(psi)[:, None] * x + np.sin(psi)[:, None] * y
+    X[:, :3, 1] = -np.sin(psi)[:, None] * x + np.cos(psi)[:, None] * y
+    X[:, :3, 2] = z
+    X[:, :3, 3] = p_HT
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+    match = np.flatnonzero(np.all(branches == kin.branch_of(q_prev)[None], axis=1))
+    if match.size == 0:
+        return q_prev
+    cand = q_all[:, match[0]]
+    cand = q_prev + np.mod(cand - q_prev + np.pi, 2 * np.pi) - np.pi  # no 2 pi turns
+    good = ~np.any(np.isnan(cand), axis=1) & kin.within_limits(cand)
+    good &= np.max(np.abs(cand - q_prev), axis=1) <= 0.6
+    if not good.any():
+        return q_prev
+    cost = np.where(good, np.sum(np.asarray(weights) * (cand - q_prev) ** 2, axis=1), np.inf)
+    return cand[int(np.argmin(cost))]
+
+
+def cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
+    """``count`` unit axes at ``angle`` from the unit axis ``c``, evenly around it."""
+    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(c, e1)
+    return [np.cos(angle) * c + np.sin(angle) * (np.cos(f) * e1 + np.sin(f) * e2)
+            for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
+
+
+def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
+                    p_HT: np.ndarray, cone_axis_H: np.ndarray, half_angle: float,
+                    pref_axis_H: np.ndarray, q_prev: np.ndarray, reach: float,
+                    samples: int = 12, lift: float = 0.0) -> np.ndarray | None:
+    """Analytic seed at the axis of most clearance among the preferred axis, the cone axis and
+    ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
+    ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
+    c = cone_axis_H / np.linalg.norm(cone_axis_H)
+    axes = [pref_axis_H, c] + cone_ring(c, 0.8 * half_angle, samples)
+    best, best_d = None, -np.inf
+    for a in axes:
+        q = analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
+        if q is q_prev:
+            continue
+        d = checker.min_distance(q, reach)[0]
+        if d > best_d:
+            best, best_d = q, d
+    return best
+
+
+def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarray,
+                     anchor: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray, half: float,
+                     options: IkOptions, lift: float, reach: float):
+    """The analytic warm start as the target's solution when it meets every constraint of the
+    Drake program: position and cone (re-checked by FK), joint limits, the trust region about
+    the previous target, the wrist branch and margin, and the clearance bound. Returns
+    ``(X_HT, clearance)`` or None (then the Drake program runs)."""
+    if q is anchor or np.max(np.abs(q - anchor)) > options.trust_region:
+        return None
+    if abs(q[4]) < options.min_wrist or np.sign(q[4]) != np.sign(anchor[4]):
+        return None
+    good, _, _, X = recheck(kin, q, p_HT, cone_axis_H, half, options, lift)
+    if not good:
+        return None
+    dist = checker.min_distance(q, reach)[0]
+    if dist < options.min_distance:
+        return None
+    return X, dist
+
+
+def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
+                         cone_axis_H: np.ndarray, half_angle: float, pref_axis_H: np.ndarray,
+                         t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
+                         bound: float = 2.05e-3, min_wrist: float = 0.25,
+                         rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98), ring_axes: int = 16,
+                         spins: int = 24, per_axis: int = 24) -> dict:
+    """Is there any admissible pose at a target? A sampled search of the whole cone.
+
+    Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings``
+    x half-angle; for each, ``spins`` spins about it and every analytic IK branch (J4/J6 turned
+    into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis`` of them
+    queried for signed distance. Stops at the first pose with ``bound`` clearance.
+
+    Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
+    clears the cell: the tool or the theta box has to change) from a solver failure (a pose
+    exists; the returned one seeds the retry). The search is sampled, so only a best pose more
+    than 0.2 mm short of the bound ends the target's retries and labels it unreachable; nearer
+    misses go on to the distance-constrained retries, which can still find the bound.
+
+    Returns:
+        ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
+    """
+    c = cone_axis_H / np.linalg.norm(cone_axis_H)
+    axes = [pref_axis_H / np.linalg.norm(pref_axis_H), c]
+    for ring in rings:
+        if ring > 0:
+            axes += cone_ring(c, ring * half_angle, ring_axes)
+    psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
+    best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
+    b_ref = kin.branch_of(q_ref)
+    for a in axes:
+        X = X_HT_from_axis(np.repeat((p_HQ + lift * a)[None], spins, 0),
+                           np.repeat(a[None], spins, 0), np.repeat(t_H[None], spins, 0), psi)
+        q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+        # the reference configuration's branch first, then the others
+        order = np.argsort([0 if np.all(b == b_ref) else 1 for b in branches], kind="stable")
+        q = q_all[:, order].transpose(1, 0, 2).reshape(-1, 6)
+        q = q[~np.any(np.isnan(q), axis=1)]
+        for j in (3, 5):
+            q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
+            q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
+        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
+        for qq in q[:: max(1, len(q) // per_axis)]:
+            d, pair = checker.min_distance(qq, bound + 1e-3)
+            best["queries"] += 1
+            if d > best["best_clearance"]:
+                best.update(best_clearance=float(d), pair=pair, q=qq.copy())
+            if d >= bound:
+                best["feasible"] = True
+                return best
+    return best
+
+
+def unreachable(probe: dict, options: IkOptions) -> bool:
+    """The probe's best pose is more than 0.2 mm short of the bound (the sampled search may
+    miss a pose within that; the retries may still find it)."""
+    return not probe["feasible"] and probe["best_clearance"] < options.min_distance_floor - 0.2e-3
+
+
+def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray,
+             half_angle: float, options: IkOptions,
+             lift: float = 0.0) -> tuple[bool, float, float, np.ndarray]:
+    """Independent check of a solution with the analytic FK: (ok, position error, cone angle)."""
+    X = kin.X_HT_from_q(q)
+    err = float(np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HT))
+    ang = float(np.arccos(np.clip(-X[:3, 2] @ cone_axis_H, -1.0, 1.0)))
+    ok = (err <= 10 * options.position_tolerance and ang <= half_angle + 1e-6
+          and bool(kin.within_limits(q)))
+    return ok, err, ang, X

@@ -1,0 +1,132 @@
+"""Planner settings (:class:`PlanOptions`) and what a planning run works with
+(:class:`PlanContext`: the cell, its kinematics, the clearance checkers and the configuration).
+
+Process numbers (speeds, TCP acceleration, depth of cut, boxes) come from the run's recipe and
+acceptance bounds (clearance, wrist margin, program orientation) from its tolerances
+(:class:`drakedeburr.config.Config`); the options hold only how the planner searches.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drakedeburr.config import Config
+from drakedeburr.plan.fillets import FilletOptions
+from drakedeburr.plan.ik import IkOptions
+from drakedeburr.plan.timing import TimingLimits
+
+__all__ = ["PlanOptions", "PlanContext"]
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """How the planner searches (process numbers and bounds come from the Config).
+
+    Attributes:
+        ik: per-target IK settings.
+        dense_step: tool travel between dense samples of the executed motion [m].
+        approach_distance: approach/retract length along the tool axis [m].
+        joint_step: joint-space sample spacing of joint moves [rad].
+        max_joint_jump: largest joint change allowed between dense samples [rad] (a flip or a
+            2*pi turn shows as ~1-6 rad; fast wrist motion at corners reaches ~0.05).
+        windows: indices of the windows to plan (None = all), in this order.
+        fit_spacings: knot spacings [m] of the least-squares joint spline of approach and
+            retract, widest first.
+        fit_tolerance: largest tool deviation [m] the joint-spline fit may cause.
+        contact_radius: radius of the flank circle that cuts [m] (None: the burr's nominal
+            3 mm); smaller lifts the shank off the face (:func:`targets.contact_geometry`).
+        window_attempts: distinct start configurations tried when a window's IK fails.
+        blend_deviation: largest distance of a corner blend from its target [m]
+            (:mod:`drakedeburr.plan.cut_path`: corners blended, the smoothest axis in the cones).
+        spin_sigma: Gaussian width of the IK orientations' smoothing before the axis program [m].
+        axis_margin: the smoothed axis keeps this far inside its cone [rad] (so the program's
+            own slerp between targets stays inside too).
+        spin_search: choose the spin about the tool axis by dynamic programming
+            (:mod:`drakedeburr.plan.spin`); False: the IK's spin, smoothed.
+        spin_band: the search stays within this of the IK's spin [rad].
+        program_orientation_share: via targets (``cl_index`` -1) are added on the executed path
+            where the program's orientation (slerp between consecutive targets, as a controller
+            interpolates) strays from the executed one by more than this share of
+            ``Tolerances.orientation_match``.
+        via_rounds: rounds of via insertion.
+        conform_program: where the program still strays after the vias (moves too short for
+            one), pull the executed orientation onto the program's there
+            (:func:`drakedeburr.plan.program_fit.conform_to_program`).
+        retry_in_band: a window planned without failure records but with less than this share
+            of its cut within the speed band is planned again with the other warm-start spin
+            rule, and the faster of the two kept.
+        acceleration_scale: what-if factor on the robot model's joint acceleration limits and
+            on the recipe's TCP acceleration (1: plan to the model). The model's accelerations
+            are assumed values; this factor measures how the speed band and cycle time depend
+            on them (``benchmarks/bench_plan.py --accel-sweep``). The verifier checks the
+            model's own limits, so a plan made with a factor above 1 fails its acceleration
+            check: to plan for a robot whose real accelerations are known, put them in the
+            model instead.
+        fillets: fillet repair (:mod:`drakedeburr.plan.fillets`): where the timed cut falls
+            below the speed band, a KTO over the joints may find a tool orientation that holds
+            the feed; None: off.
+    """
+
+    ik: IkOptions = field(default_factory=IkOptions)
+    dense_step: float = 0.25e-3
+    approach_distance: float = 15e-3
+    joint_step: float = 0.004
+    max_joint_jump: float = 0.2
+    windows: tuple[int, ...] | None = None
+    fit_spacings: tuple[float, ...] = (6e-3, 4e-3, 2e-3, 1e-3)
+    fit_tolerance: float = 0.03e-3
+    contact_radius: float | None = 1.6e-3
+    window_attempts: int = 4
+    blend_deviation: float = 0.03e-3
+    spin_sigma: float = 3e-3
+    axis_margin: float = 10e-3
+    spin_search: bool = True
+    spin_band: float = 1.2
+    program_orientation_share: float = 0.6
+    via_rounds: int = 8
+    conform_program: bool = True
+    retry_in_band: float = 0.5
+    acceleration_scale: float = 1.0
+    fillets: FilletOptions | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):
+            raise ValueError("PlanOptions.acceleration_scale must be a positive number, got "
+                             f"{self.acceleration_scale!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class PlanContext:
+    """What a planning run works with: the loaded cell, its kinematics, clearance checkers
+    (``checker``: the burr head/hub contact filtered, for cutting moves; ``free_checker``: not
+    filtered, for moves that do not cut), the run's configuration and the options."""
+
+    cell: object
+    kin: object
+    checker: object
+    free_checker: object
+    config: Config
+    options: PlanOptions
+
+    @property
+    def process(self):
+        return self.config.process
+
+    @property
+    def min_clearance(self) -> float:
+        return self.config.tolerances.min_clearance
+
+    @property
+    def program_orientation(self) -> float:
+        """Largest program-vs-executed orientation the planner leaves [rad]."""
+        return self.options.program_orientation_share * self.config.tolerances.orientation_match
+
+    def limits(self, v_cap: float) -> TimingLimits:
+        """Timing limits of a stretch with TCP speed cap ``v_cap`` [m/s]."""
+        f = self.options.acceleration_scale
+        return TimingLimits(v_cap=v_cap, a_cap=self.process.tcp_acceleration * f,
+                            v_max=tuple(self.kin.v_max),
+                            a_max=tuple(np.asarray(self.kin.a_max) * f))

@@ -1,0 +1,140 @@
+"""Typed results inside the planner: what a window's planning returns and its figures.
+
+:class:`WindowPlan` carries a :class:`WindowStatus` (in the spirit of toppra's return codes):
+a window is either planned (its stretches and :class:`WindowStats` are there; failure records
+may still say where it missed a bound) or skipped with the status naming the stage that could
+not be done. Failure records are :class:`drakedeburr.plan.types.FailureRecord`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drakedeburr.plan.timing import TimedPath
+from drakedeburr.plan.types import FailureRecord
+
+__all__ = ["WindowStatus", "Stretch", "ExecutedCut", "WindowStats", "WindowPlan", "PlanStats"]
+
+
+class WindowStatus(enum.Enum):
+    """Outcome of planning one window."""
+
+    OK = "ok"  # planned, no failure record
+    DEGRADED = "degraded"  # planned, with failure records (a bound missed somewhere)
+    IK_FAILED = "ik_failed"  # too few CL targets reached: skipped
+    MOTION_FAILED = "motion_failed"  # the executed cut leaves the configuration: skipped
+    PROGRAM_FAILED = "program_failed"  # a program target unreachable: skipped
+    APPROACH_FAILED = "approach_failed"  # approach or retract unreachable: skipped
+
+    @property
+    def planned(self) -> bool:
+        return self in (WindowStatus.OK, WindowStatus.DEGRADED)
+
+
+@dataclass
+class Stretch:
+    """A timed stretch of the plan and the program targets it ends at."""
+
+    kind: str
+    window_index: int
+    timed: TimedPath
+    targets: list
+
+
+@dataclass(frozen=True, eq=False)
+class ExecutedCut:
+    """A window's executed cut and its program.
+
+    Attributes:
+        cp: the :class:`drakedeburr.plan.cut_path.CutPath` (dense poses, program targets
+            ``X_target`` with their zones, ``target_index`` into the dense samples).
+        cut: the :class:`drakedeburr.plan.interpolate.DensePath` tracked by the analytic IK.
+        dist: (N,) clearance of every dense sample [m].
+        q_targets: (T, 6) joints at the program's targets [rad].
+        via: (T,) True where a target is a via (on the executed path, between CL targets).
+    """
+
+    cp: object
+    cut: object
+    dist: np.ndarray
+    q_targets: np.ndarray
+    via: np.ndarray
+
+
+@dataclass(frozen=True)
+class WindowStats:
+    """Figures of one planned window (``plan.meta["windows"]`` holds them as mappings).
+
+    Lengths [m], angles [deg] where the name says so, else SI; ``ik``: the IK's counters.
+    """
+
+    window: int
+    kind: str
+    cl_points: int
+    reached: int
+    edge_length_m: float
+    tool_travel_m: float
+    dense_samples: int
+    cut_seconds: float
+    j4_range_deg: float
+    j5_range_deg: float
+    j6_range_deg: float
+    min_abs_j5_deg: float
+    min_clearance_m: float
+    axis_in_theta_box_fraction: float | None
+    cone_half_angle_rad: float
+    speed_in_band_fraction: float
+    ik_seconds: float
+    dense_seconds: float
+    timing_seconds: float
+    ik: dict
+    joint_fit_deviation_m: float
+    orientation_smoothing_rad: float
+    via_targets: int
+    least_axis_acceleration_radps2: float
+    q_ik_rad: list
+    q_smoothed_rad: list
+    cl_order: list
+    transition_method: str = ""
+    spin_rule: str = ""
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclass
+class WindowPlan:
+    """One window's planning result.
+
+    Attributes:
+        window: the window; status: the outcome.
+        stretches: approach, cut and retract (empty unless planned).
+        stats: the window's figures (None unless planned).
+        q_start: (6,) joints where the approach starts [rad] (None unless planned).
+        failures: what could not be done.
+    """
+
+    window: int
+    status: WindowStatus
+    stretches: list[Stretch] = field(default_factory=list)
+    stats: WindowStats | None = None
+    q_start: np.ndarray | None = None
+    failures: list[FailureRecord] = field(default_factory=list)
+
+    @classmethod
+    def skipped(cls, window: int, status: WindowStatus,
+                failures: list[FailureRecord]) -> WindowPlan:
+        return cls(window=window, status=status, failures=list(failures))
+
+
+@dataclass(frozen=True)
+class PlanStats:
+    """Timings of a planning run [s] (``plan.meta["timings"]``)."""
+
+    total_seconds: float
+    transition_seconds: float
+    targets_seconds: float = 0.0

@@ -1,0 +1,74 @@
+"""Timed stretches of a plan and the program targets they end at: Cartesian stretches (tool
+poses tracked by the analytic IK, timed at a TCP speed cap), joint moves between windows and
+home."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drakedeburr.plan.kinematics import DISTANCE_SLACK
+from drakedeburr.plan.options import PlanContext
+from drakedeburr.plan.results import Stretch
+from drakedeburr.plan.timing import TimedPath, time_path
+from drakedeburr.plan.transitions import joint_move
+from drakedeburr.plan.types import CartesianTarget, FailureRecord
+
+__all__ = ["make_target", "time_cartesian", "time_joint", "joint_stretch"]
+
+
+def make_target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None,
+                zone: float = 0.0) -> CartesianTarget:
+    """A program target at joints ``q`` (its poses by the analytic FK)."""
+    q = np.asarray(q, float)
+    return CartesianTarget(window_index=window, segment=seg, cl_index=cl,
+                           X_HT=kin.X_HT_from_q(q), X_WF=kin.fk_flange(q), q=q.copy(),
+                           speed=float(speed), zone=float(zone), motion=motion,
+                           p_HC=None if p_HC is None else np.asarray(p_HC, float),
+                           n_H=None if n_H is None else np.asarray(n_H, float))
+
+
+def time_cartesian(ctx: PlanContext, q, s, X, v_cap, interpolate: bool = False
+                   ) -> tuple[TimedPath, float]:
+    """Timed Cartesian stretch with the widest joint-spline fit whose tool deviation from the
+    commanded samples stays within ``options.fit_tolerance`` (``interpolate``: no fit); returns
+    it and that deviation."""
+    limits = ctx.limits(v_cap)
+    opt = ctx.options
+    for spacing in ((None,) if interpolate else (*opt.fit_spacings, None)):
+        timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing)
+        dev = float(np.max(np.linalg.norm(ctx.kin.X_HT_from_q(timed.q)[:, :3, 3] - X[:, :3, 3],
+                                          axis=1)))
+        if dev <= opt.fit_tolerance or spacing is None:
+            return timed, dev
+    raise AssertionError("unreachable")
+
+
+def time_joint(ctx: PlanContext, q, s, v_cap) -> TimedPath:
+    """Timed joint move (``s``: joint-space arc length) under a TCP speed cap."""
+    p = ctx.kin.X_HT_from_q(q)[:, :3, 3]
+    return time_path(s, q, p, ctx.limits(v_cap))
+
+
+def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
+                  ) -> tuple[Stretch, object, list[FailureRecord]]:
+    """A collision-free joint move ``q0 -> q1`` checked as executed (every ``joint_step``
+    rad) against the acceptance bound with the burr head not filtered; returns the stretch,
+    the move and its failure records."""
+    kin = ctx.kin
+    mv = joint_move(ctx.cell, kin, ctx.free_checker, q0, q1,
+                    min_distance=ctx.min_clearance + DISTANCE_SLACK, step=ctx.options.joint_step)
+    failures = []
+    if not mv.ok:
+        failures.append(FailureRecord(
+            window=-1, kind=kind, value=float(mv.clearance), limit=ctx.min_clearance, unit="m",
+            tried=(mv.method,),
+            reason=f"{label}: no collision-free joint move found (clearance "
+                   f"{mv.clearance * 1e3:.2f} mm, {mv.method})"))
+    s = mv.s if mv.s[-1] > 0 else np.linspace(0.0, 1e-9, len(mv.s))
+    if len(mv.q) < 2 or mv.s[-1] <= 0:
+        timed = TimedPath(t=np.zeros(1), q=mv.q[:1], qd=np.zeros((1, 6)), sdot=np.zeros(1),
+                          v_tcp=np.zeros(1))
+    else:
+        timed = time_joint(ctx, mv.q, s, v_cap)
+    return Stretch(kind, -1, timed, [make_target(kin, q1, -1, kind, -1, v_cap, "joint")]), mv, \
+        failures

@@ -1,0 +1,168 @@
+"""One window: its CL targets solved by the cone-constrained IK from the best start, then the
+executed cut, approach, retract and timing (:mod:`drakedeburr.plan.cut`,
+:mod:`drakedeburr.plan.finish`).
+
+A window is planned with the IK's warm-start spin rule, and again with the other rule when
+that leaves failure records (the better result is kept) or holds less than
+``options.retry_in_band`` of the cut in the speed band (the faster clean one is kept): the spin
+picked target by target decides how far the wrist winds around the loop, and each rule winds
+some window into its J4/J6 limits, or slowly around, where the other does not.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from drakedeburr.plan.ik import seed_by_spin, solve_window_ik
+from drakedeburr.plan.interpolate import track_poses
+from drakedeburr.plan.options import PlanContext
+from drakedeburr.plan.results import WindowPlan, WindowStatus
+from drakedeburr.plan.targets import contact_geometry, tool_point_H
+from drakedeburr.plan.types import FailureRecord
+from drakedeburr.plan.window_targets import WindowTargets
+
+__all__ = ["plan_window", "rewound_start"]
+
+log = logging.getLogger(__name__)
+
+
+def _other_rule(ctx: PlanContext) -> tuple[str, PlanContext]:
+    other = "frame" if ctx.options.ik.seed_spin == "joint_cost" else "joint_cost"
+    options = replace(ctx.options, ik=replace(ctx.options.ik, seed_spin=other))
+    return other, replace(ctx, options=options)
+
+
+def plan_window(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
+    """Approach, cut and retract of one window (module docstring)."""
+    first = _plan_window_once(ctx, wt, q_from)
+    other, ctx2 = _other_rule(ctx)
+    if first.status.planned and not first.failures:
+        band = first.stats.speed_in_band_fraction
+        if band >= ctx.options.retry_in_band:
+            return first
+        # clean but slow: the other rule may wind the wrist less (workpiece cell)
+        log.info("window %d: %.0f %% of the cut in the speed band; planning it again with the "
+                 "%r warm-start spin", wt.window_index, 100 * band, other)
+        second = _plan_window_once(ctx2, wt, q_from)
+        if (second.status.planned and not second.failures
+                and second.stats.cut_seconds < first.stats.cut_seconds):
+            return second
+        return first
+    log.info("window %d: %d failure records; planning it again with the %r warm-start spin",
+             wt.window_index, len(first.failures), other)
+    second = _plan_window_once(ctx2, wt, q_from)
+    if second.status.planned and (not first.status.planned
+                                  or len(second.failures) < len(first.failures)):
+        return second
+    return first
+
+
+def rewound_start(kin, trial, q_first: np.ndarray | None,
+                   near: float = 0.2) -> np.ndarray | None:
+    """``q_first`` with J4/J6 turned by 2 pi away from the limit the window's IK ran into.
+
+    A closed loop winds the wrist (in the workpiece cell J6 turns almost a full circle per
+    window, the hub spinning under the fixed burr): started mid-range it runs into +-400 deg.
+    The same start a turn the other way leaves room for the whole loop. None when the reached
+    joints came within ``near`` [rad] of neither limit (or of both), or the turn leaves the
+    limits.
+    """
+    reached = np.flatnonzero(trial.ok)
+    if q_first is None or len(reached) == 0:
+        return None
+    q = trial.q[reached]
+    out = np.array(q_first, float)
+    for j in (3, 5):
+        lo, hi = kin.q_lower[j], kin.q_upper[j]
+        at_lo, at_hi = q[:, j].min() < lo + near, q[:, j].max() > hi - near
+        if at_lo != at_hi:
+            turned = out[j] + (2 * np.pi if at_lo else -2 * np.pi)
+            if lo <= turned <= hi:
+                out[j] = turned
+    return None if np.array_equal(out, q_first) else out
+
+
+def _seeds(ctx: PlanContext, wt: WindowTargets, p_HT0: np.ndarray, q_from: np.ndarray) -> list:
+    """Start configurations to try: the best few distinct ones from ``q_from``, then those
+    ranked from home (the previous window's end may hold the arm in a configuration from which
+    this loop cannot be closed; the joint move goes anywhere)."""
+    kin, opt = ctx.kin, ctx.options
+    seeds = seed_by_spin(kin, ctx.checker, p_HT0, wt.axis_H[0], wt.t_H[0], q_from, opt.ik,
+                         count=opt.window_attempts) or [None]
+    more = seed_by_spin(kin, ctx.checker, p_HT0, wt.axis_H[0], wt.t_H[0], kin.q_home, opt.ik,
+                        count=opt.window_attempts) or []
+    return list(seeds) + [q for q in more if q is not None and not _known(q, seeds)]
+
+
+def _known(q: np.ndarray, seeds: list) -> bool:
+    return any(s is not None and np.max(np.abs(q - s)) < 1e-6 for s in seeds)
+
+
+def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.ndarray,
+              p_HQ: np.ndarray, lift: float):
+    """The window's IK from the best of its start configurations (each start is judged by its
+    failures and by whether the executed motion between the targets stays on the branch and
+    inside the joint limits: a cheap analytic pre-check)."""
+    kin, opt = ctx.kin, ctx.options
+    m = len(wt)
+    seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.axis_H[0], q_from)
+    wik, best_score = None, 0
+    for attempt, q_first in enumerate(seeds):
+        trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.axis_H[loop],
+                                wt.cone_axis_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
+                                window_index=wt.window_index, options=opt.ik,
+                                q_first=q_first, lift=lift)
+        reached = np.flatnonzero(trial.ok)
+        dense_ok = bool(len(reached) > 1 and np.all(track_poses(
+            kin, trial.X_HT[reached], trial.q[reached[0]], opt.dense_step).ok))
+        score = len(trial.failures) + (0 if dense_ok else 10 * (m + 1))
+        if wik is None or score < best_score:
+            wik, best_score = trial, score
+        if score == 0:
+            break
+        # targets no pose in the cone can reach (the IK's probe): no other start fixes those
+        unreachable = sum(1 for f in trial.failures if "cone_best_clearance" in f.where)
+        if score == unreachable and trial is wik:
+            log.warning("window %d: %d targets unreachable with %.1f mm clearance by any tool "
+                        "axis in the cone; reported", wt.window_index, unreachable,
+                        1e3 * opt.ik.min_distance_floor)
+            break
+        log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
+                 "another", wt.window_index, attempt, len(trial.failures),
+                 "ok" if dense_ok else "leaves the limits")
+        # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
+        wound = rewound_start(kin, trial, q_first)
+        if wound is not None and not _known(wound, seeds):
+            seeds.insert(attempt + 1, wound)
+    return wik, len(seeds)
+
+
+def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
+    """One planning pass of a window (see :func:`plan_window`)."""
+    from drakedeburr.plan.cut import execute_cut
+
+    r_c, lift = contact_geometry(ctx.options.contact_radius)
+    m = len(wt)
+    # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
+    # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
+    loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
+    # the IK ties the centre of the cutting circle (``lift`` below T on the axis) to its target
+    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)[loop]
+    t0 = time.perf_counter()
+    wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
+    t_ik = time.perf_counter() - t0
+    failures = [replace(rec, point=int(loop[rec.point])) for rec in wik.failures]
+    # only the targets that met every constraint (a failed point's row holds its best attempt)
+    good = np.flatnonzero(wik.ok)
+    if len(good) < (m + 1) // 2 or 0 not in good:
+        failures.append(FailureRecord(
+            window=wt.window_index, kind="window", value=float(len(good)), limit=float(m + 1),
+            unit="count", reason=f"IK reached only {len(good)} of {m + 1} targets; window "
+                                 "skipped",
+            tried=(f"{n_starts} start configurations", f"spin rule {ctx.options.ik.seed_spin}")))
+        return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, failures)
+    return execute_cut(ctx, wt, wik, good, loop[good], t_ik, failures)

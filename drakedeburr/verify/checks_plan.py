@@ -1,0 +1,125 @@
+"""Checks of the plan's own consistency: structure, recorded failures, windows, FK, targets."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drakedeburr.plan.program_reading import rot_angle
+from drakedeburr.verify.report import CheckItem
+
+__all__ = ["structure", "planner_failures", "windows", "fk_agreement", "target_consistency"]
+
+
+def _structure_problems(plan) -> list[str]:
+    traj, targets, segments = plan.trajectory, plan.targets, list(plan.segments)
+    problems = []
+    t_end = float(traj.t[-1])
+    if abs(float(traj.t[0])) > 1e-9:
+        problems.append(f"trajectory starts at t={traj.t[0]:.6g} s, not 0")
+    prev_t, prev_k = float(traj.t[0]), None
+    for i, s in enumerate(segments):
+        a, b = s.target_range
+        if not (0 <= a < b <= len(targets)):
+            problems.append(f"segment {i} ({s.kind}): target_range {s.target_range} invalid")
+        if prev_k is not None and a != prev_k:
+            problems.append(f"segment {i} ({s.kind}): targets start at {a}, previous ended at "
+                            f"{prev_k}")
+        if abs(s.t_range[0] - prev_t) > 1e-9 or s.t_range[1] < s.t_range[0]:
+            problems.append(f"segment {i} ({s.kind}): t_range {s.t_range} does not continue "
+                            f"at {prev_t:.6g} s")
+        for k in range(max(a, 0), min(b, len(targets))):
+            if targets[k].segment != s.kind:
+                problems.append(f"target {k} is '{targets[k].segment}' inside a '{s.kind}' "
+                                "segment")
+                break
+        prev_t, prev_k = s.t_range[1], b
+    if segments and abs(prev_t - t_end) > 1e-9:
+        problems.append(f"segments end at {prev_t:.6g} s, trajectory at {t_end:.6g} s")
+    if not segments:
+        problems.append("no segments")
+    return problems
+
+
+def structure(sp, cfg) -> CheckItem:
+    problems = _structure_problems(sp.plan)
+    return CheckItem(
+        "structure", not problems, float(len(problems)), 0.0, "count", "<=",
+        detail="; ".join(problems[:5]) or "segments tile the trajectory and the target list")
+
+
+def planner_failures(sp, cfg) -> CheckItem:
+    f = sp.plan.failures
+    return CheckItem(
+        "planner_failures", not f, float(len(f)), 0.0, "count", "<=",
+        detail=(f"{len(f)} failure record(s) in the plan, first: {f[0]}" if f
+                else "the plan records no failed points"))
+
+
+def _missing_cl(sp) -> dict:
+    out = {}
+    for w in sp.cut_windows:
+        ref = sp.refs[w]
+        if ref is None:
+            out[w] = "neither a ToolPath nor ground-truth edge frames"
+            continue
+        have = {ref.cl_of[k] for k, t in enumerate(sp.targets)
+                if t.window_index == w and t.segment in ("approach", "cut") and k in ref.cl_of}
+        lost = sorted(set(range(len(ref.p_HC))) - have)
+        if lost:
+            out[w] = f"CL points {lost[:5]}{'...' if len(lost) > 5 else ''} not targeted"
+    return out
+
+
+def windows(sp, cfg) -> CheckItem:
+    expected, cut = sp.expected_windows, sp.cut_windows
+    missing = [w for w in expected if w not in cut]
+    cl_missing = _missing_cl(sp)
+    unknown = [w for w in cut if w not in sp.edge_of]
+    det = []
+    if missing:
+        det.append(f"window(s) {missing} of hub {sp.hub_model.name} have no cut")
+    if cl_missing:
+        det.append("; ".join(f"window {w}: {m}" for w, m in cl_missing.items()))
+    if unknown:
+        det.append(f"window(s) {unknown} not in the hub")
+    return CheckItem(
+        "windows", not (missing or cl_missing or unknown),
+        float(len(missing) + len(cl_missing) + len(unknown)), 0.0, "count", "<=",
+        window=(missing or list(cl_missing) or unknown or [None])[0],
+        detail="; ".join(det) or f"all {len(expected)} windows cut, every CL point targeted",
+        per_window={w: {"cut": w in cut} for w in expected})
+
+
+def fk_agreement(sp, cfg) -> CheckItem:
+    tol = cfg.tolerances
+    d = sp.distances.fk_difference
+    return CheckItem(
+        "fk_agreement", d <= tol.fk_match, d, tol.fk_match, "m", "<=",
+        detail="Drake plant vs analytic OPW: flange pose in world and tool pose in hub, max "
+               f"element difference over {len(sp.samples)} samples")
+
+
+def target_consistency(sp, cfg) -> CheckItem:
+    tol, targets, kin = cfg.tolerances, sp.targets, sp.kin
+    X_HT_t = sp.X_HT_targets
+    pos_err = np.linalg.norm(X_HT_t[:, :3, 3] - np.array([t.X_HT[:3, 3] for t in targets]),
+                             axis=1)
+    rot_err = rot_angle(X_HT_t[:, :3, :3], np.array([t.X_HT[:3, :3] for t in targets]))
+    X_WF_t = kin.X_WF(np.array([t.q for t in targets], float))
+    wf_err = np.linalg.norm(X_WF_t[:, :3, 3] - np.array([t.X_WF[:3, 3] for t in targets]),
+                            axis=1)
+    # the trajectory reaches each segment's last target at the segment's end time
+    reach_err = []
+    for s in sp.segments:
+        if s.target_range[1] - 1 < len(targets):
+            Xe = kin.X_HT(sp.plan.trajectory.value(np.array([s.t_range[1]])))[0]
+            reach_err.append(np.linalg.norm(Xe[:3, 3] - targets[s.target_range[1] - 1].X_HT[:3, 3]))
+    worst = np.maximum(pos_err, wf_err)
+    k_w = int(np.argmax(worst))
+    val = float(max(worst.max(), max(reach_err, default=0.0)))
+    ok = val <= tol.path_deviation and float(rot_err.max()) <= tol.orientation_match
+    return CheckItem(
+        "target_consistency", ok, val, tol.path_deviation, "m", "<=",
+        window=int(targets[k_w].window_index), target_index=k_w,
+        detail=f"FK(target.q) vs target.X_HT / X_WF and trajectory at segment ends; max "
+               f"orientation error {np.degrees(rot_err.max()):.3g} deg")

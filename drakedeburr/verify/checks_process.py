@@ -1,0 +1,171 @@
+"""Process figures and speed checks: the share of each cut at the feed and what slows it,
+the TCP speed against the programmed speeds, J4-J6 ranges, the cycle time."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drakedeburr.verify.geometry import binding_limit, slow_stretches
+from drakedeburr.verify.report import CheckItem
+from drakedeburr.verify.sampling import KIND_CODE
+
+__all__ = ["tcp_speed_band", "slowdowns_justified", "tcp_speed_max", "j4_j6_range",
+           "cycle_time", "speed_band_per_window"]
+
+
+#: (what, kind) of the columns of :func:`_limit_ratios`
+_LIMITS = ([(f"J{j + 1}", "speed") for j in range(6)]
+           + [(f"J{j + 1}", "acceleration") for j in range(6)] + [("TCP", "acceleration")])
+
+
+def _limit_ratios(sp, cfg, t0: float, t1: float, dt: float = 1e-3):
+    """On a 1 ms grid over [t0, t1] (independent of the verification sampling): times, tool
+    travel from t0 [m] and per limit of :data:`_LIMITS` its share in use (|qd|/v_max,
+    |qdd|/a_max, |TCP path acceleration|/the process's)."""
+    from drakedeburr.verify.sampling import path_acceleration
+
+    traj = sp.plan.trajectory
+    t = np.linspace(t0, t1, max(3, int(np.ceil((t1 - t0) / dt)) + 1))
+    p = sp.kin.X_HT(traj.value(t))[:, :3, 3]
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    lim = sp.limits
+    ratios = np.concatenate([
+        np.abs(traj.derivative(t, 1)) / lim.velocity,
+        np.abs(traj.derivative(t, 2)) / lim.acceleration,
+        np.abs(path_acceleration(traj, sp.kin, t, p))[:, None] / cfg.process.tcp_acceleration],
+        axis=1)
+    return t, s, ratios
+
+
+def _speed_band(sp, cfg, reach: float = 2e-3) -> dict:
+    """Per cut window: the share of its travel in the feed band, extreme speeds and its slow
+    stretches, each with the limit nearest to binding within ``reach`` of tool travel of it
+    (the limit that holds the speed down can bind just before the speed leaves the band)."""
+    s, tol = sp.samples, cfg.tolerances
+    v_g = cfg.process.grinding_speed
+    out = {}
+    for w in sp.cut_windows:
+        idx = sp.samples_of(w)
+        if len(idx) < 2:
+            continue
+        ds = np.linalg.norm(np.diff(s.p_HT[idx], axis=0), axis=1)
+        vm = 0.5 * (s.speed[idx][1:] + s.speed[idx][:-1])
+        inside = np.abs(vm / v_g - 1.0) <= tol.speed_band
+        stretches = slow_stretches(inside, ds, vm)
+        if stretches:
+            t_f, s_f, r_f = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
+            for st in stretches:
+                near = (s_f >= st["from_m"] - reach) & (s_f <= st["to_m"] + reach)
+                st.update(binding_limit(r_f[near], _LIMITS))
+                del st["a"], st["b"]
+        out[w] = {"fraction_in_band": float(ds[inside].sum() / max(ds.sum(), 1e-300)),
+                  "min_mps": float(s.speed[idx].min()), "max_mps": float(s.speed[idx].max()),
+                  "slow_stretches": stretches}
+    return out
+
+
+def speed_band_per_window(sp, cfg) -> dict:
+    """The per-window speed figures (computed once per sampled plan)."""
+    return sp.memo("speed_band", lambda: _speed_band(sp, cfg))
+
+
+def tcp_speed_band(sp, cfg) -> CheckItem:
+    per = speed_band_per_window(sp, cfg)
+    worst_w = min(per, key=lambda w: per[w]["fraction_in_band"], default=None)
+    worst = 1.0 if worst_w is None else per[worst_w]["fraction_in_band"]
+    worst_w = worst_w if worst < 1.0 else None
+    limit = cfg.acceptance.speed_band_fraction
+    tol = cfg.tolerances
+    return CheckItem(
+        "tcp_speed_band", limit is None or worst >= limit, worst, limit, "-", ">=",
+        window=worst_w,
+        detail=f"share of cutting travel within +-{tol.speed_band * 100:.0f} % of "
+               f"{cfg.process.grinding_speed * 1e3:.0f} mm/s (worst window)", per_window=per)
+
+
+def slowdowns_justified(sp, cfg) -> CheckItem:
+    """No needless slack: wherever a cut runs below the feed band, a limit binds there."""
+    per = speed_band_per_window(sp, cfg)
+    least, at = np.inf, None
+    for w, info in per.items():
+        for st in info["slow_stretches"]:
+            if st["ratio"] < least:
+                least, at = st["ratio"], (w, st)
+    tol = cfg.tolerances
+    forced = 1.0 if at is None else float(least)
+    where = "" if at is None else (
+        f"; least at window {at[0]}, {1e3 * at[1]['from_m']:.1f}-{1e3 * at[1]['to_m']:.1f} mm "
+        f"of its cut ({at[1]['at']}), {at[1]['joint']} {at[1]['limit']}")
+    return CheckItem(
+        "slowdowns_justified", forced >= tol.forced_slowdown, forced, tol.forced_slowdown,
+        "ratio", ">=", window=None if at is None else at[0],
+        detail="every stretch of a cut below the feed band has a limit in use there: a "
+               "joint's speed or acceleration, or the TCP's path acceleration, at this share "
+               "of its limit at least (within 2 mm of tool travel); below it the plan slows "
+               "for no reason the robot imposes" + where)
+
+
+def tcp_speed_max(sp, cfg) -> CheckItem:
+    s, tol, targets = sp.samples, cfg.tolerances, sp.targets
+    seg_speed = np.array([max([targets[k].speed for k in range(*g.target_range)
+                               if k < len(targets)] or [np.inf]) for g in sp.segments])
+    v_lim = (1 + tol.speed_band) * np.where(s.kind == KIND_CODE["cut"],
+                                            cfg.process.grinding_speed, seg_speed[s.segment])
+    ratio = s.speed / v_lim
+    i = int(np.argmax(ratio))
+    return CheckItem(
+        "tcp_speed_max", bool(ratio[i] <= 1.0), float(s.speed[i]), float(v_lim[i]), "m/s", "<=",
+        **sp.where(i),
+        detail="TCP speed never above the move's programmed speed + band (grinding speed on "
+               "cuts)")
+
+
+def j4_j6_range(sp, cfg) -> CheckItem:
+    acc = cfg.acceptance
+    ranges = {}
+    worst, worst_w, worst_lim = -np.inf, None, None
+    for w in sp.cut_windows:
+        idx = sp.samples_of(w)
+        if not len(idx):
+            continue
+        rng = np.ptp(sp.samples.q[idx][:, 3:6], axis=0)
+        large = w in sp.edge_of and sp.edge_of[w].kind == "large"
+        lim = acc.j6_range_large if large else acc.j6_range_small
+        ranges[w] = {"J4_range_rad": float(rng[0]), "J5_range_rad": float(rng[1]),
+                     "J6_range_rad": float(rng[2]), "J6_limit_rad": lim}
+        # the window furthest over its threshold (without thresholds: the widest J6 range)
+        excess = rng[2] - (lim if lim is not None else 0.0)
+        if worst_w is None or excess > worst - (worst_lim if worst_lim is not None else 0.0):
+            worst, worst_w, worst_lim = float(rng[2]), w, lim
+    return CheckItem(
+        "j4_j6_range", worst_lim is None or worst <= worst_lim,
+        worst if worst_w is not None else None, worst_lim, "rad", "<=", window=worst_w,
+        detail="J4-J6 ranges per window; J6 against the recipe's threshold where it sets one "
+               "(the source: 20 deg large / 10 deg small windows)", per_window=ranges)
+
+
+def _physical_seconds(sp, cfg) -> float:
+    """Edge length over the feed plus straight moves at their programmed speeds [s]."""
+    total, targets, v_g = 0.0, sp.targets, cfg.process.grinding_speed
+    for g in sp.segments:
+        a, b = g.target_range
+        if g.kind == "cut" and g.window_index in sp.edge_of:
+            e = np.asarray(sp.edge_of[g.window_index].p_HE)
+            total += float(np.linalg.norm(np.diff(np.vstack([e, e[:1]]), axis=0),
+                                          axis=1).sum()) / v_g
+        elif a >= 1 and b <= len(targets):
+            travel = sum(np.linalg.norm(targets[k].X_HT[:3, 3] - targets[k - 1].X_HT[:3, 3])
+                         for k in range(a, b))
+            total += travel / max(targets[b - 1].speed, 1e-9)
+    return total
+
+
+def cycle_time(sp, cfg) -> CheckItem:
+    duration = sp.plan.trajectory.duration
+    physical = _physical_seconds(sp, cfg)
+    ratio = duration / physical if physical > 0 else np.inf
+    limit = cfg.acceptance.cycle_time_ratio
+    return CheckItem(
+        "cycle_time", limit is None or bool(ratio <= limit), float(ratio), limit, "ratio", "<=",
+        detail=f"cycle {duration:.3f} s vs physical limit {physical:.3f} s (edge length / "
+               "grinding speed + straight moves at their programmed speeds)")

@@ -1,0 +1,136 @@
+"""What the burr does to the edge along each cut, recomputed from the executed tool poses.
+
+Per cut sample: the executed contact point C (the tool pose times the target's tool-to-CL
+offset, interpolated along the move), its distance to the hub's ground-truth edge, the edge
+point's depth inside the burr cone (engagement), the executed axis' theta_A/theta_B in the
+interpolated local frame (the source's box) and its margin to the IK's cone. theta_A =
+atan2(a.N, a.B), theta_B = asin(-a.T) for the axis a in the local frame [N, T, B]
+(docs/orientation.md), recomputed from :mod:`drakedeburr.frames.local_frames`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from drakedeburr.frames.local_frames import angles_from_axis_H
+from drakedeburr.verify.geometry import closed_polyline_distance, lerp_frames, point_segment
+from drakedeburr.verify.refs import cone_half_angle
+
+__all__ = ["cut_geometry"]
+
+
+def _anchored(ref, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> dict | None:
+    """The CL point each move end stands for (a via target: the chord point between its CL
+    points) -> the arrays of the moves ``k0 -> k1`` at shares ``f``; None if a target has no
+    anchor."""
+    anchors = {int(k): ref.anchor(int(k)) for k in np.unique(np.concatenate([k0, k1]))}
+    if any(a is None for a in anchors.values()):
+        return None
+    an0 = np.array([anchors[int(k)] for k in k0])
+    an1 = np.array([anchors[int(k)] for k in k1])
+    out = {"ca0": an0[:, 0].astype(int), "cb0": an0[:, 1].astype(int), "g0": an0[:, 2],
+           "ca1": an1[:, 0].astype(int), "cb1": an1[:, 1].astype(int), "g1": an1[:, 2], "f": f}
+    p = ref.p_HC
+    out["P0"] = (1 - out["g0"])[:, None] * p[out["ca0"]] + out["g0"][:, None] * p[out["cb0"]]
+    out["P1"] = (1 - out["g1"])[:, None] * p[out["ca1"]] + out["g1"][:, None] * p[out["cb1"]]
+    return out
+
+
+def _contact(targets, k0, k1, a: dict, X_HT: np.ndarray) -> np.ndarray:
+    """(n, 3) executed contact points: the tool-to-CL offset of the move's two targets,
+    interpolated at the move's share and carried by the executed tool pose."""
+    def p_TC(k, p):
+        X = np.asarray(targets[k].X_HT)
+        return X[:3, :3].T @ (p - X[:3, 3])
+
+    off = np.array([(1 - fi) * p_TC(ka, pa) + fi * p_TC(kb, pb)
+                    for ka, kb, pa, pb, fi in zip(k0, k1, a["P0"], a["P1"], a["f"], strict=True)])
+    return np.einsum("nij,nj->ni", X_HT[:, :3, :3], off) + X_HT[:, :3, 3]
+
+
+def _engagement(X_HT: np.ndarray, E: np.ndarray) -> np.ndarray:
+    """Depth of the true edge points ``E`` inside the burr's cone, normal to its flank [m]."""
+    from drakedeburr.cell.tools import BURR
+
+    R = X_HT[:, :3, :3]
+    p_TE = np.einsum("nji,nj->ni", R, E - X_HT[:, :3, 3])
+    r = np.linalg.norm(p_TE[:, :2], axis=1)
+    alpha = BURR.cone_half_angle
+    return ((BURR.apex_offset - p_TE[:, 2]) * np.tan(alpha) - r) * np.cos(alpha)
+
+
+def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
+    """Margin of the executed +Z_T to the IK's cone about the interpolated cone axis [rad] and
+    the window's cone figures (the theta box stands in when the plan has no cone axes)."""
+    tp = ref.tool_path
+    if tp is None or getattr(tp, "cone_axis_H", None) is None:
+        return box_margin, {"cone": "no cone axes in the plan: the theta box is checked"}
+    half = cone_half_angle(plan, w, tp)
+    c_H = np.asarray(tp.cone_axis_H, float)
+    c0 = (1 - a["g0"])[:, None] * c_H[a["ca0"]] + a["g0"][:, None] * c_H[a["cb0"]]
+    c1 = (1 - a["g1"])[:, None] * c_H[a["ca1"]] + a["g1"][:, None] * c_H[a["cb1"]]
+    c0 /= np.linalg.norm(c0, axis=1, keepdims=True)
+    c1 /= np.linalg.norm(c1, axis=1, keepdims=True)
+    f = a["f"]
+    c = (1 - f)[:, None] * c0 + f[:, None] * c1
+    c /= np.linalg.norm(c, axis=1, keepdims=True)
+    ang = np.arccos(np.clip(np.sum(c * z_T, axis=1), -1.0, 1.0))
+    return half - ang, {"cone_half_angle": half, "max_angle_to_cone_axis": float(ang.max())}
+
+
+def _window(plan, samples, program, ref, edge: np.ndarray, idx: np.ndarray, out: dict,
+            tol) -> None:
+    """Fill ``out`` for the samples ``idx`` of one window's cut."""
+    k1 = program.move[idx]
+    k0 = k1 - 1
+    w = int(samples.window[idx[0]])
+    a = _anchored(ref, k0, k1, program.fraction[idx])
+    if a is None:
+        return
+    X = samples.X_HT[idx]
+    C = _contact(plan.targets, k0, k1, a, X)
+    out["contact"][idx] = C
+    d, E = closed_polyline_distance(C, edge, cKDTree(edge))
+    out["edge_dev"][idx] = d
+    out["engagement"][idx] = _engagement(X, E)
+    dc = point_segment(edge, C[:-1], C[1:])[0] if len(C) > 1 else np.array([np.inf])
+    jc = int(np.argmax(dc))
+    out["coverage"][w] = (float(dc[jc]), jc)
+    # theta box: executed axis in the interpolated local frame (the source's bounds)
+    R_loc = lerp_frames(lerp_frames(ref.R_HL[a["ca0"]], ref.R_HL[a["cb0"]], a["g0"]),
+                        lerp_frames(ref.R_HL[a["ca1"]], ref.R_HL[a["cb1"]], a["g1"]), a["f"])
+    tA, tB = angles_from_axis_H(R_loc, X[:, :3, 2])  # the executed +Z_T
+    out["theta_A"][idx], out["theta_B"][idx] = tA, tB
+    lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
+    box = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])
+    out["box_margin"][idx] = box
+    out["cone_margin"][idx], cone_info = _cone(plan, w, ref, a, X[:, :3, 2], box)
+    out["cone_per_window"][w] = {
+        "theta_A_min": float(tA.min()), "theta_A_max": float(tA.max()),
+        "theta_B_min": float(tB.min()), "theta_B_max": float(tB.max()), "bounds": [lo, hi],
+        "reference": ref.source, "in_box_share": float(np.mean(box >= -tol.cone_slack)),
+        **cone_info}
+    out["s_cut"][idx] = np.concatenate([[0.0], np.cumsum(np.linalg.norm(
+        np.diff(samples.p_HT[idx], axis=0), axis=1))])
+
+
+def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows, tol):
+    """:class:`drakedeburr.verify.sampling.CutGeometry` of every cut (module docstring)."""
+    from drakedeburr.verify.sampling import KIND_CODE, CutGeometry
+
+    n = len(samples)
+    out = {name: np.full(n, np.nan) for name in ("edge_dev", "engagement", "theta_A",
+                                                 "theta_B", "cone_margin", "box_margin",
+                                                 "s_cut")}
+    out.update(contact=np.full((n, 3), np.nan), coverage={}, cone_per_window={})
+    for w in cut_windows:
+        ref = refs.get(w)
+        if ref is None or w not in edge_of:
+            continue
+        idx = np.flatnonzero((samples.window == w) & (samples.kind == KIND_CODE["cut"])
+                             & (program.move >= 1))
+        if len(idx):
+            _window(plan, samples, program, ref, np.asarray(edge_of[w].p_HE, float), idx, out,
+                    tol)
+    return CutGeometry(**out)
