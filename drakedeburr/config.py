@@ -127,6 +127,8 @@ class Tolerances:
     edge_deviation: float = 0.17e-3  # [m] tool point vs true edge (delta_max + 0.05 mm)
     min_clearance: float = 2e-3  # [m] except the burr contact pair
     speed_band: float = 0.05  # [-] +-5 %: "at the feed", and the overspeed allowance
+    # [m/s] programs carry each move's planned speed rounded up to this (1 mm/s)
+    speed_quantum: float = 1e-3
     # [-] wherever the tool runs below the feed (or below the programmed speed), some limit
     # must be used to at least this share there: a joint's speed or acceleration, or the TCP
     # acceleration (the planner times to 90 % of the joint accelerations, 95 % of the speeds)

@@ -31,7 +31,7 @@ def _plan(failures=()):
             speed=0.15, motion="joint" if i == 0 else "linear",
             p_HC=None if i == 0 else rng.normal(size=3),
             n_H=None if i == 0 else np.array([1.0, 0, 0])))
-    traj = JointTrajectory(t=np.array([0.0, 1.0, 2.0]), q=q, qd=np.zeros((3, 6)))
+    traj = JointTrajectory.from_hermite(t=np.array([0.0, 1.0, 2.0]), q=q, qd=np.zeros((3, 6)))
     meta = dict(X_FT=X_FT.tolist(), X_FH=np.eye(4).tolist(), X_WT=np.eye(4).tolist(), windows=[],
                 note=np.float64(1.5))
     return Plan(scenario="tool_in_hand", hub="h", mode="tool", X_WH=X_WH, targets=tuple(targets),

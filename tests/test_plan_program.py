@@ -23,7 +23,7 @@ def _plan(mode="tool", failures=()):
                         X_HT=np.eye(4), X_WF=fk_opw(ROBOT.opw, q), q=q,
                         speed=0.15 if s == "cut" else 0.45, zone=0.0005 if s == "cut" else 0.0)
         for k, (s, q) in enumerate(zip(segs, qs, strict=True)))
-    traj = JointTrajectory(t=np.array([0.0, 1.0]), q=np.array([qs[0], qs[-1]]),
+    traj = JointTrajectory.from_hermite(t=np.array([0.0, 1.0]), q=np.array([qs[0], qs[-1]]),
                            qd=np.zeros((2, 6)))
     return Plan(scenario="cell", hub="hub", mode=mode, X_WH=X_WH, targets=targets,
                 segments=(PlanSegment(0, "cut", (0, 5), (0.0, 1.0)),), trajectory=traj,

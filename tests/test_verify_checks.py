@@ -111,24 +111,29 @@ def test_malformed_plan_is_input_error():
     plan = vs.good_plan()
     t = plan.trajectory.t.copy()
     t[5] = t[4]
-    bad = faults.replace(plan, trajectory=JointTrajectory(t=t, q=plan.trajectory.q,
-                                                          qd=plan.trajectory.qd))
+    bad = faults.replace(plan, trajectory=JointTrajectory(t=t, c=plan.trajectory.c))
     with pytest.raises(InputError, match="strictly increasing at knot 5"):
         mut.verify_plan(bad, vs.config())
+    short = faults.replace(plan, trajectory=JointTrajectory(t=plan.trajectory.t,
+                                                            c=plan.trajectory.c[:, :-1]))
+    with pytest.raises(InputError, match="pieces must be"):
+        mut.verify_plan(short, vs.config())
 
 
-def test_spline_extremes_are_exact():
+def test_spline_extremes_are_certified():
     rng = np.random.default_rng(0)
     t = np.cumsum(rng.uniform(0.05, 0.3, 12))
     t -= t[0]
-    traj = JointTrajectory(t=t, q=rng.normal(0, 1, (12, 6)), qd=rng.normal(0, 2, (12, 6)))
+    traj = JointTrajectory.from_hermite(t=t, q=rng.normal(0, 1, (12, 6)),
+                                        qd=rng.normal(0, 2, (12, 6)))
     ext = spline_extremes(traj)
     tt = np.linspace(t[0], t[-1], 200001)
     for key, order in (("q", 0), ("qd", 1), ("qdd", 2)):
         dense = traj.value(tt) if order == 0 else traj.derivative(tt, order)
-        vals = ext[key][0]
-        # the candidates bound every sample, and the sampled extremes come close to them
-        top, bottom = vals.max(axis=(0, 1)), vals.min(axis=(0, 1))
+        vals, _, rem = ext[key]
+        # the readings plus the remainder bound every sample, and come close to them
+        top = (vals + rem[:, None]).max(axis=(0, 1))
+        bottom = (vals - rem[:, None]).min(axis=(0, 1))
         scale = np.abs(dense).max(axis=0)
         assert np.all(top >= dense.max(axis=0) - 1e-9 * scale)
         assert np.all(bottom <= dense.min(axis=0) + 1e-9 * scale)

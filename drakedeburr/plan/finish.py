@@ -16,7 +16,7 @@ from drakedeburr.plan.stretch import make_target, time_cartesian
 from drakedeburr.plan.transitions import approach_pose
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["finish_window", "box_share", "rotation_angle"]
+__all__ = ["finish_window", "box_share", "rotation_angle", "move_speeds"]
 
 
 def rotation_angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
@@ -73,10 +73,22 @@ def _wrist_record(ctx: PlanContext, wt, cut) -> list[FailureRecord]:
                                  f"the cut (margin {np.degrees(margin):.1f})")]
 
 
-def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray) -> list:
-    """The program's cut targets: CL targets with their edge point and normal; a via cuts the
-    edge between its CL neighbours: their chord point and normal at its share of the travel
-    between them."""
+def move_speeds(v_tcp: np.ndarray, target_index: np.ndarray, quantum: float) -> np.ndarray:
+    """The programmed speed of each move of a timed cut [m/s]: the largest planned TCP speed
+    over the move (the dense samples from its start target to its end target), rounded up to
+    ``quantum``; (T,) for the T targets, the first (the cut's start) 0."""
+    out = np.zeros(len(target_index))
+    for j in range(1, len(target_index)):
+        v = float(np.max(v_tcp[target_index[j - 1]:target_index[j] + 1]))
+        out[j] = max(quantum, quantum * np.ceil(v / quantum - 1e-9))
+    return out
+
+
+def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray,
+                 speeds: np.ndarray) -> list:
+    """The program's cut targets, each with the speed of the move that ends at it: CL targets
+    with their edge point and normal; a via cuts the edge between its CL neighbours: their
+    chord point and normal at its share of the travel between them."""
     cut, cp, via = ex.cut, ex.cp, ex.via
     cl_rows = np.flatnonzero(~via)
     out = []
@@ -94,8 +106,7 @@ def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray) -> li
             n_H = n_H / np.linalg.norm(n_H)
             i = -1
         out.append(make_target(ctx.kin, ex.q_targets[j], wt.window_index, "cut", i,
-                               ctx.process.grinding_speed, "linear", p_HC, n_H,
-                               zone=float(cp.zone[j])))
+                               float(speeds[j]), "linear", p_HC, n_H, zone=float(cp.zone[j])))
     return out
 
 
@@ -153,7 +164,9 @@ def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
         Stretch("approach", w, timed_app, [make_target(ctx.kin, q_app[-1], w, "approach", i0,
                                                        v_app, "linear", wt.p_HC[i0],
                                                        wt.n_H[i0])]),
-        Stretch("cut", w, timed_cut, _cut_targets(ctx, wt, ex, order)[1:]),
+        Stretch("cut", w, timed_cut, _cut_targets(
+            ctx, wt, ex, order, move_speeds(timed_cut.v_tcp, ex.cut.target_index,
+                                            ctx.config.tolerances.speed_quantum))[1:]),
         Stretch("retract", w, timed_ret, [make_target(ctx.kin, ret.q[-1], w, "retract", -1,
                                                       v_app, "linear")]),
     ]

@@ -1,9 +1,10 @@
 """Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``), joint CSV, robot program.
 
-Folder layout (format version 1, written atomically file by file, ``plan.json`` last so a
+Folder layout (format version 2, written atomically file by file, ``plan.json`` last so a
 folder with a ``plan.json`` is complete):
 
-* ``arrays.npz``: trajectory ``t`` (K,), ``q`` (K, 6), ``qd`` (K, 6); target arrays ``X_HT``
+* ``arrays.npz``: trajectory knot times ``t`` (K,) and polynomial pieces ``c`` (D + 1, K - 1,
+  6) (:class:`~drakedeburr.plan.types.JointTrajectory`); target arrays ``X_HT``
   (N, 4, 4), ``X_WF`` (N, 4, 4), ``q_targets`` (N, 6), ``p_HC`` (N, 3) and ``n_H`` (N, 3) (NaN
   where a target has none); ``X_WH`` (4, 4). SI units.
 * ``plan.json``: ``format``, ``version``, scenario, hub, mode, per-target scalars, segments,
@@ -42,7 +43,7 @@ __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint
            "program_from_plan"]
 
 PLAN_FORMAT = "drakedeburr-plan"
-PLAN_VERSION = 1
+PLAN_VERSION = 2
 
 
 def jsonable(obj):
@@ -67,7 +68,7 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
     n = len(plan.targets)
     nan3 = np.full(3, np.nan)
     arrays = dict(
-        t=plan.trajectory.t, q=plan.trajectory.q, qd=plan.trajectory.qd,
+        t=plan.trajectory.t, c=plan.trajectory.c,
         X_HT=np.array([tg.X_HT for tg in plan.targets]).reshape(n, 4, 4),
         X_WF=np.array([tg.X_WF for tg in plan.targets]).reshape(n, 4, 4),
         q_targets=np.array([tg.q for tg in plan.targets]).reshape(n, 6),
@@ -122,9 +123,9 @@ def load_plan(path: str | Path) -> Plan:
         raise InputError(f"{doc_path}: not valid JSON ({exc})") from exc
     if doc.get("format") != PLAN_FORMAT:
         raise InputError(f"{doc_path}: not a drakedeburr plan (format {doc.get('format')!r})")
-    if doc.get("version") != PLAN_VERSION:
+    if doc.get("version") not in (1, PLAN_VERSION):
         raise InputError(f"{doc_path}: plan version {doc.get('version')} is not supported "
-                         f"(this drakedeburr reads version {PLAN_VERSION})")
+                         f"(this drakedeburr reads versions 1 and {PLAN_VERSION})")
     npz_path = folder / "arrays.npz"
     if not npz_path.is_file():
         raise FileNotFoundError(f"{folder}: missing arrays.npz")
@@ -158,7 +159,9 @@ def load_plan(path: str | Path) -> Plan:
             **{n: arr[f"tp{w}_{n}"] for n in TOOL_PATH_ARRAYS}))
     return Plan(scenario=doc["scenario"], hub=doc["hub"], mode=doc["mode"], X_WH=arr["X_WH"],
                 targets=tuple(targets), segments=segments,
-                trajectory=JointTrajectory(t=arr["t"], q=arr["q"], qd=arr["qd"]),
+                trajectory=(JointTrajectory(t=arr["t"], c=arr["c"]) if "c" in arr else
+                            # version 1: a cubic Hermite spline through the knots
+                            JointTrajectory.from_hermite(arr["t"], arr["q"], arr["qd"])),
                 tool_path=tuple(records) or None,
                 failures=tuple(FailureRecord.from_dict(f) for f in doc["failures"]),
                 meta=doc["meta"])

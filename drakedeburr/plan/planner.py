@@ -123,24 +123,23 @@ def plan_windows(
 
 def _concatenate(kin, stretches: list[Stretch], home):
     """The stretches end to end: (targets, segments, joint trajectory)."""
-    t_all, q_all, qd_all = [np.zeros(1)], [kin.q_home[None]], [np.zeros((1, 6))]
+    t_all, c_all = [np.zeros(1)], [np.zeros((7, 0, 6))]
     targets, segments = [home], []
     t_off = 0.0
     for st in stretches:
         tp = st.timed
         first = len(targets)
         targets.extend(st.targets)
-        if len(tp.t) > 1:
-            t_all.append(t_off + tp.t[1:])
-            q_all.append(tp.q[1:])
-            qd_all.append(tp.qd[1:])
+        keep = np.diff(tp.t) > 1e-9  # zero-length pieces
+        if keep.any():
+            t_all.append(t_off + tp.t[1:][keep])
+            c_all.append(tp.c[:, keep])
         t_end = t_off + float(tp.t[-1])
         segments.append(PlanSegment(window_index=st.window_index, kind=st.kind,
                                     target_range=(first, len(targets)), t_range=(t_off, t_end)))
         t_off = t_end
-    t, q, qd = np.concatenate(t_all), np.concatenate(q_all), np.concatenate(qd_all)
-    keep = np.concatenate([[True], np.diff(t) > 1e-9])  # zero-length stretches
-    return targets, segments, JointTrajectory(t=t[keep], q=q[keep], qd=qd[keep])
+    return targets, segments, JointTrajectory(t=np.concatenate(t_all),
+                                              c=np.concatenate(c_all, axis=1))
 
 
 def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows,

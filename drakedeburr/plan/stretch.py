@@ -9,7 +9,7 @@ import numpy as np
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.results import Stretch
-from drakedeburr.plan.timing import TimedPath, time_path
+from drakedeburr.plan.timing import TimedPath, rest_path, time_path
 from drakedeburr.plan.transitions import joint_move
 from drakedeburr.plan.types import CartesianTarget, FailureRecord
 
@@ -66,8 +66,7 @@ def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
                    f"{mv.clearance * 1e3:.2f} mm, {mv.method})"))
     s = mv.s if mv.s[-1] > 0 else np.linspace(0.0, 1e-9, len(mv.s))
     if len(mv.q) < 2 or mv.s[-1] <= 0:
-        timed = TimedPath(t=np.zeros(1), q=mv.q[:1], qd=np.zeros((1, 6)), sdot=np.zeros(1),
-                          v_tcp=np.zeros(1))
+        timed = rest_path(mv.q[0])
     else:
         timed = time_joint(ctx, mv.q, s, v_cap)
     return Stretch(kind, -1, timed, [make_target(kin, q1, -1, kind, -1, v_cap, "joint")]), mv, \

@@ -14,6 +14,7 @@ fixed (virtual TCP).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -61,17 +62,44 @@ class CartesianTarget:
 
 @dataclass(frozen=True, eq=False)
 class JointTrajectory:
-    """Timed joint trajectory as a piecewise cubic Hermite spline (exact to re-evaluate).
+    """Timed joint trajectory: between consecutive knots each joint is a polynomial in the time
+    since the knot (exact to re-evaluate; the planner's pieces are the composition of its joint
+    path with its timing, :func:`drakedeburr.plan.timing.compose`).
 
     Attributes:
         t: (K,) strictly increasing knot times [s], t[0] = 0.
-        q: (K, 6) joint positions at the knots [rad].
-        qd: (K, 6) joint velocities at the knots [rad/s].
+        c: (D + 1, K - 1, 6) coefficients per piece, highest power first (scipy ``PPoly``
+            layout) [rad, rad/s, ...].
     """
 
     t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
+    c: np.ndarray
+
+    @classmethod
+    def from_hermite(cls, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> JointTrajectory:
+        """The cubic Hermite spline through knots ``t`` (K,), positions ``q`` (K, 6) [rad] and
+        velocities ``qd`` (K, 6) [rad/s]."""
+        from scipy.interpolate import CubicHermiteSpline
+
+        t = np.asarray(t, float)
+        return cls(t=t, c=CubicHermiteSpline(t, np.asarray(q, float), np.asarray(qd, float),
+                                             axis=0).c)
+
+    @functools.cached_property
+    def _pp(self):
+        from scipy.interpolate import PPoly
+
+        return PPoly(np.asarray(self.c, float), np.asarray(self.t, float))
+
+    @property
+    def q(self) -> np.ndarray:
+        """(K, 6) joint positions at the knots [rad]."""
+        return self._pp(self.t)
+
+    @property
+    def qd(self) -> np.ndarray:
+        """(K, 6) joint velocities at the knots [rad/s]."""
+        return self._pp(self.t, 1)
 
     @property
     def duration(self) -> float:
@@ -79,14 +107,10 @@ class JointTrajectory:
 
     def value(self, t: np.ndarray | float) -> np.ndarray:
         """Joint positions at times ``t`` [s] -> (len(t), 6) (or (6,) for a scalar)."""
-        from scipy.interpolate import CubicHermiteSpline
-
-        return CubicHermiteSpline(self.t, self.q, self.qd, axis=0)(t)
+        return self._pp(t)
 
     def derivative(self, t: np.ndarray | float, order: int = 1) -> np.ndarray:
-        from scipy.interpolate import CubicHermiteSpline
-
-        return CubicHermiteSpline(self.t, self.q, self.qd, axis=0).derivative(order)(t)
+        return self._pp(t, order)
 
 
 @dataclass(frozen=True, eq=False)

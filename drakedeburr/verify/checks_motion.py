@@ -1,4 +1,4 @@
-"""Checks of the joint motion: limits (exact on the Hermite spline), rest and home, the
+"""Checks of the joint motion: limits (certified on every polynomial piece), rest and home, the
 configuration per window, the wrist singularity, manipulability."""
 
 from __future__ import annotations
@@ -27,33 +27,36 @@ def _worst(sp, values: np.ndarray, xs: np.ndarray, ratio: np.ndarray):
 
 
 def joint_position(sp, cfg) -> CheckItem:
-    pos, pos_x = _extremes(sp)["q"]
+    pos, pos_x, rem = _extremes(sp)["q"]
     lim = sp.limits
-    margin = np.minimum(pos - lim.lower, lim.upper - pos)
+    margin = np.minimum(pos - rem[:, None] - lim.lower, lim.upper - pos - rem[:, None])
     piece, cand, joint = np.unravel_index(np.argmin(margin), margin.shape)
     t_at = float(sp.plan.trajectory.t[piece] + pos_x[piece, cand, joint])
     m = float(margin[piece, cand, joint])
     return CheckItem(
         "joint_position", m >= 0, m, 0.0, "rad", ">=", **sp.where_time(t_at),
         detail=f"smallest margin to a position limit: {_NAMES[joint]} at "
-               f"{np.degrees(pos[piece, cand, joint]):.2f} deg (exact on the Hermite pieces)")
+               f"{np.degrees(pos[piece, cand, joint]):.2f} deg (certified on every polynomial "
+               "piece of the trajectory)")
 
 
 def joint_velocity(sp, cfg) -> CheckItem:
-    vel, x = _extremes(sp)["qd"]
+    vel, x, rem = _extremes(sp)["qd"]
     vlim = sp.limits.velocity
-    r, j, t_at, v = _worst(sp, vel, x, np.abs(vel) / vlim)
+    r, j, t_at, v = _worst(sp, vel, x, (np.abs(vel) + rem[:, None]) / vlim)
     return CheckItem("joint_velocity", r <= 1.0, r, 1.0, "ratio", "<=", **sp.where_time(t_at),
-                     detail=f"worst |qd|/limit: {_NAMES[j]} {v:.4g} rad/s of {vlim[j]:.4g}")
+                     detail=f"worst |qd|/limit: {_NAMES[j]} {v:.4g} rad/s of {vlim[j]:.4g} "
+                            "(certified on every piece)")
 
 
 def joint_acceleration(sp, cfg) -> CheckItem:
-    acc, x = _extremes(sp)["qdd"]
+    acc, x, rem = _extremes(sp)["qdd"]
     alim = sp.limits.acceleration
-    r, j, t_at, v = _worst(sp, acc, x, np.abs(acc) / alim)
+    r, j, t_at, v = _worst(sp, acc, x, (np.abs(acc) + rem[:, None]) / alim)
     return CheckItem("joint_acceleration", r <= 1.0, r, 1.0, "ratio", "<=",
                      **sp.where_time(t_at),
-                     detail=f"worst |qdd|/limit: {_NAMES[j]} {v:.4g} rad/s^2 of {alim[j]:.4g}")
+                     detail=f"worst |qdd|/limit: {_NAMES[j]} {v:.4g} rad/s^2 of {alim[j]:.4g} "
+                            "(certified on every piece)")
 
 
 def rest_at_ends(sp, cfg) -> CheckItem:

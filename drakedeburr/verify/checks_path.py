@@ -7,11 +7,12 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from drakedeburr.frames.local_frames import angles_from_axis_H
+from drakedeburr.verify.geometry import point_segment
 from drakedeburr.verify.report import CheckItem
 
-__all__ = ["path_deviation", "orientation_agreement", "edge_deviation", "edge_coverage",
-           "burr_engagement", "cone", "theta_box", "theta_statistics", "cl_chord_error",
-           "cl_chord_length"]
+__all__ = ["path_deviation", "orientation_agreement", "program_zones", "edge_deviation",
+           "edge_coverage", "burr_engagement", "cone", "theta_box", "theta_statistics",
+           "cl_chord_error", "cl_chord_length"]
 
 
 def _not_measurable(name: str, unit: str = "m", why: str = "") -> CheckItem:
@@ -45,6 +46,30 @@ def orientation_agreement(sp, cfg) -> CheckItem:
         "orientation_agreement", float(dev[i_o]) <= tol.orientation_match, float(dev[i_o]),
         tol.orientation_match, "rad", "<=", **sp.where(i_o),
         detail="tool orientation of the trajectory vs the slerp of the program")
+
+
+def program_zones(sp, cfg) -> CheckItem:
+    """The trajectory passes each target of a linear move within its zone (a fine point within
+    the path tolerance): the program's zones are the blends the plan simulated."""
+    tol, targets, p = cfg.tolerances, sp.targets, sp.samples.p_HT
+    move = sp.program.move
+    worst, worst_k = -np.inf, None
+    for k in np.unique(move[move >= 0]):
+        idx = np.flatnonzero((move == k) | (move == k + 1))
+        if len(idx) < 2:
+            continue
+        d = point_segment(targets[k].X_HT[:3, 3][None], p[idx[:-1]], p[idx[1:]])[0][0]
+        excess = d - max(targets[k].zone, tol.path_deviation)
+        if excess > worst:
+            worst, worst_k = float(excess), int(k)
+    if worst_k is None:
+        return _not_measurable("program_zones", why="no linear moves in the plan")
+    t = targets[worst_k]
+    return CheckItem(
+        "program_zones", worst <= 0.0, worst, 0.0, "m", "<=", window=int(t.window_index),
+        target_index=worst_k,
+        detail=f"distance of each target from the executed path less its zone (fine point: the "
+               f"path tolerance); largest at target {worst_k} (zone {t.zone * 1e3:.3f} mm)")
 
 
 def edge_deviation(sp, cfg) -> CheckItem:

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from drakedeburr.verify.geometry import binding_limit, slow_stretches
+from drakedeburr.verify.geometry import slow_stretches
 from drakedeburr.verify.report import CheckItem
 from drakedeburr.verify.sampling import KIND_CODE
 
-__all__ = ["tcp_speed_band", "slowdowns_justified", "tcp_speed_max", "j4_j6_range",
-           "cycle_time", "speed_band_per_window"]
+__all__ = ["tcp_speed_band", "slowdowns_justified", "tcp_speed_max", "program_speeds",
+           "j4_j6_range", "cycle_time", "speed_band_per_window"]
 
 
 #: (what, kind) of the columns of :func:`_limit_ratios`
@@ -18,8 +18,8 @@ _LIMITS = ([(f"J{j + 1}", "speed") for j in range(6)]
            + [(f"J{j + 1}", "acceleration") for j in range(6)] + [("TCP", "acceleration")])
 
 
-def _limit_ratios(sp, cfg, t0: float, t1: float, dt: float = 1e-3):
-    """On a 1 ms grid over [t0, t1] (independent of the verification sampling): times, tool
+def _limit_ratios(sp, cfg, t0: float, t1: float, dt: float = 0.5e-3):
+    """On a ``dt`` grid over [t0, t1] (independent of the verification sampling): times, tool
     travel from t0 [m] and per limit of :data:`_LIMITS` its share in use (|qd|/v_max,
     |qdd|/a_max, |TCP path acceleration|/the process's)."""
     from drakedeburr.verify.sampling import path_acceleration
@@ -37,10 +37,23 @@ def _limit_ratios(sp, cfg, t0: float, t1: float, dt: float = 1e-3):
     return t, s, ratios
 
 
-def _speed_band(sp, cfg, reach: float = 2e-3) -> dict:
+def _windowed_max(s: np.ndarray, r: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per point of travel ``s`` (n,): the largest of ``r`` (n, L) over the points within
+    ``reach`` of it, and the column (limit) it comes from."""
+    peak = r.max(axis=1)
+    which = r.argmax(axis=1)
+    lo = np.searchsorted(s, s - reach)
+    hi = np.searchsorted(s, s + reach, side="right")
+    best = np.array([a + int(np.argmax(peak[a:b])) for a, b in zip(lo, hi, strict=True)])
+    return peak[best], which[best]
+
+
+def _speed_band(sp, cfg, reach: float = 1e-3) -> dict:
     """Per cut window: the share of its travel in the feed band, extreme speeds and its slow
-    stretches, each with the limit nearest to binding within ``reach`` of tool travel of it
-    (the limit that holds the speed down can bind just before the speed leaves the band)."""
+    stretches, each with the least, over its points, of the largest share of a limit in use
+    within ``reach`` of tool travel of the point (the limit that binds there: on a time-optimal
+    timing one always does, switching from one to another where the timing switches between
+    accelerating and braking), and that limit."""
     s, tol = sp.samples, cfg.tolerances
     v_g = cfg.process.grinding_speed
     out = {}
@@ -54,9 +67,15 @@ def _speed_band(sp, cfg, reach: float = 2e-3) -> dict:
         stretches = slow_stretches(inside, ds, vm)
         if stretches:
             t_f, s_f, r_f = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
+            bound, which = _windowed_max(s_f, r_f, reach)
             for st in stretches:
-                near = (s_f >= st["from_m"] - reach) & (s_f <= st["to_m"] + reach)
-                st.update(binding_limit(r_f[near], _LIMITS))
+                on = np.flatnonzero((s_f >= st["from_m"]) & (s_f <= st["to_m"]))
+                if not len(on):  # shorter than the fine grid: its nearest point
+                    on = np.array([int(np.argmin(np.abs(s_f - st["from_m"])))])
+                k = on[int(np.argmin(bound[on]))]
+                joint, kind = _LIMITS[which[k]]
+                st.update(joint=joint, limit=kind, ratio=float(bound[k]),
+                          least_at_m=float(s_f[k]))
                 del st["a"], st["b"]
         out[w] = {"fraction_in_band": float(ds[inside].sum() / max(ds.sum(), 1e-300)),
                   "min_mps": float(s.speed[idx].min()), "max_mps": float(s.speed[idx].max()),
@@ -99,25 +118,60 @@ def slowdowns_justified(sp, cfg) -> CheckItem:
     return CheckItem(
         "slowdowns_justified", forced >= tol.forced_slowdown, forced, tol.forced_slowdown,
         "ratio", ">=", window=None if at is None else at[0],
-        detail="every stretch of a cut below the feed band has a limit in use there: a "
-               "joint's speed or acceleration, or the TCP's path acceleration, at this share "
-               "of its limit at least (within 2 mm of tool travel); below it the plan slows "
-               "for no reason the robot imposes" + where)
+        detail="wherever a cut runs below the feed band, a limit is in use there: a joint's "
+               "speed or acceleration, or the TCP's path acceleration, at this share of its "
+               "limit at least within 1 mm of tool travel (read every 0.5 ms); below it the "
+               "plan slows for no reason the robot imposes" + where)
+
+
+def _programmed_speed(sp) -> np.ndarray:
+    """(N,) the programmed speed each sample runs under [m/s]: its linear move's (the target
+    the move ends at), else the fastest target speed of its segment (joint moves)."""
+    s, targets = sp.samples, sp.targets
+    seg_speed = np.array([max([targets[k].speed for k in range(*g.target_range)
+                               if k < len(targets)] or [np.inf]) for g in sp.segments])
+    move = sp.program.move
+    speeds = np.array([t.speed for t in targets])
+    return np.where(move >= 0, speeds[np.maximum(move, 0)], seg_speed[s.segment])
 
 
 def tcp_speed_max(sp, cfg) -> CheckItem:
-    s, tol, targets = sp.samples, cfg.tolerances, sp.targets
-    seg_speed = np.array([max([targets[k].speed for k in range(*g.target_range)
-                               if k < len(targets)] or [np.inf]) for g in sp.segments])
-    v_lim = (1 + tol.speed_band) * np.where(s.kind == KIND_CODE["cut"],
-                                            cfg.process.grinding_speed, seg_speed[s.segment])
+    s, tol = sp.samples, cfg.tolerances
+    v_lim = (1 + tol.speed_band) * _programmed_speed(sp)
     ratio = s.speed / v_lim
     i = int(np.argmax(ratio))
     return CheckItem(
         "tcp_speed_max", bool(ratio[i] <= 1.0), float(s.speed[i]), float(v_lim[i]), "m/s", "<=",
         **sp.where(i),
-        detail="TCP speed never above the move's programmed speed + band (grinding speed on "
-               "cuts)")
+        detail="TCP speed never above the programmed speed of its move + band")
+
+
+def program_speeds(sp, cfg) -> CheckItem:
+    """Each cutting move's programmed speed is the speed the verified motion runs there: the
+    fastest sample on the move within the band below it (and the quantum the program rounds
+    up to); faster is caught by ``tcp_speed_max``."""
+    s, tol, targets = sp.samples, cfg.tolerances, sp.targets
+    move = sp.program.move
+    cut = (s.kind == KIND_CODE["cut"]) & (move >= 0)
+    worst, worst_k, n_moves = 1.0, None, 0
+    for k in np.unique(move[cut]):
+        on = cut & (move == k)
+        v_prog = targets[k].speed
+        v_max = float(s.speed[on].max())
+        floor = v_prog * (1 - tol.speed_band) - tol.speed_quantum
+        n_moves += 1
+        ratio = v_max / max(floor, 1e-12)
+        if ratio < worst:
+            worst, worst_k = ratio, int(k)
+    where = {} if worst_k is None else {
+        "window": int(targets[worst_k].window_index), "target_index": worst_k}
+    detail = (f"{n_moves} cutting moves: the fastest sample of each move against its programmed "
+              "speed less the band and the quantum")
+    if worst_k is not None:
+        detail += (f"; least at target {worst_k}: programmed "
+                   f"{targets[worst_k].speed * 1e3:.0f} mm/s")
+    return CheckItem("program_speeds", worst >= 1.0, worst, 1.0, "ratio", ">=", detail=detail,
+                     **where)
 
 
 def j4_j6_range(sp, cfg) -> CheckItem:

@@ -41,7 +41,8 @@ def shift_knot_into_hub(plan: Plan, knot: int, depth: float, cell) -> Plan:
                                                cell.hub_frame)
     dx = np.concatenate([np.zeros(3), depth * X_HT.rotation().matrix()[:, 2]])
     q[knot] = q[knot] + np.linalg.lstsq(J, dx, rcond=None)[0]
-    return replace(plan, trajectory=JointTrajectory(t=traj.t.copy(), q=q, qd=traj.qd.copy()))
+    return replace(plan, trajectory=JointTrajectory.from_hermite(t=traj.t.copy(), q=q,
+                                                                 qd=traj.qd.copy()))
 
 
 def speed_up_segment(plan: Plan, segment: int, factor: float) -> Plan:
@@ -67,7 +68,7 @@ def speed_up_segment(plan: Plan, segment: int, factor: float) -> Plan:
 
     segments = tuple(replace(s, t_range=retime(*s.t_range)) for s in plan.segments)
     return replace(plan, segments=segments,
-                   trajectory=JointTrajectory(t=new_t, q=traj.q.copy(), qd=qd))
+                   trajectory=JointTrajectory.from_hermite(t=new_t, q=traj.q.copy(), qd=qd))
 
 
 def slow_down_stretch(plan: Plan, window: int, start: float, end: float, factor: float) -> Plan:
@@ -93,7 +94,7 @@ def slow_down_stretch(plan: Plan, window: int, start: float, end: float, factor:
     traj = plan.trajectory
     segments = tuple(replace(s, t_range=(float(warp(s.t_range[0])), float(warp(s.t_range[1]))))
                      for s in plan.segments)
-    return replace(plan, segments=segments, trajectory=JointTrajectory(
+    return replace(plan, segments=segments, trajectory=JointTrajectory.from_hermite(
         t=warp(traj.t), q=traj.q.copy(), qd=np.asarray(traj.qd, float) / k(traj.t)[:, None]))
 
 
@@ -121,6 +122,6 @@ def drop_window(plan: Plan, window: int) -> Plan:
         new_segs.append(replace(s, target_range=(min(ks), max(ks) + 1), t_range=(t_a, t_b)))
     return replace(plan, targets=tuple(plan.targets[k] for k in keep_targets),
                    segments=tuple(new_segs),
-                   trajectory=JointTrajectory(t=new_t, q=traj.q[keep].copy(),
+                   trajectory=JointTrajectory.from_hermite(t=new_t, q=traj.q[keep].copy(),
                                               qd=traj.qd[keep].copy()),
                    tool_path={w: tp for w, tp in (plan.tool_path or {}).items() if w != window})

@@ -223,13 +223,13 @@ class SampledPlan:
 def validate_plan(plan) -> None:
     """Raise InputError if the plan cannot be sampled (shapes, times, no targets)."""
     traj = plan.trajectory
-    t, q, qd = (np.asarray(traj.t, float), np.asarray(traj.q, float), np.asarray(traj.qd, float))
+    t, c = np.asarray(traj.t, float), np.asarray(traj.c, float)
     if t.ndim != 1 or len(t) < 2:
         raise InputError(f"plan for hub {plan.hub}: trajectory needs >= 2 knots, got {t.shape}")
-    if q.shape != (len(t), 6) or qd.shape != (len(t), 6):
-        raise InputError(f"plan for hub {plan.hub}: trajectory q/qd must be ({len(t)}, 6), got "
-                         f"{q.shape}/{qd.shape}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+    if c.ndim != 3 or c.shape[1:] != (len(t) - 1, 6) or len(c) < 1:
+        raise InputError(f"plan for hub {plan.hub}: trajectory pieces must be (D + 1, "
+                         f"{len(t) - 1}, 6), got {c.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(c))):
         raise InputError(f"plan for hub {plan.hub}: trajectory holds NaN/inf")
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:

@@ -502,7 +502,8 @@ def reference_plan(
     b.joint_move(np.asarray(cell.q_home, float), params.home_speed)
     b.add_target(-1, "home", -1, X_home, cell.q_home, params.home_speed)
     b.add_segment(-1, "home", k0, t0)
-    trajectory = JointTrajectory(t=np.asarray(b.t), q=np.asarray(b.q), qd=np.asarray(b.qd))
+    trajectory = JointTrajectory.from_hermite(t=np.asarray(b.t), q=np.asarray(b.q),
+                                              qd=np.asarray(b.qd))
     return Plan(scenario=str(scenario), hub=str(hub), mode=cell.mode, X_WH=X_WH,
                 targets=tuple(b.targets), segments=tuple(b.segments), trajectory=trajectory,
                 tool_path=tool_paths, failures=(),
