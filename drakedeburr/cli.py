@@ -23,7 +23,8 @@ __all__ = ["main", "tqdm_progress", "STAGES"]
 
 # stage packages in pipeline order; each may provide a ``commands`` module
 STAGES: tuple[str, ...] = (
-    "hub", "path", "frames", "orientation", "cell", "plan", "verify", "post", "laser", "viz",
+    "hub", "path", "frames", "orientation", "robots", "programs", "cell", "plan", "verify", "post",
+    "laser", "viz",
 )
 
 log = logging.getLogger("drakedeburr")

@@ -36,7 +36,7 @@ def _run_plan(args: argparse.Namespace) -> int:
 
         options = replace(options, fillets=FilletOptions())
     plan = plan_hub(args.scenario, args.hub, args.mode, source=args.source, options=options,
-                    progress=tqdm_progress("plan"))
+                    progress=tqdm_progress("plan"), robot=args.robot)
     out = Path(args.output or f"plan_{plan.hub}_{plan.mode}")
     save_plan(plan, out)
     write_joint_csv(plan, out / "joints.csv")
@@ -70,10 +70,27 @@ def _verification_state(folder: Path) -> tuple[bool | None, str]:
     return None, "no verification report beside the plan"
 
 
+def plan_program(plan, name: str, *, flag: str = "", flag_reason: str = "",
+                 verified: bool = False, robot: str | None = None):
+    """The plan's program with the loads of its cell's tool (and workpiece) models."""
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.errors import InputError
+    from drakedeburr.programs import plan_robot, program_from_plan
+
+    spec = plan_robot(plan)
+    try:
+        cell = load_cell(plan.scenario, plan.hub, robot=spec.name)
+    except FileNotFoundError as exc:
+        raise InputError(f"the plan's cell ({plan.scenario}, hub {plan.hub}) is needed for the "
+                         f"tool's mass and centre of gravity: {exc}") from exc
+    return program_from_plan(plan, name, robot=robot, loads=cell.flange_loads(),
+                             verified=verified, flag=flag, flag_reason=flag_reason)
+
+
 def _run_export(args: argparse.Namespace) -> int:
     from drakedeburr.errors import InputError
-    from drakedeburr.plan.io import load_plan, program_from_plan
-    from drakedeburr.post.writers import write_program
+    from drakedeburr.plan.io import load_plan
+    from drakedeburr.programs import write_program
 
     folder = Path(args.plan)
     plan = load_plan(folder)
@@ -87,7 +104,7 @@ def _run_export(args: argparse.Namespace) -> int:
         flag, reason = "FORCED", f"exported with --force although {what}"
     elif passed is None:
         flag, reason = "UNVERIFIED", "no verification report; run drakedeburr verify"
-    program = program_from_plan(plan, args.name, flag=flag, flag_reason=reason)
+    program = plan_program(plan, args.name, flag=flag, flag_reason=reason, robot=args.robot)
     paths = write_program(program, args.output, args.format)
     print("wrote " + ", ".join(str(p) for p in paths) + (f" [{flag}]" if flag else ""))
     return 0
@@ -111,6 +128,8 @@ def register(subparsers) -> None:
                         "auto (orientation stage when usable)")
     p.add_argument("-o", "--output", default=None, help="plan folder (default plan_<hub>_<mode>)")
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
     p.add_argument("--fillets", action="store_true",
                    help="re-plan the tool orientation by a KTO where a cut slows at a fillet "
                         "(faster cut, several times the planning time; docs/plan.md)")
@@ -118,12 +137,21 @@ def register(subparsers) -> None:
 
     e = subparsers.add_parser(
         "export", help="write a plan as a robot program (RAPID, KRL, FANUC LS)",
-        description="Refuses a plan whose verification failed (report.json beside it) or, "
+        description="Writes the program of the plan's arm (RAPID for ABB, KRL for KUKA, LS for "
+                    "FANUC; tool in hand or stationary tool); every move carries its planned "
+                    "speed and zone. Refuses a plan whose verification failed (report.json "
+                    "beside it) or, "
                     "without a report, a plan with failures recorded, unless --force; the "
                     "program header then says FORCED (or UNVERIFIED without a report).")
     e.add_argument("plan", help="plan folder (or its plan.json)")
-    e.add_argument("--format", choices=EXPORT_FORMATS, required=True)
-    e.add_argument("-o", "--output", required=True, help="program file")
-    e.add_argument("--name", default="Deburr", help="program/module name")
+    e.add_argument("--format", choices=EXPORT_FORMATS, default=None,
+                   help="program format (default: the plan's arm's: RAPID for ABB, KRL for "
+                        "KUKA, LS for FANUC; another one is refused)")
+    e.add_argument("-o", "--output", required=True,
+                   help="program file (.mod, .src (+ .dat), .ls); KRL and LS programs are named "
+                        "after the file")
+    e.add_argument("--name", default="Deburr", help="RAPID module name")
+    e.add_argument("--robot", default=None, metavar="NAME",
+                   help="check that the plan was made for this arm (the arm comes from the plan)")
     e.add_argument("--force", action="store_true", help="export even if verification failed")
     e.set_defaults(_run=_run_export)

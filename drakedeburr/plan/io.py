@@ -1,4 +1,5 @@
-"""Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``), joint CSV, robot program.
+"""Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``) and the joint CSV (the robot
+program of a plan: :func:`drakedeburr.programs.program_from_plan`).
 
 Folder layout (format version 1, written atomically file by file, ``plan.json`` last so a
 folder with a ``plan.json`` is complete):
@@ -37,8 +38,7 @@ from drakedeburr.plan.types import (
 )
 from drakedeburr.units import deg_from_rad
 
-__all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv",
-           "program_from_plan"]
+__all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 1
@@ -186,60 +186,3 @@ def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Pa
     rows += [f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row)
              for ti, row in zip(t, qd, strict=True)]
     return atomic_write_text(path, "\n".join(rows) + "\n")
-
-
-def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_reason: str = "",
-                      include_transitions: bool = True, verified: bool = False):
-    """The Cartesian program of a plan as a :class:`drakedeburr.post.program.RobotProgram`.
-
-    Tool-in-hand: the program's tool is T on the flange (``X_FT``), its work object the hub
-    frame H, each move the TCP pose ``X_WT``. Workpiece-in-hand (stationary tool): the moving
-    "tool" is the hub frame H in the gripper (``X_FH``), the work object is the fixed tool
-    frame T (the virtual TCP), each move the hub pose ``X_WH``; the controller must be told the
-    tool is stationary (ABB: ``robhold TRUE`` tooldata / ``ufprog FALSE`` wobj), noted in the
-    header.
-
-    Args:
-        plan: the plan. name: program name.
-        flag, flag_reason: header warning (e.g. "FORCED" when verification failed); empty:
-            FORCED when the plan has failures, else UNVERIFIED (tool mode, post's rule).
-        include_transitions: keep home/transition joint moves (else cuts, approach, retract).
-        verified: the plan passed verification (otherwise the header says UNVERIFIED).
-    """
-    X_FT = np.asarray(plan.meta["X_FT"], float)
-    notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
-             f"cycle time {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records")
-    targets = [tg for tg in plan.targets
-               if include_transitions or tg.segment not in ("home", "transition")]
-    if plan.mode == "tool":
-        # the post stage's converter (tool-in-hand) with the plan's own tool transform
-        from dataclasses import replace
-
-        from drakedeburr.post.plan_program import program_from_plan as _post_program
-
-        extra = dict(flag=flag, flag_reason=flag_reason) if flag else {}
-        return _post_program(replace(plan, targets=tuple(targets)), name, X_FT, notes=notes,
-                             source=f"drakedeburr plan {plan.hub}", verified=verified, **extra)
-    from drakedeburr.post.program import JOINT, LINEAR, RobotProgram
-
-    if not flag and not verified:
-        flag, flag_reason = (("FORCED", "the plan has failure records") if plan.failures else
-                             ("UNVERIFIED", "the plan was not verified"))
-    # workpiece in hand: the moving "tool" is the hub frame in the gripper
-    X_FH = np.asarray(plan.meta["X_FH"], float)
-    X_WT_fixed = np.asarray(plan.meta["X_WT"], float)
-    comments, prev = [], None
-    for tg in targets:
-        label = (tg.segment, tg.window_index)
-        comments.append("" if label == prev else
-                        tg.segment + (f" window {tg.window_index}" if tg.window_index >= 0 else ""))
-        prev = label
-    return RobotProgram.from_poses(
-        name, np.array([np.asarray(tg.X_WF) @ X_FH for tg in targets]),
-        np.array([tg.q for tg in targets]), speed=[tg.speed for tg in targets],
-        zone=[tg.zone for tg in targets],
-        move_type=[JOINT if tg.motion == "joint" else LINEAR for tg in targets],
-        comments=comments, X_FT=X_FH, X_WO=X_WT_fixed, source=f"drakedeburr plan {plan.hub}",
-        flag=flag, flag_reason=flag_reason,
-        notes=notes + ("workpiece in hand: the tool data is the hub held by the robot; the work "
-                       "object is the stationary spindle (set robhold/ufprog accordingly)",))

@@ -970,6 +970,7 @@ def _assemble(cell, kin, stretches, home, window_stats, failures, scenario, hub,
         contact_radius_m=contact_geometry(options.contact_radius)[0],
         contact_lift_m=contact_geometry(options.contact_radius)[1],
         X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
+        robot=cell.arm.name, X_WB=kin.X_WB.tolist(),
         windows=window_stats,
         window_sources=[w.source for w in windows],
         depth_of_cut={str(w.window_index): w.depth_of_cut for w in windows},
@@ -1050,6 +1051,7 @@ def plan_hub(
     source: str = "auto",
     options: PlanOptions = PlanOptions(),
     progress: Progress = None,
+    robot: str | None = None,
 ) -> Plan:
     """Plan a whole hub end to end: hub -> CL -> orientation -> IK -> timed Plan.
 
@@ -1060,9 +1062,10 @@ def plan_hub(
         source: where the tool axes come from (see :func:`window_targets_for_hub`).
         options: planner settings (``options.windows`` limits the windows).
         progress: callback (done, total, label).
+        robot: registered arm (``drakedeburr robots``); None: the scenario's own arm.
 
     Returns:
-        The Plan (check ``plan.failures``).
+        The Plan (check ``plan.failures``); ``meta["robot"]`` names the arm.
     """
     from drakedeburr.cell.station import load_cell
     from drakedeburr.errors import InputError
@@ -1072,7 +1075,7 @@ def plan_hub(
         if mode not in ("tool", "workpiece"):
             raise InputError(f"mode must be 'tool' or 'workpiece', got {mode!r}")
         scenario = "tool_in_hand" if mode == "tool" else "workpiece_in_hand"
-    cell = load_cell(scenario, hub)
+    cell = load_cell(scenario, hub, robot=robot)
     hub_name = hub if hub is not None else cell.hub_sdf.parent.name
     hub_model = load_hub(cell.hub_sdf.parent)
     if options.params is None:

@@ -204,7 +204,7 @@ class _Kinematics:
     the Drake plant for the cross-check. Works for both cells."""
 
     def __init__(self, cell) -> None:
-        from drakedeburr.post.opw import IRB1600_10_120
+        from drakedeburr.robots import IRB1600_10_120
 
         self.cell = cell
         self.opw = IRB1600_10_120
@@ -223,7 +223,7 @@ class _Kinematics:
             self.X_WT = cell.tool_frame.CalcPoseInWorld(ctx).GetAsMatrix4()
 
     def X_WF(self, q: np.ndarray) -> np.ndarray:
-        from drakedeburr.post.opw import fk_opw
+        from drakedeburr.robots.opw import fk_opw
 
         return self.X_WB @ fk_opw(self.opw, q)
 
