@@ -221,3 +221,26 @@ def test_models_have_collision_geometry_on_every_link(name):
     for body in bodies:
         assert plant.GetCollisionGeometriesForBody(body), (name, body.name())
         assert body.default_mass() > 0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_models_do_not_collide_with_themselves_at_zero_and_ready(name):
+    """No permanent self-contact (non-adjacent links) at q = 0 and a working posture."""
+    from pydrake.planning import RobotDiagramBuilder
+
+    spec = mut.get_robot(name)
+    builder = RobotDiagramBuilder(0.0)
+    add_package_to(builder.parser().package_map())
+    (robot,) = builder.parser().AddModels(str(resolve_package_url(spec.model_url)))
+    builder.plant().WeldFrames(builder.plant().world_frame(),
+                               builder.plant().GetFrameByName("base", robot))
+    builder.plant().Finalize()
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    ready = spec.opw.q_robot_from_opw(np.array([0.0, 0.2, 1.9, 0.0, 1.04, 0.0]))
+    for q in (np.zeros(6), np.pi - np.mod(np.pi - ready, 2 * np.pi)):
+        diagram.plant().SetPositions(diagram.plant().GetMyMutableContextFromRoot(context), q)
+        query = diagram.scene_graph().get_query_output_port().Eval(
+            diagram.scene_graph().GetMyContextFromRoot(context))
+        pairs = query.ComputeSignedDistancePairwiseClosestPoints(0.1)
+        assert min((p.distance for p in pairs), default=1.0) > 0.01, (name, q)

@@ -195,19 +195,19 @@ def _links(spec: RobotSpec, env: ArmEnvelope, jp: JointPoints) -> str:
     xyz, rpy, length = _segment(jp.j2, jp.j3)
     out += _link("link_2", jp.j2, m[2], length,
                  _shape("upper_arm", xyz - jp.j2, rpy, _capsule(env.upper_arm_radius, length), c))
+    # the forearm housing up to where the rolling tube (link 4) starts, clear of the elbow
+    u = (jp.j5 - jp.j4) / np.linalg.norm(jp.j5 - jp.j4)
+    tube_start = jp.j4 + (env.elbow_radius + env.forearm_radius + 0.01) * u
     shapes = _shape("elbow", (0, 0, 0), along_y, _cyl(env.elbow_radius, env.elbow_width), c)
-    if np.linalg.norm(jp.j4 - jp.j3) > 1e-9:
-        xyz, rpy, length = _segment(jp.j3, jp.j4)
-        shapes += _shape("elbow_offset", xyz - jp.j3, rpy, _capsule(env.forearm_radius, length), c)
+    xyz, rpy, length = _segment(jp.j3, tube_start)
+    shapes += _shape("forearm_root", xyz - jp.j3, rpy, _capsule(env.forearm_radius, length), c)
     out += _link("link_3", jp.j3, m[3], env.elbow_width, shapes)
-    wrist_start = jp.j5 - (env.wrist_radius + 0.005) * (jp.j5 - jp.j4) / np.linalg.norm(
-        jp.j5 - jp.j4)
-    xyz, rpy, length = _segment(jp.j4, wrist_start)
+    wrist_start = jp.j5 - (env.wrist_radius + 0.005) * u
+    xyz, rpy, length = _segment(tube_start, wrist_start)
     out += _link("link_4", jp.j4, m[4], length,
                  _shape("forearm", xyz - jp.j4, rpy, _capsule(env.forearm_radius, length), c))
     out += _link("link_5", jp.j5, m[5], env.wrist_width,
                  _shape("wrist", (0, 0, 0), along_y, _cyl(env.wrist_radius, env.wrist_width), c))
-    u = (jp.j6 - jp.j5) / np.linalg.norm(jp.j6 - jp.j5)
     xyz, rpy, _ = _segment(jp.j6 - 0.01 * u, jp.j6)
     out += _link("link_6", jp.j6, m[6], 0.05,
                  _shape("flange", xyz - jp.j6, rpy, _cyl(env.flange_radius, 0.01),
