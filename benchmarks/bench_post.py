@@ -23,11 +23,11 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from drakedeburr.post.cl_reader import parse_cl_text, read_cl  # noqa: E402
-from drakedeburr.post.opw import IRB1600_10_120, fk_opw  # noqa: E402
-from drakedeburr.post.opw_ik import IRB1600_10_120_ROBOT as ROBOT  # noqa: E402
-from drakedeburr.post.opw_ik import ik_opw  # noqa: E402
 from drakedeburr.post.tool_axis import path_travel, solve_tool_axis_path  # noqa: E402
 from drakedeburr.resources import extdata_dir  # noqa: E402
+from drakedeburr.robots import IRB1600_10_120, fk_opw  # noqa: E402
+from drakedeburr.robots import IRB1600_10_120_ROBOT as ROBOT  # noqa: E402
+from drakedeburr.robots.opw_ik import ik_opw  # noqa: E402
 
 GOTO = re.compile(r"^\s*GOTO\s*/\s*([^,]+),([^,]+),([^,\s]+)")
 

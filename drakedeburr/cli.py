@@ -23,7 +23,8 @@ __all__ = ["main", "tqdm_progress", "STAGES"]
 
 # stage packages in pipeline order; each may provide a ``commands`` module
 STAGES: tuple[str, ...] = (
-    "hub", "path", "frames", "orientation", "cell", "plan", "verify", "post", "laser", "viz",
+    "hub", "path", "frames", "orientation", "robots", "programs", "cell", "plan", "verify", "post",
+    "laser", "viz",
 )
 
 log = logging.getLogger("drakedeburr")
@@ -75,6 +76,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose > 1 else logging.INFO)
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s",
                         datefmt="%H:%M:%S", stream=sys.stderr)
+    # the solvers' own messages (e.g. IPOPT stopping at its iteration cap on a retried IK
+    # point, which the planner handles) only with -vv
+    logging.getLogger("drake").setLevel(level if args.verbose > 1 else logging.ERROR)
     try:
         return int(args._run(args) or 0)
     except (InputError, FileNotFoundError) as exc:

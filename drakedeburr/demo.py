@@ -38,7 +38,8 @@ def run_demo(
     *,
     test_mode: bool = False,
     force: bool = False,
-    program_format: str = "rapid",
+    program_format: str | None = None,
+    robot: str | None = None,
     progress: Progress = None,
 ) -> dict:
     """Run the whole chain on ``hub`` in ``scenario`` and write every output to ``out_dir``.
@@ -49,7 +50,8 @@ def run_demo(
         scenario: bundled scenario name or YAML path.
         test_mode: plan and verify only the first window (CI).
         force: write the robot program even if verification fails (the header says FORCED).
-        program_format: "rapid", "krl" or "ls".
+        program_format: "rapid", "krl" or "ls"; default: the arm's controller's format.
+        robot: registered arm (``drakedeburr robots``); default: the scenario's.
         progress: optional callback (done, total, label) for the planning stage.
 
     Returns:
@@ -58,21 +60,16 @@ def run_demo(
     from drakedeburr._io import atomic_write_json
     from drakedeburr.config import load_config
     from drakedeburr.path import cl_table
-    from drakedeburr.plan import (
-        PlanOptions,
-        plan_hub,
-        program_from_plan,
-        save_plan,
-        write_joint_csv,
-    )
-    from drakedeburr.post import write_program
-    from drakedeburr.verify import verify_plan, write_report_html, write_report_json
-    from drakedeburr.verify.html import meshcat_replay_html
+    from drakedeburr.plan import PlanOptions, plan_hub, save_plan
+    from drakedeburr.post.export import ExportRefused, export_plan
+    from drakedeburr.programs import plan_robot
+    from drakedeburr.verify import verify_plan
+    from drakedeburr.verify.report import write_report_files
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     hub = hub or _default_hub()
-    config = load_config(scenario, hub)
+    config = load_config(scenario, hub, robot=robot)
     outputs: dict[str, str] = {}
     timings: dict[str, float] = {}
 
@@ -87,38 +84,35 @@ def run_demo(
     log.info("demo 2/4: planning %s in %s (%s)", hub, scenario,
              "window 0 only (test mode)" if test_mode else "all windows")
     plan = plan_hub(config, options=PlanOptions(windows=windows), progress=progress)
-    outputs["plan"] = str(save_plan(plan, out / "plan"))
-    outputs["joints_csv"] = str(write_joint_csv(plan, out / "joints.csv"))
+    folder = save_plan(plan, out / "plan")
+    outputs["plan"] = str(folder)
     timings["plan"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     log.info("demo 3/4: independent verification")
     report = verify_plan(plan, config, expected_windows=list(windows) if windows else None)
-    outputs["report_json"] = str(write_report_json(report, out / "report.json"))
-    replay = meshcat_replay_html(plan)
-    outputs["report_html"] = str(write_report_html(report, out / "report.html",
-                                                   replay_html=replay))
+    written = write_report_files(report, folder, plan=plan)
+    outputs.update(report_json=str(written[0]), report_html=str(written[1]))
     timings["verify"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
+    program_format = program_format or plan_robot(plan).program_format
     suffix = {"rapid": "mod", "krl": "src", "ls": "ls"}[program_format]
     program_path = out / f"deburr_{hub}.{suffix}"
-    if report.passed or force:
-        flag = "" if report.passed else "FORCED"
-        reason = "" if report.passed else "verification FAILED; written because --force was given"
-        prog = program_from_plan(plan, f"Deburr_{hub}", flag=flag, flag_reason=reason,
-                                 verified=report.passed)
-        written = write_program(prog, program_path, program_format)  # KRL: .src and .dat
-        outputs["program"] = str(written[0])
-        log.info("demo 4/4: %s program %s%s", program_format, program_path,
-                 "" if report.passed else " (FORCED: verification failed)")
-    else:
-        log.warning("demo 4/4: verification failed; no robot program written (use --force)")
+    try:
+        done = export_plan(folder, program_path, program_format, name=f"Deburr_{hub}",
+                           force=force, plan=plan)
+        outputs["program"] = str(done.paths[0])
+        log.info("demo 4/4: %s program %s%s", program_format, done.paths[0],
+                 f" ({done.flag}: {done.reason})" if done.flag else "")
+    except ExportRefused as exc:
+        log.warning("demo 4/4: no robot program written: %s", exc)
     timings["program"] = time.perf_counter() - t0
 
     summary = {
         "hub": hub,
         "scenario": scenario,
+        "robot": plan_robot(plan).name,
         "test_mode": test_mode,
         "passed": bool(report.passed),
         "plan_failures": len(plan.failures),
@@ -138,7 +132,8 @@ def _run(args: argparse.Namespace) -> int:
 
     summary = run_demo(Path(args.out), hub=args.hub, scenario=args.scenario,
                        test_mode=args.test_mode, force=args.force,
-                       program_format=args.format, progress=tqdm_progress("plan"))
+                       program_format=args.format, robot=args.robot,
+                       progress=tqdm_progress("plan"))
     print(json.dumps({k: summary[k] for k in ("hub", "scenario", "passed", "plan_failures",
                                                "cycle_seconds")}, indent=2))
     for name, path in summary["outputs"].items():
@@ -155,8 +150,11 @@ def register(subparsers) -> None:
     p.add_argument("--scenario", default=DEFAULT_SCENARIO,
                    help="bundled scenario or YAML path (default %(default)s)")
     p.add_argument("--out", default="out/demo", help="output folder (default %(default)s)")
-    p.add_argument("--format", default="rapid", choices=("rapid", "krl", "ls"),
-                   help="robot program format (default %(default)s)")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
+    p.add_argument("--format", default=None, choices=("rapid", "krl", "ls"),
+                   help="robot program format (default: the arm's: RAPID for ABB, KRL for KUKA, "
+                        "LS for FANUC)")
     p.add_argument("--force", action="store_true",
                    help="write the program even if verification fails (header says FORCED)")
     p.add_argument("--test-mode", action="store_true", help="first window only (CI)")

@@ -7,7 +7,7 @@ import drakedeburr.post.cl_post as mut
 from drakedeburr.cli import main
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import parse_cl_text, read_cl
-from drakedeburr.post.opw import fk_opw
+from drakedeburr.robots.opw import fk_opw
 
 CREO = "CreoPost__profilfraesen_2.ncl.2"
 WOBJ = [700.0, 0.0, 300.0, 0.0, 0.0, 30.0]
@@ -67,25 +67,26 @@ def test_cli_post(extdata, tmp_path):
     out2 = tmp_path / "creo2.mod"
     assert main(["post", cl, "--format", "rapid", "-o", str(out2), "--wobj", wobj, *fast]) == 0
     assert out2.read_text() == text
-    # KRL writes .src + .dat
+    # KRL is not a program for the ABB arm: a clear input error, nothing written
     assert main(["post", cl, "--format", "krl", "-o", str(tmp_path / "c.src"),
-                 "--wobj", wobj]) == 0
-    assert (tmp_path / "c.dat").read_text().count("DECL E6POS") == len(read_cl(cl).moves)
+                 "--wobj", wobj]) == 2
+    assert not (tmp_path / "c.src").exists() and not (tmp_path / "c.dat").exists()
     # in the robot base (no work object) the part sits inside the robot: nothing written
-    bad = tmp_path / "bad.ls"
-    assert main(["post", cl, "--format", "ls", "-o", str(bad), *fast]) == 1
+    bad = tmp_path / "bad.mod"
+    assert main(["post", cl, "--format", "rapid", "-o", str(bad), *fast]) == 1
     assert not bad.exists()
     # a bad work object is an input error (exit 2)
-    assert main(["post", cl, "--format", "ls", "-o", str(bad), "--wobj", "1,2,3"]) == 2
-    assert main(["post", str(tmp_path / "missing.cl"), "--format", "ls", "-o", str(bad)]) == 2
+    assert main(["post", cl, "--format", "rapid", "-o", str(bad), "--wobj", "1,2,3"]) == 2
+    assert main(["post", str(tmp_path / "missing.cl"), "--format", "rapid", "-o",
+                 str(bad)]) == 2
 
 
 def test_cli_force(tmp_path):
     cl = tmp_path / "far.apt"
     cl.write_text("UNITS/MM\nFEDRAT/9000,MMPM\nGOTO/0,0,0\nGOTO/2500,0,0\nGOTO/10,0,0\nFINI\n")
-    out = tmp_path / "far.ls"
-    args = ["post", str(cl), "--format", "ls", "-o", str(out), "--wobj", "700,0,300,0,0,0"]
+    out = tmp_path / "far.mod"
+    args = ["post", str(cl), "--format", "rapid", "-o", str(out), "--wobj", "700,0,300,0,0,0"]
     assert main(args) == 1 and not out.exists()
     assert main(args + ["--force"]) == 1
     text = out.read_text()
-    assert "FORCED" in text and "L P[2] 150mm/sec FINE ;" in text
+    assert "FORCED" in text and "MoveL p2, v150, fine," in text

@@ -72,8 +72,8 @@ def test_tool_on_the_irb1600_flange_matches_analytic_fk():
     from pydrake.math import RigidTransform
 
     from drakedeburr.laser.kinematics import inverse_kinematics
-    from drakedeburr.post.opw import IRB1600_10_120, fk_opw
     from drakedeburr.resources import model_path
+    from drakedeburr.robots import IRB1600_10_120, fk_opw
 
     meshcat = Meshcat()
     scene = mut.build_tool_scene(meshcat, robot_model=model_path("robots/irb1600_10_120.sdf"))

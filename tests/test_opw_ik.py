@@ -8,11 +8,11 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-import drakedeburr.post.opw_ik as mut
-from drakedeburr.post.opw import IRB1600_10_120, OpwParameters, fk_opw
+import drakedeburr.robots.opw_ik as mut
+from drakedeburr.robots import IRB1600_10_120, IRB1600_10_120_ROBOT, OpwParameters, fk_opw
 
 REPO = Path(__file__).resolve().parent.parent
-ROBOT = mut.IRB1600_10_120_ROBOT
+ROBOT = IRB1600_10_120_ROBOT
 
 
 def _angle_diff(a, b):

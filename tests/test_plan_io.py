@@ -13,7 +13,7 @@ from drakedeburr.plan.types import (
 
 
 def _plan(failures=()):
-    from drakedeburr.post.opw import IRB1600_10_120, fk_opw
+    from drakedeburr.robots import IRB1600_10_120, fk_opw
 
     rng = np.random.default_rng(0)
     q = np.array([[0, 0.3, -0.2, 0.1, 0.8, 0.2], [0.1, 0.35, -0.25, 0.15, 0.7, 0.3],
@@ -34,7 +34,8 @@ def _plan(failures=()):
     traj = JointTrajectory.from_hermite(t=np.array([0.0, 1.0, 2.0]), q=q, qd=np.zeros((3, 6)))
     meta = dict(X_FT=X_FT.tolist(), X_FH=np.eye(4).tolist(), X_WT=np.eye(4).tolist(), windows=[],
                 note=np.float64(1.5))
-    return Plan(scenario="tool_in_hand", hub="h", mode="tool", X_WH=X_WH, targets=tuple(targets),
+    return Plan(scenario="tool_in_hand", hub="h5_split", mode="tool", X_WH=X_WH,
+                targets=tuple(targets),
                 segments=(PlanSegment(-1, "home", (0, 1), (0.0, 1.0)),
                           PlanSegment(0, "cut", (1, 3), (1.0, 2.0))),
                 trajectory=traj, failures=tuple(failures), meta=meta)
@@ -74,49 +75,24 @@ def test_joint_csv_in_degrees(tmp_path):
     assert path.read_text().startswith("t_s,q1_deg")
 
 
-def test_program_from_plan_is_consistent_and_writes(tmp_path):
-    from drakedeburr.post.writers import write_program
-
-    prog = mut.program_from_plan(_plan(), "Deburr")
-    assert np.max(prog.consistency_error()) < 1e-6  # the writers accept 1e-6
-    assert [m.move_type for m in prog.moves] == ["joint", "linear", "linear"]
-    text = write_program(prog, tmp_path / "d.mod", "rapid")[0].read_text()
-    assert "MoveL" in text and "MoveJ" in text
-
-
-def test_export_cli_refuses_failed_plan_unless_forced(tmp_path):
+def test_export_cli_refuses_an_unverified_plan_unless_forced(tmp_path):
     from drakedeburr.cli import main
 
     mut.save_plan(_plan(failures=(FailureRecord(window=0, kind="ik", reason="x", point=1),)),
                   tmp_path / "p")
     out = tmp_path / "d.mod"
-    assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out)]) == 2
+    # no verification report: the gate refuses (the result failed: exit 1), nothing written
+    assert main(["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out)]) == 1
     assert not out.exists()
     args = ["export", str(tmp_path / "p"), "--format", "rapid", "-o", str(out), "--force"]
     assert main(args) == 0
-    assert "FORCED" in out.read_text()
-
-
-def test_workpiece_in_hand_program_uses_the_hub_as_tool_and_says_so(tmp_path):
-    """Stationary spindle: the program moves the hub frame H (tool data X_FH) relative to the
-    fixed tool frame T (work object); joints reproduce those poses; header says UNVERIFIED."""
-    from dataclasses import replace
-
-    from drakedeburr.post.writers import write_program
-
-    X_FH = np.eye(4)
-    X_FH[:3, 3] = [0.0, 0.0, 0.24]
-    X_WT = np.eye(4)
-    X_WT[:3, 3] = [0.75, 0.0, 0.05]
-    plan = _plan()
-    plan = replace(plan, mode="workpiece", meta=dict(plan.meta, X_FH=X_FH.tolist(),
-                                                     X_WT=X_WT.tolist()))
-    prog = mut.program_from_plan(plan, "DeburrWp")
-    assert np.max(prog.consistency_error()) < 1e-6
-    np.testing.assert_allclose(prog.X_FT, X_FH)
-    np.testing.assert_allclose(prog.X_WO, X_WT)
-    text = write_program(prog, tmp_path / "w.mod", "rapid")[0].read_text()
-    assert "UNVERIFIED" in text and "robhold" in text
+    text = out.read_text()
+    assert "UNVERIFIED" in text and "--force" in text
+    # the tool data carry the cell's spindle model (3.05 kg), not a default
+    assert "PERS tooldata tBurr := [TRUE," in text and "[3.050,[" in text
+    # KRL is not a program for the plan's ABB arm
+    assert main(["export", str(tmp_path / "p"), "--format", "krl", "-o",
+                 str(tmp_path / "d.src"), "--force"]) == 2
 
 
 def test_tool_path_reference_survives_save_load(tmp_path):

@@ -7,7 +7,7 @@ import pytest
 
 import drakedeburr.cell.reach as mut
 from drakedeburr.cell.station import load_cell
-from drakedeburr.post.opw import IRB1600_10_120, fk_opw
+from drakedeburr.robots import IRB1600_10_120, fk_opw
 
 STAND_IN_HUB = Path(__file__).resolve().parent / "data" / "stand_in_hub" / "hub.sdf"
 

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import drakedeburr.cell.station as mut
-from drakedeburr.cell import robot
 from drakedeburr.errors import InputError
 from drakedeburr.resources import hub_names, models_dir
 
@@ -48,12 +47,14 @@ def test_modes_and_degrees_of_freedom(cell):
 
 
 def test_limits_come_from_the_robot_model(cell):
-    np.testing.assert_allclose(cell.q_lower, robot.POSITION_LOWER)
-    np.testing.assert_allclose(cell.q_upper, robot.POSITION_UPPER)
-    np.testing.assert_allclose(cell.v_upper, robot.VELOCITY_LIMITS)
-    np.testing.assert_allclose(cell.v_lower, -robot.VELOCITY_LIMITS)
-    np.testing.assert_allclose(cell.a_upper, robot.ACCELERATION_LIMITS)
-    np.testing.assert_allclose(cell.a_lower, -robot.ACCELERATION_LIMITS)
+    arm = cell.arm
+    assert arm.name == "irb1600"  # the bundled scenarios' own arm
+    np.testing.assert_allclose(cell.q_lower, arm.q_lower)
+    np.testing.assert_allclose(cell.q_upper, arm.q_upper)
+    np.testing.assert_allclose(cell.v_upper, arm.v_max)
+    np.testing.assert_allclose(cell.v_lower, -arm.v_max)
+    np.testing.assert_allclose(cell.a_upper, arm.a_max)
+    np.testing.assert_allclose(cell.a_lower, -arm.a_max)
     assert not cell.q_home.flags.writeable
 
 

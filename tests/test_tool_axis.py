@@ -7,9 +7,9 @@ from scipy.spatial.transform import Rotation
 import drakedeburr.post.tool_axis as mut
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import read_cl
-from drakedeburr.post.opw import fk_opw
-from drakedeburr.post.opw_ik import IRB1600_10_120_ROBOT as ROBOT
-from drakedeburr.post.opw_ik import travel_weights
+from drakedeburr.robots import IRB1600_10_120_ROBOT as ROBOT
+from drakedeburr.robots.opw import fk_opw
+from drakedeburr.robots.opw_ik import travel_weights
 
 
 @pytest.fixture(scope="module")

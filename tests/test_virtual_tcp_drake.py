@@ -34,9 +34,9 @@ import pytest
 
 import drakedeburr.post.virtual_tcp as mut
 from drakedeburr.config import load_config
-from drakedeburr.post.opw import fk_opw
-from drakedeburr.post.opw_ik import arm_branches, solve_path
 from drakedeburr.resources import hub_names
+from drakedeburr.robots.opw import fk_opw
+from drakedeburr.robots.opw_ik import arm_branches, solve_path
 
 pytestmark = pytest.mark.skipif(not hub_names(), reason="no bundled hub models")
 

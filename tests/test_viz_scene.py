@@ -39,7 +39,7 @@ def test_static_html_is_self_contained_and_holds_the_scene(meshcat, tmp_path):
     assert not re.search(r"<link[^>]*\shref=[\"']https?:", html)
     assert "meshcat" in html.lower()
     commands = _decoded_commands(html)
-    for name in (b"/drakedeburr/cell/irb1600/link_3", b"/drakedeburr/cell/spindle/burr",
+    for name in (b"/drakedeburr/cell/robot/link_3", b"/drakedeburr/cell/spindle/burr",
                  b"/drakedeburr/cell/hub/hub", b"/drakedeburr/edges/window_01",
                  b"/drakedeburr/points", b"/drakedeburr/normals", b"/drakedeburr/frames/T"):
         assert name in commands, name

@@ -6,12 +6,6 @@ are the same code with different frames. Tool geometry (the burr) is defined onc
 """
 
 from drakedeburr.cell.reach import ReachResult, ReachSurvey, ReachTarget, face_targets, survey_reach
-from drakedeburr.cell.robot import (
-    ACCELERATION_LIMITS,
-    JOINT_NAMES,
-    ROBOT_MODEL_NAME,
-    VELOCITY_LIMITS,
-)
 from drakedeburr.cell.station import Cell, load_cell, resolve_hub_sdf
 from drakedeburr.cell.tools import BURR, FLOATING_SPINDLE, SPINDLE_STAND, BurrGeometry
 
@@ -23,10 +17,6 @@ __all__ = [
     "BURR",
     "FLOATING_SPINDLE",
     "SPINDLE_STAND",
-    "JOINT_NAMES",
-    "ROBOT_MODEL_NAME",
-    "VELOCITY_LIMITS",
-    "ACCELERATION_LIMITS",
     "ReachTarget",
     "ReachResult",
     "ReachSurvey",

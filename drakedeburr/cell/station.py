@@ -2,8 +2,9 @@
 
 A scenario (``models/scenarios/*.yaml``) is a list of Drake model directives. It must contain
 
-* the robot as model instance ``irb1600`` (``robots/irb1600_10_120.sdf``) welded to the world by
-  its ``base`` frame (world W = robot base frame), with its home configuration given as the
+* the arm as model instance ``robot``: a registered arm's model (:mod:`drakedeburr.robots`,
+  e.g. ``robots/irb1600_10_120.sdf``) welded to the world by its ``base`` frame at its mount
+  (the bundled cells: W = the IRB1600's base), with its home configuration given as the
   model's ``default_joint_positions``;
 * exactly one frame named ``tool_tip`` (the tool frame T of a tool model);
 * exactly one frame named ``hub_mount``: where the hub frame H goes.
@@ -13,6 +14,10 @@ body ``hub`` whose body frame is H) and welds H onto ``hub_mount``. Whether ``to
 ``hub_mount`` moves with the robot decides the mode: ``"tool"`` (tool-in-hand: spindle on the
 flange, hub on a fixture) or ``"workpiece"`` (workpiece-in-hand: hub on a flange gripper, spindle
 on a stand; T is then the fixed "virtual TCP" of source S0). Everything else is the same code.
+
+``load_cell(..., robot=NAME)`` builds a bundled cell with another registered arm: its model,
+base pose, home and pedestal come from the arm's mount in that cell (``RobotSpec.mount``); the
+fixture, stand and tools stay where the scenario puts them. ``Cell.arm`` is the arm's spec.
 
 Collision filtering done here: bodies joined by a joint or welded together (Drake's default,
 so the flange/spindle, spindle/burr, fixture/table pairs) and the hub against the body that
@@ -29,9 +34,23 @@ from typing import Literal
 
 import numpy as np
 
-from drakedeburr.cell.robot import JOINT_NAMES, ROBOT_MODEL_NAME
 from drakedeburr.errors import InputError
-from drakedeburr.resources import add_package_to, hub_dir, hub_names, scenario_path
+from drakedeburr.resources import (
+    add_package_to,
+    hub_dir,
+    hub_names,
+    models_dir,
+    scenario_path,
+)
+from drakedeburr.robots import (
+    BASE_FRAME_NAME,
+    FLANGE_FRAME_NAME,
+    JOINT_NAMES,
+    ROBOT_MODEL_NAME,
+    RobotSpec,
+    get_robot,
+    robot_for_model_url,
+)
 
 __all__ = [
     "Cell",
@@ -67,10 +86,13 @@ class Cell:
             pointing out of the tool (spindle -> tip).
         hub_frame: frame H (body frame of the hub): origin on the hub axis at the front face,
             +Z out of the visible face.
-        flange_frame: frame F (ABB tool0). base_frame: robot base (= world W here).
+        flange_frame: frame F (the vendor's flange frame, +Z out). base_frame: robot base B
+            (at the arm's mount; ``X_WB()``).
+        arm: the arm's :class:`~drakedeburr.robots.RobotSpec` (kinematics, conventions,
+            controller).
         q_lower, q_upper: position limits [rad].
         v_lower, v_upper: velocity limits [rad/s].
-        a_lower, a_upper: acceleration limits [rad/s^2] (assumed values, see robot.py).
+        a_lower, a_upper: acceleration limits [rad/s^2] (assumed values, see the arm's spec).
         q_home: home configuration [rad] from the scenario; collision-free.
         burr_head_ids: proximity geometries of the burr's cutting head.
         hub_ids: proximity geometries of the hub.
@@ -93,6 +115,7 @@ class Cell:
     hub_frame: object
     flange_frame: object
     base_frame: object
+    arm: RobotSpec
     q_lower: np.ndarray
     q_upper: np.ndarray
     v_lower: np.ndarray
@@ -147,6 +170,41 @@ class Cell:
     def X_WF(self, q: np.ndarray):
         """Pose of the robot flange F (tool0) in world at joints ``q`` [rad]."""
         return self.flange_frame.CalcPoseInWorld(self._plant_context(q))
+
+    def X_WB(self):
+        """Pose of the robot base frame B in world (the arm's mount; independent of q)."""
+        return self.base_frame.CalcPoseInWorld(self._plant_context(self.q_home))
+
+    def flange_loads(self):
+        """What the arm carries, from the cell's models: the equipment bolted to the flange
+        (spindle, or gripper) and the workpiece held (workpiece in hand), masses [kg] and
+        centres of gravity in the flange frame F [m] (a
+        :class:`~drakedeburr.programs.FlangeLoads` for the program writers)."""
+        from drakedeburr.programs import FlangeLoads
+
+        plant_context = self._plant_context(self.q_home)
+        X_FW = self.flange_frame.CalcPoseInWorld(plant_context).inverse()
+        parts = {"tool": [0.0, np.zeros(3), []], "workpiece": [0.0, np.zeros(3), []]}
+        for instance in self.moving_model_instances:
+            if instance == self.robot:
+                continue
+            key = "workpiece" if instance == self.hub_instance else "tool"
+            for index in self.plant.GetBodyIndices(instance):
+                body = self.plant.get_body(index)
+                m = body.default_mass()
+                p_BoBcm = body.CalcCenterOfMassInBodyFrame(plant_context)
+                p_F = X_FW.multiply(body.EvalPoseInWorld(plant_context).multiply(p_BoBcm))
+                parts[key][0] += m
+                parts[key][1] += m * p_F
+            parts[key][2].append(self.plant.GetModelInstanceName(instance))
+        (mt, st, nt), (mw, sw, nw) = parts["tool"], parts["workpiece"]
+        if mt <= 0:
+            raise InputError(f"{self.scenario}: nothing with mass is mounted on the flange")
+        source = f"cell models ({', '.join(nt + nw)}), {self.scenario.name}"
+        return FlangeLoads(tool_mass=float(mt), tool_cog=tuple(map(float, st / mt)),
+                           workpiece_mass=float(mw),
+                           workpiece_cog=tuple(map(float, sw / mw)) if mw > 0 else (0.0, 0.0, 0.0),
+                           source=source)
 
     def X_HT(self, q: np.ndarray):
         """Pose of the tool frame T in the hub frame H at joints ``q``: the process pose."""
@@ -251,10 +309,69 @@ def _unique_frame(plant, name: str, scenario: Path):
     return frames[0]
 
 
+def _bundled_cell_name(scenario_file: Path) -> str | None:
+    """The bundled cell name of a scenario file (``tool_in_hand``), None for a user file."""
+    bundled = models_dir() / "scenarios"
+    return scenario_file.stem if scenario_file.parent.resolve() == bundled.resolve() else None
+
+
+def _robot_directive(items: list, scenario_file: Path):
+    """(add_model, base weld, pedestal add_model or None) of the arm in a scenario's
+    directive list (the objects in ``items``, so they can be changed in place)."""
+    model = weld = pedestal = None
+    base = f"{ROBOT_MODEL_NAME}::{BASE_FRAME_NAME}"
+    for d in items:
+        if d.add_model is not None and d.add_model.name == ROBOT_MODEL_NAME:
+            model = d.add_model
+        elif d.add_model is not None and d.add_model.name == "pedestal":
+            pedestal = d.add_model
+        elif d.add_weld is not None and d.add_weld.child == base:
+            weld = d.add_weld
+    if model is None:
+        raise InputError(f"{scenario_file}: no model instance named {ROBOT_MODEL_NAME!r} (the arm)")
+    if weld is None or weld.parent != "world":
+        raise InputError(f"{scenario_file}: the arm must be welded to 'world' by "
+                         f"'{ROBOT_MODEL_NAME}::{BASE_FRAME_NAME}'")
+    return model, weld, pedestal
+
+
+def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -> RobotSpec:
+    """The scenario's arm; with ``robot`` given, the directives are changed to place that arm
+    at its mount in this (bundled) cell. Returns the arm's spec."""
+    from pydrake.common.schema import Transform
+    from pydrake.math import RigidTransform
+
+    items = list(directives.directives)  # (the bindings hand out copies: edit, then set back)
+    model, weld, pedestal = _robot_directive(items, scenario_file)
+    scenario_arm = robot_for_model_url(model.file)
+    if robot is None:
+        if scenario_arm is None:
+            raise InputError(f"{scenario_file}: the arm model {model.file} is not a registered "
+                             "arm (drakedeburr robots lists them)")
+        return scenario_arm
+    spec = get_robot(robot)
+    if scenario_arm is spec:
+        return spec
+    cell_name = _bundled_cell_name(scenario_file)
+    if cell_name is None:
+        raise InputError(f"{scenario_file}: places the arm {model.file}; to use {spec.name} "
+                         "write a scenario that places it (base pose, home) or use a bundled cell")
+    mount = spec.mount(cell_name)
+    model.file = spec.model_url
+    model.default_joint_positions = {n: np.array([q]) for n, q in zip(
+        JOINT_NAMES, mount.q_home, strict=True)}
+    weld.X_PC = Transform(RigidTransform(mount.X_WB))
+    if pedestal is not None:
+        pedestal.file = mount.pedestal_url
+    directives.directives = items
+    return spec
+
+
 def load_cell(
     scenario: str | Path,
     hub: str | Path | None = None,
     *,
+    robot: str | RobotSpec | None = None,
     time_step: float = 0.0,
 ) -> Cell:
     """Build the cell of a scenario with a hub.
@@ -264,6 +381,8 @@ def load_cell(
             to a model-directives YAML file (see module docstring for what it must contain).
         hub: bundled hub name, hub folder, or path to a hub SDF (model ``hub``, body ``hub``
             with its body frame = H). ``None``: the first bundled hub.
+        robot: registered arm name (``drakedeburr robots``) or spec; ``None``: the scenario's
+            own arm. A bundled cell is built with the arm at its mount there.
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
 
     Returns:
@@ -271,9 +390,9 @@ def load_cell(
 
     Raises:
         FileNotFoundError: unknown scenario or hub.
-        InputError: the scenario or hub breaks the conventions above (the message names the file).
+        InputError: the scenario or hub breaks the conventions above, or the arm has no mount in
+            the cell (the message names the file).
     """
-    from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
     from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirectives
     from pydrake.planning import RobotDiagramBuilder
 
@@ -286,16 +405,53 @@ def load_cell(
     add_package_to(parser.package_map())
     try:
         directives = LoadModelDirectives(str(scenario_file))
-        ProcessModelDirectives(directives, plant, parser)
     except RuntimeError as exc:  # Drake reports parse errors as RuntimeError
         raise InputError(f"{scenario_file}: cannot load model directives: {exc}") from exc
-    if not plant.HasModelInstanceNamed(ROBOT_MODEL_NAME):
-        raise InputError(f"{scenario_file}: no model instance named {ROBOT_MODEL_NAME!r}")
-    robot = plant.GetModelInstanceByName(ROBOT_MODEL_NAME)
+    arm = _apply_arm(directives, scenario_file, robot)
+    try:
+        ProcessModelDirectives(directives, plant, parser)
+    except RuntimeError as exc:
+        raise InputError(f"{scenario_file}: cannot load model directives: {exc}") from exc
+    robot_instance = plant.GetModelInstanceByName(ROBOT_MODEL_NAME)
     if plant.HasModelInstanceNamed(HUB_MODEL_NAME):
         raise InputError(f"{scenario_file}: the model name {HUB_MODEL_NAME!r} is reserved for "
                          "the hub that load_cell adds")
+    hub_instance, hub_body, hub_mount, tool_frame = _add_hub(plant, parser, hub_sdf, scenario_file)
+    plant.Finalize()
+    _check_joints(plant, robot_instance, scenario_file)
+    mode, world_group = _mode(plant, tool_frame, hub_body, scenario_file)
+    sets, moving = _geometry_sets(builder.scene_graph(), plant, robot_instance, hub_instance,
+                                  world_group, scenario_file, hub_sdf)
+    _filter_holder(builder.scene_graph(), plant, hub_mount, hub_body, sets["hub"])
+    diagram = builder.Build()
+    plant = diagram.plant()
+    cell = Cell(
+        diagram=diagram, plant=plant, scene_graph=diagram.scene_graph(), robot=robot_instance,
+        hub_instance=hub_instance, mode=mode, tool_frame=tool_frame,
+        hub_frame=hub_body.body_frame(),
+        flange_frame=plant.GetFrameByName(FLANGE_FRAME_NAME, robot_instance),
+        base_frame=plant.GetFrameByName(BASE_FRAME_NAME, robot_instance), arm=arm,
+        q_lower=plant.GetPositionLowerLimits(), q_upper=plant.GetPositionUpperLimits(),
+        v_lower=plant.GetVelocityLowerLimits(), v_upper=plant.GetVelocityUpperLimits(),
+        a_lower=plant.GetAccelerationLowerLimits(), a_upper=plant.GetAccelerationUpperLimits(),
+        q_home=plant.GetDefaultPositions(),
+        burr_head_ids=frozenset(sets["burr"]), hub_ids=frozenset(sets["hub"]),
+        robot_ids=frozenset(sets["robot"]), environment_ids=frozenset(sets["env"]),
+        moving_model_instances=tuple(sorted(moving, key=int)),
+        scenario=scenario_file, hub_sdf=hub_sdf,
+    )
+    for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
+                cell.a_upper, cell.q_home):
+        arr.setflags(write=False)
+    _check_payload(cell)
+    log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
+              hub_sdf, arm.name)
+    return cell
 
+
+def _add_hub(plant, parser, hub_sdf: Path, scenario_file: Path):
+    """Parse the hub and weld its frame H onto ``hub_mount``; returns (instance, body,
+    hub_mount frame, tool frame)."""
     try:
         hub_models = parser.AddModels(str(hub_sdf))
     except RuntimeError as exc:
@@ -309,19 +465,24 @@ def load_cell(
     hub_mount = _unique_frame(plant, HUB_MOUNT_FRAME_NAME, scenario_file)
     plant.WeldFrames(hub_mount, hub_body.body_frame())
     tool_frame = _unique_frame(plant, TOOL_FRAME_NAME, scenario_file)
+    return hub_instance, hub_body, hub_mount, tool_frame
 
-    plant.Finalize()
+
+def _check_joints(plant, robot_instance, scenario_file: Path) -> None:
     if plant.num_positions() != len(JOINT_NAMES):
         raise InputError(
             f"{scenario_file}: the cell must have exactly the {len(JOINT_NAMES)} robot joints as "
             f"degrees of freedom, found {plant.num_positions()} (is every other model welded?)"
         )
     for i, name in enumerate(JOINT_NAMES):
-        joint = plant.GetJointByName(name, robot)
+        joint = plant.GetJointByName(name, robot_instance)
         if joint.position_start() != i:
             raise InputError(
                 f"{scenario_file}: joint {name} is at position {joint.position_start()}, not {i}")
 
+
+def _mode(plant, tool_frame, hub_body, scenario_file: Path):
+    """("tool" | "workpiece", indices of the bodies welded to the world)."""
     world_group = {b.index() for b in plant.GetBodiesWeldedTo(plant.world_body())}
     tool_fixed = tool_frame.body().index() in world_group
     hub_fixed = hub_body.index() in world_group
@@ -330,32 +491,43 @@ def load_cell(
             f"{scenario_file}: exactly one of {TOOL_FRAME_NAME!r} and the hub must move with the "
             f"robot (tool fixed: {tool_fixed}, hub fixed: {hub_fixed})"
         )
-    mode: Literal["tool", "workpiece"] = "workpiece" if tool_fixed else "tool"
+    return ("workpiece" if tool_fixed else "tool"), world_group
 
-    # geometry sets
-    scene_graph = builder.scene_graph()
+
+def _geometry_sets(scene_graph, plant, robot_instance, hub_instance, world_group,
+                   scenario_file: Path, hub_sdf: Path):
+    """Partition the proximity geometries: {"burr", "hub", "robot", "env"} and the model
+    instances moving with the robot."""
+    from pydrake.geometry import Role
+
     inspector = scene_graph.model_inspector()
-    burr_head, hub_ids, robot_ids, env_ids = set(), set(), set(), set()
-    moving_instances = {robot}
+    sets: dict[str, set] = {"burr": set(), "hub": set(), "robot": set(), "env": set()}
+    moving = {robot_instance}
     for gid in inspector.GetAllGeometryIds(Role.kProximity):
         body = plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
         if body.model_instance() == hub_instance:
-            hub_ids.add(gid)
+            sets["hub"].add(gid)
         elif inspector.GetName(gid).split("::")[-1] == BURR_HEAD_GEOMETRY_NAME:
-            burr_head.add(gid)
+            sets["burr"].add(gid)
         elif body.index() in world_group:
-            env_ids.add(gid)
+            sets["env"].add(gid)
         else:
-            robot_ids.add(gid)
+            sets["robot"].add(gid)
         if body.index() not in world_group:
-            moving_instances.add(body.model_instance())
-    if not burr_head:
+            moving.add(body.model_instance())
+    if not sets["burr"]:
         raise InputError(f"{scenario_file}: no collision geometry named "
                          f"{BURR_HEAD_GEOMETRY_NAME!r} (the burr's cutting head)")
-    if not hub_ids:
+    if not sets["hub"]:
         raise InputError(f"{hub_sdf}: the hub has no collision geometry")
+    return sets, moving
 
-    # the hub is clamped by the body carrying hub_mount: that contact is intended
+
+def _filter_holder(scene_graph, plant, hub_mount, hub_body, hub_ids) -> None:
+    """The hub is clamped by the body carrying hub_mount: that contact is intended."""
+    from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+
+    inspector = scene_graph.model_inspector()
     holder = plant.GetBodiesWeldedTo(hub_mount.body())
     holder_frames = {plant.GetBodyFrameIdOrThrow(b.index()) for b in holder
                      if b.index() != hub_body.index()}
@@ -371,38 +543,16 @@ def load_cell(
             CollisionFilterDeclaration().ExcludeBetween(
                 GeometrySet(list(hub_ids)), GeometrySet(holder_ids)))
 
-    diagram = builder.Build()
-    plant = diagram.plant()
-    scene_graph = diagram.scene_graph()
 
-    cell = Cell(
-        diagram=diagram,
-        plant=plant,
-        scene_graph=scene_graph,
-        robot=robot,
-        hub_instance=hub_instance,
-        mode=mode,
-        tool_frame=tool_frame,
-        hub_frame=hub_body.body_frame(),
-        flange_frame=plant.GetFrameByName("flange", robot),
-        base_frame=plant.GetFrameByName("base", robot),
-        q_lower=plant.GetPositionLowerLimits(),
-        q_upper=plant.GetPositionUpperLimits(),
-        v_lower=plant.GetVelocityLowerLimits(),
-        v_upper=plant.GetVelocityUpperLimits(),
-        a_lower=plant.GetAccelerationLowerLimits(),
-        a_upper=plant.GetAccelerationUpperLimits(),
-        q_home=plant.GetDefaultPositions(),
-        burr_head_ids=frozenset(burr_head),
-        hub_ids=frozenset(hub_ids),
-        robot_ids=frozenset(robot_ids),
-        environment_ids=frozenset(env_ids),
-        moving_model_instances=tuple(sorted(moving_instances, key=int)),
-        scenario=scenario_file,
-        hub_sdf=hub_sdf,
-    )
-    for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
-                cell.a_upper, cell.q_home):
-        arr.setflags(write=False)
-    log.info("loaded cell %s (%s-in-hand) with hub %s", scenario_file.name, mode, hub_sdf)
-    return cell
+def _check_payload(cell: Cell) -> None:
+    """Warn when what the arm carries (every moving body that is not an arm link) exceeds the
+    arm's rated payload; planning is kinematic and goes on."""
+    plant = cell.plant
+    carried = 0.0
+    for instance in cell.moving_model_instances:
+        if instance == cell.robot:
+            continue
+        carried += sum(plant.get_body(b).default_mass() for b in plant.GetBodyIndices(instance))
+    if carried > cell.arm.payload_kg:
+        log.warning("%s: the arm %s carries %.1f kg (tool/gripper/hub models) but is rated for "
+                    "%.1f kg", cell.scenario.name, cell.arm.name, carried, cell.arm.payload_kg)

@@ -1,12 +1,7 @@
 """drakedeburr.plan stage: cone-constrained IK, the executed motion, smoothing, timing, Plan."""
 
 from drakedeburr.plan.ik import IkOptions, WindowIk, solve_window_ik
-from drakedeburr.plan.io import (
-    load_plan,
-    program_from_plan,
-    save_plan,
-    write_joint_csv,
-)
+from drakedeburr.plan.io import load_plan, save_plan, write_joint_csv
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.planner import PlanOptions, plan_hub, plan_windows, window_targets_for_hub
 from drakedeburr.plan.targets import (
@@ -28,5 +23,5 @@ __all__ = [
     "tool_point_H", "edge_point_from_tool_pose", "X_HT_from_axis", "burr_contact_radius",
     "contact_geometry",
     "TimingLimits", "time_path",
-    "save_plan", "load_plan", "write_joint_csv", "program_from_plan",
+    "save_plan", "load_plan", "write_joint_csv",
 ]

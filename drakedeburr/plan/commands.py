@@ -4,7 +4,6 @@ program)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -27,7 +26,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from drakedeburr.cli import tqdm_progress
-    from drakedeburr.plan.io import save_plan, write_joint_csv
+    from drakedeburr.plan.io import save_plan
     from drakedeburr.plan.planner import PlanOptions, plan_hub
 
     options = replace(PlanOptions(), windows=_parse_windows(args.windows))
@@ -41,11 +40,10 @@ def _run_plan(args: argparse.Namespace) -> int:
     from drakedeburr.config import load_config
     from drakedeburr.hub import DEFAULT_HUB
 
-    config = load_config(scenario, args.hub or DEFAULT_HUB)
+    config = load_config(scenario, args.hub or DEFAULT_HUB, robot=args.robot)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
-    out = Path(args.output or f"plan_{plan.hub}_{plan.mode}")
+    out = Path(args.output or f"plan_{Path(plan.hub).name}_{plan.mode}")
     save_plan(plan, out)
-    write_joint_csv(plan, out / "joints.csv")
     if args.html:
         from drakedeburr.viz.playback import save_plan_html
 
@@ -65,37 +63,17 @@ def _run_plan(args: argparse.Namespace) -> int:
     return 0 if not plan.failures else 1
 
 
-def _verification_state(folder: Path) -> tuple[bool | None, str]:
-    report = folder / "report.json"
-    if report.is_file():
-        try:
-            passed = bool(json.loads(report.read_text()).get("passed"))
-        except (json.JSONDecodeError, AttributeError):
-            return False, f"{report} is unreadable"
-        return passed, f"verification report {report}: {'passed' if passed else 'FAILED'}"
-    return None, "no verification report beside the plan"
-
-
 def _run_export(args: argparse.Namespace) -> int:
-    from drakedeburr.errors import InputError
-    from drakedeburr.plan.io import load_plan, program_from_plan
-    from drakedeburr.post.writers import write_program
+    from drakedeburr.post.export import ExportRefused, export_plan
 
-    folder = Path(args.plan)
-    plan = load_plan(folder)
-    folder = folder.parent if folder.name == "plan.json" else folder
-    passed, why = _verification_state(folder)
-    flag = reason = ""
-    if passed is False or (passed is None and plan.failures):
-        what = why if passed is False else f"the plan records {len(plan.failures)} failures"
-        if not args.force:
-            raise InputError(f"{folder}: refusing to export: {what} (use --force to export anyway)")
-        flag, reason = "FORCED", f"exported with --force although {what}"
-    elif passed is None:
-        flag, reason = "UNVERIFIED", "no verification report; run drakedeburr verify"
-    program = program_from_plan(plan, args.name, flag=flag, flag_reason=reason)
-    paths = write_program(program, args.output, args.format)
-    print("wrote " + ", ".join(str(p) for p in paths) + (f" [{flag}]" if flag else ""))
+    try:
+        done = export_plan(args.plan, args.output, args.format, name=args.name, force=args.force,
+                           robot=args.robot)
+    except ExportRefused as exc:
+        print(f"drakedeburr export: {exc}", file=sys.stderr)
+        return 1
+    print("wrote " + ", ".join(str(p) for p in done.paths) + (f" [{done.flag}: {done.reason}]"
+                                                              if done.flag else ""))
     return 0
 
 
@@ -104,8 +82,11 @@ def register(subparsers) -> None:
         "plan", help="plan a hub's windows in a cell (IK, smoothing, timing) -> plan folder",
         description="Plan every window of a hub: CL points, tool axes, cone-constrained IK, "
                     "the executed linear motion, approach/retract/transitions, timing at "
-                    "process speed. Writes plan.json + arrays.npz + joints.csv. Exit 1 when "
-                    "any point failed (the plan is still written, failures listed).")
+                    "process speed. Writes the plan folder (plan.json, arrays.npz, joints.csv, "
+                    "run.json) as one transaction: an existing plan folder is replaced whole "
+                    "(with its verification report), any other existing folder is refused. "
+                    "Exit 1 when any point failed (the plan is still written, failures "
+                    "listed).")
     p.add_argument("scenario", nargs="?", default="tool_in_hand",
                    help="bundled scenario name or YAML path (default tool_in_hand)")
     p.add_argument("--hub", default=None,
@@ -118,6 +99,8 @@ def register(subparsers) -> None:
                         "auto (orientation stage when usable)")
     p.add_argument("-o", "--output", default=None, help="plan folder (default plan_<hub>_<mode>)")
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
     p.add_argument("--fillets", action="store_true",
                    help="re-plan the tool orientation by a KTO where a cut slows at a fillet "
                         "(faster cut, several times the planning time; docs/plan.md)")
@@ -125,12 +108,23 @@ def register(subparsers) -> None:
 
     e = subparsers.add_parser(
         "export", help="write a plan as a robot program (RAPID, KRL, FANUC LS)",
-        description="Refuses a plan whose verification failed (report.json beside it) or, "
-                    "without a report, a plan with failures recorded, unless --force; the "
-                    "program header then says FORCED (or UNVERIFIED without a report).")
+        description="Writes the program of the plan's arm (RAPID for ABB, KRL for KUKA, LS for "
+                    "FANUC; tool in hand or stationary tool); every move carries its planned "
+                    "speed and zone. The gate: refuses (exit 1, nothing written) unless the plan "
+                    "folder's report.json (drakedeburr verify FOLDER) passed and was made for "
+                    "this very plan and cell by this drakedeburr version; --force writes "
+                    "anyway and the program header then says FORCED (verification failed) or "
+                    "UNVERIFIED (no report, or one for another plan or cell).")
     e.add_argument("plan", help="plan folder (or its plan.json)")
-    e.add_argument("--format", choices=EXPORT_FORMATS, required=True)
-    e.add_argument("-o", "--output", required=True, help="program file")
-    e.add_argument("--name", default="Deburr", help="program/module name")
-    e.add_argument("--force", action="store_true", help="export even if verification failed")
+    e.add_argument("--format", choices=EXPORT_FORMATS, default=None,
+                   help="program format (default: the plan's arm's: RAPID for ABB, KRL for "
+                        "KUKA, LS for FANUC; another one is refused)")
+    e.add_argument("-o", "--output", required=True,
+                   help="program file (.mod, .src (+ .dat), .ls); KRL and LS programs are named "
+                        "after the file")
+    e.add_argument("--name", default="Deburr", help="RAPID module name")
+    e.add_argument("--robot", default=None, metavar="NAME",
+                   help="check that the plan was made for this arm (the arm comes from the plan)")
+    e.add_argument("--force", action="store_true",
+                   help="write even when the gate refuses (the header says why)")
     e.set_defaults(_run=_run_export)

@@ -120,7 +120,7 @@ def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, 
         out = fit_program(ctx, wt, tr, order, records, refine=step == ctx.options.dense_step)
         if out == "finer":
             step *= 0.5
-            log.info("window %d: between its samples the cut would stray from the program's "
+            log.debug("window %d: between its samples the cut would stray from the program's "
                      "orientation; sampling it every %.3f mm", wt.window_index, step * 1e3)
             continue
         if isinstance(out, WindowStatus):
@@ -145,7 +145,7 @@ def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: 
             X_tg = cp.X_target.copy()
             X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
             return replace(cp, X_HT=X_spin, X_target=X_tg), spin_mode
-        log.info("window %d: spin search failed (%s); using the IK's spin", w, stats["reason"])
+        log.debug("window %d: spin search failed (%s); using the IK's spin", w, stats["reason"])
         spin_mode = "ik"
     # the IK's own spin (clearance-checked at the targets), smoothed
     X_sp = cp.X_HT.copy()
@@ -175,7 +175,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
         jumps = np.max(np.abs(np.diff(cut.q, axis=0)), axis=1)
         if not (np.all(cut.ok) and np.all(jumps <= opt.max_joint_jump)):
             if spin_mode != "ik":
-                log.info("window %d: searched spin leaves the limits or jumps; using the IK's "
+                log.debug("window %d: searched spin leaves the limits or jumps; using the IK's "
                          "spin", w)
                 spin_mode = "ik"
                 continue
@@ -188,12 +188,12 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
         if dist.min() < ctx.min_clearance - 0.5e-3 and spin_mode != "ik":
             # far below the bound: the spin put the spindle body into the hub (pinning the
             # axis cannot fix that); fall back to the IK's spin
-            log.info("window %d: %.2f mm clearance with the searched spin; using the IK's spin",
+            log.debug("window %d: %.2f mm clearance with the searched spin; using the IK's spin",
                      w, dist.min() * 1e3)
             spin_mode = "ik"
             continue
         pin, dev = _pin_and_tighten(cp, low, step, pin, dev, len(order))
-        log.info("window %d: %d samples under the clearance; pinning the axis and tightening "
+        log.debug("window %d: %d samples under the clearance; pinning the axis and tightening "
                  "the blends around them (attempt %d)", w, int(low.sum()), attempt + 1)
     records += motion_records(w, cut, opt.max_joint_jump)
     if not np.all(cut.ok):

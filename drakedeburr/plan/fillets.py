@@ -131,7 +131,7 @@ def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone
     opts.SetOption(SnoptSolver().solver_id(), "Iterations limit", options.minor_iterations)
     t0 = time.perf_counter()
     res = SnoptSolver().Solve(prog, None, opts)
-    log.info("fillet KTO over %.0f mm in %.3f s: %s (SNOPT info %d) in %.1f s", 1e3 * L, T,
+    log.debug("fillet KTO over %.0f mm in %.3f s: %s (SNOPT info %d) in %.1f s", 1e3 * L, T,
              res.is_success(), res.get_solver_details().info, time.perf_counter() - t0)
     del keep
     return res, kto.ReconstructTrajectory(res)
@@ -173,7 +173,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
 
     ang = np.arccos(np.clip(np.sum(cone[st] * -R[:, :, 2], axis=1), -1.0, 1.0))
     if np.any(ang > half_angle - 1e-3):
-        log.info("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
+        log.debug("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
                  "was", window, 1e3 * s_c)
         return None
     Xn = X.copy()
@@ -185,7 +185,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
     dn = d.copy()
     dn[st] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in qn[st]]
     if np.any(dn[st] < np.minimum(d[st], ctx.min_clearance) - DISTANCE_SLACK):
-        log.info("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
+        log.debug("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
                  "as it was", window, 1e3 * s_c)
         return None
     return Xn, qn, dn
@@ -224,7 +224,7 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
         if new is None:
             continue
         t_new = float(time_path(s, new[1], new[0][:, :3, 3], lim).t[-1])
-        log.info("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
+        log.debug("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
                  1e3 * s[c], 1e3 * base.v_tcp[c], best, t_new)
         if t_new < best - 1e-3:
             (X, q, d), best = new, t_new

@@ -110,8 +110,8 @@ def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray,
     return out
 
 
-def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_cut, fit_dev,
-           seconds: dict) -> WindowStats:
+def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_cut,
+           fit_dev) -> WindowStats:
     q_deg = np.degrees(ex.cut.q)
     v_g = ctx.process.grinding_speed
     v_cut = timed_cut.v_tcp[1:-1]
@@ -131,8 +131,8 @@ def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_
         cone_half_angle_rad=float(wt.cone_half_angle),
         speed_in_band_fraction=float(np.mean(np.abs(v_cut - v_g) <= band)) if len(v_cut)
         else 0.0,
-        ik_seconds=seconds["ik"], dense_seconds=seconds["dense"],
-        timing_seconds=seconds["timing"], ik=wik.stats, joint_fit_deviation_m=fit_dev,
+        ik={k: v for k, v in wik.stats.items() if "seconds" not in k},
+        joint_fit_deviation_m=fit_dev,
         orientation_smoothing_rad=float(np.max(rotation_angle(X_ik, ex.cp.X_target[cl_rows]))),
         via_targets=int(ex.via.sum()),
         least_axis_acceleration_radps2=v_g ** 2 * least_axis_curvature(
@@ -158,7 +158,9 @@ def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
     timed_cut, fit_dev = time_cartesian(ctx, ex.cut.q, ex.cut.s, ex.cut.X_HT,
                                         ctx.process.grinding_speed, interpolate=True)
     timed_ret, _ = time_cartesian(ctx, ret.q, ret.s, ret.X_HT, v_app)
-    seconds = {"ik": t_ik, "dense": t_dense, "timing": time.perf_counter() - t2}
+    seconds = {"window": w, "ik_seconds": t_ik, "dense_seconds": t_dense,
+               "timing_seconds": time.perf_counter() - t2,
+               "ik_seconds_per_point": wik.stats.get("seconds_per_point")}
     i0 = int(order[0])
     stretches = [
         Stretch("approach", w, timed_app, [make_target(ctx.kin, q_app[-1], w, "approach", i0,
@@ -170,7 +172,7 @@ def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
         Stretch("retract", w, timed_ret, [make_target(ctx.kin, ret.q[-1], w, "retract", -1,
                                                       v_app, "linear")]),
     ]
-    stats = _stats(ctx, wt, wik, good, order, X_ik, ex, timed_cut, fit_dev, seconds)
+    stats = _stats(ctx, wt, wik, good, order, X_ik, ex, timed_cut, fit_dev)
     status = WindowStatus.DEGRADED if failures else WindowStatus.OK
     return WindowPlan(window=w, status=status, stretches=stretches, stats=stats,
-                      q_start=q_app[0], failures=failures)
+                      q_start=q_app[0], failures=failures, seconds=seconds)

@@ -284,7 +284,7 @@ def solve_window_ik(
                  distance_resolves=c["distance"], ipopt_fallbacks=c["fallback"],
                  retries=c["retry"], analytic_accepted=c["analytic"], cone_probes=c["probe"],
                  failed=int(m - ok.sum()))
-    log.info("window %d: IK %d/%d points in %.2f s (%.1f ms/point), %d analytic warm starts "
+    log.debug("window %d: IK %d/%d points in %.2f s (%.1f ms/point), %d analytic warm starts "
              "accepted, %d distance re-solves", window_index, int(ok.sum()), m, dt,
              1e3 * stats["seconds_per_point"], c["analytic"], c["distance"])
     return WindowIk(q=q_out, ok=ok, X_HT=X_out, clearance=clearance, failures=tuple(failures),

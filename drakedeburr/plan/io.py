@@ -1,7 +1,7 @@
-"""Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``), joint CSV, robot program.
+"""Plan files: save/load (a folder: ``plan.json`` + ``arrays.npz``) and the joint CSV (the robot
+program of a plan: :func:`drakedeburr.programs.program_from_plan`).
 
-Folder layout (format version 2, written atomically file by file, ``plan.json`` last so a
-folder with a ``plan.json`` is complete):
+Folder layout (format version 2, written as one transaction: :func:`save_plan`):
 
 * ``arrays.npz``: trajectory knot times ``t`` (K,) and polynomial pieces ``c`` (D + 1, K - 1,
   6) (:class:`~drakedeburr.plan.types.JointTrajectory`); target arrays ``X_HT``
@@ -19,13 +19,14 @@ The joint CSV is for people and controllers that take joint streams: ``t_s, q1_d
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 from pathlib import Path
 
 import numpy as np
 
-from drakedeburr._io import atomic_write_bytes, atomic_write_json, atomic_write_text
+from drakedeburr._io import atomic_folder, atomic_write_text
 from drakedeburr.config import OrientationBounds
 from drakedeburr.errors import InputError
 from drakedeburr.plan.types import (
@@ -40,7 +41,7 @@ from drakedeburr.plan.types import (
 from drakedeburr.units import deg_from_rad
 
 __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv", "jsonable",
-           "program_from_plan"]
+           "plan_digest", "is_plan_folder"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 2
@@ -61,14 +62,12 @@ def jsonable(obj):
     return obj
 
 
-def save_plan(plan: Plan, path: str | Path) -> Path:
-    """Write a plan folder (created if needed). Returns the folder."""
-    folder = Path(path)
-    folder.mkdir(parents=True, exist_ok=True)
+def _content(plan: Plan) -> tuple[dict, dict]:
+    """What a plan folder holds of the plan: (plan.json document, arrays.npz arrays)."""
     n = len(plan.targets)
     nan3 = np.full(3, np.nan)
     arrays = dict(
-        t=plan.trajectory.t, c=plan.trajectory.c,
+        t=np.asarray(plan.trajectory.t, float), c=np.asarray(plan.trajectory.c, float),
         X_HT=np.array([tg.X_HT for tg in plan.targets]).reshape(n, 4, 4),
         X_WF=np.array([tg.X_WF for tg in plan.targets]).reshape(n, 4, 4),
         q_targets=np.array([tg.q for tg in plan.targets]).reshape(n, 6),
@@ -86,9 +85,6 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
                             cone_half_angle=float(tp.cone_half_angle),
                             cone_outer_half_angle=float(tp.cone_outer_half_angle),
                             depth_of_cut=float(tp.depth_of_cut)))
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    atomic_write_bytes(folder / "arrays.npz", buf.getvalue())
     doc = dict(
         format=PLAN_FORMAT, version=PLAN_VERSION, scenario=plan.scenario, hub=plan.hub,
         mode=plan.mode,
@@ -101,8 +97,48 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
         meta=jsonable(plan.meta),
         tool_paths=tp_docs,
     )
-    atomic_write_json(folder / "plan.json", doc, indent=1)
-    return folder
+    return doc, arrays
+
+
+def _doc_text(doc: dict) -> str:
+    return json.dumps(doc, indent=1, sort_keys=True) + "\n"
+
+
+def plan_digest(plan: Plan) -> str:
+    """SHA-256 (hex) of the plan's content: its ``plan.json`` text and every array (name,
+    dtype, shape, bytes), not the run's timings. Identical for a plan and its saved copy."""
+    doc, arrays = _content(plan)
+    h = hashlib.sha256(_doc_text(doc).encode())
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def is_plan_folder(folder: Path) -> bool:
+    """Does ``folder`` hold a plan (its ``plan.json`` says so)?"""
+    doc = Path(folder) / "plan.json"
+    try:
+        return json.loads(doc.read_text()).get("format") == PLAN_FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def save_plan(plan: Plan, path: str | Path) -> Path:
+    """Write a plan folder as one transaction (:func:`drakedeburr._io.atomic_folder`):
+    ``plan.json``, ``arrays.npz``, ``joints.csv`` and ``run.json`` (the run's timings, not part
+    of the plan's content). An existing plan folder there is replaced whole (with its old
+    report); any other existing folder is refused. Returns the folder."""
+    doc, arrays = _content(plan)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    with atomic_folder(path, is_ours=is_plan_folder) as tmp:
+        (tmp / "arrays.npz").write_bytes(buf.getvalue())
+        write_joint_csv(plan, tmp / "joints.csv")
+        (tmp / "run.json").write_text(json.dumps(jsonable(plan.run), indent=1, sort_keys=True))
+        (tmp / "plan.json").write_text(_doc_text(doc))
+    return Path(path)
 
 
 def load_plan(path: str | Path) -> Plan:
@@ -164,7 +200,17 @@ def load_plan(path: str | Path) -> Plan:
                             JointTrajectory.from_hermite(arr["t"], arr["q"], arr["qd"])),
                 tool_path=tuple(records) or None,
                 failures=tuple(FailureRecord.from_dict(f) for f in doc["failures"]),
-                meta=doc["meta"])
+                meta=doc["meta"], run=_run_record(folder))
+
+
+def _run_record(folder: Path) -> dict:
+    """The run's record beside a plan (``run.json``), {} when missing or unreadable (it is
+    not part of the plan)."""
+    try:
+        run = json.loads((folder / "run.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return run if isinstance(run, dict) else {}
 
 
 def _tool_paths(plan: Plan) -> list:
@@ -192,60 +238,3 @@ def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Pa
     rows += [f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row)
              for ti, row in zip(t, qd, strict=True)]
     return atomic_write_text(path, "\n".join(rows) + "\n")
-
-
-def program_from_plan(plan: Plan, name: str = "Deburr", *, flag: str = "", flag_reason: str = "",
-                      include_transitions: bool = True, verified: bool = False):
-    """The Cartesian program of a plan as a :class:`drakedeburr.post.program.RobotProgram`.
-
-    Tool-in-hand: the program's tool is T on the flange (``X_FT``), its work object the hub
-    frame H, each move the TCP pose ``X_WT``. Workpiece-in-hand (stationary tool): the moving
-    "tool" is the hub frame H in the gripper (``X_FH``), the work object is the fixed tool
-    frame T (the virtual TCP), each move the hub pose ``X_WH``; the controller must be told the
-    tool is stationary (ABB: ``robhold TRUE`` tooldata / ``ufprog FALSE`` wobj), noted in the
-    header.
-
-    Args:
-        plan: the plan. name: program name.
-        flag, flag_reason: header warning (e.g. "FORCED" when verification failed); empty:
-            FORCED when the plan has failures, else UNVERIFIED (tool mode, post's rule).
-        include_transitions: keep home/transition joint moves (else cuts, approach, retract).
-        verified: the plan passed verification (otherwise the header says UNVERIFIED).
-    """
-    X_FT = np.asarray(plan.meta["X_FT"], float)
-    notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
-             f"cycle time {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records")
-    targets = [tg for tg in plan.targets
-               if include_transitions or tg.segment not in ("home", "transition")]
-    if plan.mode == "tool":
-        # the post stage's converter (tool-in-hand) with the plan's own tool transform
-        from dataclasses import replace
-
-        from drakedeburr.post.plan_program import program_from_plan as _post_program
-
-        extra = dict(flag=flag, flag_reason=flag_reason) if flag else {}
-        return _post_program(replace(plan, targets=tuple(targets)), name, X_FT, notes=notes,
-                             source=f"drakedeburr plan {plan.hub}", verified=verified, **extra)
-    from drakedeburr.post.program import JOINT, LINEAR, RobotProgram
-
-    if not flag and not verified:
-        flag, flag_reason = (("FORCED", "the plan has failure records") if plan.failures else
-                             ("UNVERIFIED", "the plan was not verified"))
-    # workpiece in hand: the moving "tool" is the hub frame in the gripper
-    X_FH = np.asarray(plan.meta["X_FH"], float)
-    X_WT_fixed = np.asarray(plan.meta["X_WT"], float)
-    comments, prev = [], None
-    for tg in targets:
-        label = (tg.segment, tg.window_index)
-        comments.append("" if label == prev else
-                        tg.segment + (f" window {tg.window_index}" if tg.window_index >= 0 else ""))
-        prev = label
-    return RobotProgram.from_poses(
-        name, np.array([np.asarray(tg.X_WF) @ X_FH for tg in targets]),
-        np.array([tg.q for tg in targets]), speed=[tg.speed for tg in targets],
-        zone=[tg.zone for tg in targets],
-        move_type=[JOINT if tg.motion == "joint" else LINEAR for tg in targets],
-        comments=comments, X_FT=X_FH, X_WO=X_WT_fixed, source=f"drakedeburr plan {plan.hub}",
-        flag=flag, flag_reason=flag_reason,
-        notes=notes + ("workpiece in hand: the tool data is the hub held by the robot; the work "
-                       "object is the stationary spindle (set robhold/ufprog accordingly)",))

@@ -9,7 +9,7 @@ rides on the flange F:
   fixed (spindle stand, the virtual TCP); ``X_WF = X_WT X_HT^-1 X_FH^-1``.
 
 The planner thinks in the process pose ``X_HT`` (tool relative to hub); this module turns it
-into flange poses and joints (analytic OPW IK from :mod:`drakedeburr.post.opw_ik`, checked
+into flange poses and joints (analytic OPW IK from :mod:`drakedeburr.robots.opw_ik`, checked
 against Drake's FK in the tests) and measures clearance with the burr-head/hub pair filtered.
 """
 
@@ -36,9 +36,10 @@ class CellKinematics:
         X_WH: (4, 4) hub in world [m] (tool mode; hub pose at ``q_home`` otherwise).
         X_FH: (4, 4) hub in flange [m] (workpiece mode).
         X_WT: (4, 4) tool in world [m] (workpiece mode; tool pose at ``q_home`` otherwise).
-        robot: ``drakedeburr.post.opw_ik.RobotKinematics`` with the cell's joint limits.
+        robot: ``drakedeburr.robots.RobotKinematics`` of ``cell.arm`` with the cell's limits.
         q_lower, q_upper: (6,) joint limits [rad]; v_max, a_max: (6,) [rad/s], [rad/s^2].
         q_home: (6,) [rad].
+        X_WB: (4, 4) robot base B in world [m] (the arm's mount; the OPW maps work in B).
     """
 
     mode: str
@@ -52,6 +53,7 @@ class CellKinematics:
     v_max: np.ndarray
     a_max: np.ndarray
     q_home: np.ndarray
+    X_WB: np.ndarray = field(default_factory=lambda: np.eye(4))
 
     def X_WF_from_X_HT(self, X_HT: np.ndarray) -> np.ndarray:
         """(..., 4, 4) process poses -> (..., 4, 4) flange poses in world [m]."""
@@ -69,9 +71,9 @@ class CellKinematics:
 
     def fk_flange(self, q: np.ndarray) -> np.ndarray:
         """(..., 6) joints [rad] -> (..., 4, 4) X_WF (analytic)."""
-        from drakedeburr.post.opw import fk_opw
+        from drakedeburr.robots.opw import fk_opw
 
-        return fk_opw(self.robot.opw, np.asarray(q, float))
+        return self.X_WB @ fk_opw(self.robot.opw, np.asarray(q, float))
 
     def X_HT_from_q(self, q: np.ndarray) -> np.ndarray:
         """(..., 6) joints -> (..., 4, 4) tool pose relative to the hub."""
@@ -104,14 +106,15 @@ class CellKinematics:
             q (N, 8, 6) [rad] wrapped to (-pi, pi] (NaN where unreachable) and branch signs
             (8, 3) (shoulder, elbow, wrist).
         """
-        from drakedeburr.post.opw_ik import ik_opw
+        from drakedeburr.robots.opw_ik import ik_opw
 
-        sols = ik_opw(self.robot.opw, np.asarray(X_WF, float).reshape(-1, 4, 4))
+        X_BF = _inv(self.X_WB) @ np.asarray(X_WF, float).reshape(-1, 4, 4)
+        sols = ik_opw(self.robot.opw, X_BF)
         return sols.q, sols.branch
 
     def branch_of(self, q: np.ndarray) -> np.ndarray:
         """(..., 6) joints -> (..., 3) branch signs (shoulder, elbow, wrist)."""
-        from drakedeburr.post.opw_ik import arm_branches
+        from drakedeburr.robots.opw_ik import arm_branches
 
         return arm_branches(self.robot.opw, q)
 
@@ -163,7 +166,7 @@ def _inv(X: np.ndarray) -> np.ndarray:
 
 def cell_kinematics(cell) -> CellKinematics:
     """Fixed transforms of a loaded :class:`drakedeburr.cell.Cell` (read at ``q_home``)."""
-    from drakedeburr.post.opw_ik import IRB1600_10_120_ROBOT, JointLimits, RobotKinematics
+    from drakedeburr.robots.opw_ik import JointLimits, RobotKinematics
 
     q = np.asarray(cell.q_home, float)
     X_WF = cell.X_WF(q).GetAsMatrix4()
@@ -171,16 +174,16 @@ def cell_kinematics(cell) -> CellKinematics:
     X_WH = cell.X_WH(q).GetAsMatrix4()
     X_FW = np.linalg.inv(X_WF)
     robot = RobotKinematics(
-        opw=IRB1600_10_120_ROBOT.opw,
+        opw=cell.arm.opw,
         limits=JointLimits(lower=tuple(map(float, cell.q_lower)),
                            upper=tuple(map(float, cell.q_upper))),
-        vendor=IRB1600_10_120_ROBOT.vendor, name=IRB1600_10_120_ROBOT.name)
+        controller=cell.arm.controller, name=cell.arm.name)
     return CellKinematics(
         mode=cell.mode, X_FT=X_FW @ X_WT, X_WH=X_WH, X_FH=X_FW @ X_WH, X_WT=X_WT, robot=robot,
         q_lower=np.array(cell.q_lower), q_upper=np.array(cell.q_upper),
         v_max=np.minimum(-np.array(cell.v_lower), np.array(cell.v_upper)),
         a_max=np.minimum(-np.array(cell.a_lower), np.array(cell.a_upper)),
-        q_home=q.copy())
+        q_home=q.copy(), X_WB=cell.X_WB().GetAsMatrix4())
 
 
 @dataclass(eq=False)

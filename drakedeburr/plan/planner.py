@@ -85,7 +85,7 @@ def plan_windows(
                       free_checker=ClearanceChecker(cell, filter_burr_contact=False),
                       config=config, options=options)
     process = config.process
-    failures, stretches, window_stats = [], [], []
+    failures, stretches, window_stats, window_seconds = [], [], [], []
     q_cur = kin.q_home.copy()
     home = make_target(kin, q_cur, -1, "home", -1, process.home_speed, "joint")
     n = len(windows)
@@ -96,8 +96,14 @@ def plan_windows(
         res = plan_window(ctx, wt, q_cur)
         failures += res.failures
         if not res.status.planned:
-            log.warning("window %d not planned (%s)", wt.window_index, res.status.value)
+            log.warning("window %d not planned (%s): %s", wt.window_index, res.status.value,
+                        res.failures[-1].reason if res.failures else "")
             continue
+        st = res.stats
+        log.info("window %d: %s, cut %.2f s, %.0f %% at the feed, %d/%d CL points, %d via "
+                 "targets%s", wt.window_index, res.status.value, st.cut_seconds,
+                 100 * st.speed_in_band_fraction, st.reached, st.cl_points + 1, st.via_targets,
+                 f", {len(res.failures)} failure records" if res.failures else "")
         speed = process.home_speed if not stretches else process.window_switch_speed
         kind = "home" if not stretches else "transition"
         t0 = time.perf_counter()
@@ -107,6 +113,7 @@ def plan_windows(
         failures += recs
         stretches += [js, *res.stretches]
         window_stats.append({**res.stats.to_dict(), "transition_method": mv.method})
+        window_seconds.append(res.seconds)
         q_cur = res.stretches[-1].timed.q[-1]
     t0 = time.perf_counter()
     js, mv, recs = joint_stretch(ctx, q_cur, kin.q_home, process.home_speed, "home",
@@ -118,7 +125,9 @@ def plan_windows(
         progress(n, n, "done")
     stats = PlanStats(total_seconds=time.perf_counter() - t_start,
                       transition_seconds=t_transitions)
-    return _assemble(ctx, stretches, home, window_stats, failures, windows, stats)
+    plan = _assemble(ctx, stretches, home, window_stats, failures, windows)
+    plan.run.update(timings=asdict(stats), windows=window_seconds)
+    return plan
 
 
 def _concatenate(kin, stretches: list[Stretch], home):
@@ -142,8 +151,7 @@ def _concatenate(kin, stretches: list[Stretch], home):
                                               c=np.concatenate(c_all, axis=1))
 
 
-def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows,
-              stats: PlanStats) -> Plan:
+def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows) -> Plan:
     kin, cell, config = ctx.kin, ctx.cell, ctx.config
     targets, segments, traj = _concatenate(kin, stretches, home)
     v_g = config.process.grinding_speed
@@ -160,6 +168,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         contact_radius_m=r_c,
         contact_lift_m=lift,
         X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
+        robot=cell.arm.name, X_WB=kin.X_WB.tolist(),
         windows=window_stats,
         window_sources=[w.source for w in windows],
         depth_of_cut={str(w.window_index): w.depth_of_cut for w in windows},
@@ -168,7 +177,6 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         cutting_seconds=cut_time,
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
-        timings=asdict(stats),
         options=jsonable(asdict(ctx.options)),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
@@ -255,12 +263,12 @@ def plan_hub(
     from drakedeburr.hub import load_hub
 
     options = options or PlanOptions()
-    cell = load_cell(config.scenario, config.hub)
+    cell = load_cell(config.scenario, config.hub, robot=config.robot)
     hub_model = load_hub(cell.hub_sdf.parent)
     t0 = time.perf_counter()
     wts = window_targets_for_hub(hub_model, source=source, params=config.process,
                                  windows=options.windows)
     t_targets = time.perf_counter() - t0
     plan = plan_windows(cell, wts, config, options=options, progress=progress)
-    plan.meta["timings"]["targets_seconds"] = t_targets
+    plan.run["timings"]["targets_seconds"] = t_targets
     return plan

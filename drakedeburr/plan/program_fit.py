@@ -112,7 +112,7 @@ def add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.0
             leg = 0.45 * min(np.linalg.norm(P[j] - P[j - 1]), np.linalg.norm(P[j + 1] - P[j]))
             zone[j] = max(zone_quantum, np.floor(leg / zone_quantum) * zone_quantum)
         cp = replace(cp, target_index=ti, X_target=Xt, zone=zone)
-        log.info("window %d: %d via targets where the program's orientation strays more than "
+        log.debug("window %d: %d via targets where the program's orientation strays more than "
                  "%.1f mrad (round %d)", window, len(add), 1e3 * tol, k + 1)
     return cp, via
 
@@ -156,22 +156,22 @@ def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: 
     before = np.arccos(np.clip(np.sum(c * -cp.X_HT[ch, :3, 2], axis=1), -1.0, 1.0))
     after = np.arccos(np.clip(np.sum(c * -X[ch, :3, 2], axis=1), -1.0, 1.0))
     if np.any(after > np.maximum(half_angle - cone_margin, before)):
-        log.info("window %d: the program's orientation leaves the tool axis' cone (by %.2f mrad); "
+        log.debug("window %d: the program's orientation leaves the tool axis' cone (by %.2f mrad); "
                  "keeping the smooth cut", window, 1e3 * float(np.max(after - half_angle)))
         return cp, cut, dist
     q, ok = ctx.kin.track(ctx.kin.X_WF_from_X_HT(X), cut.q[0])
     jumps = np.max(np.abs(np.diff(q, axis=0)), axis=1) if len(q) > 1 else np.zeros(0)
     if not (np.all(ok) and np.all(jumps <= ctx.options.max_joint_jump)):
-        log.info("window %d: the program's orientation at %d samples leaves the joints' reach; "
+        log.debug("window %d: the program's orientation at %d samples leaves the joints' reach; "
                  "keeping the smooth cut", window, int(on.sum()))
         return cp, cut, dist
     d_new = dist.copy()
     d_new[ch] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in q[ch]]
     floor = np.minimum(dist[ch], ctx.min_clearance) - DISTANCE_SLACK
     if np.any(d_new[ch] < floor):
-        log.info("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "
+        log.debug("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "
                  "keeping the smooth cut", window, int(on.sum()), 1e3 * d_new[ch].min())
         return cp, cut, dist
-    log.info("window %d: executed orientation pulled onto the program's on %d samples "
+    log.debug("window %d: executed orientation pulled onto the program's on %d samples "
              "(strayed up to %.1f mrad)", window, int(on.sum()), 1e3 * err_max)
     return replace(cp, X_HT=X), replace(cut, X_HT=X, q=q, ok=ok), d_new

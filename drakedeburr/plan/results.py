@@ -67,7 +67,8 @@ class ExecutedCut:
 
 @dataclass(frozen=True)
 class WindowStats:
-    """Figures of one planned window (``plan.meta["windows"]`` holds them as mappings).
+    """Figures of one planned window (``plan.meta["windows"]`` holds them as mappings): a pure
+    function of the inputs (the run's timings are in ``plan.run``, not here).
 
     Lengths [m], angles [deg] where the name says so, else SI; ``ik``: the IK's counters.
     """
@@ -88,9 +89,6 @@ class WindowStats:
     axis_in_theta_box_fraction: float | None
     cone_half_angle_rad: float
     speed_in_band_fraction: float
-    ik_seconds: float
-    dense_seconds: float
-    timing_seconds: float
     ik: dict
     joint_fit_deviation_m: float
     orientation_smoothing_rad: float
@@ -124,6 +122,7 @@ class WindowPlan:
     stats: WindowStats | None = None
     q_start: np.ndarray | None = None
     failures: list[FailureRecord] = field(default_factory=list)
+    seconds: dict = field(default_factory=dict)
 
     @classmethod
     def skipped(cls, window: int, status: WindowStatus,
@@ -133,7 +132,7 @@ class WindowPlan:
 
 @dataclass(frozen=True)
 class PlanStats:
-    """Timings of a planning run [s] (``plan.meta["timings"]``)."""
+    """Timings of a planning run [s] (``plan.run["timings"]``; not part of the plan's content)."""
 
     total_seconds: float
     transition_seconds: float

@@ -207,7 +207,7 @@ def _kto(cell, checker: ClearanceChecker, q0: np.ndarray, q1: np.ndarray, guess:
     result = SnoptSolver().Solve(prog, None, opts)
     info = dict(kto_success=bool(result.is_success()), kto_solver=result.get_solver_id().name())
     if not result.is_success():
-        log.info("KTO transition repair did not converge")
+        log.debug("KTO transition repair did not converge")
     traj = kto.ReconstructTrajectory(result)
     keep.clear()
     ts = np.linspace(traj.start_time(), traj.end_time(), 200)

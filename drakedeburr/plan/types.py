@@ -193,7 +193,9 @@ class Plan:
         trajectory: the timed joint trajectory simulating the program.
         tool_path: the orientation stage's ToolPath per window this plan came from.
         failures: what could not be planned (empty when every point planned).
-        meta: solver statistics, versions, timings.
+        meta: what the plan was made with and its figures (configuration, options, per-window
+            statistics): a pure function of the inputs, part of the plan's content.
+        run: how this run went (timings [s]); not part of the plan's content (``run.json``).
     """
 
     scenario: str
@@ -206,6 +208,7 @@ class Plan:
     tool_path: Any = None
     failures: tuple[FailureRecord, ...] = ()
     meta: dict = field(default_factory=dict)
+    run: dict = field(default_factory=dict)
 
 
 TOOL_PATH_ARRAYS = ("p_HC", "R_HL", "axis_H", "theta_A", "theta_B", "cone_axis_H")

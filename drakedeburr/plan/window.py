@@ -45,14 +45,14 @@ def plan_window(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> Wind
         if band >= ctx.options.retry_in_band:
             return first
         # clean but slow: the other rule may wind the wrist less (workpiece cell)
-        log.info("window %d: %.0f %% of the cut in the speed band; planning it again with the "
+        log.debug("window %d: %.0f %% of the cut in the speed band; planning it again with the "
                  "%r warm-start spin", wt.window_index, 100 * band, other)
         second = _plan_window_once(ctx2, wt, q_from)
         if (second.status.planned and not second.failures
                 and second.stats.cut_seconds < first.stats.cut_seconds):
             return second
         return first
-    log.info("window %d: %d failure records; planning it again with the %r warm-start spin",
+    log.debug("window %d: %d failure records; planning it again with the %r warm-start spin",
              wt.window_index, len(first.failures), other)
     second = _plan_window_once(ctx2, wt, q_from)
     if second.status.planned and (not first.status.planned
@@ -131,7 +131,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
                         "axis in the cone; reported", wt.window_index, unreachable,
                         1e3 * opt.ik.min_distance_floor)
             break
-        log.info("window %d: start seed %d left %d IK failures (executed motion %s); trying "
+        log.debug("window %d: start seed %d left %d IK failures (executed motion %s); trying "
                  "another", wt.window_index, attempt, len(trial.failures),
                  "ok" if dense_ok else "leaves the limits")
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next

@@ -20,9 +20,9 @@ import numpy as np
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import ClProgram
-from drakedeburr.post.opw_ik import IRB1600_10_120_ROBOT, RobotKinematics
-from drakedeburr.post.program import JOINT, LINEAR, ProgramMove, RobotProgram
 from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
+from drakedeburr.programs.program import JOINT, LINEAR, ProgramMove, RobotProgram
+from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
 __all__ = ["PostResult", "program_from_cl", "pose_from_mm_deg", "ROBOTS"]

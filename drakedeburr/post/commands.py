@@ -57,7 +57,7 @@ def _run_post(args) -> int:
     from drakedeburr.errors import InputError
     from drakedeburr.post.cl_post import ROBOTS, pose_from_mm_deg, program_from_cl
     from drakedeburr.post.cl_reader import read_cl
-    from drakedeburr.post.writers import write_program
+    from drakedeburr.programs.writers import write_program
     from drakedeburr.units import m_from_mm
 
     cl = read_cl(args.cl_file, units=args.units)

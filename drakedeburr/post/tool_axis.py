@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.post.opw_ik import (
+from drakedeburr.robots.opw_ik import (
     RobotKinematics,
     arm_branches,
     ik_opw,

@@ -19,6 +19,7 @@ import time as _time
 from collections.abc import Callable
 
 from drakedeburr.config import Config
+from drakedeburr.verify.gate import plan_identity
 from drakedeburr.verify.registry import CHECKS, run_checks
 from drakedeburr.verify.report import VerificationReport
 from drakedeburr.verify.sampling import KIND_CODE, SampledPlan, sample_plan
@@ -55,7 +56,9 @@ def verify_sampled(sp: SampledPlan, config: Config, *, elapsed: float = 0.0,
                                     if t.window_index >= 0}),
                  "targets": len(plan.targets), "segments": len(plan.segments),
                  "knots": len(traj.t), "duration_s": traj.duration,
-                 "planner": str(plan.meta.get("planner", ""))}
+                 "planner": str(plan.meta.get("planner", "")),
+                 "robot": (plan.meta or {}).get("robot"),
+                 "identity": plan_identity(plan)}
     tol = config.tolerances
     settings = {"tolerances": {k: getattr(tol, k) for k in tol.__dataclass_fields__},
                 "samples": len(sp.samples), "grinding_speed": config.process.grinding_speed,

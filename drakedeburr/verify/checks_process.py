@@ -155,9 +155,12 @@ def program_speeds(sp, cfg) -> CheckItem:
     cut = (s.kind == KIND_CODE["cut"]) & (move >= 0)
     worst, worst_k, n_moves = 1.0, None, 0
     for k in np.unique(move[cut]):
-        on = cut & (move == k)
+        on = np.flatnonzero(cut & (move == k))
+        # the move from its start target to its end target: its samples and the ones just
+        # before and after it (the plan's speed at the targets themselves)
+        span = np.arange(max(on[0] - 1, 0), min(on[-1] + 2, len(s.speed)))
         v_prog = targets[k].speed
-        v_max = float(s.speed[on].max())
+        v_max = float(s.speed[span].max())
         floor = v_prog * (1 - tol.speed_band) - tol.speed_quantum
         n_moves += 1
         ratio = v_max / max(floor, 1e-12)
@@ -165,8 +168,9 @@ def program_speeds(sp, cfg) -> CheckItem:
             worst, worst_k = ratio, int(k)
     where = {} if worst_k is None else {
         "window": int(targets[worst_k].window_index), "target_index": worst_k}
-    detail = (f"{n_moves} cutting moves: the fastest sample of each move against its programmed "
-              "speed less the band and the quantum")
+    detail = (f"{n_moves} cutting moves: the fastest sample of each move (from its start "
+              "target to its end target) against its programmed speed less the band and the "
+              "quantum")
     if worst_k is not None:
         detail += (f"; least at target {worst_k}: programmed "
                    f"{targets[worst_k].speed * 1e3:.0f} mm/s")

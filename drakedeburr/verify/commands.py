@@ -5,7 +5,8 @@
   * ``SCENARIO/HUB`` (bundled names, e.g. ``tool_in_hand/h5_straight``) or a hub folder, or
   * a hub mesh file (``.stl``/``.obj``/``.ply``): imported into a hub model folder first
     (``drakedeburr hub import``: window edges, CoACD collision pieces; cached under
-    ``--hub-cache``, default OUT/hub_import or beside --json/--html, else the user cache);
+    ``--hub-cache``, default OUT_hub_import beside OUT, beside --json/--html, else the user
+    cache);
 for a hub or mesh the hub is planned first, then verified. Exit 0 pass, 1 fail, 2 bad input.
 """
 
@@ -72,8 +73,9 @@ def _hub_cache(args: argparse.Namespace) -> Path:
     the user cache (never the package's models folder)."""
     if args.hub_cache:
         return Path(args.hub_cache)
-    if args.out:
-        return Path(args.out) / "hub_import"
+    if args.out:  # beside the plan folder (which is replaced whole on every run)
+        out = Path(args.out).resolve()
+        return out.parent / f"{out.name}_hub_import"
     for f in (args.json, args.html):
         if f:
             return Path(f).resolve().parent / "hub_import"
@@ -110,40 +112,23 @@ def _tolerances(args: argparse.Namespace):
     return default_tolerances(**QUICK_SAMPLING) if args.quick else None
 
 
-def _run_verify(args: argparse.Namespace) -> int:
-    from drakedeburr.cli import tqdm_progress
-    from drakedeburr.verify.batch import make_plan
-    from drakedeburr.verify.checks import config_for_plan, verify_plan
-    from drakedeburr.verify.report import write_report_json
+def _program_item(plan, path: str):
+    """A required report item: the program file read back and compared with the plan's own
+    program (:func:`drakedeburr.programs.compare_programs`), every difference named by line."""
+    from drakedeburr.post.export import plan_program
+    from drakedeburr.programs import compare_programs, read_program
+    from drakedeburr.verify.report import CheckItem
 
-    windows = _windows(args.windows)
-    kind, *rest = _resolve_target(args.target, args.scenario)
-    if kind == "plan":
-        plan = _load_plan(rest[0])
-        speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
-        config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
-    else:
-        scenario, hub = rest
-        if Path(hub).suffix.lower() in _MESH_SUFFIXES:
-            hub = _import_mesh(hub, args)
-        config = _config(args, scenario, hub)
-        plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
-    report = verify_plan(plan, config, expected_windows=windows,
-                         progress=tqdm_progress("verify"))
-    out_json = Path(args.json) if args.json else None
-    if out_json is None and args.out:
-        out_json = Path(args.out) / "report.json"
-    if out_json is not None:
-        write_report_json(report, out_json)
-        log.info("wrote %s", out_json)
-    out_html = Path(args.html) if args.html else (Path(args.out) / "report.html" if args.out
-                                                 else None)
-    if out_html is not None:
-        from drakedeburr.verify.html import meshcat_replay_html, write_report_html
+    actual = read_program(path)
+    expected = plan_program(plan, actual.name)
+    found = compare_programs(expected, actual)
+    lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
+    return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
+                     detail=("; ".join(lines[:8]) + (" ..." if len(lines) > 8 else "")) or
+                     f"{path}: every move, frame and load as the plan's program")
 
-        replay = None if args.no_replay else meshcat_replay_html(plan)
-        write_report_html(report, out_html, replay_html=replay)
-        log.info("wrote %s", out_html)
+
+def _print_report(report) -> None:
     width = max(len(i.name) for i in report.items)
     for it in report.items:
         mark = "PASS" if it.passed else ("FAIL" if it.required else "miss")
@@ -153,7 +138,54 @@ def _run_verify(args: argparse.Namespace) -> int:
             f", t={it.time:.3f} s" if it.time is not None else "") + "]"
         pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
         print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
+        if it.name == "program_file" and not it.passed:
+            print(f"      {it.detail}")
     print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
+
+
+def _run_verify(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.plan.io import save_plan
+    from drakedeburr.verify.batch import make_plan
+    from drakedeburr.verify.checks import config_for_plan, verify_plan
+    from drakedeburr.verify.report import write_report_files, write_report_json
+
+    windows = _windows(args.windows)
+    kind, *rest = _resolve_target(args.target, args.scenario)
+    folder = None
+    if kind == "plan":
+        folder = Path(rest[0])
+        folder = folder.parent if folder.name == "plan.json" else folder
+        plan = _load_plan(folder)
+        speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+        config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
+    else:
+        scenario, hub = rest
+        if Path(hub).suffix.lower() in _MESH_SUFFIXES:
+            hub = _import_mesh(hub, args)
+        config = _config(args, scenario, hub)
+        plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
+        if args.out:
+            folder = save_plan(plan, args.out)
+    report = verify_plan(plan, config, expected_windows=windows,
+                         progress=tqdm_progress("verify"))
+    if args.program:
+        items = (*report.items, _program_item(plan, args.program))
+        report = replace(report, items=items,
+                         passed=all(i.passed for i in items if i.required))
+    if folder is not None:
+        for path in write_report_files(report, folder, plan=plan, replay=not args.no_replay):
+            log.info("wrote %s", path)
+    if args.json:
+        write_report_json(report, args.json)
+    if args.html:
+        from drakedeburr.verify.html import meshcat_replay_html, write_report_html
+
+        write_report_html(report, args.html,
+                          replay_html=None if args.no_replay else meshcat_replay_html(plan))
+    _print_report(report)
     return 0 if report.passed else 1
 
 
@@ -192,11 +224,17 @@ def register(subparsers) -> None:
     p.add_argument("--scenario", help="cell for a hub folder/mesh (default tool_in_hand)")
     p.add_argument("--json", help="write the JSON report here")
     p.add_argument("--html", help="write the self-contained HTML report here")
-    p.add_argument("-o", "--out", help="folder for report.json and report.html")
+    p.add_argument("-o", "--out", help="for a hub or mesh: the plan folder to write (the plan, "
+                                       "report.json and report.html); a plan folder target "
+                                       "always gets its report written into it")
+    p.add_argument("--program", metavar="FILE",
+                   help="also read this RAPID/KRL/LS program back and check it against the "
+                        "plan (a changed speed, zone, pose, configuration or move order fails, "
+                        "naming the line)")
     p.add_argument("--no-replay", action="store_true", help="HTML without the Meshcat replay")
     p.add_argument("--hub-cache", help="folder for the hub model imported from a mesh target "
-                                       "(default: OUT/hub_import, beside --json/--html, or "
-                                       "~/.cache/drakedeburr/hubs)")
+                                       "(default: OUT_hub_import beside OUT, beside "
+                                       "--json/--html, or ~/.cache/drakedeburr/hubs)")
     p.add_argument("--unit", choices=("m", "mm"),
                    help="unit of a mesh target (default: detected from its size)")
     _common(p)

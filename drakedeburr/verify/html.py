@@ -153,7 +153,7 @@ def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
     if cell is None:
         from drakedeburr.cell.station import load_cell
 
-        cell = load_cell(plan.scenario, plan.hub)
+        cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
     meshcat = scene.get_meshcat(new=True)
     try:
         scene.publish_cell(meshcat, cell, plan.trajectory.q[0])

@@ -9,13 +9,8 @@ __all__ = ["VerifyKinematics", "opw_of"]
 
 
 def opw_of(cell):
-    """The OPW parameters of the cell's arm."""
-    arm = getattr(cell, "arm", None)
-    if arm is not None:
-        return arm.opw
-    from drakedeburr.post.opw import IRB1600_10_120  # cells built before the arm registry
-
-    return IRB1600_10_120
+    """The OPW parameters of the cell's arm (``cell.arm``, from the arm registry)."""
+    return cell.arm.opw
 
 
 class VerifyKinematics:
@@ -40,7 +35,7 @@ class VerifyKinematics:
             self.X_WT = cell.tool_frame.CalcPoseInWorld(ctx).GetAsMatrix4()
 
     def X_WF(self, q: np.ndarray) -> np.ndarray:
-        from drakedeburr.post.opw import fk_opw
+        from drakedeburr.robots.opw import fk_opw
 
         return self.X_WB @ fk_opw(self.opw, q)
 

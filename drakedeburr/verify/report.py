@@ -30,7 +30,8 @@ import numpy as np
 
 from drakedeburr._io import atomic_write_text
 
-__all__ = ["SCHEMA", "CheckItem", "VerificationReport", "report_json", "write_report_json"]
+__all__ = ["SCHEMA", "CheckItem", "VerificationReport", "report_json", "write_report_json",
+           "write_report_files"]
 
 SCHEMA = "drakedeburr.verify/1"
 
@@ -168,3 +169,18 @@ def report_json(report: VerificationReport, include_run: bool = True) -> str:
 def write_report_json(report: VerificationReport, path: str | Path) -> Path:
     """Write ``report.json`` atomically."""
     return atomic_write_text(Path(path), report_json(report))
+
+
+def write_report_files(report: VerificationReport, folder: str | Path, *, plan=None,
+                       replay: bool = True) -> tuple[Path, Path]:
+    """Write the report into its plan's folder, where the export gate reads it:
+    ``report.json`` and ``report.html`` (with a Meshcat replay of ``plan`` when given and
+    ``replay``). Each file is written atomically. Returns their paths."""
+    from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
+    from drakedeburr.verify.html import meshcat_replay_html, write_report_html
+
+    folder = Path(folder)
+    html = write_report_html(report, folder / REPORT_HTML,
+                             replay_html=meshcat_replay_html(plan) if plan is not None and replay
+                             else None)
+    return write_report_json(report, folder / REPORT_FILE), html

@@ -341,7 +341,7 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
     if cell is None:
         from drakedeburr.cell.station import load_cell
 
-        cell = load_cell(plan.scenario, plan.hub)
+        cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
     if hub_model is None:
         from drakedeburr.hub.model import load_hub
 

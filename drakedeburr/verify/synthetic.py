@@ -502,10 +502,15 @@ def reference_plan(
     b.joint_move(np.asarray(cell.q_home, float), params.home_speed)
     b.add_target(-1, "home", -1, X_home, cell.q_home, params.home_speed)
     b.add_segment(-1, "home", k0, t0)
+    from drakedeburr.plan.kinematics import cell_kinematics
+
+    kin = cell_kinematics(cell)
     trajectory = JointTrajectory.from_hermite(t=np.asarray(b.t), q=np.asarray(b.q),
                                               qd=np.asarray(b.qd))
     return Plan(scenario=str(scenario), hub=str(hub), mode=cell.mode, X_WH=X_WH,
                 targets=tuple(b.targets), segments=tuple(b.segments), trajectory=trajectory,
                 tool_path=tool_paths, failures=(),
                 meta={"planner": "drakedeburr.verify.synthetic.reference_plan",
-                      "windows": chosen})
+                      "windows": chosen, "robot": cell.arm.name, "X_FT": kin.X_FT.tolist(),
+                      "X_FH": kin.X_FH.tolist(), "X_WT": kin.X_WT.tolist(),
+                      "X_WB": kin.X_WB.tolist()})

@@ -34,7 +34,6 @@ from drakedeburr.plan import (  # noqa: E402
     contact_geometry,
     load_plan,
     plan_windows,
-    program_from_plan,
     save_plan,
     tool_point_H,
     window_targets_for_hub,
@@ -141,9 +140,10 @@ def main() -> None:
     back = load_plan(out / "plan")
     assert np.array_equal(back.trajectory.q, plan.trajectory.q)
     write_joint_csv(plan, out / "plan" / "joints.csv")
-    from drakedeburr.post.writers import write_program
+    from drakedeburr.programs import program_from_plan, write_program
 
-    program = program_from_plan(plan, "Deburr", flag="UNVERIFIED",
+    # the tool data carry the spindle model's mass and centre of gravity (cell.flange_loads)
+    program = program_from_plan(plan, "Deburr", loads=cell.flange_loads(), flag="UNVERIFIED",
                                 flag_reason="tutorial plan, not verified")
     print("program:", [str(p) for p in write_program(program, out / "Deburr.mod", "rapid")])
     from drakedeburr.viz.playback import save_plan_html

@@ -25,16 +25,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
+from drakedeburr.errors import InputError  # noqa: E402
 from drakedeburr.post import (  # noqa: E402
-    IRB1600_10_120_ROBOT,
-    abb_confdata,
     contour_frames,
-    fanuc_config,
     fit_touch_points,
-    fk_opw,
-    ik_opw,
-    joints_from_configuration,
-    kuka_status_turn,
     offset_contour,
     part_contour_at_virtual,
     path_travel,
@@ -44,9 +38,18 @@ from drakedeburr.post import (  # noqa: E402
     scale_about,
     solve_tool_axis_path,
     virtual_tcp_poses,
-    write_program,
 )
+from drakedeburr.programs import compare_programs, read_program, write_program  # noqa: E402
 from drakedeburr.resources import extdata_dir  # noqa: E402
+from drakedeburr.robots import (  # noqa: E402
+    IRB1600_10_120_ROBOT,
+    abb_confdata,
+    fanuc_config,
+    fk_opw,
+    ik_opw,
+    joints_from_configuration,
+    kuka_status_turn,
+)
 
 ROBOT = IRB1600_10_120_ROBOT
 
@@ -92,11 +95,17 @@ def step3_programs(cl: dict, out: Path, test_mode: bool) -> dict:
     result = program_from_cl(cl["creo"], "creo_profile", X_WO=X_WO, X_FT=X_FT)
     print(f"   {len(result.program.moves)} moves, unreachable CL lines: "
           f"{result.unreachable_lines or 'none'}")
-    files = []
-    for fmt, name in (("rapid", "creo_profile.mod"), ("krl", "creo_profile.src"),
-                      ("ls", "creo_profile.ls")):
-        files += [p.name for p in write_program(result.program, out / name, fmt)]
-    print(f"   wrote {', '.join(files)}")
+    # the program is written in the arm's own language (RAPID for the ABB) and read back
+    (path,) = write_program(result.program, out / "creo_profile.mod")
+    back = read_program(path)
+    differences = compare_programs(result.program, back)
+    print(f"   wrote {path.name}: {len(back.moves)} moves read back, {len(differences)} "
+          "differences to the program")
+    assert not differences
+    try:  # KRL is a KUKA language: refused for the ABB arm
+        write_program(result.program, out / "creo_profile.src", "krl")
+    except InputError as exc:
+        print(f"   KRL refused: {exc}")
     # without the work object the CL coordinates are robot base coordinates: unreachable
     base = program_from_cl(cl["creo"], "creo_base", X_FT=X_FT)
     print(f"   same file in the robot base frame: {len(base.unreachable_lines)} unreachable "
@@ -126,7 +135,7 @@ def step3_programs(cl: dict, out: Path, test_mode: bool) -> dict:
     print(f"   NX 5-axis file, tool tilted 30 deg, {n} points: weighted joint travel "
           f"{travel['min_travel']['weighted']:.3f} m (min travel) vs "
           f"{travel['theta6_zero']['weighted']:.3f} m (theta6 = 0): x{ratio:.2f}")
-    return {"spin_travel": travel, "files": files}
+    return {"spin_travel": travel, "files": [path.name]}
 
 
 def _rounded_rect(a=0.06, b=0.04, r=0.01, n=16):

@@ -13,7 +13,7 @@ joints); controllers resolve it with configuration data stored next to the pose:
   up branch (wrist centre in front of the lower arm); T if the wrist centre is in front of
   axis 1, B behind; t1/t4/t6 the turn numbers of J1/J4/J6 (0 for -180 < q <= 180 deg).
 
-The geometric bits come from :func:`drakedeburr.post.opw_ik.arm_branches`, so the same code
+The geometric bits come from :func:`drakedeburr.robots.opw_ik.arm_branches`, so the same code
 serves every OPW robot; joint signs and turns are taken in the robot's own convention.
 """
 
@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.post.opw_ik import RobotKinematics, arm_branches, ik_opw, joint_candidates
+from drakedeburr.robots.opw_ik import RobotKinematics, arm_branches, ik_opw, joint_candidates
 
 __all__ = [
     "abb_confdata",

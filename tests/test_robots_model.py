@@ -1,4 +1,5 @@
-"""The IRB1600-10/1.2 Drake model against the reference kinematics and the OPW forward map."""
+"""The arm model layout (robots/model.py) and the hand-written IRB1600-10/1.2 model against the
+reference kinematics and the OPW forward map (the other arms: tests/test_robots_arms.py)."""
 
 import json
 
@@ -7,16 +8,18 @@ import pytest
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 
-import drakedeburr.cell.robot as mut
-from drakedeburr.post.opw import IRB1600_10_120, fk_opw
-from drakedeburr.resources import add_package_to, model_path, models_dir
+import drakedeburr.robots.model as mut
+from drakedeburr.resources import add_package_to, model_path, models_dir, resolve_package_url
+from drakedeburr.robots import IRB1600, IRB1600_10_120, fk_opw
+
+IRB1600_FILE = resolve_package_url(IRB1600.model_url)
 
 
 def _robot_plant():
     plant = MultibodyPlant(0.0)
     parser = Parser(plant)
     add_package_to(parser.package_map())
-    (robot,) = parser.AddModels(str(model_path(mut.ROBOT_MODEL_RELPATH)))
+    (robot,) = parser.AddModels(str(IRB1600_FILE))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(mut.BASE_FRAME_NAME, robot))
     plant.Finalize()
     return plant, robot
@@ -48,14 +51,14 @@ def test_joint_order_and_limits_match_reference(extdata):
         np.testing.assert_allclose(joint.revolute_axis(), joints[i]["axis"], atol=0)
         assert joint.position_lower_limits()[0] == pytest.approx(joints[i]["lower_rad"], abs=1e-12)
         assert joint.position_upper_limits()[0] == pytest.approx(joints[i]["upper_rad"], abs=1e-12)
-    np.testing.assert_allclose(plant.GetPositionLowerLimits(), mut.POSITION_LOWER, atol=1e-12)
-    np.testing.assert_allclose(plant.GetPositionUpperLimits(), mut.POSITION_UPPER, atol=1e-12)
+    np.testing.assert_allclose(plant.GetPositionLowerLimits(), IRB1600.q_lower, atol=1e-12)
+    np.testing.assert_allclose(plant.GetPositionUpperLimits(), IRB1600.q_upper, atol=1e-12)
     # 10 kg variant speeds (an inference, see the model header)
     np.testing.assert_allclose(np.degrees(plant.GetVelocityUpperLimits()),
                                [180, 180, 185, 385, 400, 460], atol=1e-9)
-    np.testing.assert_allclose(plant.GetVelocityLowerLimits(), -mut.VELOCITY_LIMITS)
-    np.testing.assert_allclose(plant.GetAccelerationUpperLimits(), mut.ACCELERATION_LIMITS)
-    np.testing.assert_allclose(plant.GetAccelerationLowerLimits(), -mut.ACCELERATION_LIMITS)
+    np.testing.assert_allclose(plant.GetVelocityLowerLimits(), -IRB1600.v_max)
+    np.testing.assert_allclose(plant.GetAccelerationUpperLimits(), IRB1600.a_max)
+    np.testing.assert_allclose(plant.GetAccelerationLowerLimits(), -IRB1600.a_max)
 
 
 def test_joint_origins_match_reference_chain(extdata):
@@ -104,7 +107,7 @@ def test_links_have_collision_geometry_and_plausible_mass():
     plant.RegisterAsSourceForSceneGraph(scene_graph)
     parser = Parser(plant)
     add_package_to(parser.package_map())
-    (robot,) = parser.AddModels(str(model_path(mut.ROBOT_MODEL_RELPATH)))
+    (robot,) = parser.AddModels(str(IRB1600_FILE))
     plant.Finalize()
     total = 0.0
     for index in plant.GetBodyIndices(robot):
@@ -115,3 +118,14 @@ def test_links_have_collision_geometry_and_plausible_mass():
         assert body.default_mass() > 0
         total += body.default_mass()
     assert 150.0 < total < 300.0  # catalogue: about 250 kg
+
+
+def test_read_model_limits_of_every_registered_arm():
+    from drakedeburr.robots import ROBOTS
+
+    for spec in ROBOTS.values():
+        lim = mut.read_model_limits(resolve_package_url(spec.model_url))
+        np.testing.assert_allclose(lim.q_lower, spec.q_lower, atol=1e-12, err_msg=spec.name)
+        np.testing.assert_allclose(lim.q_upper, spec.q_upper, atol=1e-12, err_msg=spec.name)
+        np.testing.assert_allclose(lim.v_max, spec.v_max, atol=1e-12, err_msg=spec.name)
+        np.testing.assert_allclose(lim.a_max, spec.a_max, atol=1e-12, err_msg=spec.name)

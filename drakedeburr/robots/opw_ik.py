@@ -11,7 +11,7 @@ Branch bookkeeping: every solution carries ``(shoulder, elbow, wrist)`` signs (+
 - elbow: +1 if the wrist centre lies in front of the lower-arm line (J2 -> J3),
 - wrist: sign of the (OPW) joint-5 angle.
 The vendor configuration data (ABB confdata, KUKA S/T, FANUC CONFIG) are derived from these and
-from the joint turns in :mod:`drakedeburr.post.configuration`.
+from the joint turns in :mod:`drakedeburr.robots.configuration`.
 
 Selection follows the paper: joints 1-3 by minimum travel weighted by link length, then
 joints 4-6 by the smallest change; along a path the configuration (branch) is kept when
@@ -27,12 +27,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drakedeburr.post.opw import IRB1600_10_120, OpwParameters, fk_opw
+from drakedeburr.robots.opw import OpwParameters, fk_opw
 
 __all__ = [
     "JointLimits",
     "RobotKinematics",
-    "IRB1600_10_120_ROBOT",
     "IkSolutions",
     "JointPathResult",
     "ik_opw",
@@ -64,25 +63,19 @@ class JointLimits:
 
 @dataclass(frozen=True)
 class RobotKinematics:
-    """An OPW robot: geometry, joint limits and a vendor name for program output."""
+    """The kinematic view of an arm: OPW geometry, joint position limits, controller family.
+
+    Attributes:
+        opw: OPW parameters (model joints -> OPW joints, see :mod:`drakedeburr.robots.opw`).
+        limits: joint position limits in the model's joint convention [rad].
+        controller: "abb", "kuka" or "fanuc": which configuration data the arm's programs use.
+        name: registry name (e.g. "irb1600") or a free label.
+    """
 
     opw: OpwParameters
     limits: JointLimits
-    vendor: str = "abb"
+    controller: str = "abb"
     name: str = ""
-
-
-# ABB IRB1600 (1.2 m arm) joint limits from ros-industrial/abb irb1600_6_12 (see
-# extdata/kinematics/robot_kinematics_reference.json, urdf_joints).
-IRB1600_10_120_ROBOT = RobotKinematics(
-    opw=IRB1600_10_120,
-    limits=JointLimits(
-        lower=(-np.pi, -1.0995, -4.1015, -3.4906, -2.0071, -6.9813),
-        upper=(np.pi, 1.9198, 0.9599, 3.4906, 2.0071, 6.9813),
-    ),
-    vendor="abb",
-    name="irb1600",
-)
 
 
 @dataclass(frozen=True)

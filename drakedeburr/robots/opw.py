@@ -4,7 +4,8 @@ The parameters a1, a2, b, c1..c4 describe the arm; ``offsets`` and ``sign_correc
 robot's joint values to the model's: ``q_opw = q_robot * sign - offset``. The end frame is
 the robot's flange in the vendor convention (ABB ``tool0``: +Z out of the flange).
 
-This module holds the parameters and the forward map; the analytic inverse lives beside it.
+This module holds the parameter type and the forward map; the analytic inverse lives beside it
+(:mod:`drakedeburr.robots.opw_ik`), the arms' values in :mod:`drakedeburr.robots.arms`.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["OpwParameters", "IRB1600_10_120", "fk_opw"]
+__all__ = ["OpwParameters", "fk_opw"]
 
 
 @dataclass(frozen=True)
@@ -52,15 +53,6 @@ class OpwParameters:
             sign_corrections=tuple(int(v) for v in data.get("sign_corrections", (1,) * 6)),
             name=name,
         )
-
-
-# ABB IRB1600-10/1.2: the 1.2 m arm geometry of irb1600_6_12 (ros-industrial/abb
-# opw_parameters_irb1600_6_120.yaml); ABB's joint 3 is offset by -90 deg in OPW terms.
-IRB1600_10_120 = OpwParameters(
-    a1=0.150, a2=0.0, b=0.0, c1=0.4865, c2=0.475, c3=0.600, c4=0.065,
-    offsets=(0.0, 0.0, -np.pi / 2, 0.0, 0.0, 0.0), sign_corrections=(1, 1, 1, 1, 1, 1),
-    name="ABB IRB1600-10/1.2",
-)
 
 
 def fk_opw(params: OpwParameters, q_robot: np.ndarray) -> np.ndarray:

@@ -1,0 +1,42 @@
+"""A content hash of everything a cell is built from: the scenario file, the arm, tool and
+fixture models, and the hub model folder. A verification report carries it, so a report is
+accepted only for the cell it checked (``drakedeburr export`` refuses otherwise)."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from drakedeburr.resources import models_dir, resolve_hub_dir, scenario_path
+
+__all__ = ["cell_fingerprint"]
+
+#: model folders every cell draws from (each file hashed with its path inside ``models/``)
+_MODEL_FOLDERS = ("robots", "tools", "fixtures")
+
+
+def _files(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+
+
+def cell_fingerprint(scenario: str | Path, hub: str | Path, robot: str | None) -> str:
+    """SHA-256 (hex) of the scenario file, the arm/tool/fixture models, the hub folder's files
+    (its own ``summary.json`` aside: statistics, not geometry) and the arm's name."""
+    h = hashlib.sha256()
+
+    def add(name: str, path: Path) -> None:
+        data = path.read_bytes()
+        h.update(f"{name}\0{len(data)}\0".encode())
+        h.update(data)
+
+    add("scenario", scenario_path(scenario))
+    root = models_dir()
+    for sub in _MODEL_FOLDERS:
+        for f in _files(root / sub):
+            add(str(f.relative_to(root)), f)
+    hub_dir = resolve_hub_dir(hub)
+    for f in _files(hub_dir):
+        if f.name != "summary.json":
+            add("hub/" + str(f.relative_to(hub_dir)), f)
+    h.update(f"robot\0{robot or ''}".encode())
+    return h.hexdigest()

@@ -1,0 +1,197 @@
+"""What the three program formats share: number formats, rotations, names, header lines, and
+the values a format can hold (speeds, zones, joint speeds as written).
+
+The ``*_written`` functions are the one definition of each format's resolution; the writers
+write these values and :mod:`drakedeburr.programs.compare` compares a program read back with
+them, so "as planned" and "as written" never drift apart.
+
+Vendor limits enforced here (sources in docs/post.md):
+
+* RAPID identifiers: a letter, then letters, digits, '_'; at most 32 characters.
+* KRL names (DEF/DEFDAT = file name): a letter, then letters, digits, '_'; at most 24
+  characters; the .src/.dat file name must equal the DEF/DEFDAT name.
+* FANUC TP: program name = file name: a letter, then letters, digits, '_'; at most 36
+  characters (R-30iA and later; R-J3iB: 8); remark (``!``) text at most 32 characters;
+  /ATTR COMMENT at most 16 characters; mm/sec speeds are whole numbers; CNT 0..100; J speed
+  1..100 %.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from drakedeburr.errors import InputError
+from drakedeburr.units import mm_from_m
+
+__all__ = [
+    "FORMATS", "SUFFIXES", "ProgramFormatError", "fnum", "quat_wxyz", "euler_zyx_deg",
+    "R_from_quat_wxyz", "R_from_euler_zyx_deg", "pose_from_mm", "program_name_for",
+    "speed_written", "zone_written", "joint_percent", "cnt_from_zone", "zone_from_cnt",
+    "header_lines", "ABB_SPEEDS", "ABB_ZONES", "LS_REMARK_MAX", "LS_COMMENT_MAX",
+    "CNT_PER_MM", "wrap_remarks", "check_writable",
+]
+
+FORMATS = ("rapid", "krl", "ls")
+SUFFIXES = {"rapid": (".mod", ".modx", ".prg"), "krl": (".src",), "ls": (".ls",)}
+#: ABB predefined speeddata [mm/s] and zonedata radii [mm] (RAPID reference, speeddata/zonedata)
+ABB_SPEEDS = (5, 10, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 400, 500, 600, 800, 1000,
+              1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000)
+ABB_ZONES = (0, 1, 5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200)
+LS_REMARK_MAX = 32
+LS_COMMENT_MAX = 16
+#: FANUC CNT per mm of zone radius (CNT is a rounding degree, not a distance: docs/post.md)
+CNT_PER_MM = 10.0
+_NAMES = {
+    "rapid": (re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}"), "a letter, then letters, digits, '_', "
+              "at most 32 characters"),
+    "krl": (re.compile(r"[A-Za-z][A-Za-z0-9_]{0,23}"), "a letter, then letters, digits, '_', at "
+            "most 24 characters"),
+    "ls": (re.compile(r"[A-Za-z][A-Za-z0-9_]{0,35}"), "a letter, then letters, digits, '_', at "
+           "most 36 characters"),
+}
+
+
+class ProgramFormatError(InputError):
+    """A program file breaks the format (or the subset the readers accept); the message
+    names file, line and what was wrong."""
+
+
+def fnum(x: float, nd: int = 6) -> str:
+    """Fixed-point text of ``x`` with ``nd`` decimals (no "-0.000")."""
+    s = f"{x:.{nd}f}"
+    return s[1:] if s.startswith("-") and float(s) == 0.0 else s
+
+
+def quat_wxyz(R: np.ndarray) -> np.ndarray:
+    """(4,) unit quaternion [w, x, y, z] of a rotation matrix, w >= 0 (ABB order)."""
+    q = Rotation.from_matrix(R).as_quat(scalar_first=True)
+    return -q if q[0] < 0 else q
+
+
+def R_from_quat_wxyz(q: np.ndarray) -> np.ndarray:
+    """(3, 3) rotation of a quaternion [w, x, y, z] (normalised first)."""
+    return Rotation.from_quat(np.asarray(q, float), scalar_first=True).as_matrix()
+
+
+def euler_zyx_deg(R: np.ndarray) -> np.ndarray:
+    """(3,) [a, b, c] deg with R = Rz(a) Ry(b) Rx(c): KUKA A, B, C; FANUC R, P, W."""
+    import warnings
+
+    with warnings.catch_warnings():  # gimbal lock: still an exact representation
+        warnings.simplefilter("ignore", UserWarning)
+        return np.asarray(Rotation.from_matrix(R).as_euler("ZYX", degrees=True))
+
+
+def R_from_euler_zyx_deg(a: float, b: float, c: float) -> np.ndarray:
+    """Rz(a) Ry(b) Rx(c) from degrees."""
+    return Rotation.from_euler("ZYX", [a, b, c], degrees=True).as_matrix()
+
+
+def pose_from_mm(xyz_mm, R: np.ndarray) -> np.ndarray:
+    """(4, 4) pose [m] from a position in mm and a rotation matrix."""
+    X = np.eye(4)
+    X[:3, :3] = R
+    X[:3, 3] = np.asarray(xyz_mm, float) / 1000.0
+    return X
+
+
+def program_name_for(path: str | Path, fmt: str) -> str:
+    """The program name a file must carry (KRL DEF/DEFDAT, LS /PROG = the file's stem).
+
+    Raises:
+        InputError: the stem breaks the format's naming rules.
+    """
+    stem = Path(path).name.split(".")[0]
+    pattern, rule = _NAMES[fmt]
+    if not pattern.fullmatch(stem):
+        raise InputError(f"{path}: {stem!r} is not a valid {fmt.upper()} program name ({rule}); "
+                         "the controller needs the program to carry its file's name")
+    return stem
+
+
+def speed_written(fmt: str, speed: float) -> float:
+    """TCP speed [m/s] as the format holds it: RAPID 0.001 mm/s, KRL $VEL.CP 1e-6 m/s, LS whole
+    mm/sec rounded *down* (never faster than planned), at least 1 mm/sec."""
+    if fmt == "rapid":
+        return round(mm_from_m(speed), 3) / 1000.0
+    if fmt == "krl":
+        return round(float(speed), 6)
+    return max(1, math.floor(mm_from_m(speed) + 1e-6)) / 1000.0
+
+
+def cnt_from_zone(zone: float) -> int:
+    """FANUC CNT value of a zone radius [m]; 0 means FINE (see docs/post.md)."""
+    if zone <= 0.0:
+        return 0
+    return int(min(100, max(1, round(mm_from_m(zone) * CNT_PER_MM))))
+
+
+def zone_from_cnt(cnt: int) -> float:
+    """The nominal zone radius [m] a CNT value stands for (inverse of :func:`cnt_from_zone`)."""
+    return cnt / CNT_PER_MM / 1000.0
+
+
+def zone_written(fmt: str, zone: float) -> float:
+    """Zone radius [m] as the format holds it: RAPID/KRL 0.001 mm (0 = fine / exact stop), LS
+    the nominal radius of its CNT value."""
+    if fmt == "ls":
+        return zone_from_cnt(cnt_from_zone(zone))
+    return round(mm_from_m(zone), 3) / 1000.0
+
+
+def joint_percent(fraction: float) -> int:
+    """Joint-move speed in % of the axes' top speed (KRL BAS #VEL_PTP, LS J %): rounded down,
+    at least 1."""
+    return int(max(1, min(100, math.floor(100.0 * fraction + 1e-9))))
+
+
+def header_lines(program, fmt: str, extra: tuple[str, ...] = ()) -> list[str]:
+    """Header comment lines (text only, without the comment marker)."""
+    p = program
+    spec = p.spec
+    arm = f"{spec.title} ({spec.controller_model})" if spec else (p.kinematics.name or "robot")
+    lines = [f"drakedeburr, {fmt} program {p.name}", f"robot: {arm}",
+             ("workpiece in hand: stationary tool " if p.stationary_tool else "tool: ")
+             + f"{p.tool_name}, work object {p.wobj_name}",
+             f"loads: {p.load_source}"]
+    if p.source:
+        lines.append(f"source: {p.source}")
+    lines.append(f"moves: {len(p.moves)}")
+    if p.flag:
+        lines += ["!" * 40, f"{p.flag.upper()}: {p.flag_reason}".rstrip(": "),
+                  f"{p.flag.upper()}: check this program before running it", "!" * 40]
+    return lines + list(p.notes) + list(extra)
+
+
+def wrap_remarks(lines: list[str], width: int = LS_REMARK_MAX) -> list[str]:
+    """Lines wrapped to ``width`` characters (FANUC remarks)."""
+    out = []
+    for line in lines:
+        out += textwrap.wrap(line, width, break_long_words=True) or [""]
+    return out
+
+
+def check_writable(program, tol: float = 1e-6) -> None:
+    """Refuse a program whose joints do not reach their poses (FK(q) X_FT vs X_WT, ``tol`` in
+    m + rad) or leave the joint limits.
+
+    Raises:
+        InputError: naming the first moves and the error.
+    """
+    err = program.consistency_error()
+    bad = np.flatnonzero(err > tol)
+    if bad.size:
+        moves = ", ".join(str(i + 1) for i in bad[:10])
+        raise InputError(f"program {program.name}: move(s) {moves} have joints that do not "
+                         f"reach their pose (error {err[bad].max():.3g}); the writers need "
+                         "consistent q and X_WT")
+    inside = program.kinematics.limits.contains(np.array([m.q for m in program.moves]))
+    if not np.all(inside):
+        i = int(np.flatnonzero(~inside)[0])
+        raise InputError(f"program {program.name}: move {i + 1} joints outside the limits")
