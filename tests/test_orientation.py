@@ -265,3 +265,44 @@ def test_axis_model_hessian_matches_finite_differences_of_the_gradient():
         np.testing.assert_allclose(H[:, k], fd, rtol=1e-5, atol=1e-5 * np.abs(H).max())
     J = prob.residual_jacobian(x)
     np.testing.assert_allclose(H_gn, 2 * J.T @ J, atol=1e-10 * np.abs(H_gn).max())
+
+
+@pytest.mark.parametrize("m, w2nd, closed", [(40, 0.0, True), (40, 1e-5, True), (4, 1e-5, True),
+                                             (3, 0.0, True), (12, 1e-5, False)])
+def test_coefficients_gram_and_its_bands_match_the_residuals(m, w2nd, closed):
+    """C (built from sparse rows), G = C^T C (accumulated without BLAS) and G's cyclic bands
+    against the residuals by hand: r = C @ axes, first differences / sqrt(d) then the
+    weighted second differences."""
+    from drakedeburr.orientation.models import OrientationProblem
+
+    rng = np.random.default_rng(m)
+    phi = np.sort(rng.uniform(0, 2 * np.pi, m))
+    p = np.c_[0.02 * np.cos(phi), 0.015 * np.sin(phi), 0.002 * np.sin(2 * phi)]
+    R = Rotation.random(m, random_state=1).as_matrix()
+    prob = OrientationProblem("axis", p, R, -0.3, 0.4, second_difference_weight=w2nd,
+                              closed=closed)
+    x = rng.uniform(-0.3, 0.4, prob.n_vars)
+    a = prob.axes(x)
+    seg = m if closed else m - 1
+    i = np.arange(seg)
+    j = (i + 1) % m
+    d = np.linalg.norm(p[j] - p[i], axis=1)
+    slope = (a[j] - a[i]) / d[:, None]
+    rows = [(a[j] - a[i]) / np.sqrt(d)[:, None]]
+    if w2nd > 0:
+        after = np.arange(seg) if closed else np.arange(1, seg)
+        before = (after - 1) % seg
+        dbar = 0.5 * (d[before] + d[after])
+        rows.append((slope[after] - slope[before]) * np.sqrt(w2nd / dbar)[:, None])
+    r = np.concatenate(rows)
+    C = prob.coefficients()
+    np.testing.assert_allclose(C @ a, r, rtol=0, atol=1e-12 * np.abs(r).max())
+    np.testing.assert_allclose(prob.residuals(x), r, rtol=0, atol=1e-12 * np.abs(r).max())
+    G = prob._gram[0]
+    np.testing.assert_allclose(G, C.T @ C, rtol=0, atol=1e-12 * np.abs(G).max())
+    offsets, Gk = prob.gram_bands
+    G_bands = np.zeros((m, m))
+    for k, off in enumerate(offsets):
+        G_bands[np.arange(m), (np.arange(m) + off) % m] += Gk[k]
+    np.testing.assert_allclose(G_bands, G, rtol=0, atol=1e-12 * np.abs(G).max())
+    assert len(set(offsets.tolist())) == len(offsets) and offsets.max() < m

@@ -156,26 +156,59 @@ class OrientationProblem:
     @cached_property
     def _gram(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """G = C^T C (M, M) and its nonzero pattern (i, j, G_ij)."""
-        C = self.coefficients()
-        G = C.T @ C
+        cols, vals = self.coefficient_rows()
+        m = self.m
+        # sum of the rows' outer products, accumulated without BLAS (a dense C^T C product
+        # starts OpenBLAS threads: milliseconds, and far more on a busy machine)
+        a = np.broadcast_to(cols[:, :, None], (*cols.shape, cols.shape[1]))
+        b = np.broadcast_to(cols[:, None, :], a.shape)
+        G = np.bincount((a * m + b).reshape(-1), (vals[:, :, None] * vals[:, None, :]).reshape(-1),
+                        minlength=m * m).reshape(m, m)
         ii, jj = np.nonzero(np.abs(G) > 0)
         return G, ii, jj, G[ii, jj]
+
+    @cached_property
+    def gram_bands(self) -> tuple[np.ndarray, np.ndarray]:
+        """The cyclic bands of G = C^T C: (offsets (K,), Gk (K, M)) with
+        Gk[k, i] = G[i, (i + offsets[k]) % M]; offsets increasing in [0, M), only those with a
+        nonzero entry. O(M), no dense (M, M) matrix."""
+        cols, vals = self.coefficient_rows()
+        m = self.m
+        a = np.broadcast_to(cols[:, :, None], (*cols.shape, cols.shape[1])).reshape(-1)
+        off = ((cols[:, None, :] - cols[:, :, None]) % m).reshape(-1)
+        v = (vals[:, :, None] * vals[:, None, :]).reshape(-1)
+        nz = v != 0.0
+        offsets = np.unique(off[nz])
+        k = np.searchsorted(offsets, off[nz])
+        Gk = np.bincount(k * m + a[nz], v[nz], minlength=len(offsets) * m)
+        return offsets, Gk.reshape(len(offsets), m)
+
+    def coefficient_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The rows of C (see :meth:`coefficients`) in sparse form: column indices (R, L) and
+        values (R, L), L = 2 (first differences) or 4 (with second differences; first-difference
+        rows padded with zeros); a column may repeat within a row (the values add)."""
+        i, j = self.segment_index
+        d = self.chords
+        w = 1.0 / np.sqrt(d)
+        cols, vals = np.stack([j, i], 1), np.stack([w, -w], 1)
+        if self.second_difference_weight <= 0.0:
+            return cols, vals
+        before, after, scale = self._second_rows()
+        # (S[after] - S[before]) * scale with S = D / d, D @ axes = a_j - a_i
+        cols2 = np.stack([j[after], i[after], j[before], i[before]], 1)
+        inv_a, inv_b = 1.0 / d[after], 1.0 / d[before]
+        vals2 = np.stack([inv_a, -inv_a, -inv_b, inv_b], 1) * scale[:, None]
+        pad = np.zeros_like(cols)
+        return (np.concatenate([np.concatenate([cols, pad], 1), cols2]),
+                np.concatenate([np.concatenate([vals, np.zeros_like(vals)], 1), vals2]))
 
     def coefficients(self) -> np.ndarray:
         """(R, M) matrix C with residuals = C @ axes (every axis-model residual is a linear
         combination of the tool axes; row order as :meth:`residuals`)."""
-        i, j = self.segment_index
-        d = self.chords
-        k = len(d)
-        D = np.zeros((k, self.m))  # D @ axes = differences a_j - a_i
-        D[np.arange(k), j] += 1.0
-        D[np.arange(k), i] -= 1.0
-        rows = [D / np.sqrt(d)[:, None]]
-        if self.second_difference_weight > 0.0:
-            before, after, scale = self._second_rows()
-            S = D / d[:, None]
-            rows.append((S[after] - S[before]) * scale[:, None])
-        return np.concatenate(rows, axis=0)
+        cols, vals = self.coefficient_rows()
+        C = np.zeros((len(cols), self.m))
+        np.add.at(C, (np.arange(len(cols))[:, None], cols), vals)
+        return C
 
     def _point_derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """axes (M, 3), d axis / d theta (M, 3, 2) and second derivatives (M, 3, 2, 2) in H."""
