@@ -114,24 +114,40 @@ def test_exact_beats_pso_holds_bounds_and_is_locally_optimal(index):
 
 
 @pytest.mark.parametrize("w2nd", [0.0, 1e-5])
-def test_exact_solver_internal_model_matches_the_problem(w2nd):
-    """The exact solver's fast banded model (its own trig tables) must be the problem's model:
-    objective, gradient and Hessian-vector products against models.py at random angles (a
-    stale copy of an older theta_A sign once made it optimise a different problem)."""
-    from drakedeburr.orientation.exact import _BandedAxisModel
+@pytest.mark.parametrize("index", [0, 1])
+def test_exact_solver_internal_model_matches_the_problem(w2nd, index):
+    """The exact solver's fast banded model (its own trig tables, band numbering) must be the
+    problem's model: objective, gradient, Gauss-Newton diagonal and the whole Hessian (band
+    storage unpacked) against models.py at random angles (a stale copy of an older theta_A
+    sign once made it optimise a different problem)."""
+    from drakedeburr.orientation.banded import BandedAxisModel
 
-    cl, n = WINDOWS[0]
+    cl, n = WINDOWS[index]
     prob = _problem(cl, n, "axis", w2nd)
-    fast = _BandedAxisModel(prob)
+    fast = BandedAxisModel(prob)
+    perm = fast.layout.perm
     rng = np.random.default_rng(4)
     for x in rng.uniform(-0.5, 0.6, (3, prob.n_vars)):
-        f, g, _, curv, J = fast.derivatives(x)
+        xb = fast.to_band(x)
+        np.testing.assert_array_equal(fast.from_band(xb), x)
+        f, g, hv, curv = fast.derivatives(xb)
         assert f == pytest.approx(prob.objective(x), rel=1e-12)
-        assert fast.objective(x) == pytest.approx(prob.objective(x), rel=1e-12)
-        np.testing.assert_allclose(g, prob.gradient(x), rtol=0, atol=1e-9 * np.abs(g).max())
-        H = prob.hessian(x)
+        assert fast.objective(xb) == pytest.approx(prob.objective(x), rel=1e-12)
+        np.testing.assert_allclose(g, prob.gradient(x)[perm], rtol=0,
+                                   atol=1e-9 * np.abs(g).max())
+        _, _, H_gn, _ = prob.derivatives(x)
+        H = prob.hessian(x)[np.ix_(perm, perm)]  # band numbering
+        np.testing.assert_allclose(fast.gauss_newton_diagonal(hv), np.diag(H_gn)[perm],
+                                   rtol=1e-12)
+        ab = fast.hessian_band(hv, curv)
+        H_fast = np.zeros_like(H)
+        for d in range(fast.bandwidth + 1):  # LAPACK lower band storage
+            k = np.arange(prob.n_vars - d)
+            H_fast[k + d, k] = ab[d, : prob.n_vars - d]
+            H_fast[k, k + d] = ab[d, : prob.n_vars - d]
+        np.testing.assert_allclose(H_fast, H, rtol=0, atol=1e-9 * np.abs(H).max())
         v = rng.normal(size=prob.n_vars)
-        np.testing.assert_allclose(fast.hess_vec(J, curv, v), H @ v, rtol=0,
+        np.testing.assert_allclose(fast.hess_vec(ab, v), H @ v, rtol=0,
                                    atol=1e-9 * np.abs(H @ v).max())
 
 

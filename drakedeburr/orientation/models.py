@@ -89,17 +89,17 @@ class OrientationProblem:
     def upper(self) -> np.ndarray:
         return np.full(self.n_vars, self.theta_max)
 
-    @property
+    @cached_property
     def segment_index(self) -> tuple[np.ndarray, np.ndarray]:
-        """(i, j) point indices of the segments (consecutive pairs)."""
+        """(i, j) point indices of the segments (consecutive pairs); read-only, computed once."""
         i = np.arange(self.m if self.closed else self.m - 1)
-        return i, (i + 1) % self.m
+        return _read_only(i), _read_only((i + 1) % self.m)
 
-    @property
+    @cached_property
     def chords(self) -> np.ndarray:
-        """(K,) chord length d_k of each segment [m]."""
+        """(K,) chord length d_k of each segment [m]; read-only, computed once."""
         i, j = self.segment_index
-        return np.linalg.norm(self.p_HC[j] - self.p_HC[i], axis=1)
+        return _read_only(np.linalg.norm(self.p_HC[j] - self.p_HC[i], axis=1))
 
     def axes(self, x: np.ndarray) -> np.ndarray:
         """Tool axes in H: (..., M, 3) for x (..., 2M)."""
@@ -170,23 +170,25 @@ class OrientationProblem:
     @cached_property
     def gram_bands(self) -> tuple[np.ndarray, np.ndarray]:
         """The cyclic bands of G = C^T C: (offsets (K,), Gk (K, M)) with
-        Gk[k, i] = G[i, (i + offsets[k]) % M]; offsets increasing in [0, M), only those with a
-        nonzero entry. O(M), no dense (M, M) matrix."""
+        Gk[k, i] = G[i, (i + offsets[k]) % M]; offsets increasing in [0, M), those of the
+        coupling pattern (consecutive points, and next-but-one with second differences).
+        O(M), no dense (M, M) matrix."""
         cols, vals = self.coefficient_rows()
-        m = self.m
-        a = np.broadcast_to(cols[:, :, None], (*cols.shape, cols.shape[1])).reshape(-1)
-        off = ((cols[:, None, :] - cols[:, :, None]) % m).reshape(-1)
-        v = (vals[:, :, None] * vals[:, None, :]).reshape(-1)
-        nz = v != 0.0
-        offsets = np.unique(off[nz])
-        k = np.searchsorted(offsets, off[nz])
-        Gk = np.bincount(k * m + a[nz], v[nz], minlength=len(offsets) * m)
+        m, width = self.m, cols.shape[1]
+        a = np.repeat(cols, width, axis=1).reshape(-1)  # row entry l, then l' = 0..L-1
+        off = (np.tile(cols, (1, width)).reshape(-1) - a) % m
+        v = (np.repeat(vals, width, axis=1) * np.tile(vals, (1, width))).reshape(-1)
+        offsets = np.flatnonzero(np.bincount(off, minlength=m))
+        lookup = np.zeros(m, int)
+        lookup[offsets] = np.arange(len(offsets))
+        Gk = np.bincount(lookup[off] * m + a, v, minlength=len(offsets) * m)
         return offsets, Gk.reshape(len(offsets), m)
 
     def coefficient_rows(self) -> tuple[np.ndarray, np.ndarray]:
         """The rows of C (see :meth:`coefficients`) in sparse form: column indices (R, L) and
         values (R, L), L = 2 (first differences) or 4 (with second differences; first-difference
-        rows padded with zeros); a column may repeat within a row (the values add)."""
+        rows padded with their own columns and zero values); a column may repeat within a row
+        (the values add)."""
         i, j = self.segment_index
         d = self.chords
         w = 1.0 / np.sqrt(d)
@@ -198,8 +200,7 @@ class OrientationProblem:
         cols2 = np.stack([j[after], i[after], j[before], i[before]], 1)
         inv_a, inv_b = 1.0 / d[after], 1.0 / d[before]
         vals2 = np.stack([inv_a, -inv_a, -inv_b, inv_b], 1) * scale[:, None]
-        pad = np.zeros_like(cols)
-        return (np.concatenate([np.concatenate([cols, pad], 1), cols2]),
+        return (np.concatenate([np.concatenate([cols, cols], 1), cols2]),
                 np.concatenate([np.concatenate([vals, np.zeros_like(vals)], 1), vals2]))
 
     def coefficients(self) -> np.ndarray:
@@ -304,6 +305,11 @@ def make_problem(
         raise InputError(f"{name}: coincident consecutive CL points at segment(s) "
                          f"{bad[:10].tolist()}")
     return prob
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
 
 
 def block_diag_2(blocks: np.ndarray) -> np.ndarray:
