@@ -2,7 +2,7 @@
 of a bundled hub, on an idle machine and with a busy loop on the other core; plus
 normal-estimation and registration time.
 
-    python benchmarks/bench_orientation.py [--hub h5_split] [--quick] [--repeats 5]
+    python benchmarks/bench_orientation.py [--hub h5_split] [--quick] [--repeats 7]
                                            [--no-busy] [--solvers-only]
 
 Both solvers see the same problem (CL points every 2 mm, ground-truth normals). PSO uses the
@@ -94,7 +94,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--hub", default="h5_split")
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--repeats", type=int, default=5, help="timed solves per solver (median)")
+    ap.add_argument("--repeats", type=int, default=7, help="timed solves per solver (median)")
     ap.add_argument("--no-busy", action="store_true", help="skip the busy-machine pass")
     ap.add_argument("--solvers-only", action="store_true", help="skip normals, registration")
     args = ap.parse_args()

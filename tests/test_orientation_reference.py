@@ -12,8 +12,9 @@ whole, so this test depends on no hub model, planner or frame code: three synthe
 tests/test_orientation.py (one with second differences), two windows of the bundled hub
 h5_split (CL points every 2 mm, ground-truth normals; from the centre, a bound, a seeded random
 start), the planner's CL points on h5_straight's dense window 0 (M = 481; the solves that take
-the projected-gradient safeguard step), and seeded random hub-like window shapes (drakedeburr.path.synthetic) with the
-planner's badly scaled ``proposed`` CL points (chords 0.01-10 mm).
+the projected-gradient safeguard step), and seeded random hub-like window shapes
+(drakedeburr.path.synthetic) with the planner's badly scaled ``proposed`` CL points (chords
+0.01-10 mm).
 """
 
 from __future__ import annotations
@@ -80,7 +81,8 @@ def test_reference_file_covers_the_cases():
 # -------------------------------------------------------------------------------------------
 def _generate_cases() -> list[tuple[str, object, np.ndarray | None]]:
     sys.path.insert(0, str(Path(__file__).parent))
-    from test_orientation import WINDOWS, _problem as window_problem
+    from test_orientation import WINDOWS
+    from test_orientation import _problem as window_problem
 
     from drakedeburr.frames.local_frames import R_HL_from_normals
     from drakedeburr.hub import load_hub

@@ -94,10 +94,10 @@ class BandLayout:
     row: np.ndarray  # (E,) band variable (row) of each stored entry
     col: np.ndarray  # (E,) band variable (column)
     gram: np.ndarray  # (E,) flat index into Gk (K, M) (in band positions) of its coupling
-    flat: np.ndarray  # (E,) flat index into the band storage
+    flat: np.ndarray  # (E,) flat index into the band storage's transpose (2M, bandwidth + 1)
     at_diag: np.ndarray  # (2M,) position in E of each band variable's diagonal entry
-    band_row: np.ndarray  # (bandwidth + 1, 2M) row of each band storage slot (clipped)
-    band_col: np.ndarray  # (bandwidth + 1, 2M) column of each band storage slot
+    row6: np.ndarray  # (E,) row / column band variable 2 q + s as a column of the (3, 6 M)
+    col6: np.ndarray  # derivative table: (1 + s) M + q
     bandwidth: int
 
 
@@ -112,7 +112,6 @@ def band_layout(m: int, offsets: tuple[int, ...]) -> BandLayout:
     pos = np.empty(m, int)
     pos[order] = np.arange(m)
     idx = pos[(order[None, :] + off[:, None]) % m]  # (K, M)
-    n = 2 * m
     perm = (2 * order[:, None] + np.arange(2)).reshape(-1)
     q = np.tile(np.arange(m), len(off))  # coupling p = k M + q: (q, idx[k, q])
     s, t = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1])
@@ -123,40 +122,41 @@ def band_layout(m: int, offsets: tuple[int, ...]) -> BandLayout:
     where[keep] = np.arange(len(keep))
     r, c = r[keep], c[keep]
     bandwidth = int((r - c).max())
-    flat = (r - c) * n + c
+    flat = c * (bandwidth + 1) + (r - c)
     k0 = int(np.flatnonzero(off == 0)[0])
     base = 4 * (k0 * m + np.arange(m))  # the diagonal 2x2 block of each band position
     at_diag = np.stack([where[base], where[base + 3]], 1).reshape(-1)  # (A, A), (B, B)
-    band_col = np.broadcast_to(np.arange(n), (bandwidth + 1, n))
-    band_row = np.minimum(band_col + np.arange(bandwidth + 1)[:, None], n - 1)
     return BandLayout(order, perm, np.argsort(perm), idx, r, c, keep // 4, flat, at_diag,
-                      band_row, np.ascontiguousarray(band_col), bandwidth)
+                      (1 + r % 2) * m + r // 2,
+                      (1 + c % 2) * m + c // 2, bandwidth)
 
 
 class BandedAxisModel:
     """Axis-model objective, gradient and banded Hessian of one problem (built once), all in
     band numbering (see :class:`BandLayout`): x, gradients and diagonals are (2M,) band
-    variables, curvature blocks (M, 3) per band position."""
+    variables, curvature blocks (3, M) per band position."""
 
     def __init__(self, prob: OrientationProblem):
         offsets, Gk = prob.gram_bands  # Gk[k, i] = G[i, (i + offsets[k]) % M]
-        m = prob.m
+        m, n = prob.m, 2 * prob.m
         lay = band_layout(m, tuple(offsets.tolist()))
-        self.m, self.n, self.layout = m, 2 * m, lay
+        self.m, self.n, self.layout = m, n, lay
         self.bandwidth = lay.bandwidth
+        # component-major arrays (components x points: contiguous rows, few numpy calls)
         self.Gb = Gk[:, lay.order]  # (K, M) in band positions
-        self.Gb3 = self.Gb[:, :, None]
         self.g2 = 2.0 * self.Gb.reshape(-1)[lay.gram]  # (E,) 2 G of each stored entry
-        self.R_t = np.ascontiguousarray(prob.R_HL[lay.order].transpose(0, 2, 1))  # (M, 3, 3)
-        # [0, sa, ca, sb, cb, sa cb, sa sb, ca cb, ca sb, the same 8 negated]; column 0 stays 0
-        self._T = np.zeros((m, 17))
-        self._T_products = self._T[:, 5:9].reshape(m, 2, 2)  # views into _T (checked)
-        self._T_sin, self._T_cos = self._T[:, 1:5:2], self._T[:, 2:5:2]
+        self.R_jc = np.ascontiguousarray(prob.R_HL[lay.order].transpose(2, 1, 0))  # (3, 3, M)
+        # T: [0, sa, ca, sb, cb, sa cb, sa sb, ca cb, ca sb, the same 8 negated] x M
+        self._T = T = np.zeros((17, m))
+        self._T_sin, self._T_cos = T[1:5:2], T[2:5:2]  # (sa, sb), (ca, cb)
+        self._T_products = T[5:9].reshape(2, 2, m)
         for view in (self._T_products, self._T_sin, self._T_cos):
-            assert np.shares_memory(view, self._T)
-        # rows of d axis / d (band variable 2 q + s) in the (M * 6, 3) table: 6 q + 1 + s
-        self.row6 = 6 * (lay.row // 2) + 1 + lay.row % 2
-        self.col6 = 6 * (lay.col // 2) + 1 + lay.col % 2
+            assert np.may_share_memory(view, T)
+        # the band's free mask (transposed, C order): free[c] & free[c + d], from a zero-copy
+        # sliding view of a padded copy of "free"
+        self._free = np.ones(n + lay.bandwidth, bool)
+        self._free_window = np.lib.stride_tricks.as_strided(
+            self._free, (n, lay.bandwidth + 1), (1, 1), writeable=False)
 
     def to_band(self, x: np.ndarray) -> np.ndarray:
         """(2M,) variables -> band variables."""
@@ -167,35 +167,36 @@ class BandedAxisModel:
         return xb[self.layout.inv_perm]
 
     def _laplacian(self, A: np.ndarray) -> np.ndarray:
-        """G @ A for A (M, 3) in band positions."""
-        return (self.Gb3 * np.take(A, self.layout.idx, axis=0)).sum(0)
+        """G @ A for A (3, M) (components x band positions)."""
+        return (self.Gb * A.take(self.layout.idx, axis=1)).sum(1)
 
     def _table(self, xb: np.ndarray, rows: slice) -> np.ndarray:
-        """(M, r, 3) rows of [axis, d/dA, d/dB, d2/dA2, d2/dAdB, d2/dB2] in H."""
-        T, xb2 = self._T, xb.reshape(self.m, 2)
-        np.sin(xb2, out=self._T_sin)  # (sa, sb) -> columns 1, 3
-        np.cos(xb2, out=self._T_cos)  # (ca, cb) -> columns 2, 4
-        # (sa, ca) x (cb, sb): columns 1, 2 times columns 4, 3
-        np.multiply(T[:, 1:3, None], T[:, None, 4:2:-1], out=self._T_products)
-        np.negative(T[:, 1:9], out=T[:, 9:])
-        return np.matmul(np.take(T, _SIGNED_PICK[rows], axis=1), self.R_t)
+        """(r, 3, M) rows of [axis, d/dA, d/dB, d2/dA2, d2/dAdB, d2/dB2] in H."""
+        T, xT = self._T, xb.reshape(self.m, 2).T
+        np.sin(xT, out=self._T_sin)
+        np.cos(xT, out=self._T_cos)
+        # (sa, ca) x (cb, sb): rows 1, 2 times rows 4, 3
+        np.multiply(T[1:3, None], T[None, 4:2:-1], out=self._T_products)
+        np.negative(T[1:9], out=T[9:])
+        L = T.take(_SIGNED_PICK[rows], axis=0)  # (r, 3 j, M) in L
+        return np.einsum("rjm,jcm->rcm", L, self.R_jc)  # sum_j L[r, j] R[:, j]
 
     def objective(self, xb: np.ndarray) -> float:
-        A = self._table(xb, slice(0, 1))[:, 0, :]
+        A = self._table(xb, slice(0, 1))[0]
         return float(np.vdot(A, self._laplacian(A)))
 
     def derivatives(self, xb: np.ndarray):
         """f, gradient (2M,), Gauss-Newton entries of the stored band (E,), curvature blocks
-        (M, 3: aa, ab, bb) per band position."""
-        W = self._table(xb, slice(None))  # (M, 6, 3)
-        A = W[:, 0, :]
+        (3: aa, ab, bb, M) per band position."""
+        W = self._table(xb, slice(None))  # (6, 3, M)
+        A = W[0]
         GA = self._laplacian(A)
-        P = np.einsum("mc,mkc->mk", GA + GA, W[:, 1:, :])
-        W6 = W.reshape(-1, 3)
-        # np.take: a third of the cost of fancy indexing for row gathers
-        a, b = np.take(W6, self.row6, axis=0), np.take(W6, self.col6, axis=0)
-        hv = np.einsum("ec,ec->e", a, b) * self.g2
-        return float(np.vdot(A, GA)), P[:, :2].reshape(-1), hv, P[:, 2:]
+        P = np.einsum("kcm,cm->km", W[1:], GA + GA)  # (5, M): gradient (2), curvature (3)
+        # d axis / d (band variable 2 q + s) is column (1 + s) M + q of Wc
+        Wc = W.transpose(1, 0, 2).reshape(3, -1)
+        hv = np.einsum("ce,ce->e", Wc.take(self.layout.row6, axis=1),
+                       Wc.take(self.layout.col6, axis=1)) * self.g2
+        return float(np.vdot(A, GA)), P[:2].T.reshape(-1), hv, P[2:]
 
     def gauss_newton_diagonal(self, hv: np.ndarray) -> np.ndarray:
         """(2M,) Gauss-Newton diagonal 2 G_mm |d axis / d theta|^2 (> 0)."""
@@ -203,23 +204,30 @@ class BandedAxisModel:
 
     def hessian_band(self, hv: np.ndarray, curv: np.ndarray) -> np.ndarray:
         """The model Hessian (Gauss-Newton entries + curvature blocks ``curv``) in LAPACK lower
-        band storage: (bandwidth + 1, 2M)."""
-        ab = np.zeros((self.bandwidth + 1, self.n))
-        ab.flat[self.layout.flat] = hv
+        band storage: (bandwidth + 1, 2M), Fortran order."""
+        abT = np.zeros((self.n, self.bandwidth + 1))
+        abT.flat[self.layout.flat] = hv
+        ab = abT.T
         # the curvature blocks: (A, A), (B, B) on the diagonal (row 0), (B, A) in row 1
-        ab[0, 0::2] += curv[:, 0]
-        ab[0, 1::2] += curv[:, 2]
-        ab[1, 0::2] += curv[:, 1]
+        ab[0, 0::2] += curv[0]
+        ab[0, 1::2] += curv[2]
+        ab[1, 0::2] += curv[1]
         return ab
 
-    def hess_vec(self, abH: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """H @ v with H from :meth:`hessian_band` (BLAS ``dsbmv``, single-threaded)."""
-        return dsbmv(self.bandwidth, 1.0, abH, v, lower=1)
+    def hess_vec(self, abH: np.ndarray, v: np.ndarray, alpha: float = 1.0, beta: float = 0.0,
+                 y: np.ndarray | None = None) -> np.ndarray:
+        """alpha H @ v + beta y with H from :meth:`hessian_band` (BLAS ``dsbmv``,
+        single-threaded; y is not modified)."""
+        if y is None:
+            return dsbmv(self.bandwidth, alpha, abH, v, lower=1)
+        return dsbmv(self.bandwidth, alpha, abH, v, beta=beta, y=y, lower=1)
 
     def free_mask(self, fixed: np.ndarray) -> np.ndarray:
-        """(bandwidth + 1, 2M) band mask: 1 where neither row nor column is fixed."""
-        free = ~fixed
-        return np.take(free, self.layout.band_row) & np.take(free, self.layout.band_col)
+        """(bandwidth + 1, 2M) band mask (Fortran order, like the band): 1 where neither the
+        row nor the column is fixed."""
+        free = self._free[: self.n]
+        np.logical_not(fixed, out=free)
+        return np.logical_and(free[:, None], self._free_window).T
 
     def system(self, abH, mask, damp, fixed, ab) -> None:
         """Fill ab with H + damp I, fixed rows and columns -> identity (``mask`` from

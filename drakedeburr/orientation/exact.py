@@ -108,11 +108,11 @@ class SolveReport:
 
 
 def _psd_curvature(curv: np.ndarray) -> np.ndarray:
-    """PSD part of each 2x2 curvature block (aa, ab, bb)."""
-    B = np.stack([curv[:, :2], curv[:, 1:]], 1)
+    """PSD part of each 2x2 curvature block, (3: aa, ab, bb, M)."""
+    B = np.stack([curv[:2].T, curv[1:].T], 1)  # (M, 2, 2)
     w, v = np.linalg.eigh(B)
     B = np.einsum("mij,mj,mkj->mik", v, np.maximum(w, 0.0), v)
-    return np.stack([B[:, 0, 0], B[:, 0, 1], B[:, 1, 1]], -1)
+    return np.stack([B[:, 0, 0], B[:, 0, 1], B[:, 1, 1]])
 
 
 def _clip(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -161,13 +161,14 @@ class _Newton:
         d = d_first = None
         extra = 0.0
         for _ in range(self.opt.max_active_set_updates + 1):
-            any_fixed = bool(fixed.any())
+            any_fixed = np.count_nonzero(fixed) > 0
             mask = mdl.free_mask(fixed) if any_fixed else None
             d_fix = (z - x) * fixed  # active variables move onto their bound
-            moves = any_fixed and bool(d_fix.any())
+            moves = any_fixed and np.count_nonzero(d_fix) > 0
             d = None
             while d is None:
-                rhs = -(g + mdl.hess_vec(abH, d_fix)) if moves else -g
+                # -(g + H d_fix) (one BLAS call)
+                rhs = mdl.hess_vec(abH, d_fix, -1.0, -1.0, g) if moves else -g
                 if any_fixed:
                     np.copyto(rhs, d_fix, where=fixed)
                 damp = (self.mu + extra) * h_mean
@@ -187,10 +188,10 @@ class _Newton:
             self.solves += 1
             if d_first is None:
                 d_first = d
-            q = g + mdl.hess_vec(abH, d) + damp * d
+            q = mdl.hess_vec(abH, d, 1.0, 1.0, g + damp * d)  # g + H d + damp d
             z = _clip(x + d - q / h_diag, lo, hi)
             new_fixed = (z == lo) | (z == hi)
-            if not (new_fixed ^ fixed).any():
+            if np.count_nonzero(new_fixed ^ fixed) == 0:
                 break
             fixed = new_fixed
         return d, d_first
@@ -232,7 +233,7 @@ class _Newton:
             # diagonally scaled projected-gradient step -> active set estimate (the
             # Gauss-Newton diagonal 2 G_mm |d axis / d theta|^2 is > 0)
             h_diag = mdl.gauss_newton_diagonal(self.hv) + np.maximum(
-                self.curv[:, ::2], 0.0).reshape(-1)
+                self.curv[::2], 0.0).T.reshape(-1)
             d, d_first = self.direction(h_diag)
             if d is None:
                 return it, f"Newton system not positive definite at iteration {it}"
