@@ -30,6 +30,10 @@ __all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters"]
 _GAUSS_ORDER = 8
 # samples per segment for the true chord height before the local refinement
 _CHORD_SAMPLES = 48
+# Gauss-Legendre nodes and weights, computed once (numpy's leggauss solves an eigenproblem on
+# every call: it was half of the CL planners' time)
+_GL8 = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+_GL16 = np.polynomial.legendre.leggauss(16)
 
 
 def chord_parameters(p: np.ndarray) -> np.ndarray:
@@ -106,7 +110,7 @@ class EdgeCurve:
         u = np.clip(u, 0.0, 1.0)
         i = np.clip(np.searchsorted(self.u_table, u, side="right") - 1, 0, len(self.u_table) - 2)
         a = self.u_table[i]
-        x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+        x, w = _GL8
         h = (u - a)[..., None]
         t = a[..., None] + (x + 1.0) * 0.5 * h
         speed = np.linalg.norm(self.spline(t, nu=1), axis=-1)
@@ -135,7 +139,7 @@ class EdgeCurve:
         u0 = np.atleast_1d(np.asarray(u0, float))
         u1 = np.atleast_1d(np.asarray(u1, float))
         u1 = np.where(u1 <= u0, u1 + 1.0, u1)
-        x, w = np.polynomial.legendre.leggauss(16)
+        x, w = _GL16
         t = u0[:, None] + (x + 1.0) * 0.5 * (u1 - u0)[:, None]
         d1 = self.derivative(t, 1)
         d2 = self.derivative(t, 2)
@@ -239,7 +243,7 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     u = chord_parameters(p)
     spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
     # arc-length table on the data parameters (Gauss-Legendre per span)
-    x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+    x, w = _GL8
     t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
     speed = np.linalg.norm(spline(t, nu=1), axis=-1)
     ds = 0.5 * (speed * w).sum(-1) * np.diff(u)
