@@ -236,8 +236,13 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     u_next[-1] += 1.0
     if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
         return False
-    d = curve.chord_height(u, u_next, samples=_samples_for(curve, u, u_next), refine=False)
-    return bool((d <= params.delta_max * (1.0 - _SAMPLED_MARGIN)).all())
+    samples = _samples_for(curve, u, u_next)
+    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
+    # every 8th sample first: a plan failing there fails the full test (same values, fewer)
+    if (curve.sampled_chord_height_lower_bound(u, u_next, samples) > target).any():
+        return False
+    d = curve.chord_height(u, u_next, samples=samples, refine=False)
+    return bool((d <= target).all())
 
 
 def _samples_for(curve: EdgeCurve, u0, u1) -> int:
@@ -263,14 +268,15 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
     # a step can never exceed the length of the rest of the loop
     while True:
         rest = L - s
-        if _ch(curve, s, rest) <= target and _ch(curve, s, rest, refine=True) <= params.delta_max:
+        ch = _ChordHeightFrom(curve, s)
+        if ch(rest) <= target and ch(rest, refine=True) <= params.delta_max:
             break
         lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
         # grow a bracket geometrically, then shrink it with guesses from the model
         # h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of the target
         step = min(rest, 1e-3)
         while step < rest:
-            h = _ch(curve, s, step)
+            h = ch(step)
             if h > target:
                 hi, h_hi = step, h
                 break
@@ -281,26 +287,34 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
             guess = hi * np.sqrt(target / h_hi) if np.isfinite(h_hi) else 0.5 * (lo + hi)
             width = hi - lo
             guess = float(np.clip(guess, lo + 0.05 * width, hi - 0.05 * width))
-            h = _ch(curve, s, guess)
+            h = ch(guess)
             if h > target:
                 hi, h_hi = guess, h
             else:
                 lo, h_lo = guess, h
         # the search used sampled chord heights; confirm the step with the refined one
-        while lo > 1e-6 and _ch(curve, s, lo, refine=True) > params.delta_max:
+        while lo > 1e-6 and ch(lo, refine=True) > params.delta_max:
             lo *= 0.995
         s += lo
         out.append(s)
     return curve.u_from_arc(np.array(out))
 
 
-def _ch(curve: EdgeCurve, s: float, step: float, refine: bool = False) -> float:
-    u0 = curve.u_from_arc(s)
-    u1 = curve.u_from_arc(s + step)
-    if s + step >= curve.length - 1e-12 or u1 <= u0:
-        u1 = u1 + 1.0
-    return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
-                                    refine=refine)[0])
+class _ChordHeightFrom:
+    """Chord height of the arc from arc length s to s + step, for many steps from one s (the
+    start parameter is found once, not once per trial step)."""
+
+    def __init__(self, curve: EdgeCurve, s: float):
+        self.curve, self.s = curve, s
+        self.u0 = curve.u_from_arc(s)
+
+    def __call__(self, step: float, refine: bool = False) -> float:
+        curve, s, u0 = self.curve, self.s, self.u0
+        u1 = curve.u_from_arc(s + step)
+        if s + step >= curve.length - 1e-12 or u1 <= u0:
+            u1 = u1 + 1.0
+        return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
+                                        refine=refine)[0])
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
