@@ -245,10 +245,10 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     return bool((d <= target).all())
 
 
-def _samples_for(curve: EdgeCurve, u0, u1) -> int:
+def _samples_for(curve: EdgeCurve, u0, u1, s0=None) -> int:
     """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
-    0.25 mm of the longest arc, 48..600."""
-    arc = float(np.max(curve.arc_length(u0, u1)))
+    0.25 mm of the longest arc, 48..600 (s0: arc length to u0 if known)."""
+    arc = float(np.max(curve.arc_length(u0, u1, s0=s0)))
     return int(np.clip(arc / 0.25e-3, 48, 600))
 
 
@@ -307,13 +307,14 @@ class _ChordHeightFrom:
     def __init__(self, curve: EdgeCurve, s: float):
         self.curve, self.s = curve, s
         self.u0 = curve.u_from_arc(s)
+        self.s0 = curve.arc_length(np.mod(self.u0, 1.0))
 
     def __call__(self, step: float, refine: bool = False) -> float:
         curve, s, u0 = self.curve, self.s, self.u0
         u1 = curve.u_from_arc(s + step)
         if s + step >= curve.length - 1e-12 or u1 <= u0:
             u1 = u1 + 1.0
-        return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
+        return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1, self.s0),
                                         refine=refine)[0])
 
 
@@ -359,8 +360,14 @@ def _feasible(chord: np.ndarray, height: np.ndarray, l_max: float, delta: float)
 def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enough: int = 0):
     """Shortest-path layers over the closed grid from ``start`` back to it: best[k][j] = min
     sum of squared chords of k feasible segments from start to j (j in 0..G, G = back at
-    start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable."""
-    G, R = chord.shape
+    start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable.
+
+    Only what can be finite is computed: segment lengths up to the longest feasible one, and in
+    layer k only the positions that k segments can reach (the others stay +inf, arg 1: what
+    the full (G+1, R) minimum gives them)."""
+    G = chord.shape[0]
+    R = max(1, int(np.flatnonzero(ok.any(axis=0))[-1]) + 1 if ok.any() else 1)
+    chord, ok = chord[:, :R], ok[:, :R]
     roll = (np.arange(G + 1) + start) % G  # position j on the unrolled loop -> grid index
     cost = np.where(ok, chord**2, np.inf)
     j = np.arange(G + 1)
@@ -369,13 +376,16 @@ def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enou
     i_c = np.where(valid, i, 0)
     seg_cost = np.where(valid, cost[roll[i_c], np.arange(R)[None, :]], np.inf)
     best = np.full((k_max + 1, G + 1), np.inf)
-    arg = np.zeros((k_max + 1, G + 1), int)
+    arg = np.ones((k_max + 1, G + 1), int)
     best[0, 0] = 0.0
+    lo = hi = 0  # positions that can be finite in the previous layer
     for k in range(1, k_max + 1):
-        cand = best[k - 1][i_c] + seg_cost
-        r_best = np.argmin(cand, axis=1)
-        best[k] = cand[j, r_best]
-        arg[k] = r_best + 1
+        lo, hi = min(lo + 1, G + 1), min(hi + R, G)
+        if lo <= hi:
+            cand = best[k - 1][i_c[lo: hi + 1]] + seg_cost[lo: hi + 1]
+            r_best = np.argmin(cand, axis=1)
+            best[k, lo: hi + 1] = cand[np.arange(hi + 1 - lo), r_best]
+            arg[k, lo: hi + 1] = r_best + 1
         if k >= k_enough and np.isfinite(best[k, G]):  # the budget and the fewest are covered
             return best[: k + 1], arg[: k + 1]
     return best, arg
