@@ -191,14 +191,21 @@ def chord_walk(curve: EdgeCurve, u: np.ndarray, l_max: float, delta_max: float) 
     if len(u) == 0:
         return np.zeros(0, int)
     kept = [0]
-    start = 0
-    for j in range(1, len(u)):
-        l = float(curve.chord_length(u[start], u[j]))
-        d = float(curve.chord_height_circle(u[start], u[j])[0])
-        if l < l_max and d < delta_max:
+    start, n = 0, len(u)
+    j0, block = 1, 8
+    # the next kept point is the first j after the start whose chord or eq.-2 height fails:
+    # tested for a block of j at once (the same values as one call per j), doubling the block
+    while j0 < n:
+        j = np.arange(j0, min(j0 + block, n))
+        l = curve.chord_length(np.full(len(j), u[start]), u[j])
+        d = curve.chord_height_circle(np.full(len(j), u[start]), u[j])
+        fail = np.flatnonzero(~((l < l_max) & (d < delta_max)))
+        if len(fail) == 0:
+            j0, block = j0 + len(j), 2 * block
             continue
-        kept.append(j)
-        start = j
+        start = int(j[fail[0]])
+        kept.append(start)
+        j0, block = start + 1, 8
     return np.array(kept, int)
 
 
