@@ -276,18 +276,24 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
     while True:
         rest = L - s
         ch = _ChordHeightFrom(curve, s)
-        if ch(rest) <= target and ch(rest, refine=True) <= params.delta_max:
+        # grow a bracket geometrically (steps 1, 2, 4, ... mm below the rest of the loop, all
+        # measured in one call together with the rest itself), then shrink it with guesses
+        # from the model h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of
+        # the target
+        steps = [min(rest, 1e-3)]
+        while steps[-1] * 2.0 < rest:
+            steps.append(steps[-1] * 2.0)
+        if steps[-1] >= rest:
+            steps = []
+        h_all = ch.many(np.array([rest, *steps]))
+        if h_all[0] <= target and ch(rest, refine=True) <= params.delta_max:
             break
         lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
-        # grow a bracket geometrically, then shrink it with guesses from the model
-        # h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of the target
-        step = min(rest, 1e-3)
-        while step < rest:
-            h = ch(step)
+        for step, h in zip(steps, h_all[1:], strict=True):
             if h > target:
                 hi, h_hi = step, h
                 break
-            lo, h_lo, step = step, h, step * 2.0
+            lo, h_lo = step, h
         for _ in range(40):
             if h_lo >= 0.998 * target or hi - lo < 1e-7:
                 break
@@ -323,6 +329,22 @@ class _ChordHeightFrom:
             u1 = u1 + 1.0
         return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1, self.s0),
                                         refine=refine)[0])
+
+    def many(self, steps: np.ndarray) -> np.ndarray:
+        """Sampled chord heights (refine=False) for several steps at once, (K,): the values of
+        K calls (each arc keeps its own sample count; shorter sample rows are padded with
+        their last sample, t = 1, which does not change a maximum)."""
+        curve, s, u0 = self.curve, self.s, self.u0
+        steps = np.asarray(steps, float)
+        if len(steps) == 0:
+            return np.zeros(0)
+        u1 = curve.u_from_arc(s + steps)
+        u1 = np.where((s + steps >= curve.length - 1e-12) | (u1 <= u0), u1 + 1.0, u1)
+        counts = [_samples_for(curve, u0, u1[k], self.s0) for k in range(len(steps))]
+        t = np.ones((len(steps), max(counts) + 1))
+        for k, c in enumerate(counts):
+            t[k, : c + 1] = np.linspace(0.0, 1.0, c + 1)
+        return curve.chord_height_at(u0, u1, t)
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):

@@ -203,6 +203,20 @@ class EdgeCurve:
         return u0, u1, a, b, uu, _dist_to_segment(self.position(uu), a[:, None, :],
                                                   b[:, None, :])
 
+    def chord_height_at(self, u0, u1, t: np.ndarray) -> np.ndarray:
+        """Sampled chord height, (M,): max distance from the chord of the arc points at
+        u0 + t (u1 - u0) for the rows t (M, S) of fractions (one sample set per arc; with
+        t = linspace(0, 1, samples + 1) in every row this is ``chord_height(u0, u1, samples,
+        refine=False)``, value for value)."""
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        u1 = np.atleast_1d(np.asarray(u1, float))
+        u0 = np.broadcast_to(u0, u1.shape)
+        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
+        a = self.position(u0)
+        b = self.position(u1)
+        uu = u0[:, None] + t * (u1 - u0)[:, None]
+        return _dist_to_segment(self.position(uu), a[:, None, :], b[:, None, :]).max(axis=1)
+
     def sampled_chord_height_lower_bound(self, u0, u1, samples: int, every: int = 8):
         """A lower bound of ``chord_height(u0, u1, samples, refine=False)``, (M,): the same
         distances at every ``every``-th sample only (identical values: the same parameters
