@@ -402,16 +402,22 @@ def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enou
     j = np.arange(G + 1)
     i = j[:, None] - np.arange(1, R + 1)[None, :]  # (G+1, R) segment start on the unrolled loop
     valid = i >= 0
-    i_c = np.where(valid, i, 0)
-    seg_cost = np.where(valid, cost[roll[i_c], np.arange(R)[None, :]], np.inf)
-    best = np.full((k_max + 1, G + 1), np.inf)
+    seg_cost = np.where(valid, cost[roll[np.where(valid, i, 0)], np.arange(R)[None, :]], np.inf)
+    # best[k] is stored after R entries of +inf, so that best[k-1][j - r] (r = 1..R) for the
+    # rows j of a layer is a zero-copy sliding view (+inf before the start, as the
+    # unreachable start positions have)
+    pad = np.full((k_max + 1, R + G + 1), np.inf)
+    best = pad[:, R:]
     arg = np.ones((k_max + 1, G + 1), int)
     best[0, 0] = 0.0
+    step = pad.strides[1]
     lo = hi = 0  # positions that can be finite in the previous layer
     for k in range(1, k_max + 1):
         lo, hi = min(lo + 1, G + 1), min(hi + R, G)
         if lo <= hi:
-            cand = best[k - 1][i_c[lo: hi + 1]] + seg_cost[lo: hi + 1]
+            prev = np.lib.stride_tricks.as_strided(  # prev[j - lo, r - 1] = best[k-1][j - r]
+                pad[k - 1, R + lo - 1:], (hi + 1 - lo, R), (step, -step), writeable=False)
+            cand = prev + seg_cost[lo: hi + 1]
             r_best = np.argmin(cand, axis=1)
             best[k, lo: hi + 1] = cand[np.arange(hi + 1 - lo), r_best]
             arg[k, lo: hi + 1] = r_best + 1
