@@ -356,20 +356,29 @@ def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
     chord = np.full((G, reach), np.inf)
     height = np.full((G, reach), np.inf)
     alive = np.arange(G)
+    # D[i, k] = p[(i + 1 + k) % G] - p[i]: the inner points seen from each start, and their
+    # squared lengths, computed once for all segment lengths (a zero-copy sliding view of
+    # the wrapped grid; per segment only the rows still alive are gathered)
+    p_ext = np.concatenate([p, p[: reach + 1]])
+    window = np.lib.stride_tricks.as_strided(p_ext[1:], (G, reach, 3),
+                                             (p_ext.strides[0], p_ext.strides[0], p_ext.strides[1]),
+                                             writeable=False)
+    D = window - p[:, None, :]
+    DD = np.einsum("nkj,nkj->nk", D, D)
     for r in range(1, reach + 1):
         a = p[alive]
-        b = p[(alive + r) % G]
+        b = p_ext[alive + r]
         c = np.linalg.norm(b - a, axis=1)
         h = np.zeros(len(alive))
         if r > 1:
             # squared distance of the inner points to the segment, without (n, r-1, 3)
             # temporaries beyond ap: |ap|^2 - 2 t ap.ab + t^2 |ab|^2, t clipped to [0, 1]
-            ap = p[(alive[:, None] + np.arange(1, r)) % G] - a[:, None, :]  # (n, r-1, 3)
+            ap = D[alive, : r - 1]  # (n, r-1, 3)
             ab = b - a
             L2 = np.maximum(c * c, 1e-300)[:, None]
             dot = np.einsum("nkj,nj->nk", ap, ab)
             t = np.clip(dot / L2, 0.0, 1.0)
-            d2 = np.einsum("nkj,nkj->nk", ap, ap) - 2 * t * dot + t * t * L2
+            d2 = DD[alive, : r - 1] - 2 * t * dot + t * t * L2
             h = np.sqrt(np.maximum(d2.max(1), 0.0))
         chord[alive, r - 1] = c
         height[alive, r - 1] = h
