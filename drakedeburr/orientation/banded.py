@@ -101,34 +101,37 @@ class BandLayout:
     bandwidth: int
 
 
+# the four entries (s, t) of a 2x2 block: row 2 q + s, column 2 n + t
+_S, _T = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1])
+
+
 @lru_cache(maxsize=32)
 def band_layout(m: int, offsets: tuple[int, ...]) -> BandLayout:
-    """Pure index tables (cached: windows of one hub share a few sizes; ~50 us to build)."""
+    """Pure index tables (cached: windows of one hub share a few sizes). ``offsets`` increasing
+    and starting with 0 (:meth:`OrientationProblem.gram_bands`). Built with few numpy calls:
+    a first solve of a new size pays for it."""
     off = np.asarray(offsets)
+    if off[0] != 0:
+        raise ValueError(f"band_layout: offsets must start with 0, got {offsets}")
+    q = np.arange(m)
     # interleaved numbering 0, M-1, 1, M-2, ...: cyclic neighbours end up <= 2 apart
-    order = np.empty(m, int)
-    order[0::2] = np.arange((m + 1) // 2)
-    order[1::2] = m - 1 - np.arange(m // 2)
-    pos = np.empty(m, int)
-    pos[order] = np.arange(m)
-    idx = pos[(order[None, :] + off[:, None]) % m]  # (K, M)
-    perm = (2 * order[:, None] + np.arange(2)).reshape(-1)
-    q = np.tile(np.arange(m), len(off))  # coupling p = k M + q: (q, idx[k, q])
-    s, t = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1])
-    r = ((2 * q)[:, None] + s).reshape(-1)
-    c = ((2 * idx.reshape(-1))[:, None] + t).reshape(-1)
-    keep = np.flatnonzero(r >= c)  # lower triangle
-    where = np.full(len(r), -1)
-    where[keep] = np.arange(len(keep))
-    r, c = r[keep], c[keep]
+    order = np.where(q % 2 == 0, q // 2, m - 1 - q // 2)
+    pos = np.argsort(order)
+    idx = pos[(order + off[:, None]) % m]  # (K, M)
+    perm = (2 * order[:, None] + _S[::3]).reshape(-1)
+    # candidate entries (k, q, s, t), K M 4 of them; the lower triangle is stored
+    r = np.broadcast_to((2 * q)[:, None] + _S, (len(off), m, 4)).reshape(-1)
+    n_e = np.broadcast_to(idx[:, :, None], (len(off), m, 4)).reshape(-1)
+    c = 2 * n_e + np.tile(_T, len(off) * m)
+    keep = np.flatnonzero(r >= c)
+    r, c, n_e = r[keep], c[keep], n_e[keep]
     bandwidth = int((r - c).max())
-    flat = c * (bandwidth + 1) + (r - c)
-    k0 = int(np.flatnonzero(off == 0)[0])
-    base = 4 * (k0 * m + np.arange(m))  # the diagonal 2x2 block of each band position
-    at_diag = np.stack([where[base], where[base + 3]], 1).reshape(-1)  # (A, A), (B, B)
-    return BandLayout(order, perm, np.argsort(perm), idx, r, c, keep // 4, flat, at_diag,
-                      (1 + r % 2) * m + r // 2,
-                      (1 + c % 2) * m + c // 2, bandwidth)
+    # offset 0 comes first: its kept entries are (A, A), (B, A), (B, B) of each position q,
+    # E positions 3 q, 3 q + 1, 3 q + 2
+    v = np.arange(2 * m)
+    return BandLayout(order, perm, np.argsort(perm), idx, r, c, keep // 4,
+                      c * (bandwidth + 1) + (r - c), 3 * (v // 2) + 2 * (v % 2),
+                      (1 + r % 2) * m + r // 2, (1 + c % 2) * m + n_e, bandwidth)
 
 
 class BandedAxisModel:
