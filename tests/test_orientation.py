@@ -322,3 +322,6 @@ def test_coefficients_gram_and_its_bands_match_the_residuals(m, w2nd, closed):
         G_bands[np.arange(m), (np.arange(m) + off) % m] += Gk[k]
     np.testing.assert_allclose(G_bands, G, rtol=0, atol=1e-12 * np.abs(G).max())
     assert len(set(offsets.tolist())) == len(offsets) and offsets.max() < m
+    offsets_g, Gk_g = prob._gram_bands_general()  # the closed form is the general sums
+    np.testing.assert_array_equal(offsets_g, offsets)
+    np.testing.assert_array_equal(Gk_g, Gk)

@@ -158,8 +158,7 @@ class BandedAxisModel:
         # the band's free mask (transposed, C order): free[c] & free[c + d], from a zero-copy
         # sliding view of a padded copy of "free"
         self._free = np.ones(n + lay.bandwidth, bool)
-        self._free_window = np.lib.stride_tricks.as_strided(
-            self._free, (n, lay.bandwidth + 1), (1, 1), writeable=False)
+        self._free_window = np.ndarray((n, lay.bandwidth + 1), bool, self._free, 0, (1, 1))
 
     def to_band(self, x: np.ndarray) -> np.ndarray:
         """(2M,) variables -> band variables."""

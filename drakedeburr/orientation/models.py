@@ -173,6 +173,16 @@ class OrientationProblem:
         Gk[k, i] = G[i, (i + offsets[k]) % M]; offsets increasing in [0, M), those of the
         coupling pattern (consecutive points, and next-but-one with second differences).
         O(M), no dense (M, M) matrix."""
+        if self.closed and self.second_difference_weight <= 0.0 and self.m >= 3:
+            # the common case in closed form (the same sums as the general path below:
+            # G_ii = w_(i-1)^2 + w_i^2, G_i,i+1 = -w_i^2, w = 1 / sqrt(d))
+            w = 1.0 / np.sqrt(self.chords)
+            w2 = w * w
+            w2_prev = np.roll(w2, 1)
+            return np.array([0, 1, self.m - 1]), np.stack([w2_prev + w2, -w2, -w2_prev])
+        return self._gram_bands_general()
+
+    def _gram_bands_general(self) -> tuple[np.ndarray, np.ndarray]:
         cols, vals = self.coefficient_rows()
         m, width = self.m, cols.shape[1]
         a = np.repeat(cols, width, axis=1).reshape(-1)  # row entry l, then l' = 0..L-1
