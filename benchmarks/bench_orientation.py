@@ -32,18 +32,31 @@ import time
 
 import numpy as np
 
+import drakedeburr.orientation.exact as exact_module
 from drakedeburr.frames.local_frames import R_HL_from_normals
 from drakedeburr.frames.normals import inner_normals_from_cloud
 from drakedeburr.hub import load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, problem_for, solve_problem
-from drakedeburr.orientation.banded import band_layout
 from drakedeburr.orientation.commands import cl_points_from_edge
 from drakedeburr.orientation.models import make_problem
 
 
+def _solver_caches():
+    """Every functools cache of the exact solver's modules (the band layout tables)."""
+    import importlib
+
+    mods = [exact_module]
+    try:
+        mods.append(importlib.import_module("drakedeburr.orientation.banded"))
+    except ImportError:  # an older implementation (benchmarked with PYTHONPATH)
+        pass
+    return [f for m in mods for f in vars(m).values() if hasattr(f, "cache_clear")]
+
+
 def _fresh(prob):
-    """The same problem, rebuilt: no cached coupling matrix; band-layout cache emptied."""
-    band_layout.cache_clear()
+    """The same problem, rebuilt (no cached coupling matrix), the solver's caches emptied."""
+    for f in _solver_caches():
+        f.cache_clear()
     return make_problem(prob.model, prob.p_HC, prob.R_HL, prob.theta_min, prob.theta_max,
                         w1=prob.w1, w2=prob.w2,
                         second_difference_weight=prob.second_difference_weight, name=prob.name)
