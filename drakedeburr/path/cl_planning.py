@@ -255,7 +255,10 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
 def _samples_for(curve: EdgeCurve, u0, u1, s0=None) -> int:
     """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
     0.25 mm of the longest arc, 48..600 (s0: arc length to u0 if known)."""
-    arc = float(np.max(curve.arc_length(u0, u1, s0=s0)))
+    return _sample_count(float(np.max(curve.arc_length(u0, u1, s0=s0))))
+
+
+def _sample_count(arc: float) -> int:
     return int(np.clip(arc / 0.25e-3, 48, 600))
 
 
@@ -340,7 +343,9 @@ class _ChordHeightFrom:
             return np.zeros(0)
         u1 = curve.u_from_arc(s + steps)
         u1 = np.where((s + steps >= curve.length - 1e-12) | (u1 <= u0), u1 + 1.0, u1)
-        counts = [_samples_for(curve, u0, u1[k], self.s0) for k in range(len(steps))]
+        # _samples_for per arc, the arcs measured in one call (elementwise: the same values)
+        arcs = curve.arc_length(u0, u1, s0=self.s0)
+        counts = [_sample_count(float(a)) for a in arcs]
         t = np.ones((len(steps), max(counts) + 1))
         for k, c in enumerate(counts):
             t[k, : c + 1] = np.linspace(0.0, 1.0, c + 1)
