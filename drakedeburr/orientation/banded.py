@@ -74,8 +74,6 @@ def _derive_tables() -> tuple[np.ndarray, np.ndarray]:
 
 
 _PICK, _SIGN = _derive_tables()
-# the same picks from [T, -T[1:]] (17 columns, no multiply by the signs)
-_SIGNED_PICK = np.where(_SIGN < 0, _PICK + 8, _PICK)
 
 
 @dataclass(frozen=True)
@@ -149,8 +147,10 @@ class BandedAxisModel:
         self.Gb = Gk[:, lay.order]  # (K, M) in band positions
         self.g2 = 2.0 * self.Gb.reshape(-1)[lay.gram]  # (E,) 2 G of each stored entry
         self.R_jc = np.ascontiguousarray(prob.R_HL[lay.order].transpose(2, 1, 0))  # (3, 3, M)
-        # T: [0, sa, ca, sb, cb, sa cb, sa sb, ca cb, ca sb, the same 8 negated] x M
-        self._T = T = np.zeros((17, m))
+        # the table's signs folded into the frames: (6 r, 3 j, 3 c, M) = sign[r, j] R[j, c]
+        self.R_signed = _SIGN[:, :, None, None] * self.R_jc
+        # T: [0, sa, ca, sb, cb, sa cb, sa sb, ca cb, ca sb] x M
+        self._T = T = np.zeros((9, m))
         self._T_sin, self._T_cos = T[1:5:2], T[2:5:2]  # (sa, sb), (ca, cb)
         self._T_products = T[5:9].reshape(2, 2, m)
         for view in (self._T_products, self._T_sin, self._T_cos):
@@ -170,32 +170,33 @@ class BandedAxisModel:
 
     def _laplacian(self, A: np.ndarray) -> np.ndarray:
         """G @ A for A (3, M) (components x band positions)."""
-        return (self.Gb * A.take(self.layout.idx, axis=1)).sum(1)
+        return np.einsum("km,ckm->cm", self.Gb, A.take(self.layout.idx, axis=1))
 
     def _table(self, xb: np.ndarray, rows: slice) -> np.ndarray:
-        """(r, 3, M) rows of [axis, d/dA, d/dB, d2/dA2, d2/dAdB, d2/dB2] in H."""
+        """(3, r, M) rows of [axis, d/dA, d/dB, d2/dA2, d2/dAdB, d2/dB2] in H (components
+        first)."""
         T, xT = self._T, xb.reshape(self.m, 2).T
         np.sin(xT, out=self._T_sin)
         np.cos(xT, out=self._T_cos)
         # (sa, ca) x (cb, sb): rows 1, 2 times rows 4, 3
         np.multiply(T[1:3, None], T[None, 4:2:-1], out=self._T_products)
-        np.negative(T[1:9], out=T[9:])
-        L = T.take(_SIGNED_PICK[rows], axis=0)  # (r, 3 j, M) in L
-        return np.einsum("rjm,jcm->rcm", L, self.R_jc)  # sum_j L[r, j] R[:, j]
+        L = T.take(_PICK[rows], axis=0)  # (r, 3 j, M): the unsigned trig products in L
+        # sum_j sign[r, j] L[r, j] R[:, j], components first (c, r, M)
+        return np.einsum("rjm,rjcm->crm", L, self.R_signed[rows])
 
     def objective(self, xb: np.ndarray) -> float:
-        A = self._table(xb, slice(0, 1))[0]
+        A = self._table(xb, slice(0, 1))[:, 0]
         return float(np.vdot(A, self._laplacian(A)))
 
     def derivatives(self, xb: np.ndarray):
         """f, gradient (2M,), Gauss-Newton entries of the stored band (E,), curvature blocks
         (3: aa, ab, bb, M) per band position."""
-        W = self._table(xb, slice(None))  # (6, 3, M)
-        A = W[0]
+        W = self._table(xb, slice(None))  # (3 c, 6, M)
+        A = W[:, 0]
         GA = self._laplacian(A)
-        P = np.einsum("kcm,cm->km", W[1:], GA + GA)  # (5, M): gradient (2), curvature (3)
-        # d axis / d (band variable 2 q + s) is column (1 + s) M + q of Wc
-        Wc = W.transpose(1, 0, 2).reshape(3, -1)
+        P = np.einsum("ckm,cm->km", W[:, 1:], GA + GA)  # (5, M): gradient (2), curvature (3)
+        # d axis / d (band variable 2 q + s) is column (1 + s) M + q of Wc (a view)
+        Wc = W.reshape(3, -1)
         hv = np.einsum("ce,ce->e", Wc.take(self.layout.row6, axis=1),
                        Wc.take(self.layout.col6, axis=1)) * self.g2
         return float(np.vdot(A, GA)), P[:2].T.reshape(-1), hv, P[2:]

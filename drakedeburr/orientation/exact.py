@@ -220,11 +220,13 @@ class _Newton:
         paths = [(d, 1e-6)]
         if d_first is not d:
             paths.append((d_first, 1e-6))
-        paths.append((-g / h_diag, 1e-12))
+        paths.append((None, 1e-12))  # -g / diag(H), computed only if reached
         for k, (dk, min_step) in enumerate(paths):
+            if dk is None:
+                dk = -g / h_diag
             step = 1.0
             while step >= min_step:
-                x_new = _clip(x + step * dk, lo, hi)
+                x_new = _clip(x + step * dk if step != 1.0 else x + dk, lo, hi)
                 slope = float(g @ (x_new - x))
                 if slope < 0.0:
                     # the full Newton step is nearly always accepted: evaluate all there
