@@ -127,9 +127,11 @@ def band_layout(m: int, offsets: tuple[int, ...]) -> BandLayout:
     # offset 0 comes first: its kept entries are (A, A), (B, A), (B, B) of each position q,
     # E positions 3 q, 3 q + 1, 3 q + 2
     v = np.arange(2 * m)
-    return BandLayout(order, perm, np.argsort(perm), idx, r, c, keep // 4,
-                      c * (bandwidth + 1) + (r - c), 3 * (v // 2) + 2 * (v % 2),
-                      (1 + r % 2) * m + r // 2, (1 + c % 2) * m + n_e, bandwidth)
+    tables = [order, perm, np.argsort(perm), idx, r, c, keep // 4, c * (bandwidth + 1) + (r - c),
+              3 * (v // 2) + 2 * (v % 2), (1 + r % 2) * m + r // 2, (1 + c % 2) * m + n_e]
+    for a in tables:  # shared by every model of this size (cached): read-only
+        a.setflags(write=False)
+    return BandLayout(*tables, bandwidth)
 
 
 class BandedAxisModel:
