@@ -1,6 +1,6 @@
 """Benchmark of the path stage: CL planning time per window and planner, counts and c_v.
 
-    python benchmarks/bench_path.py [--quick]
+    python benchmarks/bench_path.py [--quick] [--hubs h5_straight]
 
 Windows: two hub-like analytic windows (182 / 63 initial points, as the source's windows 1
 and 2), every window of every bundled hub (ground-truth loops resampled at 2 mm), and (full
@@ -8,9 +8,12 @@ run) the 5 windows extracted from the audibot rim in ../shared/extdata. Times ar
 with the isoparametric baseline measured in the same run; the source needed 8.4-15.3 s per
 window (MATLAB, proposed method). Every plan is checked against the thresholds its method
 promises (true chord height <= delta_max; chord <= L_max for isoparametric and adaptive).
+Last, the wall and process-CPU time of each set's ``cl_table`` call (the CL stage of
+``drakedeburr demo``, which runs it on its default hub h5_straight: ``--hubs h5_straight``).
 """
 
 import argparse
+import time
 from pathlib import Path
 
 import sklearn.cluster  # noqa: F401  (import once before timing: 2-6 s cold)
@@ -21,19 +24,22 @@ from drakedeburr.path.synthetic import hub_like_window
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--quick", action="store_true", help="analytic windows and one hub only")
+ap.add_argument("--hubs", default="", help="comma-separated bundled hubs only (e.g. the demo's "
+                "h5_straight: times drakedeburr demo's CL stage), no analytic windows or rim")
 args = ap.parse_args()
 
-sets = {"analytic": [WindowEdge(0, "large", hub_like_window("large", 182)),
-                     WindowEdge(1, "small", hub_like_window("small", 63, angle=1.2))]}
+sets = {} if args.hubs else {
+    "analytic": [WindowEdge(0, "large", hub_like_window("large", 182)),
+                 WindowEdge(1, "small", hub_like_window("small", 63, angle=1.2))]}
 try:
     from drakedeburr.resources import hub_names
 
     names = hub_names()
 except FileNotFoundError:
     names = []
-for name in names[:1] if args.quick else names:
+for name in args.hubs.split(",") if args.hubs else names[:1] if args.quick else names:
     sets[name] = name
-if not args.quick:
+if not args.quick and not args.hubs:
     for parent in Path(__file__).resolve().parents:
         rim = parent / "shared/extdata/wheel_models/audibot__wheel_rim_only_DERIVED_m.stl"
         if rim.is_file():
@@ -47,8 +53,11 @@ print(f"{'set':13s}{'win':>4s}{'init':>5s} " + "".join(f"{m[:18]:>27s}" for m in
 print(f"{'':22s} " + "".join(f"{'n   c_v  c_v(pairs)  t[s]':>27s}" for _ in METHODS))
 tot = {m: 0.0 for m in METHODS}
 nwin, violations, wins = 0, [], {"count": 0, "cv_pairs": 0, "both": 0, "cv_vs_proposed": 0}
+table_times = {}
 for name, src in sets.items():
+    c0, t0 = time.process_time(), time.perf_counter()
     table = cl_table(src, METHODS, P)
+    table_times[name] = (time.perf_counter() - t0, time.process_time() - c0, len(table["windows"]))
     for w in table["windows"]:
         nwin += 1
         row = f"{name[:13]:13s}{w['index']:>4d}{w['initial_count']:>5d} "
@@ -82,3 +91,6 @@ print("mean planning time per window [s] (ratio to isoparametric):")
 for m in METHODS:
     print(f"  {m:20s} {tot[m] / nwin:7.3f}  ({tot[m] / tot['isoparametric']:.2f}x)")
 print("source (MATLAB, proposed): 8.4-15.3 s per window")
+print("cl_table (all four planners, every window; the CL stage of `drakedeburr demo`):")
+for name, (wall, cpu, n) in table_times.items():
+    print(f"  {name:13s} {n:3d} windows  wall {wall:6.2f} s  cpu {cpu:6.2f} s")

@@ -1,3 +1,6 @@
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -184,3 +187,72 @@ def test_thresholds_on_bundled_windows(name, index):
     assert m["adaptive"]["count"] < m["isoparametric"]["count"]
     assert m["adaptive"]["cv"] < m["proposed"]["cv"]
     del hub_model
+
+
+# -------------------------------------------------------------------------------------------
+# Speeding the planners up (issue 19) must not move a single CL point. tests/data/
+# cl_reference.npz holds, per case, the window loop (the input) and every planner's CL
+# parameters u and metrics, written by ``python tests/test_cl_planning.py --write`` at commit
+# 9ccafa3 (before the speed-ups). Cases: the two analytic hub-like windows of
+# benchmarks/bench_path.py, a seeded random hub-like window, and one large and one small window
+# of the bundled hub h5_split (ground-truth loops resampled at 2 mm, stored, so the test needs
+# no hub model). The planners must reproduce the points to 1e-12.
+# -------------------------------------------------------------------------------------------
+DATA = Path(__file__).parent / "data" / "cl_reference.npz"
+_METRICS = ("count", "cv", "cv_pairwise", "max_chord_height_m", "max_chord_height_circle_m",
+            "max_chord_length_m", "min_chord_length_m", "mean_chord_length_m")
+
+
+def _reference_cases() -> list[str]:
+    return [str(s) for s in np.load(DATA)["names"]] if DATA.is_file() else []
+
+
+@pytest.mark.parametrize("name", _reference_cases())
+def test_planners_reproduce_the_stored_cl_points(name):
+    z = np.load(DATA)
+    loop, kind = z[f"{name}/loop"], str(z[f"{name}/kind"])
+    curve = fit_edge_curve(loop, name=name)
+    paths = mut.plan_all(curve, mut.PlannerParams(), kind=kind)
+    for m in mut.METHODS:
+        u_ref = z[f"{name}/{m}/u"]
+        assert len(paths[m].u) == len(u_ref), m
+        np.testing.assert_allclose(paths[m].u, u_ref, rtol=0, atol=1e-12, err_msg=m)
+        got = np.array([paths[m].metrics[k] for k in _METRICS], float)
+        np.testing.assert_allclose(got, z[f"{name}/{m}/metrics"], rtol=1e-12, atol=1e-15,
+                                   err_msg=m)
+
+
+def test_cl_reference_file_has_the_cases():
+    assert len(_reference_cases()) >= 5
+
+
+def write_reference() -> None:
+    from drakedeburr.path.synthetic import hub_like_window
+    from drakedeburr.path.table import windows_from_source
+
+    rng = np.random.default_rng(19)
+    loops = {"analytic_large": (hub_like_window("large", 182), "large"),
+             "analytic_small": (hub_like_window("small", 63, angle=1.2), "small"),
+             "random_window": (hub_like_window("large", int(rng.integers(120, 260)),
+                                               angle=float(rng.uniform(0, 6)),
+                                               dome=float(rng.uniform(0.0, 0.4))), "large")}
+    for w in windows_from_source("h5_split")[0][:2]:
+        loops[f"h5_split_w{w.index}"] = (w.p_HE, w.kind)
+    arrays, names = {}, []
+    for name, (loop, kind) in loops.items():
+        paths = mut.plan_all(fit_edge_curve(loop, name=name), mut.PlannerParams(), kind=kind)
+        names.append(name)
+        arrays[f"{name}/loop"] = loop
+        arrays[f"{name}/kind"] = np.array(kind)
+        for m in mut.METHODS:
+            arrays[f"{name}/{m}/u"] = paths[m].u
+            arrays[f"{name}/{m}/metrics"] = np.array([paths[m].metrics[k] for k in _METRICS],
+                                                     float)
+        print(name, len(loop), {m: len(paths[m].u) for m in mut.METHODS})
+    np.savez_compressed(DATA, names=np.array(names), **arrays)
+    print(f"wrote {DATA}")
+
+
+if __name__ == "__main__":
+    if "--write" in sys.argv:
+        write_reference()

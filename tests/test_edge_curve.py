@@ -78,3 +78,36 @@ def test_fit_interpolates_and_rejects_bad_input():
     q[8] = q[7]
     with pytest.raises(InputError, match="points 7 and 8 coincide"):
         mut.fit_edge_curve(q)
+
+
+def test_batched_bounded_search_is_scipys_bounded_brent_per_problem():
+    """minimize_bounded_batch runs scipy's minimize_scalar(method="bounded") in lockstep: every
+    problem must end where its own scipy call ends (same x-tolerance rule, same iterates)."""
+    from scipy.optimize import minimize_scalar
+
+    from drakedeburr.path.edge_curve import minimize_bounded_batch
+
+    rng = np.random.default_rng(3)
+    m = 40
+    c = rng.uniform(-1, 1, (m, 4))  # smooth, some with interior minima, some at a bound
+    lo = rng.uniform(-2, 0, m)
+    hi = lo + rng.uniform(1e-6, 3, m)
+    xatol = 1e-13 * (1 + np.abs(hi))
+
+    def f_all(x):
+        return c[:, 0] * np.cos(3 * x + c[:, 1]) + c[:, 2] * x**2 + c[:, 3] * x
+
+    got = minimize_bounded_batch(f_all, lo, hi, xatol)
+    for k in range(m):
+        res = minimize_scalar(lambda x, k=k: c[k, 0] * np.cos(3 * x + c[k, 1]) + c[k, 2] * x**2
+                              + c[k, 3] * x, bounds=(lo[k], hi[k]), method="bounded",
+                              options={"xatol": xatol[k]})
+        assert got[k] == pytest.approx(res.fun, rel=1e-13, abs=1e-15)
+    # on a unimodal problem it is the minimum (at a bound: within Brent's x-tolerance,
+    # sqrt(eps) |x|, of it)
+    parabola = minimize_bounded_batch(lambda x: (x - 0.3) ** 2, lo, hi, xatol)
+    exact = np.where(hi < 0.3, (hi - 0.3) ** 2, np.where(lo > 0.3, (lo - 0.3) ** 2, 0.0))
+    inside = (lo < 0.3) & (hi > 0.3)
+    assert inside.sum() >= 5 and (~inside).sum() >= 5
+    np.testing.assert_allclose(parabola[inside], 0.0, rtol=0, atol=1e-20)
+    assert np.all(parabola >= exact) and np.all(parabola - exact <= 1e-6)

@@ -114,24 +114,40 @@ def test_exact_beats_pso_holds_bounds_and_is_locally_optimal(index):
 
 
 @pytest.mark.parametrize("w2nd", [0.0, 1e-5])
-def test_exact_solver_internal_model_matches_the_problem(w2nd):
-    """The exact solver's fast banded model (its own trig tables) must be the problem's model:
-    objective, gradient and Hessian-vector products against models.py at random angles (a
-    stale copy of an older theta_A sign once made it optimise a different problem)."""
-    from drakedeburr.orientation.exact import _BandedAxisModel
+@pytest.mark.parametrize("index", [0, 1])
+def test_exact_solver_internal_model_matches_the_problem(w2nd, index):
+    """The exact solver's fast banded model (its own trig tables, band numbering) must be the
+    problem's model: objective, gradient, Gauss-Newton diagonal and the whole Hessian (band
+    storage unpacked) against models.py at random angles (a stale copy of an older theta_A
+    sign once made it optimise a different problem)."""
+    from drakedeburr.orientation.banded import BandedAxisModel
 
-    cl, n = WINDOWS[0]
+    cl, n = WINDOWS[index]
     prob = _problem(cl, n, "axis", w2nd)
-    fast = _BandedAxisModel(prob)
+    fast = BandedAxisModel(prob)
+    perm = fast.layout.perm
     rng = np.random.default_rng(4)
     for x in rng.uniform(-0.5, 0.6, (3, prob.n_vars)):
-        f, g, _, curv, J = fast.derivatives(x)
+        xb = fast.to_band(x)
+        np.testing.assert_array_equal(fast.from_band(xb), x)
+        f, g, hv, curv = fast.derivatives(xb)
         assert f == pytest.approx(prob.objective(x), rel=1e-12)
-        assert fast.objective(x) == pytest.approx(prob.objective(x), rel=1e-12)
-        np.testing.assert_allclose(g, prob.gradient(x), rtol=0, atol=1e-9 * np.abs(g).max())
-        H = prob.hessian(x)
+        assert fast.objective(xb) == pytest.approx(prob.objective(x), rel=1e-12)
+        np.testing.assert_allclose(g, prob.gradient(x)[perm], rtol=0,
+                                   atol=1e-9 * np.abs(g).max())
+        _, _, H_gn, _ = prob.derivatives(x)
+        H = prob.hessian(x)[np.ix_(perm, perm)]  # band numbering
+        np.testing.assert_allclose(fast.gauss_newton_diagonal(hv), np.diag(H_gn)[perm],
+                                   rtol=1e-12)
+        ab = fast.hessian_band(hv, curv)
+        H_fast = np.zeros_like(H)
+        for d in range(fast.bandwidth + 1):  # LAPACK lower band storage
+            k = np.arange(prob.n_vars - d)
+            H_fast[k + d, k] = ab[d, : prob.n_vars - d]
+            H_fast[k, k + d] = ab[d, : prob.n_vars - d]
+        np.testing.assert_allclose(H_fast, H, rtol=0, atol=1e-9 * np.abs(H).max())
         v = rng.normal(size=prob.n_vars)
-        np.testing.assert_allclose(fast.hess_vec(J, curv, v), H @ v, rtol=0,
+        np.testing.assert_allclose(fast.hess_vec(ab, v), H @ v, rtol=0,
                                    atol=1e-9 * np.abs(H @ v).max())
 
 
@@ -265,3 +281,47 @@ def test_axis_model_hessian_matches_finite_differences_of_the_gradient():
         np.testing.assert_allclose(H[:, k], fd, rtol=1e-5, atol=1e-5 * np.abs(H).max())
     J = prob.residual_jacobian(x)
     np.testing.assert_allclose(H_gn, 2 * J.T @ J, atol=1e-10 * np.abs(H_gn).max())
+
+
+@pytest.mark.parametrize("m, w2nd, closed", [(40, 0.0, True), (40, 1e-5, True), (4, 1e-5, True),
+                                             (3, 0.0, True), (12, 1e-5, False)])
+def test_coefficients_gram_and_its_bands_match_the_residuals(m, w2nd, closed):
+    """C (built from sparse rows), G = C^T C (accumulated without BLAS) and G's cyclic bands
+    against the residuals by hand: r = C @ axes, first differences / sqrt(d) then the
+    weighted second differences."""
+    from drakedeburr.orientation.models import OrientationProblem
+
+    rng = np.random.default_rng(m)
+    phi = np.sort(rng.uniform(0, 2 * np.pi, m))
+    p = np.c_[0.02 * np.cos(phi), 0.015 * np.sin(phi), 0.002 * np.sin(2 * phi)]
+    R = Rotation.random(m, random_state=1).as_matrix()
+    prob = OrientationProblem("axis", p, R, -0.3, 0.4, second_difference_weight=w2nd,
+                              closed=closed)
+    x = rng.uniform(-0.3, 0.4, prob.n_vars)
+    a = prob.axes(x)
+    seg = m if closed else m - 1
+    i = np.arange(seg)
+    j = (i + 1) % m
+    d = np.linalg.norm(p[j] - p[i], axis=1)
+    slope = (a[j] - a[i]) / d[:, None]
+    rows = [(a[j] - a[i]) / np.sqrt(d)[:, None]]
+    if w2nd > 0:
+        after = np.arange(seg) if closed else np.arange(1, seg)
+        before = (after - 1) % seg
+        dbar = 0.5 * (d[before] + d[after])
+        rows.append((slope[after] - slope[before]) * np.sqrt(w2nd / dbar)[:, None])
+    r = np.concatenate(rows)
+    C = prob.coefficients()
+    np.testing.assert_allclose(C @ a, r, rtol=0, atol=1e-12 * np.abs(r).max())
+    np.testing.assert_allclose(prob.residuals(x), r, rtol=0, atol=1e-12 * np.abs(r).max())
+    G = prob._gram[0]
+    np.testing.assert_allclose(G, C.T @ C, rtol=0, atol=1e-12 * np.abs(G).max())
+    offsets, Gk = prob.gram_bands
+    G_bands = np.zeros((m, m))
+    for k, off in enumerate(offsets):
+        G_bands[np.arange(m), (np.arange(m) + off) % m] += Gk[k]
+    np.testing.assert_allclose(G_bands, G, rtol=0, atol=1e-12 * np.abs(G).max())
+    assert len(set(offsets.tolist())) == len(offsets) and offsets.max() < m
+    offsets_g, Gk_g = prob._gram_bands_general()  # the closed form is the general sums
+    np.testing.assert_array_equal(offsets_g, offsets)
+    np.testing.assert_array_equal(Gk_g, Gk)

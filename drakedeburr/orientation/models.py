@@ -89,17 +89,17 @@ class OrientationProblem:
     def upper(self) -> np.ndarray:
         return np.full(self.n_vars, self.theta_max)
 
-    @property
+    @cached_property
     def segment_index(self) -> tuple[np.ndarray, np.ndarray]:
-        """(i, j) point indices of the segments (consecutive pairs)."""
+        """(i, j) point indices of the segments (consecutive pairs); read-only, computed once."""
         i = np.arange(self.m if self.closed else self.m - 1)
-        return i, (i + 1) % self.m
+        return _read_only(i), _read_only((i + 1) % self.m)
 
-    @property
+    @cached_property
     def chords(self) -> np.ndarray:
-        """(K,) chord length d_k of each segment [m]."""
+        """(K,) chord length d_k of each segment [m]; read-only, computed once."""
         i, j = self.segment_index
-        return np.linalg.norm(self.p_HC[j] - self.p_HC[i], axis=1)
+        return _read_only(np.linalg.norm(self.p_HC[j] - self.p_HC[i], axis=1))
 
     def axes(self, x: np.ndarray) -> np.ndarray:
         """Tool axes in H: (..., M, 3) for x (..., 2M)."""
@@ -156,26 +156,70 @@ class OrientationProblem:
     @cached_property
     def _gram(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """G = C^T C (M, M) and its nonzero pattern (i, j, G_ij)."""
-        C = self.coefficients()
-        G = C.T @ C
+        cols, vals = self.coefficient_rows()
+        m = self.m
+        # sum of the rows' outer products, accumulated without BLAS (a dense C^T C product
+        # starts OpenBLAS threads: milliseconds, and far more on a busy machine)
+        a = np.broadcast_to(cols[:, :, None], (*cols.shape, cols.shape[1]))
+        b = np.broadcast_to(cols[:, None, :], a.shape)
+        G = np.bincount((a * m + b).reshape(-1), (vals[:, :, None] * vals[:, None, :]).reshape(-1),
+                        minlength=m * m).reshape(m, m)
         ii, jj = np.nonzero(np.abs(G) > 0)
         return G, ii, jj, G[ii, jj]
+
+    @cached_property
+    def gram_bands(self) -> tuple[np.ndarray, np.ndarray]:
+        """The cyclic bands of G = C^T C: (offsets (K,), Gk (K, M)) with
+        Gk[k, i] = G[i, (i + offsets[k]) % M]; offsets increasing in [0, M), those of the
+        coupling pattern (consecutive points, and next-but-one with second differences).
+        O(M), no dense (M, M) matrix."""
+        if self.closed and self.second_difference_weight <= 0.0 and self.m >= 3:
+            # the common case in closed form (the same sums as the general path below:
+            # G_ii = w_(i-1)^2 + w_i^2, G_i,i+1 = -w_i^2, w = 1 / sqrt(d))
+            w = 1.0 / np.sqrt(self.chords)
+            w2 = w * w
+            w2_prev = np.roll(w2, 1)
+            return np.array([0, 1, self.m - 1]), np.stack([w2_prev + w2, -w2, -w2_prev])
+        return self._gram_bands_general()
+
+    def _gram_bands_general(self) -> tuple[np.ndarray, np.ndarray]:
+        cols, vals = self.coefficient_rows()
+        m, width = self.m, cols.shape[1]
+        a = np.repeat(cols, width, axis=1).reshape(-1)  # row entry l, then l' = 0..L-1
+        off = (np.tile(cols, (1, width)).reshape(-1) - a) % m
+        v = (np.repeat(vals, width, axis=1) * np.tile(vals, (1, width))).reshape(-1)
+        offsets = np.flatnonzero(np.bincount(off, minlength=m))
+        lookup = np.zeros(m, int)
+        lookup[offsets] = np.arange(len(offsets))
+        Gk = np.bincount(lookup[off] * m + a, v, minlength=len(offsets) * m)
+        return offsets, Gk.reshape(len(offsets), m)
+
+    def coefficient_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The rows of C (see :meth:`coefficients`) in sparse form: column indices (R, L) and
+        values (R, L), L = 2 (first differences) or 4 (with second differences; first-difference
+        rows padded with their own columns and zero values); a column may repeat within a row
+        (the values add)."""
+        i, j = self.segment_index
+        d = self.chords
+        w = 1.0 / np.sqrt(d)
+        cols, vals = np.stack([j, i], 1), np.stack([w, -w], 1)
+        if self.second_difference_weight <= 0.0:
+            return cols, vals
+        before, after, scale = self._second_rows()
+        # (S[after] - S[before]) * scale with S = D / d, D @ axes = a_j - a_i
+        cols2 = np.stack([j[after], i[after], j[before], i[before]], 1)
+        inv_a, inv_b = 1.0 / d[after], 1.0 / d[before]
+        vals2 = np.stack([inv_a, -inv_a, -inv_b, inv_b], 1) * scale[:, None]
+        return (np.concatenate([np.concatenate([cols, cols], 1), cols2]),
+                np.concatenate([np.concatenate([vals, np.zeros_like(vals)], 1), vals2]))
 
     def coefficients(self) -> np.ndarray:
         """(R, M) matrix C with residuals = C @ axes (every axis-model residual is a linear
         combination of the tool axes; row order as :meth:`residuals`)."""
-        i, j = self.segment_index
-        d = self.chords
-        k = len(d)
-        D = np.zeros((k, self.m))  # D @ axes = differences a_j - a_i
-        D[np.arange(k), j] += 1.0
-        D[np.arange(k), i] -= 1.0
-        rows = [D / np.sqrt(d)[:, None]]
-        if self.second_difference_weight > 0.0:
-            before, after, scale = self._second_rows()
-            S = D / d[:, None]
-            rows.append((S[after] - S[before]) * scale[:, None])
-        return np.concatenate(rows, axis=0)
+        cols, vals = self.coefficient_rows()
+        C = np.zeros((len(cols), self.m))
+        np.add.at(C, (np.arange(len(cols))[:, None], cols), vals)
+        return C
 
     def _point_derivatives(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """axes (M, 3), d axis / d theta (M, 3, 2) and second derivatives (M, 3, 2, 2) in H."""
@@ -271,6 +315,11 @@ def make_problem(
         raise InputError(f"{name}: coincident consecutive CL points at segment(s) "
                          f"{bad[:10].tolist()}")
     return prob
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
 
 
 def block_diag_2(blocks: np.ndarray) -> np.ndarray:

@@ -191,14 +191,21 @@ def chord_walk(curve: EdgeCurve, u: np.ndarray, l_max: float, delta_max: float) 
     if len(u) == 0:
         return np.zeros(0, int)
     kept = [0]
-    start = 0
-    for j in range(1, len(u)):
-        l = float(curve.chord_length(u[start], u[j]))
-        d = float(curve.chord_height_circle(u[start], u[j])[0])
-        if l < l_max and d < delta_max:
+    start, n = 0, len(u)
+    j0, block = 1, 8
+    # the next kept point is the first j after the start whose chord or eq.-2 height fails:
+    # tested for a block of j at once (the same values as one call per j), doubling the block
+    while j0 < n:
+        j = np.arange(j0, min(j0 + block, n))
+        l = curve.chord_length(np.full(len(j), u[start]), u[j])
+        d = curve.chord_height_circle(np.full(len(j), u[start]), u[j])
+        fail = np.flatnonzero(~((l < l_max) & (d < delta_max)))
+        if len(fail) == 0:
+            j0, block = j0 + len(j), 2 * block
             continue
-        kept.append(j)
-        start = j
+        start = int(j[fail[0]])
+        kept.append(start)
+        j0, block = start + 1, 8
     return np.array(kept, int)
 
 
@@ -236,14 +243,22 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     u_next[-1] += 1.0
     if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
         return False
-    d = curve.chord_height(u, u_next, samples=_samples_for(curve, u, u_next), refine=False)
-    return bool((d <= params.delta_max * (1.0 - _SAMPLED_MARGIN)).all())
+    samples = _samples_for(curve, u, u_next)
+    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
+    # every 8th sample first: a plan failing there fails the full test (same values, fewer)
+    if (curve.sampled_chord_height_lower_bound(u, u_next, samples) > target).any():
+        return False
+    d = curve.chord_height(u, u_next, samples=samples, refine=False)
+    return bool((d <= target).all())
 
 
-def _samples_for(curve: EdgeCurve, u0, u1) -> int:
+def _samples_for(curve: EdgeCurve, u0, u1, s0=None) -> int:
     """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
-    0.25 mm of the longest arc, 48..600."""
-    arc = float(np.max(curve.arc_length(u0, u1)))
+    0.25 mm of the longest arc, 48..600 (s0: arc length to u0 if known)."""
+    return _sample_count(float(np.max(curve.arc_length(u0, u1, s0=s0))))
+
+
+def _sample_count(arc: float) -> int:
     return int(np.clip(arc / 0.25e-3, 48, 600))
 
 
@@ -263,44 +278,78 @@ def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndar
     # a step can never exceed the length of the rest of the loop
     while True:
         rest = L - s
-        if _ch(curve, s, rest) <= target and _ch(curve, s, rest, refine=True) <= params.delta_max:
+        ch = _ChordHeightFrom(curve, s)
+        # grow a bracket geometrically (steps 1, 2, 4, ... mm below the rest of the loop, all
+        # measured in one call together with the rest itself), then shrink it with guesses
+        # from the model h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of
+        # the target
+        steps = [min(rest, 1e-3)]
+        while steps[-1] * 2.0 < rest:
+            steps.append(steps[-1] * 2.0)
+        if steps[-1] >= rest:
+            steps = []
+        h_all = ch.many(np.array([rest, *steps]))
+        if h_all[0] <= target and ch(rest, refine=True) <= params.delta_max:
             break
         lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
-        # grow a bracket geometrically, then shrink it with guesses from the model
-        # h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of the target
-        step = min(rest, 1e-3)
-        while step < rest:
-            h = _ch(curve, s, step)
+        for step, h in zip(steps, h_all[1:], strict=True):
             if h > target:
                 hi, h_hi = step, h
                 break
-            lo, h_lo, step = step, h, step * 2.0
+            lo, h_lo = step, h
         for _ in range(40):
             if h_lo >= 0.998 * target or hi - lo < 1e-7:
                 break
             guess = hi * np.sqrt(target / h_hi) if np.isfinite(h_hi) else 0.5 * (lo + hi)
             width = hi - lo
             guess = float(np.clip(guess, lo + 0.05 * width, hi - 0.05 * width))
-            h = _ch(curve, s, guess)
+            h = ch(guess)
             if h > target:
                 hi, h_hi = guess, h
             else:
                 lo, h_lo = guess, h
         # the search used sampled chord heights; confirm the step with the refined one
-        while lo > 1e-6 and _ch(curve, s, lo, refine=True) > params.delta_max:
+        while lo > 1e-6 and ch(lo, refine=True) > params.delta_max:
             lo *= 0.995
         s += lo
         out.append(s)
     return curve.u_from_arc(np.array(out))
 
 
-def _ch(curve: EdgeCurve, s: float, step: float, refine: bool = False) -> float:
-    u0 = curve.u_from_arc(s)
-    u1 = curve.u_from_arc(s + step)
-    if s + step >= curve.length - 1e-12 or u1 <= u0:
-        u1 = u1 + 1.0
-    return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1),
-                                    refine=refine)[0])
+class _ChordHeightFrom:
+    """Chord height of the arc from arc length s to s + step, for many steps from one s (the
+    start parameter is found once, not once per trial step)."""
+
+    def __init__(self, curve: EdgeCurve, s: float):
+        self.curve, self.s = curve, s
+        self.u0 = curve.u_from_arc(s)
+        self.s0 = curve.arc_length(np.mod(self.u0, 1.0))
+
+    def __call__(self, step: float, refine: bool = False) -> float:
+        curve, s, u0 = self.curve, self.s, self.u0
+        u1 = curve.u_from_arc(s + step)
+        if s + step >= curve.length - 1e-12 or u1 <= u0:
+            u1 = u1 + 1.0
+        return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1, self.s0),
+                                        refine=refine)[0])
+
+    def many(self, steps: np.ndarray) -> np.ndarray:
+        """Sampled chord heights (refine=False) for several steps at once, (K,): the values of
+        K calls (each arc keeps its own sample count; shorter sample rows are padded with
+        their last sample, t = 1, which does not change a maximum)."""
+        curve, s, u0 = self.curve, self.s, self.u0
+        steps = np.asarray(steps, float)
+        if len(steps) == 0:
+            return np.zeros(0)
+        u1 = curve.u_from_arc(s + steps)
+        u1 = np.where((s + steps >= curve.length - 1e-12) | (u1 <= u0), u1 + 1.0, u1)
+        # _samples_for per arc, the arcs measured in one call (elementwise: the same values)
+        arcs = curve.arc_length(u0, u1, s0=self.s0)
+        counts = [_sample_count(float(a)) for a in arcs]
+        t = np.ones((len(steps), max(counts) + 1))
+        for k, c in enumerate(counts):
+            t[k, : c + 1] = np.linspace(0.0, 1.0, c + 1)
+        return curve.chord_height_at(u0, u1, t)
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
@@ -312,20 +361,29 @@ def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
     chord = np.full((G, reach), np.inf)
     height = np.full((G, reach), np.inf)
     alive = np.arange(G)
+    # D[i, k] = p[(i + 1 + k) % G] - p[i]: the inner points seen from each start, and their
+    # squared lengths, computed once for all segment lengths (a zero-copy sliding view of
+    # the wrapped grid; per segment only the rows still alive are gathered)
+    p_ext = np.concatenate([p, p[: reach + 1]])
+    window = np.lib.stride_tricks.as_strided(p_ext[1:], (G, reach, 3),
+                                             (p_ext.strides[0], p_ext.strides[0], p_ext.strides[1]),
+                                             writeable=False)
+    D = window - p[:, None, :]
+    DD = np.einsum("nkj,nkj->nk", D, D)
     for r in range(1, reach + 1):
         a = p[alive]
-        b = p[(alive + r) % G]
+        b = p_ext[alive + r]
         c = np.linalg.norm(b - a, axis=1)
         h = np.zeros(len(alive))
         if r > 1:
             # squared distance of the inner points to the segment, without (n, r-1, 3)
             # temporaries beyond ap: |ap|^2 - 2 t ap.ab + t^2 |ab|^2, t clipped to [0, 1]
-            ap = p[(alive[:, None] + np.arange(1, r)) % G] - a[:, None, :]  # (n, r-1, 3)
+            ap = D[alive, : r - 1]  # (n, r-1, 3)
             ab = b - a
             L2 = np.maximum(c * c, 1e-300)[:, None]
             dot = np.einsum("nkj,nj->nk", ap, ab)
             t = np.clip(dot / L2, 0.0, 1.0)
-            d2 = np.einsum("nkj,nkj->nk", ap, ap) - 2 * t * dot + t * t * L2
+            d2 = DD[alive, : r - 1] - 2 * t * dot + t * t * L2
             h = np.sqrt(np.maximum(d2.max(1), 0.0))
         chord[alive, r - 1] = c
         height[alive, r - 1] = h
@@ -345,23 +403,38 @@ def _feasible(chord: np.ndarray, height: np.ndarray, l_max: float, delta: float)
 def _dp_layers(chord: np.ndarray, ok: np.ndarray, start: int, k_max: int, k_enough: int = 0):
     """Shortest-path layers over the closed grid from ``start`` back to it: best[k][j] = min
     sum of squared chords of k feasible segments from start to j (j in 0..G, G = back at
-    start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable."""
-    G, R = chord.shape
+    start). Returns (best (K+1, G+1), arg (K+1, G+1)) with +inf where unreachable.
+
+    Only what can be finite is computed: segment lengths up to the longest feasible one, and in
+    layer k only the positions that k segments can reach (the others stay +inf, arg 1: what
+    the full (G+1, R) minimum gives them)."""
+    G = chord.shape[0]
+    R = max(1, int(np.flatnonzero(ok.any(axis=0))[-1]) + 1 if ok.any() else 1)
+    chord, ok = chord[:, :R], ok[:, :R]
     roll = (np.arange(G + 1) + start) % G  # position j on the unrolled loop -> grid index
     cost = np.where(ok, chord**2, np.inf)
     j = np.arange(G + 1)
     i = j[:, None] - np.arange(1, R + 1)[None, :]  # (G+1, R) segment start on the unrolled loop
     valid = i >= 0
-    i_c = np.where(valid, i, 0)
-    seg_cost = np.where(valid, cost[roll[i_c], np.arange(R)[None, :]], np.inf)
-    best = np.full((k_max + 1, G + 1), np.inf)
-    arg = np.zeros((k_max + 1, G + 1), int)
+    seg_cost = np.where(valid, cost[roll[np.where(valid, i, 0)], np.arange(R)[None, :]], np.inf)
+    # best[k] is stored after R entries of +inf, so that best[k-1][j - r] (r = 1..R) for the
+    # rows j of a layer is a zero-copy sliding view (+inf before the start, as the
+    # unreachable start positions have)
+    pad = np.full((k_max + 1, R + G + 1), np.inf)
+    best = pad[:, R:]
+    arg = np.ones((k_max + 1, G + 1), int)
     best[0, 0] = 0.0
+    step = pad.strides[1]
+    lo = hi = 0  # positions that can be finite in the previous layer
     for k in range(1, k_max + 1):
-        cand = best[k - 1][i_c] + seg_cost
-        r_best = np.argmin(cand, axis=1)
-        best[k] = cand[j, r_best]
-        arg[k] = r_best + 1
+        lo, hi = min(lo + 1, G + 1), min(hi + R, G)
+        if lo <= hi:
+            prev = np.lib.stride_tricks.as_strided(  # prev[j - lo, r - 1] = best[k-1][j - r]
+                pad[k - 1, R + lo - 1:], (hi + 1 - lo, R), (step, -step), writeable=False)
+            cand = prev + seg_cost[lo: hi + 1]
+            r_best = np.argmin(cand, axis=1)
+            best[k, lo: hi + 1] = cand[np.arange(hi + 1 - lo), r_best]
+            arg[k, lo: hi + 1] = r_best + 1
         if k >= k_enough and np.isfinite(best[k, G]):  # the budget and the fewest are covered
             return best[: k + 1], arg[: k + 1]
     return best, arg

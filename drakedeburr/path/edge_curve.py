@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline
-from scipy.optimize import minimize_scalar
 
 from drakedeburr.errors import InputError
 
@@ -30,6 +29,20 @@ __all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters"]
 _GAUSS_ORDER = 8
 # samples per segment for the true chord height before the local refinement
 _CHORD_SAMPLES = 48
+# Gauss-Legendre nodes and weights, computed once (numpy's leggauss solves an eigenproblem on
+# every call: it was half of the CL planners' time)
+_GL8 = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+_GL16 = np.polynomial.legendre.leggauss(16)
+
+
+def _norm(v: np.ndarray) -> np.ndarray:
+    """|v| over the last axis: numpy's own ``linalg.norm(v, axis=-1)`` formula for real v
+    (the same values), without its Python-level dispatch (called ~10^5 times per hub)."""
+    return np.sqrt(np.add.reduce(v * v, axis=-1))
+
+
+def _clip01(v):
+    return np.minimum(np.maximum(v, 0.0), 1.0)  # = np.clip(v, 0, 1), a third of the overhead
 
 
 def chord_parameters(p: np.ndarray) -> np.ndarray:
@@ -87,44 +100,56 @@ class EdgeCurve:
         return np.linalg.norm(np.cross(d1, d2), axis=-1) / np.linalg.norm(d1, axis=-1) ** 3
 
     # ----- arc length ---------------------------------------------------------------------
-    def arc_length(self, u0, u1=None) -> np.ndarray:
+    def arc_length(self, u0, u1=None, *, s0=None) -> np.ndarray:
         """Arc length [m] from u0 to u1 going forward (wrapping through u = 1 if u1 < u0).
 
-        With one argument: arc length from u = 0 to u (u in [0, 1]).
+        With one argument: arc length from u = 0 to u (u in [0, 1]). ``s0``: the arc length
+        from u = 0 to u0 if already known (``arc_length(u0 % 1)``), for repeated calls.
         """
         if u1 is None:
             return self._s(np.asarray(u0, float))
         u0 = np.asarray(u0, float)
         u1 = np.asarray(u1, float)
-        s = self._s(np.mod(u1, 1.0)) - self._s(np.mod(u0, 1.0))
+        s0 = self._s(np.mod(u0, 1.0)) if s0 is None else s0
+        s = self._s(np.mod(u1, 1.0)) - s0
         s = np.where(s < 0, s + self.length, s)
         # a full turn (u1 = u0 + 1) is the whole length, not zero
         return np.where((u1 - u0) >= 1.0 - 1e-15, self.length, s)
 
     def _s(self, u: np.ndarray) -> np.ndarray:
-        # exact within a span: Gauss-Legendre on the table span holding u
-        u = np.clip(u, 0.0, 1.0)
-        i = np.clip(np.searchsorted(self.u_table, u, side="right") - 1, 0, len(self.u_table) - 2)
+        return self._s_and_speed(u)[0]
+
+    def _s_and_speed(self, u: np.ndarray, speed_at: np.ndarray | None = None):
+        """(s(u), |C'(speed_at)| or None): arc length exact within a span (Gauss-Legendre on
+        the table span holding u); the speed at ``speed_at`` comes from the same spline call
+        (pointwise evaluation: the values are those of separate calls)."""
+        u = _clip01(u)
+        i = np.minimum(np.maximum(np.searchsorted(self.u_table, u, side="right") - 1, 0),
+                       len(self.u_table) - 2)
         a = self.u_table[i]
-        x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+        x, w = _GL8
         h = (u - a)[..., None]
         t = a[..., None] + (x + 1.0) * 0.5 * h
-        speed = np.linalg.norm(self.spline(t, nu=1), axis=-1)
-        return self.s_table[i] + 0.5 * (speed * w).sum(-1) * h[..., 0]
+        if speed_at is not None:
+            t = np.concatenate([t, np.asarray(speed_at, float)[..., None]], axis=-1)
+        speed = _norm(self.spline(t, nu=1))
+        s = self.s_table[i] + 0.5 * (speed[..., :8] * w).sum(-1) * h[..., 0]
+        return s, (None if speed_at is None else speed[..., 8])
 
     def u_from_arc(self, s) -> np.ndarray:
         """Parameter u at arc length s [m] from u = 0 (s wrapped into [0, length))."""
         s = np.mod(np.asarray(s, float), self.length)
         u = np.interp(s, self.s_table, self.u_table)
         for _ in range(4):  # Newton on s(u) - s = 0; ds/du = |C'(u)|
-            u = u - (self._s(u) - s) / np.linalg.norm(self.spline(u, nu=1), axis=-1)
-            u = np.clip(u, 0.0, 1.0)
+            s_u, speed = self._s_and_speed(u, speed_at=u)
+            u = u - (s_u - s) / speed
+            u = _clip01(u)
         return u
 
     # ----- chords -------------------------------------------------------------------------
     def chord_length(self, u0, u1) -> np.ndarray:
         """|C(u1) - C(u0)| [m]."""
-        return np.linalg.norm(self.position(u1) - self.position(u0), axis=-1)
+        return _norm(self.position(u1) - self.position(u0))
 
     def mean_curvature(self, u0, u1) -> np.ndarray:
         """Mean curvature over the arc [u0, u1] (forward): turning angle / arc length [1/m].
@@ -135,12 +160,12 @@ class EdgeCurve:
         u0 = np.atleast_1d(np.asarray(u0, float))
         u1 = np.atleast_1d(np.asarray(u1, float))
         u1 = np.where(u1 <= u0, u1 + 1.0, u1)
-        x, w = np.polynomial.legendre.leggauss(16)
+        x, w = _GL16
         t = u0[:, None] + (x + 1.0) * 0.5 * (u1 - u0)[:, None]
         d1 = self.derivative(t, 1)
         d2 = self.derivative(t, 2)
-        speed = np.linalg.norm(d1, axis=-1)
-        kappa = np.linalg.norm(np.cross(d1, d2), axis=-1) / speed**3
+        speed = _norm(d1)
+        kappa = _norm(np.cross(d1, d2)) / speed**3
         turn = 0.5 * (kappa * speed * w).sum(-1) * (u1 - u0)
         length = 0.5 * (speed * w).sum(-1) * (u1 - u0)
         return turn / np.maximum(length, 1e-300)
@@ -162,6 +187,42 @@ class EdgeCurve:
                              l_half)
         return delta
 
+    def _sampled(self, u0, u1, samples: int, index=None):
+        """Arcs forward from u0 to u1 sampled at t = linspace(0, 1, samples + 1) (or the
+        entries ``index`` of it): (u0 (M,), u1 (M,) unwrapped, chord ends a, b (M, 3),
+        sample parameters (M, S), their distances from the chord segment (M, S))."""
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        u1 = np.atleast_1d(np.asarray(u1, float))
+        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
+        a = self.position(u0)
+        b = self.position(u1)
+        t = np.linspace(0.0, 1.0, samples + 1)
+        if index is not None:
+            t = t[index]
+        uu = u0[:, None] + t * (u1 - u0)[:, None]
+        return u0, u1, a, b, uu, _dist_to_segment(self.position(uu), a[:, None, :],
+                                                  b[:, None, :])
+
+    def chord_height_at(self, u0, u1, t: np.ndarray) -> np.ndarray:
+        """Sampled chord height, (M,): max distance from the chord of the arc points at
+        u0 + t (u1 - u0) for the rows t (M, S) of fractions (one sample set per arc; with
+        t = linspace(0, 1, samples + 1) in every row this is ``chord_height(u0, u1, samples,
+        refine=False)``, value for value)."""
+        u0 = np.atleast_1d(np.asarray(u0, float))
+        u1 = np.atleast_1d(np.asarray(u1, float))
+        u0 = np.broadcast_to(u0, u1.shape)
+        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
+        a = self.position(u0)
+        b = self.position(u1)
+        uu = u0[:, None] + t * (u1 - u0)[:, None]
+        return _dist_to_segment(self.position(uu), a[:, None, :], b[:, None, :]).max(axis=1)
+
+    def sampled_chord_height_lower_bound(self, u0, u1, samples: int, every: int = 8):
+        """A lower bound of ``chord_height(u0, u1, samples, refine=False)``, (M,): the same
+        distances at every ``every``-th sample only (identical values: the same parameters
+        and arithmetic), a cheap first test for arcs that fail a threshold."""
+        return self._sampled(u0, u1, samples, slice(every // 2, samples, every))[5].max(axis=1)
+
     def chord_height(self, u0, u1, samples: int = _CHORD_SAMPLES, refine: bool = True):
         """True chord-height error: max distance of the arc C([u0, u1]) from the chord [m].
 
@@ -176,37 +237,93 @@ class EdgeCurve:
         Returns:
             (M,) chord heights [m].
         """
-        u0 = np.atleast_1d(np.asarray(u0, float))
-        u1 = np.atleast_1d(np.asarray(u1, float))
-        u1 = np.where(u1 <= u0, u1 + 1.0, u1)
-        a = self.position(u0)
-        b = self.position(u1)
-        t = np.linspace(0.0, 1.0, samples + 1)
-        uu = u0[:, None] + t * (u1 - u0)[:, None]
-        d = _dist_to_segment(self.position(uu), a[:, None, :], b[:, None, :])
+        u0, u1, a, b, uu, d = self._sampled(u0, u1, samples)
         if not refine:
             return d.max(axis=1)
-        out = np.empty(len(u0))
         k = np.argmax(d, axis=1)
-        for m in range(len(u0)):
-            lo = uu[m, max(k[m] - 1, 0)]
-            hi = uu[m, min(k[m] + 1, samples)]
-            if hi - lo <= 0:
-                out[m] = d[m, k[m]]
-                continue
-            res = minimize_scalar(
-                lambda x, m=m: -_dist_to_segment(self.position(x), a[m], b[m]),
-                bounds=(lo, hi), method="bounded", options={"xatol": 1e-13 * (1 + hi)},
-            )
-            out[m] = max(d[m, k[m]], -float(res.fun))
+        rows = np.arange(len(u0))
+        d_best = d[rows, k]
+        lo = uu[rows, np.maximum(k - 1, 0)]
+        hi = uu[rows, np.minimum(k + 1, samples)]
+        out = d_best.copy()
+        go = np.flatnonzero(hi - lo > 0)
+        if len(go):
+            a_g, b_g = a[go], b[go]
+            f_min = minimize_bounded_batch(
+                lambda x: -_dist_to_segment(self.position(x), a_g, b_g), lo[go], hi[go],
+                1e-13 * (1 + hi[go]))
+            out[go] = np.maximum(d_best[go], -f_min)
         return out
+
+
+def minimize_bounded_batch(func, lo: np.ndarray, hi: np.ndarray, xatol: np.ndarray,
+                           maxfun: int = 500) -> np.ndarray:
+    """Minimum values of M independent bounded scalar problems, (M,).
+
+    ``func`` maps (M,) points to (M,) values (problem m sees only entry m). This is scipy's
+    ``minimize_scalar(method="bounded")`` (Brent's method, scipy 1.17 ``_minimize_scalar_bounded``)
+    step for step, run in lockstep over the problems: every problem gets the very same iterates
+    and result as its own scipy call. Written by hand because scipy solves one problem per
+    call (~0.4 ms of Python each; the true chord heights of a plan are hundreds of them).
+    """
+    sqrt_eps, golden_mean = np.sqrt(2.2e-16), 0.5 * (3.0 - np.sqrt(5.0))
+    a, b = np.array(lo, float), np.array(hi, float)
+    xf = nfc = fulc = a + golden_mean * (b - a)
+    rat = e = np.zeros_like(a)
+    fx = ffulc = fnfc = func(xf)
+    num = 1
+    xm = 0.5 * (a + b)
+    tol1 = sqrt_eps * np.abs(xf) + xatol / 3.0
+    tol2 = 2.0 * tol1
+    act = np.abs(xf - xm) > (tol2 - 0.5 * (b - a))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        while act.any():
+            # parabolic fit (used where |e| > tol1 and the parabola is acceptable)
+            r = (xf - nfc) * (fx - ffulc)
+            q = (xf - fulc) * (fx - fnfc)
+            p = (xf - fulc) * q - (xf - nfc) * r
+            q = 2.0 * (q - r)
+            p = np.where(q > 0.0, -p, p)
+            q = np.abs(q)
+            para = (np.abs(e) > tol1) & (np.abs(p) < np.abs(0.5 * q * e)) & (p > q * (a - xf)) \
+                & (p < q * (b - xf))
+            rat_p = (p + 0.0) / q
+            x_p = xf + rat_p
+            near = ((x_p - a) < tol2) | ((b - x_p) < tol2)
+            rat_p = np.where(near, tol1 * (np.sign(xm - xf) + ((xm - xf) == 0)), rat_p)
+            e_g = np.where(xf >= xm, a - xf, b - xf)  # golden-section step
+            e_new = np.where(para, rat, e_g)
+            rat = np.where(act, np.where(para, rat_p, golden_mean * e_g), rat)
+            e = np.where(act, e_new, e)
+            x = xf + (np.sign(rat) + (rat == 0)) * np.maximum(np.abs(rat), tol1)
+            fu = func(x)
+            num += 1
+            better = act & (fu <= fx)
+            worse = act & ~(fu <= fx)
+            right = x >= xf
+            a = np.where(better & right, xf, np.where(worse & ~right, x, a))
+            b = np.where(better & ~right, xf, np.where(worse & right, x, b))
+            c1 = worse & ((fu <= fnfc) | (nfc == xf))
+            c2 = worse & ~c1 & ((fu <= ffulc) | (fulc == xf) | (fulc == nfc))
+            fulc, ffulc = (np.where(better | c1, nfc, np.where(c2, x, fulc)),
+                           np.where(better | c1, fnfc, np.where(c2, fu, ffulc)))
+            nfc, fnfc = (np.where(better, xf, np.where(c1, x, nfc)),
+                         np.where(better, fx, np.where(c1, fu, fnfc)))
+            xf, fx = np.where(better, x, xf), np.where(better, fu, fx)
+            xm = 0.5 * (a + b)
+            tol1 = sqrt_eps * np.abs(xf) + xatol / 3.0
+            tol2 = 2.0 * tol1
+            act = act & (np.abs(xf - xm) > (tol2 - 0.5 * (b - a)))
+            if num >= maxfun:
+                break
+    return fx
 
 
 def _dist_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ab = b - a
     L2 = np.maximum((ab * ab).sum(-1, keepdims=True), 1e-300)
-    t = np.clip(((p - a) * ab).sum(-1, keepdims=True) / L2, 0.0, 1.0)
-    return np.linalg.norm(p - (a + t * ab), axis=-1)
+    t = _clip01(((p - a) * ab).sum(-1, keepdims=True) / L2)
+    return _norm(p - (a + t * ab))
 
 
 def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
@@ -239,7 +356,7 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     u = chord_parameters(p)
     spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
     # arc-length table on the data parameters (Gauss-Legendre per span)
-    x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+    x, w = _GL8
     t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
     speed = np.linalg.norm(spline(t, nu=1), axis=-1)
     ds = 0.5 * (speed * w).sum(-1) * np.diff(u)
