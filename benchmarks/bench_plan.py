@@ -54,7 +54,7 @@ def naive_kto(cell, wt, max_points: int, iterations: int = 300):
     checker = ClearanceChecker(cell)
     m = min(len(wt), max_points)
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
-    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, lift)[:m]
+    p_HT = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, lift)[:m]
     s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(p_HT, axis=0), axis=1))])
     r = s / s[-1]
     t0 = time.perf_counter()
@@ -70,7 +70,7 @@ def naive_kto(cell, wt, max_points: int, iterations: int = 300):
     for i in range(m):
         pc = PositionConstraint(cell.plant, cell.hub_frame, p_HT[i] - 1e-6, p_HT[i] + 1e-6,
                                 cell.tool_frame, np.zeros(3), ctx)
-        ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, wt.cone_axis_H[i],
+        ac = AngleBetweenVectorsConstraint(cell.plant, cell.hub_frame, wt.cone_retract_H[i],
                                            cell.tool_frame, np.array([0, 0, -1.0]), 0.0,
                                            wt.cone_half_angle, ctx)
         keep += [pc, ac]

@@ -112,7 +112,7 @@ def main() -> None:
                                   axis=2), axis=1)
     order = np.argsort(at)
     cone_s = s[at[order]]
-    cones = wt.cone_axis_H[np.array([x.cl_index for x in tg])[order]]
+    cones = wt.cone_retract_H[np.array([x.cl_index for x in tg])[order]]
     L = s[-1]
     slow = (v < 0.95 * 0.150) & (s > 0.02) & (s < L - 0.02)
     runs = np.flatnonzero(np.diff(np.concatenate([[0], slow.astype(int), [0]])))

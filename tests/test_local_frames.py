@@ -82,8 +82,8 @@ def test_world_axes_round_trip_through_frames():
     t, n = _random_tn(rng, 50)
     R = mut.R_HL_from_normals(t, n)
     a, b = rng.uniform(0.09, 0.44, 50), rng.uniform(0.09, 0.44, 50)
-    axis_H = mut.axis_H_from_angles(R, a, b)
-    a2, b2 = mut.angles_from_axis_H(R, axis_H)
+    axis_H = mut.zT_H_from_angles(R, a, b)
+    a2, b2 = mut.angles_from_zT_H(R, axis_H)
     np.testing.assert_allclose(a2, a, atol=1e-12)
     np.testing.assert_allclose(b2, b, atol=1e-12)
 

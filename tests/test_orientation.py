@@ -11,7 +11,7 @@ from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import (
     R_HL_from_normals,
-    angles_from_axis_H,
+    angles_from_zT_H,
     axis_from_angles,
 )
 from drakedeburr.orientation.exact import projected_gradient_norm, solve_exact
@@ -215,11 +215,11 @@ def test_tool_path_is_consistent_and_follows_the_hub_pose():
     assert tp.success and len(tp) == len(cl)
     assert tp.depth_of_cut == ProcessParameters().depth_of_cut_large
     # independent re-check: angles -> axis through the frames, and back
-    a, b = angles_from_axis_H(tp.R_HL, tp.axis_H)
+    a, b = angles_from_zT_H(tp.R_HL, tp.zT_H)
     np.testing.assert_allclose(a, tp.theta_A, atol=1e-12)
     np.testing.assert_allclose(b, tp.theta_B, atol=1e-12)
-    np.testing.assert_allclose(tp.R_HT[:, :, 2], tp.axis_H, atol=1e-12)
-    np.testing.assert_allclose(tp.ijk_H, -tp.axis_H)
+    np.testing.assert_allclose(tp.R_HT[:, :, 2], tp.zT_H, atol=1e-12)
+    np.testing.assert_allclose(tp.ijk_H, -tp.zT_H)
     assert tp.admissible(tp.axis_W).all()
     np.testing.assert_allclose(tp.p_WC, X_WH.multiply(cl.p_HC.T).T, atol=1e-15)
     # every axis inside the inner cone is admissible; the outer cone contains the box corners
@@ -234,7 +234,7 @@ def test_tool_path_is_consistent_and_follows_the_hub_pose():
         # rotate the sample from +z onto the cone axis (same in every local frame)
         rot, _ = Rotation.align_vectors([axis_from_angles(c, c)], [[0, 0, 1.0]])
         axis_H = np.einsum("mij,j->mi", tp.R_HL, rot.apply(local))
-        np.testing.assert_allclose(np.arccos(np.clip(np.einsum("ij,ij->i", axis_H, tp.cone_axis_H),
+        np.testing.assert_allclose(np.arccos(np.clip(np.einsum("ij,ij->i", axis_H, tp.cone_zT_H),
                                                      -1, 1)), ang, atol=1e-9)
         assert tp.admissible((X_WH.rotation().matrix() @ axis_H.T).T, tol=1e-12).all()
     corners = axis_from_angles(np.array([0.26, 0.26, 0.44, 0.44]),

@@ -25,7 +25,7 @@ def fillet():
     k = int(np.argmax(turn / np.maximum(seg, 1e-4)))
     wt = wt.stretch(max(0, k - 15), max(0, k - 15) + 30)
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
-    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)
+    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
     return cell, cell_kinematics(cell), ClearanceChecker(cell), wt, p_HQ, lift
 
 
@@ -34,7 +34,7 @@ def _solve(fillet, analytic_first):
 
     cell, kin, checker, wt, p_HQ, lift = fillet
     opts = IkOptions(analytic_first=analytic_first)
-    return opts, solve_window_ik(cell, kin, checker, p_HQ, wt.axis_H, wt.cone_axis_H,
+    return opts, solve_window_ik(cell, kin, checker, p_HQ, wt.retract_H, wt.cone_retract_H,
                                  wt.cone_half_angle, wt.t_H, cell.q_home, options=opts, lift=lift)
 
 
@@ -50,7 +50,7 @@ def _drake_recheck(fillet, q, opts):
         p = X.translation() + lift * X.rotation().matrix()[:, 2]
         err.append(np.linalg.norm(p - p_HQ[i]))
         axis = -X.rotation().matrix()[:, 2]
-        ang.append(np.arccos(np.clip(axis @ wt.cone_axis_H[i], -1, 1)))
+        ang.append(np.arccos(np.clip(axis @ wt.cone_retract_H[i], -1, 1)))
         clear.append(checker.min_distance(qi, 0.01)[0])
     return np.array(err), np.array(ang), np.array(clear)
 
@@ -80,7 +80,7 @@ def test_analytic_first_takes_the_preferred_axis_and_solves_the_rest_with_drake(
     assert 0 < accepted < n  # the fillet has targets where the preferred axis lacks clearance
     # where the warm start was taken, the axis is the preferred one exactly
     axis = -fast.X_HT[:, :3, 2]
-    pref_angle = np.arccos(np.clip(np.sum(axis * wt.axis_H, 1), -1, 1))
+    pref_angle = np.arccos(np.clip(np.sum(axis * wt.retract_H, 1), -1, 1))
     assert np.sum(pref_angle < 1e-6) >= accepted
     # where Drake solved with the distance constraint active, it tilted the axis for clearance
     # and both variants agree on how much room there is (same program, same bound)
@@ -112,9 +112,9 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     bound = IkOptions().min_distance_floor
 
     def probe(wt, i):
-        p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)
+        p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
         return p_HQ[i], cone_clearance_probe(
-            kin, checker, p_HQ[i], wt.cone_axis_H[i], wt.cone_half_angle, wt.axis_H[i],
+            kin, checker, p_HQ[i], wt.cone_retract_H[i], wt.cone_half_angle, wt.retract_H[i],
             wt.t_H[i], cell.q_home, lift=lift, bound=bound)
 
     def assert_admissible(wt, i, p_HQ, res):
@@ -124,7 +124,7 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
         X = cell.plant.CalcRelativeTransform(ctx, cell.hub_frame, cell.tool_frame)
         R = X.rotation().matrix()
         assert np.linalg.norm(X.translation() + lift * R[:, 2] - p_HQ) < 1e-6
-        assert (np.arccos(np.clip(-R[:, 2] @ wt.cone_axis_H[i], -1, 1))
+        assert (np.arccos(np.clip(-R[:, 2] @ wt.cone_retract_H[i], -1, 1))
                 <= wt.cone_half_angle + 1e-9)
         assert checker.min_distance(res["q"], 0.01)[0] >= bound
         assert kin.within_limits(res["q"])

@@ -107,14 +107,14 @@ def test_tool_path_reference_survives_save_load(tmp_path):
     m = 7
     R = np.linalg.qr(rng.normal(size=(m, 3, 3)))[0]
     tp = ToolPathRecord(window_index=0, kind="large", p_HC=rng.normal(size=(m, 3)), R_HL=R,
-                        axis_H=rng.normal(size=(m, 3)), theta_A=rng.uniform(size=m),
-                        theta_B=rng.uniform(size=m), cone_axis_H=rng.normal(size=(m, 3)),
+                        zT_H=rng.normal(size=(m, 3)), theta_A=rng.uniform(size=m),
+                        theta_B=rng.uniform(size=m), cone_zT_H=rng.normal(size=(m, 3)),
                         bounds=OrientationBounds(0.26, 0.44), cone_half_angle=0.08,
                         cone_outer_half_angle=0.124, depth_of_cut=1.5e-3)
     plan = replace(_plan(), tool_path=(tp,))
     mut.save_plan(plan, tmp_path / "p")
     back = mut.load_plan(tmp_path / "p").tool_path[0]
-    for name in ("p_HC", "R_HL", "axis_H", "theta_A", "theta_B", "cone_axis_H"):
+    for name in ("p_HC", "R_HL", "zT_H", "theta_A", "theta_B", "cone_zT_H"):
         np.testing.assert_array_equal(getattr(back, name), getattr(tp, name))
     assert back.bounds == tp.bounds and back.kind == "large" and back.window_index == 0
     assert (back.cone_half_angle, back.cone_outer_half_angle, back.depth_of_cut) == (

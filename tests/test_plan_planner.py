@@ -57,11 +57,11 @@ def _target_cone_axes(tg, wt):
     out = np.empty((len(tg), 3))
     for k in range(len(tg)):
         if cl[k] >= 0:
-            out[k] = wt.cone_axis_H[cl[k]]
+            out[k] = wt.cone_retract_H[cl[k]]
             continue
         a, b = known[known < k][-1], known[known > k][0]
         f = (run[k] - run[a]) / (run[b] - run[a])
-        c = (1 - f) * wt.cone_axis_H[cl[a]] + f * wt.cone_axis_H[cl[b]]
+        c = (1 - f) * wt.cone_retract_H[cl[a]] + f * wt.cone_retract_H[cl[b]]
         out[k] = c / np.linalg.norm(c)
     return out
 
@@ -174,7 +174,7 @@ def test_one_configuration_per_window(planned):
 def test_unreachable_window_is_reported_not_raised(planned):
     cell, wt, _ = planned
     far = WindowTargets(window_index=7, kind="large", p_HC=wt.p_HC + [5.0, 0, 0], t_H=wt.t_H,
-                        n_H=wt.n_H, axis_H=wt.axis_H, cone_axis_H=wt.cone_axis_H,
+                        n_H=wt.n_H, retract_H=wt.retract_H, cone_retract_H=wt.cone_retract_H,
                         cone_half_angle=wt.cone_half_angle, depth_of_cut=wt.depth_of_cut,
                         closed=False)
     plan = mut.plan_windows(cell, [far], load_config("tool_in_hand", "h5_straight"))
@@ -185,7 +185,7 @@ def test_unreachable_window_is_reported_not_raised(planned):
 def test_toolpath_cone_is_the_smallest_cone_containing_the_theta_box(planned):
     """The IK cone of a ToolPath window (docs/plan.md, "From the theta box to the IK cone"):
     centred on the box centre, just wide enough to hold the box's four corner axes."""
-    from drakedeburr.frames.local_frames import axis_H_from_angles
+    from drakedeburr.frames.local_frames import zT_H_from_angles
 
     _, wt, _ = planned
     tp = wt.tool_path
@@ -195,8 +195,8 @@ def test_toolpath_cone_is_the_smallest_cone_containing_the_theta_box(planned):
     m = len(tp)
     corner_angles = []
     for a, b in [(lo, lo), (lo, hi), (hi, lo), (hi, hi)]:
-        z = axis_H_from_angles(tp.R_HL, np.full(m, a), np.full(m, b))  # +Z_T
-        corner_angles.append(np.arccos(np.clip(np.sum(-z * -np.asarray(tp.cone_axis_H), 1),
+        z = zT_H_from_angles(tp.R_HL, np.full(m, a), np.full(m, b))  # +Z_T
+        corner_angles.append(np.arccos(np.clip(np.sum(-z * -np.asarray(tp.cone_zT_H), 1),
                                                -1, 1)))
     corner_angles = np.array(corner_angles)
     assert wt.cone_half_angle == pytest.approx(tp.cone_outer_half_angle)

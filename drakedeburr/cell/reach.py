@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drakedeburr.cell.station import Cell
+from drakedeburr.frames.vectors import angle_between
 
 __all__ = ["ReachTarget", "ReachResult", "ReachSurvey", "face_targets", "survey_reach"]
 
@@ -192,7 +193,7 @@ def survey_reach(
             X_HT = cell.X_HT(found)
             pos_err = float(np.linalg.norm(X_HT.inverse().multiply(target.p_HQ)))
             z_T = X_HT.rotation().matrix()[:, 2]
-            axis_err = float(np.arccos(np.clip(z_T @ a_H, -1.0, 1.0)))
+            axis_err = float(angle_between(z_T, a_H))
             clearance = _clearance(cell, context, found)
             ok = (pos_err <= 10 * position_tolerance and axis_err <= 1.01 * axis_tolerance + 1e-6
                   and np.all(found >= lo - 1e-9) and np.all(found <= hi + 1e-9)

@@ -4,9 +4,9 @@ from drakedeburr.frames.local_frames import (
     R_HL_from_normals,
     R_LT_from_angles,
     angles_from_axis,
-    angles_from_axis_H,
+    angles_from_zT_H,
     axis_from_angles,
-    axis_H_from_angles,
+    zT_H_from_angles,
 )
 from drakedeburr.frames.normals import (
     NormalEstimate,
@@ -18,8 +18,8 @@ __all__ = [
     "R_HL_from_normals",
     "axis_from_angles",
     "angles_from_axis",
-    "axis_H_from_angles",
-    "angles_from_axis_H",
+    "zT_H_from_angles",
+    "angles_from_zT_H",
     "R_LT_from_angles",
     "NormalEstimate",
     "inner_normals_from_cloud",

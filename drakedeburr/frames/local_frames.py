@@ -54,8 +54,8 @@ __all__ = [
     "axis_from_angles",
     "angles_from_axis",
     "axis_jacobian",
-    "axis_H_from_angles",
-    "angles_from_axis_H",
+    "zT_H_from_angles",
+    "angles_from_zT_H",
     "check_rotations",
     "R_LT_from_angles",
 ]
@@ -144,14 +144,14 @@ def axis_jacobian(theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
     return np.stack([d_a, d_b], axis=-1)
 
 
-def axis_H_from_angles(R_HL: np.ndarray, theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
+def zT_H_from_angles(R_HL: np.ndarray, theta_A: np.ndarray, theta_B: np.ndarray) -> np.ndarray:
     """Tool axis in H: (M, 3) from (M, 3, 3) frames and (M,) angles [rad]."""
     return np.einsum("mij,mj->mi", np.asarray(R_HL, float), axis_from_angles(theta_A, theta_B))
 
 
-def angles_from_axis_H(R_HL: np.ndarray, axis_H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def angles_from_zT_H(R_HL: np.ndarray, zT_H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(theta_A, theta_B) [rad], each (M,), of (M, 3) axes given in H w.r.t. frames R_HL."""
-    axis_L = np.einsum("mji,mj->mi", np.asarray(R_HL, float), np.asarray(axis_H, float))
+    axis_L = np.einsum("mji,mj->mi", np.asarray(R_HL, float), np.asarray(zT_H, float))
     return angles_from_axis(axis_L)
 
 

@@ -40,6 +40,7 @@ import numpy as np
 
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
+from drakedeburr.frames.vectors import perpendicular_basis
 from drakedeburr.hub.types import ScanCloud
 from drakedeburr.path.types import ClPath
 
@@ -161,7 +162,7 @@ def _quadric_normal(pts: np.ndarray, p0: np.ndarray, n0: np.ndarray, t0: np.ndar
     for _ in range(2):
         u = t0 - (t0 @ n) * n
         if np.linalg.norm(u) < 0.1:
-            u = np.cross(n, [1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.cross(n, [0.0, 1.0, 0.0])
+            u = perpendicular_basis(n)[:, 0]
         u /= np.linalg.norm(u)
         v = np.cross(n, u)
         q = pts - p0

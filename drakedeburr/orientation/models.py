@@ -3,7 +3,7 @@
 Decision variables, for a window with M CL points: theta = (theta_A, theta_B) per point [rad],
 stacked as x = [theta_A_0, theta_B_0, theta_A_1, theta_B_1, ...] (2M,), each inside the box
 [theta_min, theta_max] of the window class (config.ProcessParameters.bounds_large/small).
-The tool axis at point i is ``axis_H_i = R_HL_i @ axis_from_angles(theta_A_i, theta_B_i)``
+The tool axis at point i is ``zT_H_i = R_HL_i @ axis_from_angles(theta_A_i, theta_B_i)``
 (see :mod:`drakedeburr.frames.local_frames`).
 
 ``paper`` (eq. 11, literal, open sequence i = 2..n as printed)::

@@ -13,6 +13,7 @@ from pydrake.math import RigidTransform
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
+from drakedeburr.frames.vectors import angle_between
 from drakedeburr.orientation.exact import ExactOptions, SolveReport, solve_exact
 from drakedeburr.orientation.models import ModelName, OrientationProblem, make_problem
 from drakedeburr.orientation.pso import PsoOptions, pso_minimize
@@ -104,7 +105,7 @@ def cone_half_angles(bounds: OrientationBounds, samples: int = 64) -> tuple[floa
     edge_a = np.concatenate([s, s, np.full(samples, lo), np.full(samples, hi)])
     edge_b = np.concatenate([np.full(samples, lo), np.full(samples, hi), s, s])
     v = axis_from_angles(edge_a, edge_b)
-    ang = np.arccos(np.clip(v @ axis_from_angles(c, c), -1.0, 1.0))
+    ang = angle_between(v, axis_from_angles(c, c))
     # the boundary's closest point may lie between samples: shrink by the sampling step
     step = (hi - lo) / (samples - 1)
     return float(ang.min() - step), float(ang.max())
@@ -146,12 +147,12 @@ def orient_window(
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)
     th = rep.x.reshape(prob.m, 2)
-    axis_H = prob.axes(rep.x)
+    zT_H = prob.axes(rep.x)
     bounds = _bounds_for(cl.kind, params)
     c = 0.5 * (bounds.theta_min + bounds.theta_max)
-    cone_axis_H = prob.axes(np.full(prob.n_vars, c))
+    cone_zT_H = prob.axes(np.full(prob.n_vars, c))
     inner, outer = cone_half_angles(bounds)
-    stats = angle_statistics(th[:, 0], th[:, 1], cl.p_HC, axis_H)
+    stats = angle_statistics(th[:, 0], th[:, 1], cl.p_HC, zT_H)
     stats["solver_info"] = {**rep.info, "iterations": rep.iterations}
     depth = params.depth_of_cut_large if cl.kind == "large" else params.depth_of_cut_small
     log.info("window %d: %s/%s objective %.6g in %.1f ms (%s)", cl.window_index, model, solver,
@@ -159,9 +160,9 @@ def orient_window(
     return ToolPath(
         window_index=cl.window_index, kind=cl.kind, cl_path=cl,
         X_WH=RigidTransform() if X_WH is None else RigidTransform(X_WH),
-        p_HC=np.asarray(cl.p_HC, float), R_HL=R_HL, axis_H=axis_H,
+        p_HC=np.asarray(cl.p_HC, float), R_HL=R_HL, zT_H=zT_H,
         theta_A=th[:, 0].copy(), theta_B=th[:, 1].copy(), bounds=bounds,
-        cone_axis_H=cone_axis_H, cone_half_angle=inner, cone_outer_half_angle=outer,
+        cone_zT_H=cone_zT_H, cone_half_angle=inner, cone_outer_half_angle=outer,
         depth_of_cut=depth, model=model, solver=solver, objective=rep.objective,
         success=rep.success, solve_seconds=rep.solve_seconds, stats=stats, message=rep.message,
     )

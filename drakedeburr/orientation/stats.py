@@ -20,12 +20,12 @@ def _describe(v: np.ndarray) -> dict[str, float]:
     }
 
 
-def axis_turning(p_HC: np.ndarray, axis_H: np.ndarray, closed: bool = True) -> np.ndarray:
+def axis_turning(p_HC: np.ndarray, zT_H: np.ndarray, closed: bool = True) -> np.ndarray:
     """Turning rate of the tool axis between consecutive CL points.
 
     Args:
         p_HC: (M, 3) CL points [m].
-        axis_H: (M, 3) unit tool axes.
+        zT_H: (M, 3) unit tool axes.
         closed: include the segment from the last point back to the first.
 
     Returns:
@@ -34,13 +34,13 @@ def axis_turning(p_HC: np.ndarray, axis_H: np.ndarray, closed: bool = True) -> n
     i = np.arange(len(p_HC) if closed else len(p_HC) - 1)
     j = (i + 1) % len(p_HC)
     d = np.linalg.norm(p_HC[j] - p_HC[i], axis=1)
-    cosang = np.clip(np.einsum("ij,ij->i", axis_H[i], axis_H[j]), -1.0, 1.0)
-    cross = np.linalg.norm(np.cross(axis_H[i], axis_H[j]), axis=1)
+    cosang = np.clip(np.einsum("ij,ij->i", zT_H[i], zT_H[j]), -1.0, 1.0)
+    cross = np.linalg.norm(np.cross(zT_H[i], zT_H[j]), axis=1)
     return np.arctan2(cross, cosang) / d
 
 
 def angle_statistics(theta_A: np.ndarray, theta_B: np.ndarray, p_HC: np.ndarray,
-                     axis_H: np.ndarray) -> dict:
+                     zT_H: np.ndarray) -> dict:
     """Tab. 3-6 figures for theta_A and theta_B [rad] and the axis turning [rad/mm, deg/mm].
 
     Returns:
@@ -48,7 +48,7 @@ def angle_statistics(theta_A: np.ndarray, theta_B: np.ndarray, p_HC: np.ndarray,
          "axis_turn_rad_per_mm": {max, mean, rms}, "axis_turn_deg_per_mm": {max, mean, rms},
          "axis_turn_total_deg": total turning around the loop}
     """
-    rate = axis_turning(p_HC, axis_H) * 1e-3  # rad/mm
+    rate = axis_turning(p_HC, zT_H) * 1e-3  # rad/mm
     per_mm = {"max": float(rate.max()), "mean": float(rate.mean()),
               "rms": float(np.sqrt(np.mean(rate**2)))}
     i = np.arange(len(p_HC))

@@ -166,7 +166,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
     q0 = wik.q[good[0]]
     for attempt in range(6):
         dist = None
-        cp = cut_path(X_ik, wt.cone_axis_H[order], wt.cone_half_angle, step=step,
+        cp = cut_path(X_ik, wt.cone_retract_H[order], wt.cone_half_angle, step=step,
                       spin_sigma=opt.spin_sigma, axis_margin=opt.axis_margin, pin=pin,
                       deviation=dev)
         cp, spin_mode = _spin(ctx, cp, q0, step, spin_mode, w)
@@ -224,4 +224,4 @@ def _pin_and_tighten(cp, low: np.ndarray, step: float, pin, dev: np.ndarray, n: 
 def cone_of_cut(wt, order: np.ndarray, cp, via: np.ndarray | None = None) -> np.ndarray:
     """The cone axis at every dense sample of the cut (interpolated between the CL targets)."""
     ti = cp.target_index if via is None else cp.target_index[~via]
-    return axes_interp(cp.s[ti], wt.cone_axis_H[order], cp.s)
+    return axes_interp(cp.s[ti], wt.cone_retract_H[order], cp.s)

@@ -33,6 +33,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation, Slerp
 
+from drakedeburr.frames.vectors import perpendicular_basis
+
 log = logging.getLogger(__name__)
 
 __all__ = ["BlendedPath", "blend_corners", "smooth_axes", "least_axis_curvature", "CutPath",
@@ -153,14 +155,6 @@ def _add_cone(prog, u_i, axis: np.ndarray, cos_a: float) -> None:
     prog.AddLorentzConeConstraint(A, b, u_i)
 
 
-def _basis(z0: np.ndarray) -> np.ndarray:
-    z0 = z0 / np.linalg.norm(z0)
-    h = np.array([1.0, 0.0, 0.0]) if abs(z0[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(z0, h)
-    e1 /= np.linalg.norm(e1)
-    return np.stack([e1, np.cross(z0, e1), z0], axis=1)  # columns e1, e2, z0
-
-
 def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_angle: float,
                 *, margin: float = 2e-3, w_pref: float = 1.0, w_rate: float = 1e-4,
                 w_curv: float = 1e-10, pin: np.ndarray | None = None,
@@ -189,7 +183,7 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     a_pref = np.asarray(a_pref, float)
     c = np.asarray(cone_axis, float)
     N = len(s)
-    E = _basis(np.mean(c, axis=0))
+    E = perpendicular_basis(np.mean(c, axis=0))
     # preferred axes in gnomonic coordinates
     loc = a_pref @ E
     u_pref = loc[:, :2] / loc[:, 2:3]
@@ -276,7 +270,7 @@ def least_axis_curvature(p: np.ndarray, cone_axis: np.ndarray, half_angle: float
         s = s[:-1]  # the end is the start
     h = ts[-1] / n
     c = axes_interp(ts, C, s)
-    E = _basis(np.mean(c, axis=0))
+    E = perpendicular_basis(np.mean(c, axis=0))
     cl = c @ E
     N = len(s)
     prog = MathematicalProgram()
@@ -331,7 +325,7 @@ def _rotate_axis_to(R: np.ndarray, a_new: np.ndarray) -> np.ndarray:
     return Rotation.from_rotvec(axis * ang[:, None]).as_matrix() @ R
 
 
-def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, *,
+def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: float, *,
              deviation: float | np.ndarray = 0.03e-3, step: float = 0.5e-3,
              spin_sigma: float = 3e-3,
              axis_margin: float = 2e-3, w_rate: float = 1e-4, w_curv: float = 1e-10,
@@ -342,7 +336,7 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
     Args:
         X_targets: (K, 4, 4) target tool poses in H from the IK (tool point on the CL target,
             axis in the cone) [m].
-        cone_axis_H: (K, 3) unit cone axes at the targets (tip -> spindle); half_angle [rad].
+        cone_retract_H: (K, 3) unit cone axes at the targets (tip -> spindle); half_angle [rad].
         deviation: corner blend tolerance [m] (or (K,) per target); step: dense sample
             spacing [m].
         spin_sigma: Gaussian width of the orientation smoothing before the axis program [m].
@@ -368,7 +362,7 @@ def cut_path(X_targets: np.ndarray, cone_axis_H: np.ndarray, half_angle: float, 
         sig = spin_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
         quat = gaussian_filter1d(quat, sig, axis=0, mode="nearest")
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
-    c_rot = axes_interp(ts, cone_axis_H, bp.s)
+    c_rot = axes_interp(ts, cone_retract_H, bp.s)
     a = smooth_axes(bp.s, -R[:, :, 2], c_rot, half_angle, margin=axis_margin, w_rate=w_rate,
                     w_curv=w_curv, pin=_in_intervals(bp.s, pin), pin_axes=a_ik,
                     pin_angle=pin_angle)

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drakedeburr.frames.vectors import angle_between
+
 log = logging.getLogger(__name__)
 
 __all__ = ["FilletOptions", "slow_stretches", "stretch_kto", "orientation_by_kto", "repair_fillets"]
@@ -171,7 +173,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
     the cone, the joints' reach or loses clearance: (poses, joints, distances)."""
     from drakedeburr.plan.kinematics import DISTANCE_SLACK
 
-    ang = np.arccos(np.clip(np.sum(cone[st] * -R[:, :, 2], axis=1), -1.0, 1.0))
+    ang = angle_between(cone[st], -R[:, :, 2])
     if np.any(ang > half_angle - 1e-3):
         log.debug("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
                  "was", window, 1e3 * s_c)

@@ -11,18 +11,13 @@ from drakedeburr.plan.cut_path import least_axis_curvature
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
+from drakedeburr.plan.program_reading import rot_angle
 from drakedeburr.plan.results import ExecutedCut, Stretch, WindowPlan, WindowStats, WindowStatus
 from drakedeburr.plan.stretch import make_target, time_cartesian
 from drakedeburr.plan.transitions import approach_pose
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["finish_window", "box_share", "rotation_angle", "move_speeds"]
-
-
-def rotation_angle(Xa: np.ndarray, Xb: np.ndarray) -> np.ndarray:
-    """(M,) rotation angle between paired poses [rad]."""
-    c = (np.einsum("mij,mij->m", Xa[:, :3, :3], Xb[:, :3, :3]) - 1.0) / 2.0
-    return np.arccos(np.clip(c, -1.0, 1.0))
+__all__ = ["finish_window", "box_share", "move_speeds"]
 
 
 def box_share(wt, order: np.ndarray, q: np.ndarray, kin) -> float | None:
@@ -32,10 +27,10 @@ def box_share(wt, order: np.ndarray, q: np.ndarray, kin) -> float | None:
     tp = wt.tool_path
     if tp is None or len(tp) != len(wt) or not hasattr(tp, "bounds"):
         return None  # no ToolPath, or a stretch of one
-    from drakedeburr.frames.local_frames import angles_from_axis_H
+    from drakedeburr.frames.local_frames import angles_from_zT_H
 
     z_H = kin.X_HT_from_q(q)[:, :3, 2]  # +Z_T (spindle -> tip), the ToolPath convention
-    a, b = angles_from_axis_H(np.asarray(tp.R_HL)[order], z_H)
+    a, b = angles_from_zT_H(np.asarray(tp.R_HL)[order], z_H)
     lo, hi = tp.bounds.theta_min - 1e-9, tp.bounds.theta_max + 1e-9
     return float(np.mean((a >= lo) & (a <= hi) & (b >= lo) & (b <= hi)))
 
@@ -133,10 +128,11 @@ def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_
         else 0.0,
         ik={k: v for k, v in wik.stats.items() if "seconds" not in k},
         joint_fit_deviation_m=fit_dev,
-        orientation_smoothing_rad=float(np.max(rotation_angle(X_ik, ex.cp.X_target[cl_rows]))),
+        orientation_smoothing_rad=float(np.max(rot_angle(X_ik[:, :3, :3],
+                                                           ex.cp.X_target[cl_rows, :3, :3]))),
         via_targets=int(ex.via.sum()),
         least_axis_acceleration_radps2=v_g ** 2 * least_axis_curvature(
-            wt.p_HC, wt.cone_axis_H, wt.cone_half_angle, closed=wt.closed),
+            wt.p_HC, wt.cone_retract_H, wt.cone_half_angle, closed=wt.closed),
         q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=ex.q_targets[cl_rows].tolist(),
         cl_order=[int(i) for i in order], spin_rule=ctx.options.ik.seed_spin)
 

@@ -157,9 +157,9 @@ def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     return so
 
 
-def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H: np.ndarray,
-                 half_angle: float, pref_axis_H: np.ndarray, q_prev: np.ndarray, q_seed: np.ndarray,
-                 with_distance: bool, solver, options: IkOptions,
+def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_retract_H: np.ndarray,
+                 half_angle: float, pref_retract_H: np.ndarray, q_prev: np.ndarray,
+                 q_seed: np.ndarray, with_distance: bool, solver, options: IkOptions,
                  lift: float = 0.0) -> tuple[bool, np.ndarray]:
     from pydrake.multibody.inverse_kinematics import InverseKinematics
 
@@ -169,9 +169,9 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_axis_H:
     ik.AddPositionConstraint(cell.tool_frame, np.array([0.0, 0.0, lift]), cell.hub_frame,
                              p_HT - tol, p_HT + tol)
     down_T = np.array([0.0, 0.0, -1.0])  # the tool axis (tip -> spindle) is -Z_T
-    ik.AddAngleBetweenVectorsConstraint(cell.hub_frame, cone_axis_H, cell.tool_frame, down_T,
+    ik.AddAngleBetweenVectorsConstraint(cell.hub_frame, cone_retract_H, cell.tool_frame, down_T,
                                         0.0, half_angle)
-    ik.AddAngleBetweenVectorsCost(cell.hub_frame, pref_axis_H, cell.tool_frame, down_T,
+    ik.AddAngleBetweenVectorsCost(cell.hub_frame, pref_retract_H, cell.tool_frame, down_T,
                                   options.axis_weight)
     prog = ik.get_mutable_prog()
     q = ik.q()
@@ -199,8 +199,8 @@ def solve_window_ik(
     kin: CellKinematics,
     checker: ClearanceChecker,
     p_HT: np.ndarray,
-    pref_axis_H: np.ndarray,
-    cone_axis_H: np.ndarray,
+    pref_retract_H: np.ndarray,
+    cone_retract_H: np.ndarray,
     cone_half_angle: float,
     t_H: np.ndarray,
     q_ref: np.ndarray,
@@ -217,8 +217,8 @@ def solve_window_ik(
         cell: the loaded :class:`drakedeburr.cell.Cell`.
         kin: its :class:`CellKinematics`; checker: its :class:`ClearanceChecker`.
         p_HT: (M, 3) tool-point targets in H [m] (see :mod:`drakedeburr.plan.targets`).
-        pref_axis_H: (M, 3) preferred tool axes (tip -> spindle) in H.
-        cone_axis_H: (M, 3) admissible cone axes in H; cone_half_angle: [rad] (> 0).
+        pref_retract_H: (M, 3) preferred tool axes (tip -> spindle) in H.
+        cone_retract_H: (M, 3) admissible cone axes in H; cone_half_angle: [rad] (> 0).
         t_H: (M, 3) feed tangents (spin reference of the seeds).
         q_ref: (6,) joints the robot comes from (configuration preference) [rad].
         window_index: for failure records.
@@ -248,12 +248,12 @@ def solve_window_ik(
     clearance = np.zeros(m)
     failures: list[FailureRecord] = []
     t0 = time.perf_counter()
-    p_T_pref = p_HT + lift * pref_axis_H  # T itself at the preferred axis (seeds)
+    p_T_pref = p_HT + lift * pref_retract_H  # T itself at the preferred axis (seeds)
     q_prev, i_prev = None, -1
     for i in range(m):
         if q_prev is None:
             q_seed = (q_first if q_first is not None and i == 0 else
-                      seed_by_spin(kin, checker, p_T_pref[i], pref_axis_H[i], t_H[i], q_ref,
+                      seed_by_spin(kin, checker, p_T_pref[i], pref_retract_H[i], t_H[i], q_ref,
                                    options))
             if q_seed is None:
                 failures.append(FailureRecord(window=window_index, kind="ik", point=i,
@@ -262,11 +262,11 @@ def solve_window_ik(
             anchor = q_seed
         else:
             anchor = q_prev
-            q_seed = analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_axis_H[i], q_prev,
+            q_seed = analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_retract_H[i], q_prev,
                                     options.joint_weights,
                                     spin_span=0.5 if options.seed_spin == "joint_cost" else 0.0,
                                     spin_samples=21 if options.seed_spin == "joint_cost" else 1)
-        target = _Target(p_HT[i], cone_axis_H[i], pref_axis_H[i], t_H[i])
+        target = _Target(p_HT[i], cone_retract_H[i], pref_retract_H[i], t_H[i])
         prev = None if q_prev is None else (q_prev, X_out[i_prev])
         done, best, probe = _solve_target(run, target, q_seed, anchor, prev)
         if best is not None:
@@ -311,8 +311,8 @@ class _Target:
     """One CL target: the constrained point, cone axis, preferred axis and tangent (in H)."""
 
     p_HT: np.ndarray
-    cone_axis_H: np.ndarray
-    pref_axis_H: np.ndarray
+    cone_retract_H: np.ndarray
+    pref_retract_H: np.ndarray
     t_H: np.ndarray
 
 
@@ -327,28 +327,28 @@ def _reseed(run: _WindowRun, tg: _Target, attempt: int, probe, anchor, prev):
     if attempt in (1, 2) and prev is not None:
         # where the preferred axis is too close to the hub (concave fillets), seed from the
         # axis in the cone with the most clearance, distance-active at once
-        seed = clearance_seed(run.kin, run.checker, prev[1], tg.p_HT, tg.cone_axis_H, run.half,
-                               tg.pref_axis_H, prev[0], run.reach, lift=run.lift)
+        seed = clearance_seed(run.kin, run.checker, prev[1], tg.p_HT, tg.cone_retract_H, run.half,
+                               tg.pref_retract_H, prev[0], run.reach, lift=run.lift)
         if seed is not None:
             return seed, True
-    p_T = tg.p_HT + run.lift * tg.pref_axis_H
-    return seed_by_spin(run.kin, run.checker, p_T, tg.pref_axis_H, tg.t_H, anchor, opt), False
+    p_T = tg.p_HT + run.lift * tg.pref_retract_H
+    return seed_by_spin(run.kin, run.checker, p_T, tg.pref_retract_H, tg.t_H, anchor, opt), False
 
 
 def _solve_with(run: _WindowRun, tg: _Target, solver, anchor, q_seed, with_distance, opts):
     """One solve (and a lazy re-solve with the distance constraint when the solution comes
     too close), re-checked by the analytic FK: ((q, X, clearance, position error, cone angle),
     accepted, whether the distance constraint is now on - it stays on for the next solver)."""
-    args = (run.cell, run.checker, tg.p_HT, tg.cone_axis_H, run.half, tg.pref_axis_H, anchor)
+    args = (run.cell, run.checker, tg.p_HT, tg.cone_retract_H, run.half, tg.pref_retract_H, anchor)
     _, q = _solve_point(*args, q_seed, with_distance, solver, opts, run.lift)
-    good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_axis_H, run.half, opts, run.lift)
+    good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts, run.lift)
     dist = run.checker.min_distance(q, run.reach)[0]
     if good and dist < opts.min_distance - 1e-5 and not with_distance:
         # lazy collision constraint: re-solve with it from this solution
         with_distance = True
         run.counts["distance"] += 1
         _, q = _solve_point(*args, q, True, solver, opts, run.lift)
-        good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_axis_H, run.half, opts,
+        good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts,
                                      run.lift)
         dist = run.checker.min_distance(q, run.reach)[0]
     return (q, X, dist, err, ang), good and dist >= opts.min_distance - 1e-5, with_distance
@@ -360,7 +360,7 @@ def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
     (done, best (q, X, clearance, position error, cone angle) or None, probe or None)."""
     opt = run.options
     if opt.analytic_first and prev is not None:
-        acc = analytic_accept(run.kin, run.checker, q_seed, anchor, tg.p_HT, tg.cone_axis_H,
+        acc = analytic_accept(run.kin, run.checker, q_seed, anchor, tg.p_HT, tg.cone_retract_H,
                                run.half, opt, run.lift, run.reach)
         if acc is not None:
             run.counts["analytic"] += 1
@@ -373,8 +373,8 @@ def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
             opt, min_distance=min(opt.min_distance, opt.min_distance_floor))
         if attempt == 1 and probe is None:
             # the program failed from the warm start: is there any admissible pose at all?
-            probe = cone_clearance_probe(run.kin, run.checker, tg.p_HT, tg.cone_axis_H, run.half,
-                                         tg.pref_axis_H, tg.t_H, anchor, lift=run.lift,
+            probe = cone_clearance_probe(run.kin, run.checker, tg.p_HT, tg.cone_retract_H, run.half,
+                                         tg.pref_retract_H, tg.t_H, anchor, lift=run.lift,
                                          bound=opt.min_distance_floor, min_wrist=opt.min_wrist)
             run.counts["probe"] += 1
             if unreachable(probe, opt):

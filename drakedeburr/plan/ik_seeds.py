@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from drakedeburr.frames.vectors import angle_between, perpendicular_basis
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 from drakedeburr.plan.targets import X_HT_from_axis
 
@@ -23,7 +24,7 @@ __all__ = ["JOINT_WEIGHTS", "seed_by_spin", "cone_clearance_probe", "analytic_se
 
 
 def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
-                 axis_H: np.ndarray, t_H: np.ndarray, q_ref: np.ndarray,
+                 retract_H: np.ndarray, t_H: np.ndarray, q_ref: np.ndarray,
                  options: IkOptions, count: int = 1) -> np.ndarray | None:
     """Best joint vector for one target over a sweep of spins and all IK branches.
 
@@ -31,7 +32,7 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
     |J5| < ``min_wrist``, outside the limits or in collision are dropped.
 
     Args:
-        p_HT: (3,) tool point [m]; axis_H: (3,) preferred axis; t_H: (3,) feed tangent.
+        p_HT: (3,) tool point [m]; retract_H: (3,) preferred axis; t_H: (3,) feed tangent.
         q_ref: (6,) reference joints (e.g. home or the previous window's end) [rad].
 
         count: > 1 returns a list of up to ``count`` distinct seeds (J4/J6 differing by more
@@ -42,7 +43,7 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
     """
     spins = np.linspace(-np.pi, np.pi, options.spin_samples, endpoint=False)
     k = len(spins)
-    X_HT = X_HT_from_axis(np.repeat(p_HT[None], k, 0), np.repeat(axis_H[None], k, 0),
+    X_HT = X_HT_from_axis(np.repeat(p_HT[None], k, 0), np.repeat(retract_H[None], k, 0),
                           np.repeat(t_H[None], len(spins), 0), spins)
     q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X_HT))
     b_ref = kin.branch_of(q_ref)
@@ -90,14 +91,14 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
 
 
 def analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
-                   axis_H: np.ndarray, q_prev: np.ndarray,
+                   retract_H: np.ndarray, q_prev: np.ndarray,
                    weights: tuple[float, ...] = JOINT_WEIGHTS,
                    spin_span: float = 0.5, spin_samples: int = 21) -> np.ndarray:
     """Seed that already meets position and preferred axis exactly, with the spin about the
     axis that minimises the program's own joint cost ``sum w_j (q_j - q_prev_j)^2``: spins
     within ``spin_span`` of the previous pose's X_T projected normal to the new axis, solved
     by the analytic IK on the previous configuration's branch. Falls back to ``q_prev``."""
-    z = -axis_H / np.linalg.norm(axis_H)
+    z = -retract_H / np.linalg.norm(retract_H)
     x = X_prev[:3, 0] - (X_prev[:3, 0] @ z) * z
     if np.linalg.norm(x) < 1e-6:
         return q_prev
@@ -125,22 +126,20 @@ def analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
 
 def cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
     """``count`` unit axes at ``angle`` from the unit axis ``c``, evenly around it."""
-    e1 = np.cross(c, [1.0, 0.0, 0.0] if abs(c[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(c, e1)
+    e1, e2, _ = perpendicular_basis(c).T
     return [np.cos(angle) * c + np.sin(angle) * (np.cos(f) * e1 + np.sin(f) * e2)
             for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
 
 
 def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
-                    p_HT: np.ndarray, cone_axis_H: np.ndarray, half_angle: float,
-                    pref_axis_H: np.ndarray, q_prev: np.ndarray, reach: float,
+                    p_HT: np.ndarray, cone_retract_H: np.ndarray, half_angle: float,
+                    pref_retract_H: np.ndarray, q_prev: np.ndarray, reach: float,
                     samples: int = 12, lift: float = 0.0) -> np.ndarray | None:
     """Analytic seed at the axis of most clearance among the preferred axis, the cone axis and
     ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
     ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
-    c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    axes = [pref_axis_H, c] + cone_ring(c, 0.8 * half_angle, samples)
+    c = cone_retract_H / np.linalg.norm(cone_retract_H)
+    axes = [pref_retract_H, c] + cone_ring(c, 0.8 * half_angle, samples)
     best, best_d = None, -np.inf
     for a in axes:
         q = analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
@@ -153,7 +152,7 @@ def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.nd
 
 
 def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarray,
-                     anchor: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray, half: float,
+                     anchor: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray, half: float,
                      options: IkOptions, lift: float, reach: float):
     """The analytic warm start as the target's solution when it meets every constraint of the
     Drake program: position and cone (re-checked by FK), joint limits, the trust region about
@@ -163,7 +162,7 @@ def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarra
         return None
     if abs(q[4]) < options.min_wrist or np.sign(q[4]) != np.sign(anchor[4]):
         return None
-    good, _, _, X = recheck(kin, q, p_HT, cone_axis_H, half, options, lift)
+    good, _, _, X = recheck(kin, q, p_HT, cone_retract_H, half, options, lift)
     if not good:
         return None
     dist = checker.min_distance(q, reach)[0]
@@ -173,7 +172,7 @@ def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarra
 
 
 def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
-                         cone_axis_H: np.ndarray, half_angle: float, pref_axis_H: np.ndarray,
+                         cone_retract_H: np.ndarray, half_angle: float, pref_retract_H: np.ndarray,
                          t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
                          bound: float = 2.05e-3, min_wrist: float = 0.25,
                          rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98), ring_axes: int = 16,
@@ -194,8 +193,8 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     Returns:
         ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
     """
-    c = cone_axis_H / np.linalg.norm(cone_axis_H)
-    axes = [pref_axis_H / np.linalg.norm(pref_axis_H), c]
+    c = cone_retract_H / np.linalg.norm(cone_retract_H)
+    axes = [pref_retract_H / np.linalg.norm(pref_retract_H), c]
     for ring in rings:
         if ring > 0:
             axes += cone_ring(c, ring * half_angle, ring_axes)
@@ -231,13 +230,13 @@ def unreachable(probe: dict, options: IkOptions) -> bool:
     return not probe["feasible"] and probe["best_clearance"] < options.min_distance_floor - 0.2e-3
 
 
-def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_axis_H: np.ndarray,
+def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray,
              half_angle: float, options: IkOptions,
              lift: float = 0.0) -> tuple[bool, float, float, np.ndarray]:
     """Independent check of a solution with the analytic FK: (ok, position error, cone angle)."""
     X = kin.X_HT_from_q(q)
     err = float(np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HT))
-    ang = float(np.arccos(np.clip(-X[:3, 2] @ cone_axis_H, -1.0, 1.0)))
+    ang = float(angle_between(-X[:3, 2], cone_retract_H))
     ok = (err <= 10 * options.position_tolerance and ang <= half_angle + 1e-6
           and bool(kin.within_limits(q)))
     return ok, err, ang, X

@@ -184,6 +184,9 @@ def load_plan(path: str | Path) -> Plan:
     records = []
     for d in doc.get("tool_paths", []):
         w = int(d["window_index"])
+        for new, old in (("zT_H", "axis_H"), ("cone_zT_H", "cone_axis_H")):  # version 1 names
+            if f"tp{w}_{new}" not in arr and f"tp{w}_{old}" in arr:
+                arr[f"tp{w}_{new}"] = arr[f"tp{w}_{old}"]
         missing = [n for n in TOOL_PATH_ARRAYS if f"tp{w}_{n}" not in arr]
         if missing:
             raise InputError(f"{npz_path}: tool path of window {w} lacks {', '.join(missing)}")

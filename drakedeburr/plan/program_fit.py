@@ -11,6 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from drakedeburr.frames.vectors import angle_between
 from drakedeburr.plan.cut import between_samples_error, cone_of_cut
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
@@ -153,8 +154,8 @@ def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: 
         return cp, cut, dist
     X, ch, on, err_max = pulled
     c = np.asarray(cone_axis, float)[ch]
-    before = np.arccos(np.clip(np.sum(c * -cp.X_HT[ch, :3, 2], axis=1), -1.0, 1.0))
-    after = np.arccos(np.clip(np.sum(c * -X[ch, :3, 2], axis=1), -1.0, 1.0))
+    before = angle_between(c, -cp.X_HT[ch, :3, 2])
+    after = angle_between(c, -X[ch, :3, 2])
     if np.any(after > np.maximum(half_angle - cone_margin, before)):
         log.debug("window %d: the program's orientation leaves the tool axis' cone (by %.2f mrad); "
                  "keeping the smooth cut", window, 1e3 * float(np.max(after - half_angle)))

@@ -58,20 +58,20 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def _u(n_H: np.ndarray, axis_H: np.ndarray) -> np.ndarray:
-    a = _unit(np.asarray(axis_H, float))
+def _u(n_H: np.ndarray, retract_H: np.ndarray) -> np.ndarray:
+    a = _unit(np.asarray(retract_H, float))
     n = np.asarray(n_H, float)
     return _unit(n - np.sum(n * a, axis=-1, keepdims=True) * a)
 
 
-def tool_point_H(p_HC: np.ndarray, n_H: np.ndarray, axis_H: np.ndarray, depth: float,
+def tool_point_H(p_HC: np.ndarray, n_H: np.ndarray, retract_H: np.ndarray, depth: float,
                  r_c: float, lift: float = 0.0) -> np.ndarray:
     """Tool point p_HT for CL points.
 
     Args:
         p_HC: (M, 3) edge (CL) points in H [m].
         n_H: (M, 3) unit inner normals (out of the material into the opening).
-        axis_H: (M, 3) unit tool axes (tip -> spindle).
+        retract_H: (M, 3) unit tool axes (tip -> spindle).
         depth: chamfer leg / depth of cut [m].
         r_c: radius of the flank circle that touches C' [m].
         lift: distance [m] from that circle's centre back along the axis (toward the spindle)
@@ -81,7 +81,7 @@ def tool_point_H(p_HC: np.ndarray, n_H: np.ndarray, axis_H: np.ndarray, depth: f
         (M, 3) tool points in H [m].
     """
     n = np.asarray(n_H, float)
-    a = _unit(np.asarray(axis_H, float))
+    a = _unit(np.asarray(retract_H, float))
     return np.asarray(p_HC, float) - depth * n + r_c * _u(n, a) + lift * a
 
 
@@ -126,7 +126,7 @@ def contact_geometry(r_contact: float | None = None, burr=None) -> tuple[float, 
     return float(r_contact), float((r_c - r_contact) / np.tan(burr.cone_half_angle))
 
 
-def X_HT_from_axis(p_HT: np.ndarray, axis_H: np.ndarray, t_H: np.ndarray,
+def X_HT_from_axis(p_HT: np.ndarray, retract_H: np.ndarray, t_H: np.ndarray,
                    spin: np.ndarray | float = 0.0) -> np.ndarray:
     """Tool poses from a position, a tool axis and a spin about it.
 
@@ -134,14 +134,14 @@ def X_HT_from_axis(p_HT: np.ndarray, axis_H: np.ndarray, t_H: np.ndarray,
     spin [rad] turns X_T about +Z_T.
 
     Args:
-        p_HT: (M, 3) [m]; axis_H: (M, 3) unit (tip -> spindle); t_H: (M, 3) feed tangents;
+        p_HT: (M, 3) [m]; retract_H: (M, 3) unit (tip -> spindle); t_H: (M, 3) feed tangents;
         spin: scalar or (M,) [rad].
 
     Returns:
         (M, 4, 4) X_HT.
     """
     p = np.atleast_2d(np.asarray(p_HT, float))
-    z = -_unit(np.atleast_2d(np.asarray(axis_H, float)))
+    z = -_unit(np.atleast_2d(np.asarray(retract_H, float)))
     t = np.atleast_2d(np.asarray(t_H, float))
     e1 = _unit(t - np.sum(t * z, axis=-1, keepdims=True) * z)
     e2 = np.cross(z, e1)

@@ -211,7 +211,7 @@ class Plan:
     run: dict = field(default_factory=dict)
 
 
-TOOL_PATH_ARRAYS = ("p_HC", "R_HL", "axis_H", "theta_A", "theta_B", "cone_axis_H")
+TOOL_PATH_ARRAYS = ("p_HC", "R_HL", "zT_H", "theta_A", "theta_B", "cone_zT_H")
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,8 +223,8 @@ class ToolPathRecord:
     Attributes:
         window_index, kind: window number and "large"/"small".
         p_HC: (M, 3) CL points in H [m]; R_HL: (M, 3, 3) local frames [N_new, T, -B].
-        axis_H: (M, 3) chosen axes +Z_T (spindle -> tip); theta_A, theta_B: (M,) [rad].
-        cone_axis_H: (M, 3) box-centre axes +Z_T; bounds: the theta box.
+        zT_H: (M, 3) chosen axes +Z_T (spindle -> tip); theta_A, theta_B: (M,) [rad].
+        cone_zT_H: (M, 3) box-centre axes +Z_T; bounds: the theta box.
         cone_half_angle / cone_outer_half_angle: inner / enclosing cone of the box [rad].
         depth_of_cut: [m].
     """
@@ -233,10 +233,10 @@ class ToolPathRecord:
     kind: str
     p_HC: np.ndarray
     R_HL: np.ndarray
-    axis_H: np.ndarray
+    zT_H: np.ndarray
     theta_A: np.ndarray
     theta_B: np.ndarray
-    cone_axis_H: np.ndarray
+    cone_zT_H: np.ndarray
     bounds: object
     cone_half_angle: float
     cone_outer_half_angle: float

@@ -91,9 +91,9 @@ def _seeds(ctx: PlanContext, wt: WindowTargets, p_HT0: np.ndarray, q_from: np.nd
     ranked from home (the previous window's end may hold the arm in a configuration from which
     this loop cannot be closed; the joint move goes anywhere)."""
     kin, opt = ctx.kin, ctx.options
-    seeds = seed_by_spin(kin, ctx.checker, p_HT0, wt.axis_H[0], wt.t_H[0], q_from, opt.ik,
+    seeds = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], q_from, opt.ik,
                          count=opt.window_attempts) or [None]
-    more = seed_by_spin(kin, ctx.checker, p_HT0, wt.axis_H[0], wt.t_H[0], kin.q_home, opt.ik,
+    more = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], kin.q_home, opt.ik,
                         count=opt.window_attempts) or []
     return list(seeds) + [q for q in more if q is not None and not _known(q, seeds)]
 
@@ -109,11 +109,11 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
     inside the joint limits: a cheap analytic pre-check)."""
     kin, opt = ctx.kin, ctx.options
     m = len(wt)
-    seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.axis_H[0], q_from)
+    seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.retract_H[0], q_from)
     wik, best_score = None, 0
     for attempt, q_first in enumerate(seeds):
-        trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.axis_H[loop],
-                                wt.cone_axis_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
+        trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
+                                wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=opt.ik,
                                 q_first=q_first, lift=lift)
         reached = np.flatnonzero(trial.ok)
@@ -151,7 +151,7 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
     # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
     loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
     # the IK ties the centre of the cutting circle (``lift`` below T on the axis) to its target
-    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.axis_H, wt.depth_of_cut, r_c, 0.0)[loop]
+    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)[loop]
     t0 = time.perf_counter()
     wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
     t_ik = time.perf_counter() - t0

@@ -31,8 +31,9 @@ class WindowTargets:
         p_HC: (M, 3) CL (edge) points [m], in loop order (closed: M-1 -> 0).
         t_H: (M, 3) unit feed tangents.
         n_H: (M, 3) unit inner normals (out of the material into the opening).
-        axis_H: (M, 3) preferred unit tool axes (tip -> spindle).
-        cone_axis_H: (M, 3) admissible cone axes; cone_half_angle: [rad].
+        retract_H: (M, 3) preferred unit tool axes, tip -> spindle (-Z_T: the way the tool
+            is pulled out of the cut; the ToolPath's ``zT_H`` is +Z_T).
+        cone_retract_H: (M, 3) admissible cone axes (tip -> spindle); cone_half_angle: [rad].
         depth_of_cut: [m].
         source: what these came from (for the plan's metadata).
         tool_path: the ToolPath they came from, if any.
@@ -45,8 +46,8 @@ class WindowTargets:
     p_HC: np.ndarray
     t_H: np.ndarray
     n_H: np.ndarray
-    axis_H: np.ndarray
-    cone_axis_H: np.ndarray
+    retract_H: np.ndarray
+    cone_retract_H: np.ndarray
     cone_half_angle: float
     depth_of_cut: float
     source: str = ""
@@ -58,7 +59,7 @@ class WindowTargets:
 
     def __post_init__(self) -> None:
         m = len(self.p_HC)
-        for name in ("p_HC", "t_H", "n_H", "axis_H", "cone_axis_H"):
+        for name in ("p_HC", "t_H", "n_H", "retract_H", "cone_retract_H"):
             arr = np.asarray(getattr(self, name), float)
             if arr.shape != (m, 3) or not np.all(np.isfinite(arr)):
                 raise InputError(f"window {self.window_index}: {name} must be finite ({m}, 3), "
@@ -70,7 +71,8 @@ class WindowTargets:
                              f"rad, got {self.cone_half_angle}")
         # the tool must come from the visible side: the axis points out of the material
         # (toward the spindle), i.e. away from the side wall's material and up from the face
-        bad = np.flatnonzero(np.sum(self.axis_H * self.cone_axis_H, axis=1) < np.cos(np.pi / 3))
+        bad = np.flatnonzero(np.sum(self.retract_H * self.cone_retract_H, axis=1)
+                             < np.cos(np.pi / 3))
         if bad.size:
             raise InputError(f"window {self.window_index}: preferred axis more than 60 deg from "
                              f"the cone axis at CL point {int(bad[0])}")
@@ -79,7 +81,8 @@ class WindowTargets:
         """The open stretch of CL points ``start..stop-1`` (for partial plans and tests)."""
         sl = slice(start, stop)
         return replace(self, p_HC=self.p_HC[sl], t_H=self.t_H[sl], n_H=self.n_H[sl],
-                       axis_H=self.axis_H[sl], cone_axis_H=self.cone_axis_H[sl], closed=False,
+                       retract_H=self.retract_H[sl], cone_retract_H=self.cone_retract_H[sl],
+                       closed=False,
                        source=f"{self.source} [CL {start}..{stop - 1}]")
 
     @classmethod
@@ -88,8 +91,8 @@ class WindowTargets:
         """From the orientation stage's ToolPath (``drakedeburr.orientation.ToolPath``).
 
         Args:
-            tool_path: has ``window_index, kind, p_HC, R_HL, axis_H, cone_axis_H,
-                cone_half_angle, depth_of_cut``; ``axis_H``/``cone_axis_H`` are +Z_T
+            tool_path: has ``window_index, kind, p_HC, R_HL, zT_H, cone_zT_H,
+                cone_half_angle, depth_of_cut``; ``zT_H``/``cone_zT_H`` are +Z_T
                 (spindle -> tip, the ToolPath convention) and are flipped here.
             face_normal_H: (3,) outward normal of the visible face (default +Z_H): the tool
                 axes must point to that side (the burr comes from the front).
@@ -105,9 +108,9 @@ class WindowTargets:
         tp = tool_path
         face = (np.array([0.0, 0.0, 1.0]) if face_normal_H is None
                 else _unit(np.asarray(face_normal_H, float)))
-        # the ToolPath's axis_H / cone_axis_H are +Z_T (spindle -> tip); ours point tip -> spindle
-        axis = -_unit(np.asarray(tp.axis_H, float))
-        cone = -_unit(np.asarray(tp.cone_axis_H, float))
+        # the ToolPath's zT_H / cone_zT_H are +Z_T (spindle -> tip); ours point tip -> spindle
+        axis = -_unit(np.asarray(tp.zT_H, float))
+        cone = -_unit(np.asarray(tp.cone_zT_H, float))
         if cone_mapping not in ("outer", "inner"):
             raise InputError(f"cone_mapping must be 'outer' or 'inner', got {cone_mapping!r}")
         half = float(tp.cone_outer_half_angle if cone_mapping == "outer" else tp.cone_half_angle)
@@ -119,7 +122,7 @@ class WindowTargets:
                              f"{face.tolist()})")
         return cls(window_index=int(tp.window_index), kind=str(tp.kind),
                    p_HC=np.asarray(tp.p_HC, float), t_H=_unit(np.asarray(tp.R_HL)[:, :, 1]),
-                   n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), axis_H=axis, cone_axis_H=cone,
+                   n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), retract_H=axis, cone_retract_H=cone,
                    cone_half_angle=half, depth_of_cut=float(tp.depth_of_cut),
                    source=f"ToolPath ({getattr(tp, 'model', '')}/{getattr(tp, 'solver', '')})",
                    tool_path=tp)
@@ -165,6 +168,6 @@ class WindowTargets:
         axis = _unit(np.cos(th) * n_face + np.sin(th) * n_perp)
         depth = params.depth_of_cut_large if edge.kind == "large" else params.depth_of_cut_small
         return cls(window_index=int(edge.index), kind=str(edge.kind), p_HC=p_HC, t_H=t,
-                   n_H=n_wall, axis_H=axis, cone_axis_H=axis.copy(),
+                   n_H=n_wall, retract_H=axis, cone_retract_H=axis.copy(),
                    cone_half_angle=float(cone_half_angle), depth_of_cut=float(depth),
                    source=f"window edge, fixed tilt {th:.3f} rad")

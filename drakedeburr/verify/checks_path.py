@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from drakedeburr.frames.local_frames import angles_from_axis_H
+from drakedeburr.frames.local_frames import angles_from_zT_H
 from drakedeburr.verify.geometry import point_segment
 from drakedeburr.verify.report import CheckItem
 
@@ -165,7 +165,7 @@ def theta_statistics(sp, cfg) -> CheckItem:
         if not ks:
             continue
         cl = np.array([ref.cl_of[k] for k in ks])
-        tA, tB = angles_from_axis_H(ref.R_HL[cl], sp.X_HT_targets[ks, :3, 2])
+        tA, tB = angles_from_zT_H(ref.R_HL[cl], sp.X_HT_targets[ks, :3, 2])
         tp = ref.tool_path
         diff = None
         if tp is not None:

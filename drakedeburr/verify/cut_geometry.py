@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from drakedeburr.frames.local_frames import angles_from_axis_H
+from drakedeburr.frames.local_frames import angles_from_zT_H
+from drakedeburr.frames.vectors import angle_between
 from drakedeburr.verify.geometry import closed_polyline_distance, lerp_frames, point_segment
 from drakedeburr.verify.refs import cone_half_angle
 
@@ -64,10 +65,10 @@ def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
     """Margin of the executed +Z_T to the IK's cone about the interpolated cone axis [rad] and
     the window's cone figures (the theta box stands in when the plan has no cone axes)."""
     tp = ref.tool_path
-    if tp is None or getattr(tp, "cone_axis_H", None) is None:
+    if tp is None or getattr(tp, "cone_zT_H", None) is None:
         return box_margin, {"cone": "no cone axes in the plan: the theta box is checked"}
     half = cone_half_angle(plan, w, tp)
-    c_H = np.asarray(tp.cone_axis_H, float)
+    c_H = np.asarray(tp.cone_zT_H, float)
     c0 = (1 - a["g0"])[:, None] * c_H[a["ca0"]] + a["g0"][:, None] * c_H[a["cb0"]]
     c1 = (1 - a["g1"])[:, None] * c_H[a["ca1"]] + a["g1"][:, None] * c_H[a["cb1"]]
     c0 /= np.linalg.norm(c0, axis=1, keepdims=True)
@@ -75,7 +76,7 @@ def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
     f = a["f"]
     c = (1 - f)[:, None] * c0 + f[:, None] * c1
     c /= np.linalg.norm(c, axis=1, keepdims=True)
-    ang = np.arccos(np.clip(np.sum(c * z_T, axis=1), -1.0, 1.0))
+    ang = angle_between(c, z_T)
     return half - ang, {"cone_half_angle": half, "max_angle_to_cone_axis": float(ang.max())}
 
 
@@ -100,7 +101,7 @@ def _window(plan, samples, program, ref, edge: np.ndarray, idx: np.ndarray, out:
     # theta box: executed axis in the interpolated local frame (the source's bounds)
     R_loc = lerp_frames(lerp_frames(ref.R_HL[a["ca0"]], ref.R_HL[a["cb0"]], a["g0"]),
                         lerp_frames(ref.R_HL[a["ca1"]], ref.R_HL[a["cb1"]], a["g1"]), a["f"])
-    tA, tB = angles_from_axis_H(R_loc, X[:, :3, 2])  # the executed +Z_T
+    tA, tB = angles_from_zT_H(R_loc, X[:, :3, 2])  # the executed +Z_T
     out["theta_A"][idx], out["theta_B"][idx] = tA, tB
     lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
     box = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])

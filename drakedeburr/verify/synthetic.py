@@ -34,7 +34,7 @@ import numpy as np
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.frames.local_frames import (
     R_HL_from_normals,
-    angles_from_axis_H,
+    angles_from_zT_H,
     axis_from_angles,
 )
 from drakedeburr.plan.types import CartesianTarget, JointTrajectory, Plan, PlanSegment
@@ -236,7 +236,7 @@ class ReferenceOptions:
     spin_direction_H: tuple[float, float, float] = (1.0, 0.0, 0.0)
     contact_radius: float = 1.5e-3
     bounds: OrientationBounds | None = None
-    fixed_axis_H: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fixed_retract_H: tuple[float, float, float] = (0.0, 0.0, 1.0)
     box_margin: float = 0.05
     axis_tilt: dict[int, float] | None = None
 
@@ -323,7 +323,7 @@ class _Builder:
 
 
 def _window_axes(w: int, edge, R_HL: np.ndarray, params, opt: ReferenceOptions):
-    """-> (up_H (M, 3) tip -> spindle, theta_A, theta_B, box, cone axis +Z_T, inner, outer)."""
+    """-> (retract_H (M, 3) tip -> spindle, theta_A, theta_B, box, cone axis +Z_T, inner, outer)."""
     from drakedeburr.orientation.orient import cone_half_angles
 
     m = len(R_HL)
@@ -331,29 +331,29 @@ def _window_axes(w: int, edge, R_HL: np.ndarray, params, opt: ReferenceOptions):
         # the source's way: fixed angles in the local frame (the axis swings with it)
         box = opt.bounds or params.bounds(edge.kind)
         a, b = opt.theta[w]
-        up_H = -(R_HL @ axis_from_angles(a, b))
+        retract_H = -(R_HL @ axis_from_angles(a, b))
         th_A, th_B = np.full(m, a), np.full(m, b)
     else:
         # one fixed axis per window: no swing, so the joints stay slow at any feed
-        up_H = np.tile(np.asarray(opt.fixed_axis_H, float) / np.linalg.norm(opt.fixed_axis_H),
-                       (m, 1))
-        th_A, th_B = angles_from_axis_H(R_HL, -up_H)
+        fixed = np.asarray(opt.fixed_retract_H, float)
+        retract_H = np.tile(fixed / np.linalg.norm(fixed), (m, 1))
+        th_A, th_B = angles_from_zT_H(R_HL, -retract_H)
         box = opt.bounds or OrientationBounds(
             float(min(th_A.min(), th_B.min())) - opt.box_margin,
             float(max(th_A.max(), th_B.max())) + opt.box_margin)
     mid = 0.5 * (box.theta_min + box.theta_max)
-    cone_axis_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
+    cone_zT_H = R_HL @ axis_from_angles(mid, mid)  # +Z_T, the ToolPath convention
     inner, outer = cone_half_angles(box)
     if not (opt.theta is not None and w in opt.theta):
         # the reference plan's admissible cone: 0.1 rad about its fixed axis
-        cone_axis_H = -up_H.copy()
+        cone_zT_H = -retract_H.copy()
         inner = outer = 0.1
         tilt = (opt.axis_tilt or {}).get(w, 0.0)
         if tilt:
             from scipy.spatial.transform import Rotation
 
-            up_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(up_H)
-    return up_H, th_A, th_B, box, cone_axis_H, inner, outer
+            retract_H = Rotation.from_rotvec([0.0, tilt, 0.0]).apply(retract_H)
+    return retract_H, th_A, th_B, box, cone_zT_H, inner, outer
 
 
 def _window_tool_path(w: int, edge, idx: np.ndarray, X_WH, params, opt: ReferenceOptions):
@@ -367,7 +367,7 @@ def _window_tool_path(w: int, edge, idx: np.ndarray, X_WH, params, opt: Referenc
     t_H = edge.t_H[idx] / np.linalg.norm(edge.t_H[idx], axis=1, keepdims=True)
     # the project's local frames and angle convention (drakedeburr.frames.local_frames)
     R_HL = R_HL_from_normals(t_H, edge.n_wall_H[idx], name=f"window {w}")
-    up_H, th_A, th_B, box, cone_axis_H, inner, outer = _window_axes(w, edge, R_HL, params, opt)
+    retract_H, th_A, th_B, box, cone_zT_H, inner, outer = _window_axes(w, edge, R_HL, params, opt)
     seg = np.linalg.norm(np.diff(np.vstack([edge.p_HE, edge.p_HE[:1]]), axis=0), axis=1)
     arc_all = np.concatenate([[0.0], np.cumsum(seg)])
     total = float(arc_all[-1])
@@ -376,8 +376,8 @@ def _window_tool_path(w: int, edge, idx: np.ndarray, X_WH, params, opt: Referenc
                 arc_length=arc_all[idx], total_length=total, metrics={})
     return ToolPath(
         window_index=w, kind=edge.kind, cl_path=cl, X_WH=RigidTransform(X_WH), p_HC=p_HC,
-        R_HL=R_HL, axis_H=-up_H, theta_A=th_A, theta_B=th_B,
-        bounds=box, cone_axis_H=cone_axis_H, cone_half_angle=inner,
+        R_HL=R_HL, zT_H=-retract_H, theta_A=th_A, theta_B=th_B,
+        bounds=box, cone_zT_H=cone_zT_H, cone_half_angle=inner,
         cone_outer_half_angle=outer, depth_of_cut=params.depth_of_cut(edge.kind),
         model="reference", solver="none", objective=0.0, success=True, solve_seconds=0.0,
         stats={}, message="reference plan (fixed angles)")
@@ -389,7 +389,7 @@ def _window_poses(tp, opt: ReferenceOptions) -> tuple[np.ndarray, np.ndarray]:
     ``opt.contact_radius`` (T sits on the axis at that circle's height)."""
     from drakedeburr.cell.tools import BURR
 
-    z_T, N, p_HC = tp.axis_H, tp.R_HL[:, :, 0], tp.p_HC
+    z_T, N, p_HC = tp.zT_H, tp.R_HL[:, :, 0], tp.p_HC
     m = len(p_HC)
     X_HT = np.tile(np.eye(4), (m, 1, 1))
     x = np.asarray(opt.spin_direction_H, float).copy()
@@ -413,7 +413,7 @@ def _window_poses(tp, opt: ReferenceOptions) -> tuple[np.ndarray, np.ndarray]:
 def _add_window(b: _Builder, w: int, tp, X_HT: np.ndarray, X_close: np.ndarray) -> None:
     """Transition, approach, the closed cut and the retract of one window."""
     params, retract = b.params, b.opt.retract
-    up = -tp.axis_H[0]
+    up = -tp.zT_H[0]
     X_up = X_HT[0].copy()
     X_up[:3, 3] += retract * up
     X_end_up = X_close.copy()
@@ -459,7 +459,7 @@ def reference_plan(
             theta: optional {window: (theta_A, theta_B)} [rad]: that window's axis at these
                 fixed angles in the local frame (the source's way; the axis then swings with
                 the frame at every fillet, which at 150 mm/s exceeds the wrist's limits: see
-                docs/verify.md). Other windows use ``fixed_axis_H``.
+                docs/verify.md). Other windows use ``fixed_retract_H``.
             cl_chord_height: chord-height error of the CL points [m].
             retract: approach/retract distance along the tool axis [m].
             sample_step: tool travel between trajectory knots on linear moves [m].
@@ -471,7 +471,7 @@ def reference_plan(
             bounds: (theta_A, theta_B) box written into every ToolPath (default: for ``theta``
                 windows the kind's bounds from ``params``; otherwise the range the fixed axis
                 spans, widened by ``box_margin`` [rad]).
-            fixed_axis_H: tool axis (tip -> spindle) in H of the fixed-axis windows.
+            fixed_retract_H: tool axis (tip -> spindle) in H of the fixed-axis windows.
             axis_tilt: {window: angle [rad]}: tilt that window's axis about +Y_H *after* its
                 box is set (a plan that must fail the cone check).
         progress: optional callback (done, total, label).

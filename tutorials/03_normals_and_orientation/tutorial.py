@@ -102,7 +102,7 @@ def main() -> None:
         ax = axes[row, 1]
         for t, c in ((tp, "r"), (tp_paper, "b")):
             turn = np.degrees(np.arccos(np.clip(np.einsum(
-                "ij,ij->i", t.axis_H, np.roll(t.axis_H, -1, axis=0)), -1, 1)))
+                "ij,ij->i", t.zT_H, np.roll(t.zT_H, -1, axis=0)), -1, 1)))
             ds = np.linalg.norm(np.roll(cl.p_HC, -1, axis=0) - cl.p_HC, axis=1) * 1e3
             ax.plot(s_mm, turn / ds, c, label=f"{t.model}/{t.solver}")
         ax.set(xlabel="arc length [mm]", ylabel="tool-axis turn [deg/mm]",
@@ -128,10 +128,10 @@ def main() -> None:
                                 2.0, Rgba(0.1, 0.7, 0.1, 1))
         # tool axes drawn from the tip back toward the spindle (-Z_T) so they stand over the edge
         meshcat.SetLineSegments(f"window{edge.index}/axis_model", p,
-                                p - 2 * L * tp.axis_H[::step].T,
+                                p - 2 * L * tp.zT_H[::step].T,
                                 2.0, Rgba(0.9, 0.1, 0.1, 1))
         meshcat.SetLineSegments(f"window{edge.index}/paper_model", p,
-                                p - 2 * L * tp_paper.axis_H[::step].T, 1.0,
+                                p - 2 * L * tp_paper.zT_H[::step].T, 1.0,
                                 Rgba(0.1, 0.2, 0.9, 1))
         meshcat.SetLine(f"window{edge.index}/edge", np.c_[cl.p_HC.T, cl.p_HC[:1].T], 2.0,
                         Rgba(0, 0, 0, 1))

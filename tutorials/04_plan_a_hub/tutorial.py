@@ -69,7 +69,7 @@ def main() -> None:
     # 2. tool point for a CL point --------------------------------------------------------------
     w0 = windows[0]
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
-    p_HT = tool_point_H(w0.p_HC[:1], w0.n_H[:1], w0.axis_H[:1], w0.depth_of_cut, r_c, lift)
+    p_HT = tool_point_H(w0.p_HC[:1], w0.n_H[:1], w0.retract_H[:1], w0.depth_of_cut, r_c, lift)
     offset = p_HT[0] - w0.p_HC[0]
     print(f"tool point offset from CL 0: {np.round(offset * 1e3, 3)} mm (cutting circle radius "
           f"{r_c * 1e3:.2f} mm, T lifted {lift * 1e3:.2f} mm along the axis; along the inner "
