@@ -124,20 +124,30 @@ def slowdowns_justified(sp, cfg) -> CheckItem:
                "plan slows for no reason the robot imposes" + where)
 
 
-def _programmed_speed(sp) -> np.ndarray:
+def _programmed_speed(sp, step: float) -> np.ndarray:
     """(N,) the programmed speed each sample runs under [m/s]: its linear move's (the target
-    the move ends at), else the fastest target speed of its segment (joint moves)."""
+    the move ends at), else the fastest target speed of its segment (joint moves). Which move
+    a sample lies on is read to the sampling ``step``: within it of a move's start or end
+    target, the neighbouring move's speed counts too (a controller changes speed there)."""
     s, targets = sp.samples, sp.targets
     seg_speed = np.array([max([targets[k].speed for k in range(*g.target_range)
                                if k < len(targets)] or [np.inf]) for g in sp.segments])
     move = sp.program.move
     speeds = np.array([t.speed for t in targets])
-    return np.where(move >= 0, speeds[np.maximum(move, 0)], seg_speed[s.segment])
+    P = np.array([t.X_HT[:3, 3] for t in targets])
+    k = np.maximum(move, 0)
+    v = speeds[k]
+    near_start = np.linalg.norm(s.p_HT - P[np.maximum(k - 1, 0)], axis=1) <= step
+    near_end = np.linalg.norm(s.p_HT - P[k], axis=1) <= step
+    v = np.where(near_start & (k >= 1), np.maximum(v, speeds[np.maximum(k - 1, 0)]), v)
+    nxt = np.minimum(k + 1, len(targets) - 1)
+    v = np.where(near_end, np.maximum(v, speeds[nxt]), v)
+    return np.where(move >= 0, v, seg_speed[s.segment])
 
 
 def tcp_speed_max(sp, cfg) -> CheckItem:
     s, tol = sp.samples, cfg.tolerances
-    v_lim = (1 + tol.speed_band) * _programmed_speed(sp)
+    v_lim = (1 + tol.speed_band) * _programmed_speed(sp, tol.dense_step)
     ratio = s.speed / v_lim
     i = int(np.argmax(ratio))
     return CheckItem(
@@ -153,7 +163,7 @@ def program_speeds(sp, cfg) -> CheckItem:
     s, tol, targets = sp.samples, cfg.tolerances, sp.targets
     move = sp.program.move
     cut = (s.kind == KIND_CODE["cut"]) & (move >= 0)
-    worst, worst_k, n_moves = 1.0, None, 0
+    worst, worst_k, n_moves = np.inf, None, 0
     for k in np.unique(move[cut]):
         on = np.flatnonzero(cut & (move == k))
         # the move from its start target to its end target: its samples and the ones just
@@ -174,8 +184,8 @@ def program_speeds(sp, cfg) -> CheckItem:
     if worst_k is not None:
         detail += (f"; least at target {worst_k}: programmed "
                    f"{targets[worst_k].speed * 1e3:.0f} mm/s")
-    return CheckItem("program_speeds", worst >= 1.0, worst, 1.0, "ratio", ">=", detail=detail,
-                     **where)
+    return CheckItem("program_speeds", worst >= 1.0, None if worst_k is None else worst, 1.0,
+                     "ratio", ">=", detail=detail, **where)
 
 
 def j4_j6_range(sp, cfg) -> CheckItem:
