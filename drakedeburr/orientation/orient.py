@@ -155,7 +155,7 @@ def orient_window(
     stats = angle_statistics(th[:, 0], th[:, 1], cl.p_HC, zT_H)
     stats["solver_info"] = {**rep.info, "iterations": rep.iterations}
     depth = params.depth_of_cut_large if cl.kind == "large" else params.depth_of_cut_small
-    log.info("window %d: %s/%s objective %.6g in %.1f ms (%s)", cl.window_index, model, solver,
+    log.debug("window %d: %s/%s objective %.6g in %.1f ms (%s)", cl.window_index, model, solver,
              rep.objective, 1e3 * rep.solve_seconds, rep.message)
     return ToolPath(
         window_index=cl.window_index, kind=cl.kind, cl_path=cl,
