@@ -7,12 +7,21 @@ from drakedeburr.post.calibration import (
     fit_touch_points,
     scale_about,
 )
-from drakedeburr.post.cl_post import PostResult, pose_from_mm_deg, program_from_cl
+from drakedeburr.post.cl_post import (
+    PostResult,
+    PostSettings,
+    PostSummary,
+    pose_from_mm_deg,
+    post_cl_file,
+    program_from_cl,
+)
 from drakedeburr.post.cl_reader import (
     ClMove,
     ClParseError,
     ClProgram,
+    ClToolPath,
     ClWarning,
+    ClWordCount,
     iter_cl_moves,
     parse_cl_text,
     read_cl,
@@ -53,8 +62,10 @@ from drakedeburr.post.writers import format_krl, format_ls, format_rapid, write_
 
 __all__ = [
     "CalibrationFit", "calibrated_pose", "fit_touch_points", "scale_about",
-    "PostResult", "pose_from_mm_deg", "program_from_cl",
-    "ClMove", "ClParseError", "ClProgram", "ClWarning", "iter_cl_moves", "parse_cl_text",
+    "PostResult", "PostSettings", "PostSummary", "pose_from_mm_deg", "post_cl_file",
+    "program_from_cl",
+    "ClMove", "ClParseError", "ClProgram", "ClToolPath", "ClWarning", "ClWordCount",
+    "iter_cl_moves", "parse_cl_text",
     "read_cl",
     "abb_confdata", "configuration_of", "fanuc_config", "joints_from_configuration",
     "kuka_status_turn",
