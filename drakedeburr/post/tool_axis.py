@@ -138,6 +138,7 @@ class _Problem:
     lo: np.ndarray
     hi: np.ndarray
     wraps: np.ndarray  # (6,) bool, joint range > 2 pi: compared modulo 2 pi
+    period: np.ndarray  # (6,) 2 pi where wraps, inf elsewhere
     w_edge: np.ndarray  # (6,) travel weights of one step
     w_node6: float  # weight of |J6| at each point (theta6_zero)
 
@@ -160,12 +161,12 @@ class _Problem:
     def dist(self, qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
         """Weighted joint travel between broadcastable (..., 6) arrays (wrap-aware) [m]."""
         d = np.abs(qa - qb)
-        dw = d[..., self.wraps]
-        d[..., self.wraps] = np.minimum(dw, _TWO_PI - dw)
+        np.minimum(d, self.period - d, out=d)  # period inf for joints that do not wrap
         return d @ self.w_edge
 
-    def node(self, q: np.ndarray) -> np.ndarray:
-        return self.w_node6 * np.abs(q[..., 5]) if self.w_node6 else np.zeros(q.shape[:-1])
+    def node(self, q: np.ndarray) -> np.ndarray | float:
+        """Cost of the joints themselves: w * |J6| (theta6_zero), else 0."""
+        return self.w_node6 * np.abs(q[..., 5]) if self.w_node6 else 0.0
 
 
 def _flange_axis_tool(X_FT: np.ndarray, tol: float = 1e-9) -> bool:
@@ -186,7 +187,9 @@ def _single_branch_path(prob: _Problem, Q: np.ndarray, OK: np.ndarray, q0: np.nd
     whole = OK[rows].all(0)
     if not whole.any():
         return None
-    cost = prob.dist(q0, Qr[0]) + prob.node(Qr).sum(0) + prob.dist(Qr[1:], Qr[:-1]).sum(0)
+    node = prob.node(Qr)
+    cost = (prob.dist(q0, Qr[0]) + (node.sum(0) if np.ndim(node) else 0.0)
+            + prob.dist(Qr[1:], Qr[:-1]).sum(0))
     if b0 >= 0:
         cost = cost + _BRANCH_CHANGE_COST * (np.arange(Q.shape[1]) != b0)
     cost = np.where(whole, cost, np.inf)
@@ -195,6 +198,35 @@ def _single_branch_path(prob: _Problem, Q: np.ndarray, OK: np.ndarray, q0: np.nd
         return None
     choice = np.full(Q.shape[0], -1)
     choice[rows] = b
+    return choice
+
+
+def _dp_one_branch(prob: _Problem, Q: np.ndarray, OK: np.ndarray, q0: np.ndarray
+                   ) -> np.ndarray:
+    """:func:`_dp` for one branch: Q (L, M, 6), OK (L, M); returns (L,) state, -1 where none."""
+    L, M, _ = Q.shape
+    back = np.full((L, M), -1, np.int64)
+    stepped = OK.any(1)
+    cols = np.arange(M)
+    acc = qp = None
+    for i in np.flatnonzero(stepped):
+        qc = Q[i]
+        if acc is None:
+            new = prob.dist(q0, qc) + prob.node(qc)
+        else:
+            tot = acc[:, None] + prob.dist(qp[:, None, :], qc[None, :, :])
+            src = tot.argmin(0)
+            back[i] = src
+            new = tot[src, cols] + prob.node(qc)
+        acc = np.where(OK[i], new, np.inf)
+        qp = qc
+    choice = np.full(L, -1)
+    if acc is None:
+        return choice
+    k = int(acc.argmin())
+    for i in np.flatnonzero(stepped)[::-1]:
+        choice[i] = k
+        k = int(back[i, k])
     return choice
 
 
@@ -208,6 +240,8 @@ def _dp(prob: _Problem, Q: np.ndarray, OK: np.ndarray, q0: np.ndarray, b0: int) 
         fast = _single_branch_path(prob, Q[:, :, 0], OK[:, :, 0], q0, b0)
         if fast is not None:
             return fast
+    if B == 1:
+        return _dp_one_branch(prob, Q[:, 0], OK[:, 0], q0)
     back = np.full((L, B, M), -1, np.int64)
     stepped = np.zeros(L, bool)
     branch_ids = np.arange(B)[:, None]
@@ -407,11 +441,13 @@ def _problem(robot: RobotKinematics, p_W, axis_W, X_FT, mode: str, x_ref_W) -> _
         raise InputError(f"p_W {p_W.shape} and axis_W {axis_W.shape} must both be (N, 3)")
     lo, hi = np.asarray(robot.limits.lower, float), np.asarray(robot.limits.upper, float)
     w = travel_weights(robot.opw)
+    wraps = (hi - lo) > _TWO_PI + 1e-9
     theta6 = mode == "theta6_zero"
     return _Problem(robot=robot, p_W=p_W, axis_W=axis_W,
                     X_TF=np.linalg.inv(np.asarray(X_FT, float)),
                     x_ref_W=np.asarray(x_ref_W, float), mode=mode, lo=lo, hi=hi,
-                    wraps=(hi - lo) > _TWO_PI + 1e-9, w_edge=w * (1e-3 if theta6 else 1.0),
+                    wraps=wraps, period=np.where(wraps, _TWO_PI, np.inf),
+                    w_edge=w * (1e-3 if theta6 else 1.0),
                     w_node6=_THETA6_WEIGHT if theta6 else 0.0)
 
 
