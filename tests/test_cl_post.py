@@ -251,3 +251,21 @@ def test_cli_interrupt_exit_130(extdata, tmp_path, monkeypatch):
     assert main(["post", str(extdata / "cl_files" / CREO), "--format", "rapid",
                  "-o", str(out)]) == 130
     assert out.read_text() == "previous"
+
+
+def test_post_cl_file_reports_progress_and_never_prints(extdata, tmp_path, capsys):
+    calls = []
+    summary = mut.post_cl_file(
+        extdata / "cl_files" / CREO, tmp_path / "p.ls", "ls", "p",
+        mut.PostSettings(X_WO=mut.pose_from_mm_deg(WOBJ)), max_moves=60,
+        progress=lambda done, total, label: calls.append((label, done, total)))
+    assert [f.name for f in summary.files] == ["p_001.ls", "p_002.ls", "p_003.ls"]
+    assert summary.n_moves == len(summary.cl) == 172
+    labels = [c[0] for c in calls]
+    assert labels.index("read CL") < labels.index("spin + IK") < labels.index("write")
+    for label in ("read CL", "spin + IK", "write"):
+        last = [c for c in calls if c[0] == label][-1]
+        assert last[1] == last[2]  # each phase reports its end
+    assert [c[1:] for c in calls if c[0] == "write"] == [(1, 3), (2, 3), (3, 3)]
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == ""
