@@ -124,6 +124,7 @@ def test_chip_break_bore_and_tilted_axis():
     ("CYCLE/DRILL,DEPTH,5,SPEED,3", "SPEED", "unknown CYCLE parameter"),
     ("CYCLE/DRILL,1,2,3,4", "3", "left over"),
     ("CYCLE/DRILL,DEPTH,-2", "-2", "must be > 0"),
+    ("CYCLE/DEEP,DEPTH,1e8,STEP,1e-3", "0.001", "more than 10000 pecks"),
     ("CYCLE/ON", "ON", "before any cycle"),
     ("CYCLE/FOO,1", "FOO", "unknown drilling cycle"),
     ("CYCLE83(10,0,2,-5)", "CYCLE83", "NC drilling cycle"),

@@ -60,6 +60,7 @@ _REFUSED = {
 _VALUE_WORDS = ("DEPTH", "FEDTO", "STEP", "INCR", "CLEAR", "RAPTO", "RTRCTO", "RETURN",
                 "DWELL")
 _EPS = 1e-9  # [m] positions closer than this are the same point
+_MAX_PECKS = 10_000  # more pecks per hole than this is a data error (DEPTH / STEP)
 
 
 @dataclass(frozen=True)
@@ -217,6 +218,8 @@ def parse_cycle(
         fail(f"{depth:g}", f"CYCLE/{kind}: the depth must be > 0")
     if deep and not step > 0:
         fail(kind, f"CYCLE/{kind} needs a peck depth STEP (or INCR) > 0")
+    if deep and depth / step > _MAX_PECKS:
+        fail(f"{step:g}", f"CYCLE/{kind}: {depth:g} / {step:g} is more than {_MAX_PECKS} pecks")
     if float(rapto) < 0:
         fail(f"{rapto:g}", f"CYCLE/{kind}: the clearance (RAPTO/CLEAR) must be >= 0")
     if retract is not None and retract < float(rapto):
