@@ -92,25 +92,27 @@ def load_baseline() -> types.SimpleNamespace | None:
                                  solve_tool_axis_path=mods["tool_axis"].solve_tool_axis_path)
 
 
-def tool(tilt_deg: float) -> np.ndarray:
+def tool(tilt_deg: float, z: float = 0.2) -> np.ndarray:
+    """Tool in the flange: tilted about Y (TCP then 50 mm off the axis), ``z`` out [m]."""
     X = np.eye(4)
     X[:3, :3] = Rotation.from_euler("Y", tilt_deg, degrees=True).as_matrix()
-    X[:3, 3] = [0.05 if tilt_deg else 0.0, 0.0, 0.15 if tilt_deg else 0.2]
+    X[:3, 3] = [0.05 if tilt_deg else 0.0, 0.0, z]
     return X
 
 
 def timed_post(impl, path: Path, X_FT: np.ndarray, out: Path | None) -> dict[str, float]:
     """Seconds for read, spin + IK + program, write (RAPID) with one implementation."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     cl = impl.read_cl(path)
     t1 = time.perf_counter()
     res = impl.program_from_cl(cl, "bench", X_WO=pose_from_mm_deg(WOBJ), X_FT=X_FT)
-    t2 = time.perf_counter()
+    t2, c2 = time.perf_counter(), time.process_time()
     if out is not None and res.program is not None:
         write_program(res.program, out, "rapid")
     t3 = time.perf_counter()
     assert res.program is not None, "benchmark path must be reachable"
-    return {"read": t1 - t0, "post": t2 - t1, "write": t3 - t2, "moves": len(res.program.moves)}
+    return {"read": t1 - t0, "post": t2 - t1, "write": t3 - t2, "cpu": c2 - c0,
+            "moves": len(res.program.moves)}
 
 
 def child(mode: str, cl_file: str, out: str) -> None:
@@ -155,7 +157,8 @@ def cam_rows(tmp: Path, quick: bool, base) -> list[tuple[str, str, str, str]]:
         p = path10 if label.startswith("10000") else path
         ours = timed_post(new, p, X_FT, tmp / "new.mod" if write else None)
         ours_s = ours["read"] + ours["post"]
-        text = f"{ours_s:.2f} s (read {ours['read']:.2f} + spin/IK/program {ours['post']:.2f})"
+        text = (f"{ours_s:.2f} s (read {ours['read']:.2f} + spin/IK/program "
+                f"{ours['post']:.2f}; CPU {ours['cpu']:.2f} s)")
         if base is not None:
             old = timed_post(base, p, X_FT, None)
             old_s = old["read"] + old["post"]
@@ -269,7 +272,8 @@ def micro_rows(ext: Path, quick: bool, base) -> list[tuple[str, str, str, str]]:
     # the reader applies the file's MSYS (3, 3, 0) inch; placed as before it
     p_W = prog.p_C[:n_pts] - np.array([3.0, 3.0, 0.0]) * 0.0254 + np.array([0.75, 0.0, 0.25])
     axis = prog.axis_C[:n_pts]
-    for label, X_FT in (("straight tool", tool(0.0)), ("tool tilted 30 deg", tool(30.0))):
+    for label, X_FT in (("straight tool", tool(0.0, 0.15)),
+                        ("tool tilted 30 deg", tool(30.0, 0.15))):
         res = {}
         for mode in ("min_travel", "greedy", "theta6_zero"):
             t = time.perf_counter()
