@@ -239,7 +239,6 @@ class ClInterpreter:
         o = o * self.scale
         identity = np.allclose(R, np.eye(3), atol=1e-12) and not np.any(o)
         self.msys = None if identity else (R, o)
-        self._path(line)
 
     def _units(self, line: int, word: str, args: list[str]) -> None:
         u = word if word in ("INCHES", "MM") else (args[0].upper() if args else "")
