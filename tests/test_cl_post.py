@@ -160,7 +160,7 @@ def test_creo_drilling_program(extdata):
     assert res.ok and len(prog.moves) == len(cl) == 26
     for i, m in enumerate(prog.moves):
         if cl.cycle[i]:
-            assert m.move_type == "linear"
+            assert m.move_type == "linear" and m.zone == 0.0  # every depth reached exactly
             assert m.speed == pytest.approx(50e-3 / 60 if not cl.rapid[i] else prog.moves[0].speed)
         else:
             assert m.move_type == ("joint" if cl.rapid[i] else "linear")

@@ -173,7 +173,8 @@ def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: 
         moves.append(ProgramMove(
             X_WT=res.X_WT[i], q=res.q[i],
             move_type=JOINT if rapid and not cl.cycle[i] else LINEAR,
-            speed=rapid_speed if rapid else v, zone=0.0 if last or rapid else s.zone,
+            speed=rapid_speed if rapid else v,
+            zone=0.0 if last or rapid or cl.cycle[i] else s.zone,  # holes: to full depth
             comment=comment, source_line=line))
     return moves
 
