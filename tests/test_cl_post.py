@@ -98,7 +98,7 @@ NX_WOBJ = [800.0, 0.0, 100.0, 0.0, 0.0, -90.0]
 
 @pytest.fixture(scope="module")
 def fifteen(extdata, tmp_path_factory):
-    from tests.cl_support import nx_multipath
+    from cl_support import nx_multipath
 
     return nx_multipath(extdata, tmp_path_factory.mktemp("nx") / "fifteen.cls", n_paths=15)
 
@@ -106,7 +106,7 @@ def fifteen(extdata, tmp_path_factory):
 def test_fifteen_paths_every_goto_in_the_program(fifteen):
     """At least one move per GOTO of all 15 paths, in file order, each path named, every
     GOTO's move on its MCS point (plain scan of the file, independent of the reader)."""
-    from tests.cl_support import msys_point_inch, scan_nx_paths
+    from cl_support import msys_point_inch, scan_nx_paths
 
     scan = scan_nx_paths(fifteen)
     cl = read_cl(fifteen, units="inch")
@@ -135,7 +135,7 @@ def test_fifteen_paths_every_goto_in_the_program(fifteen):
 
 @pytest.mark.parametrize("fmt, suffix", [("rapid", ".mod"), ("krl", ".src"), ("ls", ".ls")])
 def test_cli_fifteen_paths_named_in_each_format(fifteen, tmp_path, fmt, suffix):
-    from tests.cl_support import scan_nx_paths
+    from cl_support import scan_nx_paths
 
     out = tmp_path / f"fifteen{suffix}"
     wobj = ",".join(str(v) for v in NX_WOBJ)

@@ -4,13 +4,13 @@ import math
 
 import numpy as np
 import pytest
+from cl_support import msys_point_inch, nx_multipath, scan_nx_paths
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import drakedeburr.post.cl_reader as mut
 from drakedeburr.errors import InputError
 from drakedeburr.units import INCH_M
-from tests.cl_support import msys_point_inch, nx_multipath, scan_nx_paths
 
 CL = "cl_files"
 
