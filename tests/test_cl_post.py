@@ -1,5 +1,7 @@
 """CL file -> program pipeline and the ``drakedeburr post`` command."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -67,26 +69,221 @@ def test_cli_post(extdata, tmp_path):
     out2 = tmp_path / "creo2.mod"
     assert main(["post", cl, "--format", "rapid", "-o", str(out2), "--wobj", wobj, *fast]) == 0
     assert out2.read_text() == text
-    # KRL is not a program for the ABB arm: a clear input error, nothing written
-    assert main(["post", cl, "--format", "krl", "-o", str(tmp_path / "c.src"),
-                 "--wobj", wobj]) == 2
-    assert not (tmp_path / "c.src").exists() and not (tmp_path / "c.dat").exists()
+    # KRL (for a KUKA arm, the part within its 0.7 m reach) writes .src + .dat
+    near = "450,0,100,0,0,30"
+    assert main(["post", cl, "--robot", "kr6_r700", "-o", str(tmp_path / "c.src"),
+                 "--wobj", near]) == 0
+    # KRL is not for the ABB arm: refused before any work (exit 2)
+    assert main(["post", cl, "--format", "krl", "-o", str(tmp_path / "d.src"),
+                 "--wobj", near]) == 2
+    assert (tmp_path / "c.dat").read_text().count("DECL E6POS") == len(read_cl(cl).moves)
     # in the robot base (no work object) the part sits inside the robot: nothing written
-    bad = tmp_path / "bad.mod"
-    assert main(["post", cl, "--format", "rapid", "-o", str(bad), *fast]) == 1
-    assert not bad.exists()
+    bad = tmp_path / "bad.ls"
+    fanuc = ["--robot", "m10ia"]
+    bad_mod = tmp_path / "bad.mod"
+    assert main(["post", cl, "-o", str(bad_mod), *fast]) == 1
+    assert not bad_mod.exists()
     # a bad work object is an input error (exit 2)
-    assert main(["post", cl, "--format", "rapid", "-o", str(bad), "--wobj", "1,2,3"]) == 2
-    assert main(["post", str(tmp_path / "missing.cl"), "--format", "rapid", "-o",
-                 str(bad)]) == 2
+    assert main(["post", cl, *fanuc, "-o", str(bad), "--wobj", "1,2,3"]) == 2
+    assert main(["post", str(tmp_path / "missing.cl"), *fanuc, "-o", str(bad)]) == 2
 
 
 def test_cli_force(tmp_path):
     cl = tmp_path / "far.apt"
     cl.write_text("UNITS/MM\nFEDRAT/9000,MMPM\nGOTO/0,0,0\nGOTO/2500,0,0\nGOTO/10,0,0\nFINI\n")
-    out = tmp_path / "far.mod"
-    args = ["post", str(cl), "--format", "rapid", "-o", str(out), "--wobj", "700,0,300,0,0,0"]
+    out = tmp_path / "far.ls"
+    args = ["post", str(cl), "--robot", "m10ia", "-o", str(out), "--wobj", "700,0,300,0,0,0"]
     assert main(args) == 1 and not out.exists()
     assert main(args + ["--force"]) == 1
     text = out.read_text()
-    assert "FORCED" in text and "MoveL p2, v150, fine," in text
+    assert "FORCED" in text and "L P[2] 150mm/sec FINE ;" in text
+
+
+NX_WOBJ = [800.0, 0.0, 100.0, 0.0, 0.0, -90.0]
+
+
+@pytest.fixture(scope="module")
+def fifteen(extdata, tmp_path_factory):
+    from cl_support import nx_multipath
+
+    return nx_multipath(extdata, tmp_path_factory.mktemp("nx") / "fifteen.cls", n_paths=15)
+
+
+def test_fifteen_paths_every_goto_in_the_program(fifteen):
+    """At least one move per GOTO of all 15 paths, in file order, each path named, every
+    GOTO's move on its MCS point (plain scan of the file, independent of the reader)."""
+    from cl_support import msys_point_inch, scan_nx_paths
+
+    scan = scan_nx_paths(fifteen)
+    cl = read_cl(fifteen, units="inch")
+    X_WO = mut.pose_from_mm_deg(NX_WOBJ)
+    res = mut.program_from_cl(cl, "fifteen", X_WO=X_WO)
+    assert res.ok, res.unreachable_lines[:5]
+    prog = res.program
+    lines = [m.source_line for m in prog.moves]
+    assert lines == sorted(lines)
+    by_line = {}
+    for i, m in enumerate(prog.moves):
+        by_line.setdefault(m.source_line, []).append(i)
+    for k, path in enumerate(scan):
+        for n, values, msys in path["gotos"]:
+            assert n in by_line, f"GOTO on line {n} of path {k + 1} missing"
+            i = by_line[n][-1]
+            assert np.abs(prog.X_OT(i)[:3, 3] - msys_point_inch(msys, values)).max() < 1e-9
+        first = prog.moves[by_line[path["gotos"][0][0]][0]]
+        assert first.comment.startswith(f"path {k + 1}/15 {path['name']}")
+    assert sum(len(p["gotos"]) for p in scan) == len(prog.moves)
+    # FK of the planned joints puts the tool on every point
+    X = np.array([fk_opw(prog.robot.opw, m.q) for m in prog.moves]) @ prog.X_FT
+    assert np.abs(X - np.array([m.X_WT for m in prog.moves])).max() < 1e-9
+    assert any(n.startswith("path 15 'OP15'") for n in prog.notes)
+
+
+@pytest.mark.parametrize("fmt, suffix, robot, wobj", [
+    ("rapid", ".mod", "irb1600", NX_WOBJ), ("krl", ".src", "kr6_r700", [450.0, 0, 0, 0, 0, -90]),
+    ("ls", ".ls", "m10ia", NX_WOBJ)])
+def test_cli_fifteen_paths_named_in_each_format(fifteen, tmp_path, fmt, suffix, robot, wobj):
+    from cl_support import scan_nx_paths
+
+    out = tmp_path / f"fifteen{suffix}"
+    wobj = ",".join(str(v) for v in wobj)
+    args = ["post", str(fifteen), "--robot", robot, "-o", str(out), "--units", "inch",
+            "--wobj", wobj]
+    if robot == "kr6_r700":
+        # the 15 paths spread wider than the KR 6's 0.7 m reach: written with --force (exit 1,
+        # the result failed), every path still there and the header saying so
+        assert main([*args, "--force"]) == 1 and "FORCED" in out.read_text()
+    else:
+        assert main(args) == 0
+    text = out.read_text()
+    names = [p["name"] for p in scan_nx_paths(fifteen)]
+    at = [text.find(f"path {k + 1}/15 {name}") for k, name in enumerate(names)]
+    assert all(a > 0 for a in at) and at == sorted(at)  # named, in file order
+    n_goto = sum(len(p["gotos"]) for p in scan_nx_paths(fifteen))
+    move = {"rapid": r"^\s*Move[LJ] ", "krl": r"^\s*(LIN|PTP) ", "ls": r"^\s*\d+:\s+[LJ] P\["}
+    left_out = re.search(r"FORCED: (\d+) unreachable CL point", text)
+    left_out = int(left_out[1]) if left_out else 0
+    assert (robot == "kr6_r700") == (left_out > 0)
+    assert len(re.findall(move[fmt], text, re.M)) == n_goto - left_out
+
+
+def test_creo_drilling_program(extdata):
+    """The cycle's moves reach the program: straight (linear) rapids in and out of the holes,
+    feed moves at the cycle feed down to the depth written in the file."""
+    cl = read_cl(extdata / "cl_files" / "CreoPost__bohren_1.ncl.8")
+    X_WO = mut.pose_from_mm_deg(WOBJ)
+    res = mut.program_from_cl(cl, "bohren", X_WO=X_WO)
+    prog = res.program
+    assert res.ok and len(prog.moves) == len(cl) == 26
+    for i, m in enumerate(prog.moves):
+        if cl.cycle[i]:
+            assert m.move_type == "linear" and m.zone == 0.0  # every depth reached exactly
+            assert m.speed == pytest.approx(50e-3 / 60 if not cl.rapid[i] else prog.moves[0].speed)
+        else:
+            assert m.move_type == ("joint" if cl.rapid[i] else "linear")
+    z = np.array([prog.X_OT(i)[2, 3] for i in range(len(prog.moves))])
+    assert z.min() == pytest.approx(0.5e-3 - 3.5e-3)  # GOTO z 0.5 - DEPTH 3.5 (mm)
+    assert any("2 holes drilled" in n for n in prog.notes)
+
+
+def test_cli_reports_unit_switch_and_unknown_words(tmp_path, caplog):
+    cl = tmp_path / "mixed.apt"
+    cl.write_text("UNITS/MM\nGOTO/0,0,0\nFOO/1\nGOTO/10,0,0\nUNITS/INCHES\nGOTO/1,0,0\n"
+                  "FOO/2\nBAR\nFINI\n")
+    out = tmp_path / "mixed.mod"
+    assert main(["post", str(cl), "--format", "rapid", "-o", str(out), "--wobj",
+                 "700,0,300,0,0,0", "--spin", "greedy"]) == 0
+    log = caplog.text
+    assert "UNITS switched to inch after 2 moves" in log
+    assert log.count("FOO x2 (lines 3, 7)") == 1 and "BAR x1 (line 8)" in log
+    text = out.read_text()
+    assert "UNITS switched to inch at line 5 after 2 moves" in text
+    assert "not applied: FOO x2 (lines 3, 7)" in text
+    prog = read_cl(cl)
+    assert prog.p_C[-1] == pytest.approx([0.0254, 0, 0])  # 1 inch after the switch
+
+
+@pytest.mark.parametrize("content, expected", [
+    (None, "missing.cl: CL file not found"),
+    ("GOTO/1,2,3\nGOTO/1,x,3\nFINI\n", "bad.cl:2: expected a number (token 'x')"),
+    ("GOTO/1,2,3\nCUTCOM/LEFT\nFINI\n", "bad.cl:2: cutter compensation"),
+    ("GOTO/1,2,3\nCYCLE/TAP,DEPTH,5,MMPR,1\nGOTO/0,0,0\nFINI\n", "bad.cl:2: drilling cycle"),
+])
+def test_cli_bad_input_exit_2_one_line(tmp_path, capsys, content, expected):
+    cl = tmp_path / ("missing.cl" if content is None else "bad.cl")
+    if content is not None:
+        cl.write_text(content)
+    out = tmp_path / "p.mod"
+    assert main(["post", str(cl), "--format", "rapid", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_cli_output_checked_before_reading(tmp_path, capsys, extdata):
+    cl = str(extdata / "cl_files" / CREO)
+    assert main(["post", cl, "--format", "rapid", "-o", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
+    assert main(["post", cl, "--format", "rapid", "-o", str(tmp_path / "no" / "p.mod")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_cli_ignore_cutcom(tmp_path):
+    cl = tmp_path / "comp.apt"
+    cl.write_text("UNITS/MM\nCUTCOM/LEFT\nGOTO/0,0,0\nGOTO/10,0,0\nCUTCOM/OFF\nFINI\n")
+    out = tmp_path / "comp.mod"
+    args = ["post", str(cl), "--format", "rapid", "-o", str(out), "--wobj", "700,0,300,0,0,0"]
+    assert main(args) == 2 and not out.exists()
+    assert main(args + ["--ignore-cutcom"]) == 0
+    assert "not applied: CUTCOM x1 (line 2)" in out.read_text()
+
+
+def test_cli_parts_continue_each_other(extdata, tmp_path):
+    cl_path = extdata / "cl_files" / CREO
+    out = tmp_path / "creo.mod"
+    wobj = ",".join(str(v) for v in WOBJ)
+    assert main(["post", str(cl_path), "--format", "rapid", "-o", str(out), "--wobj", wobj,
+                 "--max-moves", "100"]) == 0
+    parts = [tmp_path / "creo_001.mod", tmp_path / "creo_002.mod"]
+    assert all(p.exists() for p in parts) and not out.exists()
+    texts = [p.read_text() for p in parts]
+    counts = [t.count("MoveL") + t.count("MoveJ") for t in texts]
+    assert counts == [100, len(read_cl(cl_path)) - 100]
+    assert "part 1 of 2" in texts[0] and "part 2 of 2" in texts[1]
+    assert texts[0].splitlines()[0].endswith("_001") and texts[1].splitlines()[0].endswith("_002")
+    # part 1 runs on into part 2 (no stop point); the whole program stops at its very end
+    last = [[ln for ln in t.splitlines() if ln.lstrip().startswith("Move")][-1] for t in texts]
+    assert ", z1," in last[0] and ", fine," in last[1]
+
+
+def test_cli_interrupt_exit_130(extdata, tmp_path, monkeypatch):
+    import drakedeburr.post.cl_post as cl_post
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cl_post, "post_cl_file", interrupted)
+    out = tmp_path / "p.mod"
+    out.write_text("previous")
+    assert main(["post", str(extdata / "cl_files" / CREO), "--format", "rapid",
+                 "-o", str(out)]) == 130
+    assert out.read_text() == "previous"
+
+
+def test_post_cl_file_reports_progress_and_never_prints(extdata, tmp_path, capsys):
+    calls = []
+    summary = mut.post_cl_file(
+        extdata / "cl_files" / CREO, tmp_path / "p.ls", "ls", "p",
+        mut.PostSettings(robot=mut.robot_kinematics("m10ia"), X_WO=mut.pose_from_mm_deg(WOBJ)),
+        max_moves=60,
+        progress=lambda done, total, label: calls.append((label, done, total)))
+    assert [f.name for f in summary.files] == ["p_001.ls", "p_002.ls", "p_003.ls"]
+    assert summary.n_moves == len(summary.cl) == 172
+    labels = [c[0] for c in calls]
+    assert labels.index("read CL") < labels.index("spin + IK") < labels.index("write")
+    for label in ("read CL", "spin + IK", "write"):
+        last = [c for c in calls if c[0] == label][-1]
+        assert last[1] == last[2]  # each phase reports its end
+    assert [c[1:] for c in calls if c[0] == "write"] == [(1, 3), (2, 3), (3, 3)]
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == ""

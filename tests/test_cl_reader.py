@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from cl_support import msys_point_inch, nx_multipath, scan_nx_paths
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -51,7 +52,10 @@ def test_nx_variable_axis_inch(extdata):
     # variable axis: the tool axis really varies (> 20 deg spread)
     ang = np.degrees(np.arccos(np.clip(ax @ ax[0], -1, 1)))
     assert ang.max() > 20
-    assert np.allclose(prog.moves[-1].p_C, np.array([3.6648, 3.0081, 3.0]) * INCH_M)
+    # MSYS/3,3,0,... : the MCS is shifted 3 inch in x and y from the absolute frame
+    assert np.allclose(prog.moves[-1].p_C, (np.array([3.6648, 3.0081, 3.0]) + [3, 3, 0]) * INCH_M)
+    assert [p.name for p in prog.paths] == ["NORM_PART"] and prog.paths[0].tool_name == (
+        "BALL_MILL_1.00")
 
 
 def test_creo_profile_circles_mm(extdata):
@@ -61,6 +65,8 @@ def test_creo_profile_circles_mm(extdata):
     circ = [m for m in prog.moves if m.from_circle]
     assert len(prog.moves) == gotos + len(circ)
     assert prog.units == "mm" and prog.end_line == 112 and prog.warnings == ()
+    assert [p.name for p in prog.paths] == ["FEATNO 638"]
+    assert [(w.word, w.count, w.lines) for w in prog.not_applied] == [("SPINDL", 2, (13, 110))]
     assert prog.moves[0].p_C == pytest.approx((0.0, 1.5e-3, 2e-3))
     assert prog.moves[0].spindle_rpm == pytest.approx(15915.507752)
     assert np.allclose(prog.feed[2:], 400e-3 / 60)  # FEDRAT / 400, MMPM
@@ -87,14 +93,6 @@ def test_creo_profile_circles_mm(extdata):
     assert np.all(np.diff(ang) < 0) and ang[0] < math.pi / 2 and ang[-1] > 0
 
 
-def test_creo_drilling_cycle_warns(extdata):
-    prog = mut.read_cl(extdata / CL / "CreoPost__bohren_1.ncl.8")
-    assert len(prog.moves) == 4
-    assert [(w.line, w.word) for w in prog.warnings] == [(16, "CYCLE"), (20, "CYCLE")]
-    assert prog.moves[0].rapid and prog.moves[0].spindle_rpm == 9000
-    assert any("MFGNO" in t for _, t in prog.comments)
-
-
 def test_statements_and_units():
     text = "\n".join([
         "UNITS/INCHES", "LOADTL/3", "SPINDL/RPM,1200,CCLW", "TLAXIS/0,0,2",
@@ -109,8 +107,129 @@ def test_statements_and_units():
     assert m1.axis_C == pytest.approx((0, 1, 0))
     assert m2.p_C == pytest.approx((0.01, 0, 0))
     assert m2.feed == pytest.approx(0.1e-3 * 1200 / 60)
-    assert [(w.line, w.word) for w in prog.warnings] == [(4, "TLAXIS"), (14, "FOO")]
-    assert prog.comments == ((5, "HELLO"),)  # data after FINI are ignored
+    # the mid-file switch to mm after two inch moves is honoured and reported
+    assert prog.unit_changes == ((1, "inch", 0), (11, "mm", 2))
+    assert prog.mid_file_unit_changes == ((11, "mm", 2),)
+    assert [(w.line, w.word) for w in prog.warnings] == [(4, "TLAXIS"), (11, "UNITS")]
+    assert "after 2 moves" in prog.warnings[1].message
+    assert any("UNITS switched to mm at line 11" in ln for ln in prog.summary())
+    words = {w.word: (w.count, w.lines) for w in prog.not_applied}
+    assert words == {"SPINDL": (1, (3,)), "FOO": (1, (14,)), "(after FINI)": (1, (16,))}
+    assert prog.comments == ((5, "HELLO"),)  # data after FINI are not read
+
+
+def test_unknown_words_listed_once_with_counts_and_lines():
+    text = "\n".join(["GOTO/0,0,0"] + [f"FOO/{k}" if k % 2 else f"BAR/{k}" for k in range(50)]
+                     + ["COOLNT/ON", "GOTO/1,0,0", "COOLNT/OFF", "FINI"])
+    prog = mut.parse_cl_text(text)
+    words = {w.word: w for w in prog.not_applied}
+    assert set(words) == {"FOO", "BAR", "COOLNT"}
+    assert words["FOO"].count == 25 and words["BAR"].count == 25
+    assert words["BAR"].lines == tuple(range(2, 2 + 40, 2))  # the first 20 lines
+    assert words["COOLNT"].count == 2 and words["COOLNT"].lines == (52, 54)
+    assert "FOO x25 (lines 3, 5," in words["FOO"].describe()
+    assert len(prog.moves) == 2
+
+
+def test_nx_banner_and_footer_are_not_words(extdata, tmp_path):
+    path = nx_multipath(extdata, tmp_path / "two.cls", n_paths=2)
+    prog = mut.read_cl(path, units="inch")
+    assert prog.not_applied == () and prog.warnings == ()
+
+
+def test_fifteen_tool_paths_all_read_in_order(extdata, tmp_path):
+    """Every GOTO of every path (counted by a plain scan) becomes a move at its MCS point."""
+    path = nx_multipath(extdata, tmp_path / "fifteen.cls", n_paths=15)
+    scan = scan_nx_paths(path)
+    prog = mut.read_cl(path, units="inch")
+    assert len(scan) == 15 == len(prog.paths)
+    assert [p.name for p in prog.paths] == [s["name"] for s in scan]
+    assert [p.n_goto for p in prog.paths] == [len(s["gotos"]) for s in scan]
+    assert [(p.start_line, p.end_line) for p in prog.paths] == [
+        (s["start"], s["end"]) for s in scan]
+    n_goto = sum(len(s["gotos"]) for s in scan)
+    assert len(prog) == n_goto > 5000
+    lines = prog.lines
+    assert np.all(np.diff(lines) > 0)  # file order
+    expected = np.array([msys_point_inch(m, v) for s in scan for _, v, m in s["gotos"]])
+    # the MSYS axes are printed with 7 digits and orthonormalised by the reader: 1e-9 m
+    assert np.abs(prog.p_C - expected).max() < 1e-9
+    assert lines.tolist() == [n for s in scan for n, _, _ in s["gotos"]]
+    # the path index of every move matches the path its line lies in
+    for k, s in enumerate(scan):
+        inside = (lines >= s["start"]) & (lines <= s["end"])
+        assert np.all(prog.path[inside] == k)
+
+
+def test_msys_rotates_axes_and_circles():
+    # MCS turned 90 deg about z, origin (10, 20, 30) mm
+    text = "\n".join(["UNITS/MM", "MSYS/10,20,30,0,1,0,-1,0,0", "GOTO/1,0,0,1,0,0",
+                      "CIRCLE/0,0,0,0,0,1,1", "GOTO/0,1,0", "TLAXIS/0,1,0", "GOTO/0,0,5",
+                      "MSYS/0,0,0,1,0,0,0,1,0", "GOTO/1,2,3", "FINI"])
+    prog = mut.parse_cl_text(text, arc_tolerance=1e-6)
+    p = prog.p_C * 1e3
+    assert np.allclose(p[0], [10, 21, 30]) and np.allclose(prog.axis_C[0], [0, 1, 0])
+    arc = p[prog.from_circle]
+    # the arc runs about the MCS origin, counter-clockwise about z (z is unchanged by the turn)
+    assert np.allclose(np.hypot(arc[:, 0] - 10, arc[:, 1] - 20), 1.0)
+    ang = np.unwrap(np.arctan2(arc[:, 1] - 20, arc[:, 0] - 10))
+    assert np.all(np.diff(ang) > 0)
+    assert np.allclose(p[prog.lines == 5][-1], [9, 20, 30])
+    assert np.allclose(prog.axis_C[prog.lines == 7][0], [-1, 0, 0])
+    assert np.allclose(p[-1], [1, 2, 3])  # identity MSYS: as written
+
+
+@pytest.mark.parametrize("text, line, token, message", [
+    ("MSYS/0,0,0,1,0,0,0.5,1,0\nFINI", 1, "1,0,0,0.5,1,0", "not orthonormal"),
+    ("MSYS/0,0,0,1,0,0\nFINI", 1, "0,0,0,1,0,0", "9 numbers"),
+    ("GOTO/0,0,0\nCUTCOM/LEFT,1\nGOTO/1,0,0\nFINI", 2, "CUTCOM/LEFT,1", "cutter compensation"),
+    ("GOTO/0,0,0\nTLCOMP/ON\nFINI", 2, "TLCOMP/ON", "cutter compensation"),
+    ("GOTO/0,0,0\nTLON,GOFWD/(CIRCLE/0,0,0,5),ON,(LINE/0,0,0,1,1,1)\nFINI", 2, "TLON,GOFWD",
+     "not supported"),
+    ("GODLTA/1,0,0\nFINI", 1, "GODLTA", "before any position"),
+    ("GOHOME\nFINI", 1, "GOHOME", "without a FROM"),
+])
+def test_refused_statements_name_the_line(text, line, token, message):
+    with pytest.raises(mut.ClParseError, match=message) as info:
+        mut.parse_cl_text(text, source="<t>")
+    assert info.value.line == line and token in info.value.token
+
+
+def test_cutcom_ignored_on_request_and_listed():
+    text = "GOTO/0,0,0\nCUTCOM/LEFT\nGOTO/1,0,0\nCUTCOM/OFF\nFINI"
+    prog = mut.parse_cl_text(text, cutcom="ignore")
+    assert len(prog) == 2
+    assert [(w.word, w.count, w.lines) for w in prog.not_applied] == [("CUTCOM", 1, (2,))]
+
+
+def test_godlta_from_gohome():
+    text = "\n".join(["UNITS/MM", "FROM/0,0,100", "GOTO/10,0,0,0,0,1", "GODLTA/0,5,0",
+                      "GODLTA/2", "MSYS/0,0,0,0,1,0,-1,0,0", "GODLTA/1,0,0", "GOHOME", "FINI"])
+    prog = mut.parse_cl_text(text)
+    p = prog.p_C * 1e3
+    assert np.allclose(p, [[0, 0, 100], [10, 0, 0], [10, 5, 0], [10, 5, 2], [10, 6, 2],
+                           [0, 0, 100]])
+    assert prog.rapid.tolist() == [True, False, False, False, False, True]
+    assert prog.paths[0].n_goto == 6
+
+
+def test_end_of_path_continues_and_truncation_is_caught():
+    two = "TOOL PATH/A\nGOTO/0,0,0\nEND-OF-PATH\nTOOL PATH/B\nGOTO/1,0,0\nEND-OF-PATH\n"
+    prog = mut.parse_cl_text(two)
+    assert [(p.name, p.n_goto, p.start_line, p.end_line) for p in prog.paths] == [
+        ("A", 1, 1, 3), ("B", 1, 4, 6)]
+    assert prog.path.tolist() == [0, 1] and prog.end_line == 6
+    # the second path cut before its END-OF-PATH: a truncated file
+    with pytest.raises(mut.ClParseError, match="without FINI or END-OF-PATH") as info:
+        mut.parse_cl_text(two.rsplit("END-OF-PATH", 1)[0], source="<t>")
+    assert info.value.line == 5
+
+
+def test_missing_file_is_named(tmp_path):
+    with pytest.raises(InputError, match=r"missing\.cl: CL file not found"):
+        mut.read_cl(tmp_path / "missing.cl")
+    with pytest.raises(InputError, match="not a file"):
+        mut.read_cl(tmp_path)
 
 
 @pytest.mark.parametrize("text, line, token", [
@@ -160,13 +279,16 @@ def test_circle_full_and_helix():
 
 
 _WORDS = ["GOTO", "FEDRAT", "SPINDL", "RAPID", "CIRCLE", "TLAXIS", "MULTAX", "UNITS", "LOADTL",
-          "PPRINT", "FINI", "END-OF-PATH", "PAINT", "CYCLE", "$$", "LOAD", "XYZ", "INCHES"]
+          "PPRINT", "FINI", "END-OF-PATH", "PAINT", "CYCLE", "$$", "LOAD", "XYZ", "INCHES",
+          "MSYS", "CUTCOM", "GODLTA", "FROM", "GOHOME", "TOOL PATH", "CYCLE", "CYCLE", "GOFWD"]
 _TOKENS = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True).map(repr),
     st.integers(-10**6, 10**6).map(str),
     st.floats(-1e9, 1e9).map(repr),
     st.sampled_from(["IPM", "MMPM", "IPR", "MMPR", "RPM", "CLW", "CCLW", "OFF", "ON", "MM",
-                     "INCHES", "TOOL", "", "$", "nan", "1e999", "-0", " "]),
+                     "INCHES", "TOOL", "", "$", "nan", "1e999", "-0", " ", "DRILL", "DEEP",
+                     "BRKCHP", "BORE", "TAP", "DEPTH", "STEP", "CLEAR", "RAPTO", "FEDTO",
+                     "RTRCTO", "AUTO", "DWELL", "LEFT"]),
     st.text(max_size=6),
 )
 _LINE = st.one_of(

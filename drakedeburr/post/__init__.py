@@ -7,12 +7,21 @@ from drakedeburr.post.calibration import (
     fit_touch_points,
     scale_about,
 )
-from drakedeburr.post.cl_post import PostResult, pose_from_mm_deg, program_from_cl
+from drakedeburr.post.cl_post import (
+    PostResult,
+    PostSettings,
+    PostSummary,
+    pose_from_mm_deg,
+    post_cl_file,
+    program_from_cl,
+)
 from drakedeburr.post.cl_reader import (
     ClMove,
     ClParseError,
     ClProgram,
+    ClToolPath,
     ClWarning,
+    ClWordCount,
     iter_cl_moves,
     parse_cl_text,
     read_cl,
@@ -32,8 +41,10 @@ from drakedeburr.post.virtual_tcp import (
 
 __all__ = [
     "CalibrationFit", "calibrated_pose", "fit_touch_points", "scale_about",
-    "PostResult", "pose_from_mm_deg", "program_from_cl",
-    "ClMove", "ClParseError", "ClProgram", "ClWarning", "iter_cl_moves", "parse_cl_text",
+    "PostResult", "PostSettings", "PostSummary", "pose_from_mm_deg", "post_cl_file",
+    "program_from_cl",
+    "ClMove", "ClParseError", "ClProgram", "ClToolPath", "ClWarning", "ClWordCount",
+    "iter_cl_moves", "parse_cl_text",
     "read_cl",
     "ToolAxisPathResult", "path_travel", "solve_tool_axis_path", "tool_frames",
     "contour_frames", "offset_contour", "part_contour_at_virtual", "virtual_tcp_poses",

@@ -3,9 +3,18 @@
 CL points (tool tip + CAM tool axis) are taken in the work object O (the robot base when no
 work object is given), the free spin about the tool axis is resolved
 (:mod:`drakedeburr.post.tool_axis`), joints come from the analytic IK with configuration
-continuity, and a :class:`~drakedeburr.post.program.RobotProgram` is built. Points the robot
-cannot reach are reported with their CL line numbers; they are left out of the program only
-when the caller forces it, and the program header then says FORCED.
+continuity, and a :class:`~drakedeburr.programs.program.RobotProgram` is built. Every tool path of
+the file goes into the program in file order; its first move carries the path's name as a
+comment and the header lists the paths, UNITS switches, expanded drilling cycles and the
+words of the file that are not in the program. Rapids of the file are joint moves; the rapids
+of an expanded drilling cycle are linear moves at rapid speed (the tool is in or right over
+a hole). Points the robot cannot reach are reported with their CL line numbers; they are left
+out of the program only when the caller forces it, and the header then says FORCED.
+
+:func:`post_cl_file` is the streaming form the CLI uses: the file is read into arrays (about
+90 bytes per move), the joints are solved in segments, and programs longer than
+``max_moves`` are written as numbered parts, each built only while it is written, so memory
+stays bounded for files of millions of lines. Progress goes to a callback; nothing is printed.
 """
 
 from __future__ import annotations
@@ -19,17 +28,24 @@ import numpy as np
 
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
-from drakedeburr.post.cl_reader import ClProgram
+from drakedeburr.post.cl_reader import ClProgram, read_cl
 from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
 from drakedeburr.programs.program import JOINT, LINEAR, ProgramMove, RobotProgram
 from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
-__all__ = ["PostResult", "program_from_cl", "pose_from_mm_deg", "ROBOTS"]
+__all__ = ["PostResult", "PostSettings", "PostSummary", "program_from_cl", "post_cl_file",
+           "pose_from_mm_deg", "robot_kinematics", "MAX_MOVES"]
 
 log = logging.getLogger(__name__)
 
-ROBOTS: dict[str, RobotKinematics] = {"irb1600": IRB1600_10_120_ROBOT}
+def robot_kinematics(name: str) -> RobotKinematics:
+    """The analytic kinematics of a registered arm (``drakedeburr robots``)."""
+    from drakedeburr.robots import get_robot
+
+    return get_robot(name).kinematics
+MAX_MOVES = 100_000  # moves per written program file; longer programs are split into parts
+_NOTE_LINES = 40  # header lines listing tool paths / words at most
 
 
 def pose_from_mm_deg(values: tuple[float, ...] | list[float], what: str = "pose") -> np.ndarray:
@@ -50,6 +66,44 @@ def pose_from_mm_deg(values: tuple[float, ...] | list[float], what: str = "pose"
 
 
 @dataclass(frozen=True)
+class PostSettings:
+    """How a CL file becomes robot motion (see :func:`program_from_cl` for each field).
+
+    Attributes:
+        robot: kinematics and limits.
+        X_WO: (4, 4) work object (CL frame) in the robot base [m]; None = identity.
+        X_FT: (4, 4) tool in the flange frame [m]; None = 0.2 m along the flange axis.
+        spin_mode: "min_travel", "greedy" or "theta6_zero".
+        zone: corner zone of feed moves [m].
+        feed: TCP speed of feed moves [m/s]; None = the file's FEDRAT, else the process speed.
+        rapid_speed: speed of rapid moves [m/s]; None = ``process.window_switch_speed``.
+        force: write the reachable part when points are unreachable (flagged FORCED).
+        q_start: (6,) joints the robot starts from [rad]; None = tool_axis.READY_POSE.
+        process: process parameters for the defaults.
+    """
+
+    robot: RobotKinematics = IRB1600_10_120_ROBOT
+    X_WO: np.ndarray | None = None
+    X_FT: np.ndarray | None = None
+    spin_mode: str = "min_travel"
+    zone: float = 1e-3
+    feed: float | None = None
+    rapid_speed: float | None = None
+    force: bool = False
+    q_start: np.ndarray | None = None
+    process: ProcessParameters | None = None
+
+    def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        X_WO = np.eye(4) if self.X_WO is None else np.asarray(self.X_WO, float)
+        if self.X_FT is None:
+            X_FT = np.eye(4)
+            X_FT[2, 3] = 0.2
+        else:
+            X_FT = np.asarray(self.X_FT, float)
+        return X_WO, X_FT
+
+
+@dataclass(frozen=True)
 class PostResult:
     """Outcome of :func:`program_from_cl`.
 
@@ -58,16 +112,82 @@ class PostResult:
         unreachable_lines: CL line numbers of points the robot cannot reach.
         configuration_change_lines: CL lines where the arm configuration changes.
         joints: the IK result for every CL move (NaN rows where unreachable).
+        notes: the header lines describing the file (paths, units, cycles, words not applied).
     """
 
     program: RobotProgram | None
     unreachable_lines: tuple[int, ...]
     configuration_change_lines: tuple[int, ...]
     joints: ToolAxisPathResult
+    notes: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
         return not self.unreachable_lines
+
+
+def _solve(cl: ClProgram, s: PostSettings,
+           progress: Callable[[int, int, str], None] | None) -> ToolAxisPathResult:
+    if len(cl) == 0:
+        raise InputError(f"{cl.source}: no moves in the CL file")
+    X_WO, X_FT = s.frames()
+    p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
+    axis_W = cl.axis_C @ X_WO[:3, :3].T
+    return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, mode=s.spin_mode,
+                                q_start=s.q_start, progress=progress)
+
+
+def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...]) -> list[str]:
+    """Header lines: the spin rule, tool paths, UNITS switches, cycles, words not applied."""
+    notes = [f"spin about the tool axis: {spin_mode}"]
+    lines = cl.summary()[1:]
+    if len(lines) > _NOTE_LINES:
+        lines = lines[:_NOTE_LINES] + [f"... {len(lines) - _NOTE_LINES} more lines"]
+    notes += lines
+    if cl.cycle.any():
+        notes.append(f"{int(cl.cycle.sum())} moves from expanded drilling cycles (their "
+                     "rapids are linear moves at rapid speed)")
+    if change_lines:
+        notes.append("configuration changes at CL lines " + ", ".join(map(str, change_lines[:20]))
+                     + (" ..." if len(change_lines) > 20 else ""))
+    return notes
+
+
+def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: PostSettings,
+                   last_index: int) -> list[ProgramMove]:
+    """ProgramMoves of the CL moves ``keep`` (indices, increasing); the move ``last_index``
+    ends the whole program (a stop point)."""
+    process = s.process or ProcessParameters()
+    rapid_speed = process.window_switch_speed if s.rapid_speed is None else s.rapid_speed
+    n_paths = len(cl.paths)
+    moves = []
+    prev_path = -1 if keep.size == 0 or keep[0] == 0 else int(cl.path[keep[0] - 1])
+    for i in keep:
+        i = int(i)
+        rapid, line, path = bool(cl.rapid[i]), int(cl.lines[i]), int(cl.path[i])
+        f = float(cl.feed[i])
+        v = s.feed if s.feed is not None else (f if np.isfinite(f) and f > 0
+                                               else process.grinding_speed)
+        last = i == last_index
+        comment = f"CL line {line}" if rapid or i == 0 else ""
+        if path != prev_path and n_paths:
+            comment = f"path {path + 1}/{n_paths} {cl.paths[path].name} (CL line {line})"
+            comment = comment.replace("  ", " ")
+        prev_path = path
+        moves.append(ProgramMove(
+            X_WT=res.X_WT[i], q=res.q[i],
+            move_type=JOINT if rapid and not cl.cycle[i] else LINEAR,
+            speed=rapid_speed if rapid else v,
+            zone=0.0 if last or rapid or cl.cycle[i] else s.zone,  # holes: to full depth
+            comment=comment, source_line=line))
+    return moves
+
+
+def _flag(bad: tuple[int, ...]) -> tuple[str, str]:
+    if bad:
+        return "FORCED", (f"{len(bad)} unreachable CL point(s) left out, lines "
+                          + ", ".join(map(str, bad[:15])))
+    return "UNVERIFIED", "joint limits checked; collisions NOT checked"
 
 
 def program_from_cl(
@@ -97,8 +217,7 @@ def program_from_cl(
         zone: corner zone of feed moves [m] (the last move is always a stop point).
         feed: TCP speed of feed moves [m/s]; None = the CL file's FEDRAT, else
             ``process.grinding_speed``.
-        rapid_speed: speed of RAPID moves (joint moves) [m/s]; None =
-            ``process.window_switch_speed``.
+        rapid_speed: speed of RAPID moves [m/s]; None = ``process.window_switch_speed``.
         force: build the program even with unreachable points (they are left out and the
             header says FORCED).
         process: process parameters for the defaults.
@@ -106,48 +225,107 @@ def program_from_cl(
             the first point's configuration is the one closest to it.
         progress: optional callback (done, total, label).
     """
-    process = process or ProcessParameters()
-    if not cl.moves:
-        raise InputError(f"{cl.source}: no moves in the CL file")
-    X_WO = np.eye(4) if X_WO is None else np.asarray(X_WO, float)
-    if X_FT is None:
-        X_FT = np.eye(4)
-        X_FT[2, 3] = 0.2
-    p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
-    axis_W = cl.axis_C @ X_WO[:3, :3].T
-    res = solve_tool_axis_path(robot, p_W, axis_W, X_FT, mode=spin_mode, q_start=q_start,
-                               progress=progress)
-    lines = cl.lines
-    bad = tuple(sorted({int(lines[i]) for i in res.failed}))
-    changes = tuple(sorted({int(lines[i]) for i in res.configuration_changes}))
+    s = PostSettings(robot, X_WO, X_FT, spin_mode, zone, feed, rapid_speed, force, q_start,
+                     process)
+    res = _solve(cl, s, progress)
+    bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
+    changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
+    notes = tuple(file_notes(cl, spin_mode, changes))
     if bad and not force:
         log.warning("%d CL point(s) unreachable, first at line(s) %s", len(bad),
                     ", ".join(map(str, bad[:10])))
-        return PostResult(None, bad, changes, res)
-    moves = []
+        return PostResult(None, bad, changes, res, notes)
     keep = np.flatnonzero(res.reachable)
-    rapid_speed = process.window_switch_speed if rapid_speed is None else rapid_speed
-    for n_kept, i in enumerate(keep):
-        m = cl.moves[i]
-        v = feed if feed is not None else (m.feed if np.isfinite(m.feed) and m.feed > 0
-                                           else process.grinding_speed)
-        last = n_kept == len(keep) - 1
-        moves.append(ProgramMove(
-            X_WT=res.X_WT[i], q=res.q[i], move_type=JOINT if m.rapid else LINEAR,
-            speed=rapid_speed if m.rapid else v, zone=0.0 if last or m.rapid else zone,
-            comment=f"CL line {m.line}" if (m.rapid or n_kept == 0) else "",
-            source_line=m.line))
-    if not moves:
-        return PostResult(None, bad, changes, res)
-    notes = [f"spin about the tool axis: {spin_mode}"]
-    if changes:
-        notes.append("configuration changes at CL lines " + ", ".join(map(str, changes[:20])))
+    if keep.size == 0:
+        return PostResult(None, bad, changes, res, notes)
+    X_WO_, X_FT_ = s.frames()
+    flag, reason = _flag(bad)
     program = RobotProgram(
-        name=name, moves=tuple(moves), X_FT=X_FT, X_WO=X_WO, robot=robot,
-        source=Path(cl.source).name,
-        flag="FORCED" if bad else "UNVERIFIED",
-        flag_reason=(f"{len(bad)} unreachable CL point(s) left out, lines "
-                     + ", ".join(map(str, bad[:15])) if bad
-                     else "joint limits checked; collisions NOT checked"),
-        notes=tuple(notes))
-    return PostResult(program, bad, changes, res)
+        name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]))),
+        X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
+        flag_reason=reason, notes=notes)
+    return PostResult(program, bad, changes, res, notes)
+
+
+@dataclass(frozen=True)
+class PostSummary:
+    """Outcome of :func:`post_cl_file`.
+
+    Attributes:
+        files: the files written (none when points are unreachable and not forced).
+        n_moves: moves written, over all parts.
+        unreachable_lines: CL lines the robot cannot reach.
+        configuration_change_lines: CL lines where the arm configuration changes.
+        notes: the header lines describing the file.
+        cl: the file as read (arrays, paths, words not applied, UNITS switches).
+    """
+
+    files: tuple[Path, ...]
+    n_moves: int
+    unreachable_lines: tuple[int, ...]
+    configuration_change_lines: tuple[int, ...]
+    notes: tuple[str, ...]
+    cl: ClProgram
+
+
+def _part_path(out: Path, k: int, n_parts: int) -> Path:
+    return out if n_parts == 1 else out.with_name(f"{out.stem}_{k + 1:03d}{out.suffix}")
+
+
+def post_cl_file(
+    cl_path: str | Path,
+    out: str | Path,
+    fmt: str,
+    name: str,
+    settings: PostSettings = PostSettings(),
+    units: str = "mm",
+    cutcom: str = "refuse",
+    max_moves: int = MAX_MOVES,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> PostSummary:
+    """Read a CL file, solve the joints and write the program (streaming, bounded memory).
+
+    Args:
+        cl_path: the CL/APT file.
+        out: program file (.mod / .src / .ls); parts are ``out_001.ext``, ``out_002.ext``...
+        fmt: 'rapid', 'krl' or 'ls'.
+        name: program name (parts get ``_001`` ... appended, within 24 characters).
+        settings: see :class:`PostSettings`.
+        units: CL length unit until a UNITS statement ('mm' or 'inch').
+        cutcom: 'refuse' cutter compensation, or 'ignore' it (CL points = tool centre).
+        max_moves: moves per written file; a longer program is written as numbered parts,
+            each continuing where the previous ended.
+        progress: callback (done, total, label) with labels 'read CL', 'spin + IK', 'write'.
+
+    Raises:
+        InputError: bad file or settings (named).
+    """
+    from drakedeburr.programs.writers import write_program
+
+    if max_moves < 1:
+        raise InputError(f"max_moves must be >= 1, got {max_moves}")
+    cl = read_cl(cl_path, units=units, cutcom=cutcom, progress=progress)
+    res = _solve(cl, settings, progress)
+    bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
+    changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
+    notes = tuple(file_notes(cl, settings.spin_mode, changes))
+    keep = np.flatnonzero(res.reachable)
+    if (bad and not settings.force) or keep.size == 0:
+        return PostSummary((), 0, bad, changes, notes, cl)
+    X_WO, X_FT = settings.frames()
+    flag, reason = _flag(bad)
+    parts = [keep[a:a + max_moves] for a in range(0, keep.size, max_moves)]
+    files: list[Path] = []
+    for k, part in enumerate(parts):
+        extra = (f"part {k + 1} of {len(parts)}: CL lines {int(cl.lines[part[0]])}-"
+                 f"{int(cl.lines[part[-1]])}",) if len(parts) > 1 else ()
+        program = RobotProgram(
+            name=name if len(parts) == 1 else f"{name[:20]}_{k + 1:03d}",
+            moves=tuple(_program_moves(cl, res, part, settings, int(keep[-1]))),
+            X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
+            flag=flag, flag_reason=reason, notes=notes + extra)
+        files += write_program(program, _part_path(Path(out), k, len(parts)), fmt)
+        del program
+        if progress is not None:
+            progress(k + 1, len(parts), "write")
+    return PostSummary(tuple(files), int(keep.size), bad, changes, notes, cl)

@@ -2,28 +2,40 @@
 
 The file is read line by line (never loaded whole): physical lines ending in ``$`` continue on
 the next line; ``$$`` starts a comment. Statements are ``WORD / arg, arg, ...`` or a bare
-``WORD``. Understood words:
+``WORD``. What the reader does with each word:
 
-- ``GOTO/x,y,z[,i,j,k]`` a move to the tool tip position (and tool axis, tip -> spindle);
-- ``RAPID`` the next move is a rapid (one-shot, as in APT);
-- ``FEDRAT/[IPM|MMPM|IPR|MMPR,]f[,IPM|MMPM|...]`` feed rate;
-- ``SPINDL/[RPM,]n[,CLW|CCLW]``, ``SPINDL/OFF|ON``;
-- ``CIRCLE/xc,yc,zc,i,j,k,r[,...]`` the next ``GOTO`` runs on this circle (right-handed about
-  (i, j, k)), expanded to points within ``arc_tolerance``;
-- ``TLAXIS/i,j,k``, ``MULTAX[/ON|OFF]``; ``UNITS/MM|INCHES``; ``LOADTL/n``, ``LOAD/TOOL,n``;
-- ``PPRINT/text`` and ``$$`` comments (kept); ``FINI`` and ``END-OF-PATH`` end the data;
-- header words with no effect on the path (PARTNO, MACHIN, TLDATA, MSYS, PAINT, ...).
+- moves: ``GOTO/x,y,z[,i,j,k]`` (tool tip and tool axis, tip -> spindle), ``GODLTA/dx,dy,dz``
+  or ``GODLTA/d`` (along the tool axis), ``FROM`` (start point, reached by positioning),
+  ``GOHOME`` (back to FROM); ``RAPID`` makes the next move a rapid (one-shot, as in APT);
+  ``CIRCLE/xc,yc,zc,i,j,k,r`` makes the next GOTO run on the circle (right-handed about
+  (i, j, k), helix allowed), expanded within ``arc_tolerance``;
+- drilling cycles: ``CYCLE/DRILL|FACE|DEEP|BRKCHP|BORE|REAM, ...`` ... ``CYCLE/OFF``: every
+  GOTO in between is a hole, expanded into its moves (:mod:`drakedeburr.post.cl_cycles`);
+  other cycles and NC cycle calls (``CYCLE81(...)``) are refused with the line named;
+- frames and units: ``MSYS/x,y,z,xi,xj,xk,yi,yj,yk`` (or a 12-number 3 x 4 matrix): the
+  following coordinates are in that system, ``p = origin + [X Y Z] p_file``; ``UNITS/MM|INCHES``
+  (a switch after moves is reported); ``TLAXIS/i,j,k``; ``FEDRAT``; ``SPINDL``; ``LOADTL`` /
+  ``LOAD/TOOL``;
+- tool paths: ``TOOL PATH/name,...`` ... ``END-OF-PATH`` (NX; the file goes on to the next
+  path), Creo's ``$$-> FEATNO / n`` ... ``$$-> END /``; ``FINI`` ends the data;
+- cutter compensation ``CUTCOM`` / ``TLCOMP`` (other than OFF) is refused unless
+  ``cutcom="ignore"`` (the CL points are then the tool centre);
+- motion words whose moves cannot be computed here (GOFWD, TLON, ROTABL, TRACUT, ...) are
+  refused;
+- machine functions (SPINDL, COOLNT, DELAY, STOP, AUXFUN, INSERT, ...) and unknown words are
+  listed once each with their count and first lines (:attr:`ClProgram.not_applied`); titles,
+  display and tool data (PARTNO, PAINT, TLDATA, ...) and the NX listing banner are read
+  silently; ``$$`` comments and PPRINT are kept.
 
-Any other word is kept as a :class:`ClWarning` with its line number. Malformed data raise
-:class:`ClParseError` (an :class:`~drakedeburr.errors.InputError`) naming the file, line and
-token. Output is SI: positions [m], feeds [m/s]; tool axes are unit vectors in the CAM
-convention (i, j, k) = tip -> spindle = -Z_T (DESIGN.md).
+Malformed data raise :class:`ClParseError` (an :class:`~drakedeburr.errors.InputError`) naming
+the file, line and token. Output is SI: positions [m], feeds [m/s]; tool axes are unit vectors
+in the CAM convention (i, j, k) = tip -> spindle = -Z_T (DESIGN.md).
 """
 
 from __future__ import annotations
 
+import functools
 import logging
-import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,13 +43,24 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.units import INCH_M, MM_PER_M
+from drakedeburr.post.cl_interpreter import ClInterpreter
+from drakedeburr.post.cl_types import (
+    ClMove,
+    ClParseError,
+    ClToolPath,
+    ClWarning,
+    ClWordCount,
+    Notes,
+)
 
 __all__ = [
     "ClParseError",
     "ClWarning",
     "ClMove",
+    "ClToolPath",
+    "ClWordCount",
     "ClProgram",
+    "ClReadState",
     "iter_cl_moves",
     "read_cl",
     "parse_cl_text",
@@ -45,153 +68,53 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-_LENGTH_M = {"mm": 1.0 / MM_PER_M, "inch": INCH_M}
-_MAX_ABS = 1e9  # no CL number (mm, inch, rpm, feed) is larger: beyond is corrupt data
-# words that carry no path information here (kept silently)
-_IGNORED = frozenset({
-    "PARTNO", "MACHIN", "TLDATA", "MSYS", "PAINT", "CUTTER", "COOLNT", "END", "TOOL PATH",
-    "CUTCOM", "CLRSRF", "OPSKIP", "SELCTL", "MODE", "INSERT", "DISPLY", "FEDRAT/RAPID",
-    "AIR", "OPSTOP", "STOP", "DELAY", "SEQNO", "ORIGIN", "PITCH", "PREFUN", "AUXFUN",
-})
+_CHUNK = 65536  # moves per column block while reading
+_COMMENTS_KEPT = 10000
+_PROGRESS_LINES = 65536  # progress callback every this many lines
 
 
-class ClParseError(InputError):
-    """Malformed CL data: names the file, the line and the offending token."""
+@dataclass
+class ClReadState:
+    """What a streaming read found besides the moves (filled while reading, complete at the
+    end). See :class:`ClProgram` for the attributes."""
 
-    def __init__(self, source: str, line: int, token: str, message: str) -> None:
-        self.source, self.line, self.token = source, line, token
-        super().__init__(f"{source}:{line}: {message} (token {token!r})")
-
-
-@dataclass(frozen=True)
-class ClWarning:
-    """A statement the reader did not act on."""
-
-    line: int
-    word: str
-    message: str
-
-
-@dataclass(frozen=True)
-class ClMove:
-    """One tool-tip position of the CL file.
-
-    Attributes:
-        line: 1-based line number of the statement (GOTO; CIRCLE for expanded arc points).
-        rapid: True for a rapid (positioning) move, False for a feed move.
-        p_C: (x, y, z) tool tip in the CL (workpiece/MSYS) frame [m].
-        axis_C: (i, j, k) unit tool axis, tip -> spindle (= -Z_T), CL frame.
-        feed: feed rate [m/s]; NaN if the file gave none yet.
-        spindle_rpm: spindle speed [1/min], + clockwise (CLW), - counter-clockwise, 0 off.
-        tool: tool number from LOADTL / LOAD/TOOL (0 if none).
-        from_circle: True for a point generated by CIRCLE expansion.
-    """
-
-    line: int
-    rapid: bool
-    p_C: tuple[float, float, float]
-    axis_C: tuple[float, float, float]
-    feed: float
-    spindle_rpm: float
-    tool: int
-    from_circle: bool = False
-
-
-@dataclass(frozen=True)
-class ClProgram:
-    """A read CL file (see :func:`read_cl`).
-
-    Attributes:
-        source: file name (for messages).
-        moves: every move, in order.
-        warnings: statements not acted on.
-        comments: (line, text) of ``$$`` comments and PPRINT.
-        units: length unit the coordinates were read in at the end ('mm' or 'inch').
-        end_line: line of FINI / END-OF-PATH.
-    """
-
-    source: str
-    moves: tuple[ClMove, ...]
-    warnings: tuple[ClWarning, ...] = field(default=())
-    comments: tuple[tuple[int, str], ...] = field(default=())
     units: str = "mm"
     end_line: int = 0
-
-    @property
-    def p_C(self) -> np.ndarray:
-        """(N, 3) tool tip positions in the CL frame [m]."""
-        return np.array([m.p_C for m in self.moves], float).reshape(-1, 3)
-
-    @property
-    def axis_C(self) -> np.ndarray:
-        """(N, 3) unit tool axes tip -> spindle in the CL frame."""
-        return np.array([m.axis_C for m in self.moves], float).reshape(-1, 3)
-
-    @property
-    def rapid(self) -> np.ndarray:
-        """(N,) bool, rapid moves."""
-        return np.array([m.rapid for m in self.moves], bool)
-
-    @property
-    def lines(self) -> np.ndarray:
-        """(N,) int line numbers."""
-        return np.array([m.line for m in self.moves], int)
-
-    @property
-    def feed(self) -> np.ndarray:
-        """(N,) feed [m/s]."""
-        return np.array([m.feed for m in self.moves], float)
+    paths: list[ClToolPath] = field(default_factory=list)
+    unit_changes: list[tuple[int, str, int]] = field(default_factory=list)
+    warnings: list[ClWarning] = field(default_factory=list)
+    warning_counts: dict[str, int] = field(default_factory=dict)
+    not_applied: tuple[ClWordCount, ...] = ()
+    lines_read: int = 0
 
 
-def _statements(lines: Iterable[str], source: str, counter: list[int]
-                ) -> Iterator[tuple[int, str]]:
+def _statements(lines: Iterable[str], source: str, counter: list[int],
+                progress: Callable[[int, int], None] | None) -> Iterator[tuple[int, str]]:
     """(first line number, joined text) per statement; ``$`` continues a line.
-    ``counter[0]`` follows the physical line number."""
+    ``counter`` follows [physical line number, characters read]."""
     buf: list[str] = []
-    start = 0
-    lineno = 0
+    start = lineno = chars = 0
     for lineno, raw in enumerate(lines, start=1):
-        counter[0] = lineno
+        chars += len(raw)
+        if progress is not None and lineno % _PROGRESS_LINES == 0:
+            counter[0], counter[1] = lineno, chars
+            progress(lineno, chars)
         text = raw.rstrip("\r\n").strip()
         if not buf:
             start = lineno
         if text.endswith("$") and not text.endswith("$$") and text != "$":
             buf.append(text[:-1])
             continue
-        buf.append(text)
-        stmt = " ".join(buf).strip()
-        buf = []
-        if stmt:
-            yield start, stmt
+        if buf:
+            buf.append(text)
+            text = " ".join(buf).strip()
+            buf = []
+        if text:
+            yield start, text
+    counter[0], counter[1] = lineno, chars
     if buf:
         raise ClParseError(source, lineno, buf[-1][-20:] + "$",
                            "file ends inside a '$' continuation (truncated?)")
-
-
-def _number(source: str, line: int, token: str) -> float:
-    try:
-        value = float(token)
-    except ValueError:
-        raise ClParseError(source, line, token, "expected a number") from None
-    if not math.isfinite(value):
-        raise ClParseError(source, line, token, "not a finite number")
-    if abs(value) > _MAX_ABS:
-        raise ClParseError(source, line, token, f"number beyond +-{_MAX_ABS:g}")
-    return value
-
-
-class _State:
-    def __init__(self, units: str) -> None:
-        self.units = units
-        self.scale = _LENGTH_M[units]
-        self.axis = (0.0, 0.0, 1.0)
-        self.feed = math.nan
-        self.rpm = 0.0
-        self.tool = 0
-        self.rapid_next = False
-        self.p_prev: tuple[float, float, float] | None = None
-        self.circle: tuple[int, np.ndarray, np.ndarray, float, str] | None = None
-        self.ended = 0
 
 
 def iter_cl_moves(
@@ -202,7 +125,9 @@ def iter_cl_moves(
     on_warning: Callable[[ClWarning], None] | None = None,
     on_comment: Callable[[int, str], None] | None = None,
     require_end: bool = True,
-    state_out: dict | None = None,
+    state_out: dict | ClReadState | None = None,
+    cutcom: str = "refuse",
+    progress: Callable[[int, int], None] | None = None,
 ) -> Iterator[ClMove]:
     """Yield the moves of a CL file as it is read (streaming).
 
@@ -212,202 +137,168 @@ def iter_cl_moves(
         units: length unit until a UNITS statement says otherwise: 'mm' or 'inch' (NX CLSF
             files usually carry no UNITS statement; inch files say FEDRAT/IPM).
         arc_tolerance: maximum chord-height error of CIRCLE expansion [m].
-        on_warning: called with each :class:`ClWarning`.
+        on_warning: called with each :class:`ClWarning` (at most 20 per word).
         on_comment: called with (line, text) of each comment / PPRINT.
-        require_end: raise if the file ends without FINI or END-OF-PATH (truncated file).
-        state_out: if given, receives 'units' and 'end_line' at the end.
+        require_end: raise if the file ends without FINI or a closing END-OF-PATH (truncated).
+        state_out: a :class:`ClReadState` (or a dict, which receives 'units' and 'end_line')
+            filled at the end.
+        cutcom: 'refuse' cutter compensation (default) or 'ignore' it (CL = tool centre).
+        progress: called with (lines read, characters read) every 65536 lines.
 
     Raises:
-        ClParseError: malformed statement, non-finite number, truncated file.
+        ClParseError: malformed or unsupported statement, non-finite number, truncated file.
     """
-    if units not in _LENGTH_M:
-        raise InputError(f"{source}: units must be 'mm' or 'inch', got {units!r}")
-    if not arc_tolerance > 0:
-        raise InputError(f"arc_tolerance must be > 0, got {arc_tolerance!r}")
-    st = _State(units)
-    warn = on_warning or (lambda w: None)
-    counter = [0]
-    for line, stmt in _statements(lines, source, counter):
-        if st.ended:
-            continue
-        if stmt.startswith("$$"):
-            if on_comment is not None:
-                on_comment(line, stmt[2:].lstrip("-> ").strip())
-            continue
-        word, sep, rest = stmt.partition("/")
-        word = " ".join(word.split()).upper()
-        args = [a.strip() for a in rest.split(",")] if sep else []
-        if word == "GOTO":
-            yield from _goto(st, source, line, args, arc_tolerance, warn)
-        elif word == "RAPID":
-            st.rapid_next = True
-        elif word == "FEDRAT":
-            _fedrat(st, source, line, args, warn)
-        elif word == "SPINDL":
-            _spindl(st, source, line, args)
-        elif word == "CIRCLE":
-            if len(args) < 7:
-                raise ClParseError(source, line, rest.strip(), "CIRCLE needs xc,yc,zc,i,j,k,r")
-            v = [_number(source, line, a) for a in args[:7]]
-            n = np.array(v[3:6])
-            nn = np.linalg.norm(n)
-            if nn < 1e-9 or v[6] <= 0:
-                raise ClParseError(source, line, rest.strip(),
-                                   "CIRCLE axis must be non-zero and radius > 0")
-            st.circle = (line, np.array(v[:3]) * st.scale, n / nn, v[6] * st.scale, args[6])
-        elif word == "TLAXIS":
-            if len(args) < 3:
-                raise ClParseError(source, line, rest.strip(), "TLAXIS needs i,j,k")
-            st.axis = _unit(source, line, [_number(source, line, a) for a in args[:3]], warn,
-                            "TLAXIS")
-        elif word == "MULTAX":
-            pass  # GOTO carries the axis when it has 6 numbers, whatever the MULTAX state
-        elif word == "UNITS":
-            u = args[0].upper() if args else ""
-            if u in ("MM", "MILLIMETERS", "METRIC"):
-                st.units, st.scale = "mm", _LENGTH_M["mm"]
-            elif u in ("INCHES", "INCH", "IN"):
-                st.units, st.scale = "inch", _LENGTH_M["inch"]
-            else:
-                raise ClParseError(source, line, u, "UNITS must be MM or INCHES")
-        elif word in ("INCHES", "MM"):
-            st.units = "inch" if word == "INCHES" else "mm"
-            st.scale = _LENGTH_M[st.units]
-        elif word == "LOADTL" or (word == "LOAD" and args and args[0].upper() == "TOOL"):
-            tok = (args[0] if args else "") if word == "LOADTL" else (
-                args[1] if len(args) > 1 else "")
-            if not tok:
-                raise ClParseError(source, line, word, "tool change without a tool number")
-            st.tool = int(_number(source, line, tok))
-        elif word == "PPRINT":
-            if on_comment is not None:
-                on_comment(line, rest.strip())
-        elif word in ("FINI", "END-OF-PATH"):
-            st.ended = line
-        elif word in _IGNORED:
-            pass
-        elif word == "CYCLE":
-            warn(ClWarning(line, word, "machining cycle not expanded: its GOTOs are read as "
-                                       "plain moves"))
-        else:
-            warn(ClWarning(line, word, "unknown word ignored"))
+    notes = Notes(on_warning)
+    interp = ClInterpreter(source, units, arc_tolerance, notes, on_comment, cutcom)
+    counter = [0, 0]
+    for line, stmt in _statements(lines, source, counter, progress):
+        yield from interp.statement(line, stmt)
     last_line = max(counter[0], 1)
-    if st.circle is not None:
+    if interp.circle is not None:
         raise ClParseError(source, last_line, "CIRCLE",
-                           f"CIRCLE on line {st.circle[0]} has no end GOTO (truncated?)")
-    if require_end and not st.ended:
+                           f"CIRCLE on line {interp.circle[0]} has no end GOTO (truncated?)")
+    closed = interp.paths and not interp.path_open and interp.paths[-1].end_line > 0
+    if require_end and not (interp.ended or closed):
         raise ClParseError(source, last_line, "EOF",
                            "file ends without FINI or END-OF-PATH (truncated?)"
                            if counter[0] else "empty file")
-    if state_out is not None:
-        state_out.update(units=st.units, end_line=st.ended)
+    end_line = interp.ended or (interp.paths[-1].end_line if closed else 0)
+    if isinstance(state_out, dict):
+        state_out.update(units=interp.units, end_line=end_line)
+    elif state_out is not None:
+        state_out.units, state_out.end_line = interp.units, end_line
+        state_out.paths = interp.paths
+        state_out.unit_changes = interp.unit_changes
+        state_out.warnings, state_out.warning_counts = notes.warnings, notes.warning_counts
+        state_out.not_applied = notes.word_counts()
+        state_out.lines_read = counter[0]
 
 
-def _unit(source: str, line: int, v: list[float], warn: Callable[[ClWarning], None],
-          word: str) -> tuple[float, float, float]:
-    m = max(abs(x) for x in v)
-    if m < 1e-9:
-        raise ClParseError(source, line, ",".join(f"{x:g}" for x in v), "zero tool axis")
-    w = [x / m for x in v]  # scaled first: no overflow for huge components
-    n = math.hypot(*w)
-    if abs(n * m - 1.0) > 1e-3:
-        warn(ClWarning(line, word, f"tool axis length {n * m:.6g} normalised"))
-    return (w[0] / n, w[1] / n, w[2] / n)
+class _Columns:
+    """Moves collected into numpy blocks (bounded memory: ~90 bytes per move)."""
+
+    def __init__(self) -> None:
+        self.rows: list[tuple] = []
+        self.blocks: list[np.ndarray] = []
+
+    def add(self, m: ClMove) -> None:
+        self.rows.append((m.line, m.rapid, *m.p_C, *m.axis_C, m.feed, m.spindle_rpm, m.tool,
+                          m.from_circle, m.path, m.cycle))
+        if len(self.rows) == _CHUNK:
+            self.blocks.append(np.array(self.rows, float))
+            self.rows = []
+
+    def columns(self) -> dict[str, np.ndarray]:
+        if self.rows or not self.blocks:
+            self.blocks.append(np.array(self.rows, float).reshape(-1, 14))
+            self.rows = []
+        a = np.concatenate(self.blocks) if len(self.blocks) > 1 else self.blocks[0]
+        self.blocks = []
+        return dict(lines=a[:, 0].astype(np.int64), rapid=a[:, 1] != 0,
+                    p_C=np.ascontiguousarray(a[:, 2:5]), axis_C=np.ascontiguousarray(a[:, 5:8]),
+                    feed=a[:, 8].copy(), spindle_rpm=a[:, 9].copy(),
+                    tool=a[:, 10].astype(np.int32), from_circle=a[:, 11] != 0,
+                    path=a[:, 12].astype(np.int32), cycle=a[:, 13] != 0)
 
 
-def _goto(st: _State, source: str, line: int, args: list[str], arc_tolerance: float,
-          warn: Callable[[ClWarning], None]) -> Iterator[ClMove]:
-    if len(args) not in (3, 6):
-        raise ClParseError(source, line, ",".join(args),
-                           f"GOTO needs 3 or 6 numbers, got {len(args)}")
-    v = [_number(source, line, a) for a in args]
-    sc = st.scale
-    p = (v[0] * sc, v[1] * sc, v[2] * sc)  # plain floats: numpy per point costs 2x here
-    if len(v) == 6:
-        st.axis = _unit(source, line, v[3:], warn, "GOTO")
-    rapid = st.rapid_next
-    st.rapid_next = False
-    if st.circle is not None:
-        c_line, center, n, radius, r_token = st.circle
-        st.circle = None
-        if st.p_prev is None:
-            raise ClParseError(source, c_line, "CIRCLE", "CIRCLE before any position")
-        for q in _arc_points(source, c_line, np.array(st.p_prev), np.array(p), center, n,
-                             radius, r_token, arc_tolerance):
-            yield ClMove(c_line, rapid, (float(q[0]), float(q[1]), float(q[2])), st.axis,
-                         st.feed, st.rpm, st.tool, True)
-    st.p_prev = p
-    yield ClMove(line, rapid, p, st.axis, st.feed, st.rpm, st.tool, False)
+@dataclass(frozen=True, eq=False)
+class ClProgram:
+    """A read CL file (see :func:`read_cl`), moves stored as arrays.
+
+    Attributes:
+        source: file name (for messages).
+        p_C: (N, 3) tool tip positions in the CL frame [m].
+        axis_C: (N, 3) unit tool axes tip -> spindle, CL frame.
+        rapid: (N,) bool, rapid moves.
+        lines: (N,) int, CL line of each move.
+        feed: (N,) feed [m/s] (NaN before the first FEDRAT).
+        spindle_rpm: (N,) spindle speed [1/min] (+ CLW).
+        tool: (N,) tool numbers.
+        from_circle: (N,) bool, points from CIRCLE expansion.
+        path: (N,) int, index into ``paths``.
+        cycle: (N,) bool, moves of an expanded drilling cycle.
+        paths: the tool paths, in file order.
+        warnings: statements acted on with a caveat (at most 20 per word; all are counted in
+            ``warning_counts``).
+        warning_counts: word -> number of warnings.
+        not_applied: words not turned into robot motion, each listed once with its count.
+        comments: (line, text) of ``$$`` comments and PPRINT (the first 10000).
+        units: length unit in effect at the end ('mm' or 'inch').
+        unit_changes: (line, new unit, moves read before) of each UNITS statement that changed
+            the unit; a switch with moves before it is a mid-file switch.
+        end_line: line of FINI (or of the last END-OF-PATH).
+    """
+
+    source: str
+    p_C: np.ndarray
+    axis_C: np.ndarray
+    rapid: np.ndarray
+    lines: np.ndarray
+    feed: np.ndarray
+    spindle_rpm: np.ndarray
+    tool: np.ndarray
+    from_circle: np.ndarray
+    path: np.ndarray
+    cycle: np.ndarray
+    paths: tuple[ClToolPath, ...] = ()
+    warnings: tuple[ClWarning, ...] = ()
+    warning_counts: dict[str, int] = field(default_factory=dict)
+    not_applied: tuple[ClWordCount, ...] = ()
+    comments: tuple[tuple[int, str], ...] = ()
+    units: str = "mm"
+    unit_changes: tuple[tuple[int, str, int], ...] = ()
+    end_line: int = 0
+
+    def __len__(self) -> int:
+        return int(self.lines.shape[0])
+
+    @functools.cached_property
+    def moves(self) -> tuple[ClMove, ...]:
+        """Every move as a :class:`ClMove`, in order (built on first use)."""
+        return tuple(
+            ClMove(int(ln), bool(r), tuple(map(float, p)), tuple(map(float, a)), float(f),
+                   float(s), int(t), bool(c), int(k), bool(y))
+            for ln, r, p, a, f, s, t, c, k, y in zip(
+                self.lines, self.rapid, self.p_C, self.axis_C, self.feed, self.spindle_rpm,
+                self.tool, self.from_circle, self.path, self.cycle, strict=True))
+
+    @property
+    def mid_file_unit_changes(self) -> tuple[tuple[int, str, int], ...]:
+        """UNITS switches that came after moves had been read in the other unit."""
+        return tuple(u for u in self.unit_changes if u[2] > 0)
+
+    def summary(self) -> list[str]:
+        """Short lines describing the file: paths, units, words not applied."""
+        out = [f"{Path(self.source).name}: {len(self)} moves in {len(self.paths)} tool "
+               f"path(s), units {self.units}"]
+        for p in self.paths:
+            holes = f", {p.n_holes} holes drilled" if p.n_holes else ""
+            name = f" {p.name!r}" if p.name else ""
+            out.append(f"path {p.index + 1}{name}: lines {p.start_line}-{p.end_line}, "
+                       f"{p.n_goto} GOTOs -> {p.n_moves} moves{holes}")
+        for line, unit, before in self.mid_file_unit_changes:
+            out.append(f"UNITS switched to {unit} at line {line} after {before} moves")
+        out += [f"not applied: {w.describe()}" for w in self.not_applied]
+        return out
 
 
-def _arc_points(source: str, line: int, p0: np.ndarray, p1: np.ndarray, center: np.ndarray,
-                n: np.ndarray, radius: float, r_token: str, tol: float) -> np.ndarray:
-    """Interior points of the arc p0 -> p1, right-handed about n (helix along n allowed)."""
-    r0, r1 = p0 - center, p1 - center
-    h0, h1 = r0 @ n, r1 @ n
-    r0p, r1p = r0 - h0 * n, r1 - h1 * n
-    rad_tol = max(1e-3 * radius, 10 * tol)
-    for rp, name in ((r0p, "start"), (r1p, "end")):
-        if abs(np.linalg.norm(rp) - radius) > rad_tol:
-            raise ClParseError(source, line, r_token,
-                               f"CIRCLE {name} point is {np.linalg.norm(rp):.6g} m from the "
-                               f"centre, radius {radius:.6g} m")
-    e1 = r0p / np.linalg.norm(r0p)
-    e2 = np.cross(n, e1)
-    ang = math.atan2(float(r1p @ e2), float(r1p @ e1)) % (2 * math.pi)
-    if ang < 1e-12:
-        ang = 2 * math.pi  # end point = start point: full circle
-    step = 2 * math.acos(max(-1.0, 1 - tol / radius)) if tol < radius else math.pi / 2
-    k = max(1, math.ceil(ang / max(step, 1e-6)))
-    t = np.arange(1, k) / k
-    th = ang * t
-    return (center[None] + radius * (np.cos(th)[:, None] * e1 + np.sin(th)[:, None] * e2)
-            + (h0 + (h1 - h0) * t)[:, None] * n)
+def _program(source: str, moves: Iterable[ClMove], state: ClReadState,
+             comments: list[tuple[int, str]]) -> ClProgram:
+    cols = _Columns()
+    for m in moves:
+        cols.add(m)
+    return ClProgram(source=source, **cols.columns(), paths=tuple(state.paths),
+                     warnings=tuple(state.warnings), warning_counts=dict(state.warning_counts),
+                     not_applied=state.not_applied, comments=tuple(comments),
+                     units=state.units, unit_changes=tuple(state.unit_changes),
+                     end_line=state.end_line)
 
 
-def _fedrat(st: _State, source: str, line: int, args: list[str],
-            warn: Callable[[ClWarning], None]) -> None:
-    value = None
-    mode = None
-    for a in args:
-        u = a.upper()
-        if u in ("IPM", "MMPM", "IPR", "MMPR", "PERMIN", "PERREV"):
-            mode = u
-        elif u:
-            value = _number(source, line, a)
-    if value is None:
-        raise ClParseError(source, line, ",".join(args), "FEDRAT without a value")
-    if value < 0:
-        raise ClParseError(source, line, f"{value:g}", "negative feed")
-    if mode in ("IPM", "IPR"):
-        length = INCH_M
-    elif mode in ("MMPM", "MMPR"):
-        length = 1.0 / MM_PER_M
-    else:
-        length = st.scale
-    if mode in ("IPR", "MMPR", "PERREV"):
-        if st.rpm == 0:
-            warn(ClWarning(line, "FEDRAT", "feed per revolution with the spindle off: feed 0"))
-        st.feed = value * length * abs(st.rpm) / 60.0
-    else:
-        st.feed = value * length / 60.0
-    if mode == "IPM" and st.units == "mm":
-        warn(ClWarning(line, "FEDRAT", "feed in inch/min but coordinates read as mm "
-                                       "(no UNITS statement?): check the units argument"))
-
-
-def _spindl(st: _State, source: str, line: int, args: list[str]) -> None:
-    words = [a.upper() for a in args if a]
-    if "OFF" in words:
-        st.rpm = 0.0
-        return
-    sign = -1.0 if "CCLW" in words else 1.0
-    nums = [a for a in args if a and a.upper() not in ("RPM", "SFM", "SMM", "CLW", "CCLW",
-                                                         "ON", "RANGE", "HIGH", "LOW", "MEDIUM")]
-    if nums:
-        st.rpm = sign * abs(_number(source, line, nums[0]))
-    elif "ON" not in words:
-        raise ClParseError(source, line, ",".join(args), "SPINDL without a speed")
+def _comment_sink(comments: list[tuple[int, str]]) -> Callable[[int, str], None]:
+    def add(line: int, text: str) -> None:
+        if len(comments) < _COMMENTS_KEPT:
+            comments.append((line, text))
+    return add
 
 
 def read_cl(
@@ -415,6 +306,8 @@ def read_cl(
     units: str = "mm",
     arc_tolerance: float = 1e-5,
     require_end: bool = True,
+    cutcom: str = "refuse",
+    progress: Callable[[int, int, str], None] | None = None,
 ) -> ClProgram:
     """Read a CL/APT file into a :class:`ClProgram` (see :func:`iter_cl_moves`).
 
@@ -423,34 +316,39 @@ def read_cl(
         units: length unit until a UNITS statement ('mm' or 'inch').
         arc_tolerance: chord-height error of CIRCLE expansion [m].
         require_end: a file without FINI / END-OF-PATH is an error (truncated).
+        cutcom: 'refuse' cutter compensation, or 'ignore' it (CL points = tool centre).
+        progress: optional callback (characters read, file size, "read CL").
 
     Raises:
         ClParseError: malformed data (file, line, token named).
-        FileNotFoundError: no such file.
+        InputError: no such file, or not a readable file.
     """
     path = Path(path)
-    warnings: list[ClWarning] = []
+    if not path.is_file():
+        raise InputError(f"{path}: CL file not found" if not path.exists()
+                         else f"{path}: not a file")
+    size = path.stat().st_size
+    state = ClReadState()
     comments: list[tuple[int, str]] = []
-    state: dict = {}
+    tick = None if progress is None else (lambda n, chars: progress(min(chars, size), size,
+                                                                    "read CL"))
     with path.open("r", encoding="utf-8", errors="replace", newline="") as f:
-        moves = tuple(iter_cl_moves(f, str(path), units, arc_tolerance, warnings.append,
-                                    lambda ln, t: comments.append((ln, t)), require_end, state))
-    for w in warnings:
+        prog = _program(str(path), iter_cl_moves(
+            f, str(path), units, arc_tolerance, None, _comment_sink(comments), require_end,
+            state, cutcom, tick), state, comments)
+    if progress is not None:
+        progress(size, size, "read CL")
+    for w in prog.warnings:
         log.info("%s:%d: %s: %s", path.name, w.line, w.word, w.message)
-    return ClProgram(source=str(path), moves=moves, warnings=tuple(warnings),
-                     comments=tuple(comments), units=state.get("units", units),
-                     end_line=state.get("end_line", 0))
+    return prog
 
 
 def parse_cl_text(text: str, source: str = "<text>", units: str = "mm",
-                  arc_tolerance: float = 1e-5, require_end: bool = True) -> ClProgram:
+                  arc_tolerance: float = 1e-5, require_end: bool = True,
+                  cutcom: str = "refuse") -> ClProgram:
     """Like :func:`read_cl` for a string."""
-    warnings: list[ClWarning] = []
+    state = ClReadState()
     comments: list[tuple[int, str]] = []
-    state: dict = {}
-    moves = tuple(iter_cl_moves(text.splitlines(), source, units, arc_tolerance,
-                                warnings.append, lambda ln, t: comments.append((ln, t)),
-                                require_end, state))
-    return ClProgram(source=source, moves=moves, warnings=tuple(warnings),
-                     comments=tuple(comments), units=state.get("units", units),
-                     end_line=state.get("end_line", 0))
+    return _program(source, iter_cl_moves(
+        text.splitlines(), source, units, arc_tolerance, None, _comment_sink(comments),
+        require_end, state, cutcom), state, comments)

@@ -1,13 +1,28 @@
-"""``drakedeburr post``: CL/APT file -> ABB RAPID, KUKA KRL or FANUC LS program."""
+"""``drakedeburr post``: CL/APT file -> ABB RAPID, KUKA KRL or FANUC LS program.
+
+Exit codes: 0 written; 1 ran but points are unreachable (nothing written, or with --force the
+reachable part, flagged FORCED); 2 bad input (one line naming file, item and what is wrong);
+130 interrupted (earlier outputs untouched: files are written atomically).
+
+The options are built in groups (:func:`add_input_options`, :func:`add_cell_options`,
+:func:`add_output_options`) and turned into library settings by :func:`settings_from_args`,
+so a new cell option (a robot, workpiece in hand) is one argument plus one line there.
+"""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
+import re
+from pathlib import Path
 
-__all__ = ["register"]
+__all__ = ["register", "add_input_options", "add_cell_options", "add_output_options",
+           "settings_from_args", "program_name"]
 
 log = logging.getLogger(__name__)
+
+_WORDS_SHOWN = 30  # words-not-applied lines shown on the console
 
 
 def _six(text: str) -> list[float]:
@@ -18,73 +33,191 @@ def _six(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"expected x,y,z,rx,ry,rz numbers, got {text!r}") from None
 
 
-def register(subparsers) -> None:
-    p = subparsers.add_parser(
-        "post", help="post-process a CL/APT file into a robot program",
-        description="Read a CAM cutter-location file (NX CLSF, Creo, APT), solve the robot's "
-                    "joints with the analytic IK and write an ABB RAPID, KUKA KRL or FANUC LS "
-                    "program. CL coordinates are in the robot base frame unless --wobj is given. "
-                    "Unreachable points are listed with their CL line numbers and no program "
-                    "is written unless --force (then the header says FORCED).")
+def add_input_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("cl_file", help="the .cl / CLSF / APT file")
-    p.add_argument("--robot", default="irb1600", choices=["irb1600"], help="robot model")
-    p.add_argument("--format", dest="fmt", required=True, choices=["rapid", "krl", "ls"])
-    p.add_argument("-o", "--output", required=True,
-                   help="program file (.mod / .src (+ .dat beside it) / .ls)")
+    p.add_argument("--units", default="mm", choices=["mm", "inch"],
+                   help="CL length unit until a UNITS statement (NX CLSF files: often inch); "
+                        "a UNITS switch after moves is honoured and reported")
+    p.add_argument("--ignore-cutcom", action="store_true",
+                   help="accept CUTCOM/TLCOMP (cutter compensation) by taking the CL points as "
+                        "the tool centre; without it such files are refused")
+
+
+def add_cell_options(p: argparse.ArgumentParser) -> None:
+    from drakedeburr.robots import robot_names
+
+    p.add_argument("--robot", default="irb1600", choices=robot_names(),
+                   help="registered arm (drakedeburr robots); its controller's format is "
+                        "the default --format")
     p.add_argument("--wobj", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
-                   help="work object (CL frame) in the robot base: mm, deg, R = Rz Ry Rx")
+                   help="work object (CL frame, after MSYS) in the robot base: mm, deg, "
+                        "R = Rz Ry Rx")
     p.add_argument("--tool", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="TCP in the flange frame: mm, deg (default 0,0,200,0,0,0)")
-    p.add_argument("--units", default="mm", choices=["mm", "inch"],
-                   help="CL length unit until a UNITS statement (NX CLSF files: often inch)")
     p.add_argument("--spin", default="min_travel",
                    choices=["min_travel", "greedy", "theta6_zero"],
                    help="rule for the free rotation about the tool axis")
     p.add_argument("--zone", type=float, default=1.0, help="corner zone of feed moves [mm]")
     p.add_argument("--feed", type=float, default=None,
                    help="feed-move TCP speed [mm/s] (default: the file's FEDRAT)")
-    p.add_argument("--name", default=None, help="program name (default from the file name)")
     p.add_argument("--force", action="store_true",
                    help="write the program even if points are unreachable (they are left out)")
+
+
+def add_output_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--format", dest="fmt", default=None, choices=["rapid", "krl", "ls"],
+                   help="program format (default: the arm's controller's: RAPID for ABB, KRL "
+                        "for KUKA, LS for FANUC; another one is refused)")
+    p.add_argument("-o", "--output", required=True,
+                   help="program file (.mod / .src (+ .dat beside it) / .ls)")
+    p.add_argument("--name", default=None, help="program name (default from the file name)")
+    p.add_argument("--max-moves", type=int, default=None, metavar="N",
+                   help="moves per program file (default 100000); a longer program is written "
+                        "as numbered parts FILE_001, FILE_002, ... each continuing the last")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "post", help="post-process a CL/APT file into a robot program",
+        description="Read a CAM cutter-location file (NX CLSF, Creo, APT): every tool path in "
+                    "file order, MSYS and UNITS applied, drilling cycles expanded into moves; "
+                    "solve the robot's joints with the analytic IK and write an ABB RAPID, "
+                    "KUKA KRL or FANUC LS program. CL coordinates are in the robot base frame "
+                    "unless --wobj is given. Words of the file not in the program are listed "
+                    "once each. Unreachable points are listed with their CL line numbers and "
+                    "no program is written unless --force (then the header says FORCED). "
+                    "Exit codes: 0 written, 1 unreachable points, 2 bad input, 130 "
+                    "interrupted.")
+    add_input_options(p)
+    add_cell_options(p)
+    add_output_options(p)
     p.set_defaults(_run=_run_post)
 
 
-def _run_post(args) -> int:
-    import re
-    from pathlib import Path
-
-    from drakedeburr.cli import tqdm_progress
+def program_name(cl_file: str, name: str | None) -> str:
+    """A program name from --name or the file name: letters, digits, '_', <= 24 chars."""
     from drakedeburr.errors import InputError
-    from drakedeburr.post.cl_post import ROBOTS, pose_from_mm_deg, program_from_cl
-    from drakedeburr.post.cl_reader import read_cl
-    from drakedeburr.programs.writers import write_program
-    from drakedeburr.units import m_from_mm
 
-    cl = read_cl(args.cl_file, units=args.units)
-    for w in cl.warnings:
-        log.warning("%s:%d: %s: %s", Path(args.cl_file).name, w.line, w.word, w.message)
-    X_WO = pose_from_mm_deg(args.wobj, "--wobj") if args.wobj is not None else None
-    X_FT = pose_from_mm_deg(args.tool if args.tool is not None else [0, 0, 200, 0, 0, 0], "--tool")
-    name = args.name or re.sub(r"[^A-Za-z0-9_]", "_", Path(args.cl_file).name.split(".")[0])
-    if not name[:1].isalpha():
-        name = "p" + name
-    name = name[:24]
+    if name is not None:
+        if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,23}", name):
+            raise InputError(f"--name {name!r}: letters, digits, '_', starting with a letter, "
+                             "at most 24 characters")
+        return name
+    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(cl_file).name.split(".")[0])
+    if not stem[:1].isalpha():
+        stem = "p" + stem
+    return stem[:24]
+
+
+def _check_args(args) -> None:
+    """Everything that can be checked before reading the file."""
+    from drakedeburr.errors import InputError
+
+    cl = Path(args.cl_file)
+    if not cl.is_file():
+        raise InputError(f"{cl}: CL file not found" if not cl.exists() else f"{cl}: not a file")
     if args.feed is not None and not args.feed > 0:
         raise InputError(f"--feed must be > 0 mm/s, got {args.feed}")
-    result = program_from_cl(
-        cl, name, robot=ROBOTS[args.robot], X_WO=X_WO, X_FT=X_FT, spin_mode=args.spin,
-        zone=m_from_mm(args.zone), feed=None if args.feed is None else m_from_mm(args.feed),
-        force=args.force, progress=tqdm_progress("IK"))
-    if result.unreachable_lines:
-        shown = ", ".join(map(str, result.unreachable_lines[:30]))
-        more = "" if len(result.unreachable_lines) <= 30 else " ..."
+    if not args.zone >= 0:
+        raise InputError(f"--zone must be >= 0 mm, got {args.zone}")
+    if args.max_moves is not None and args.max_moves < 1:
+        raise InputError(f"--max-moves must be >= 1, got {args.max_moves}")
+    out = Path(args.output)
+    if out.is_dir():
+        raise InputError(f"{out}: --output is a folder, give a file name")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{out}: the output folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise InputError(f"{out}: the output folder {parent} is not writable")
+
+
+def settings_from_args(args):
+    """:class:`~drakedeburr.post.cl_post.PostSettings` from the parsed options."""
+    from drakedeburr.post.cl_post import PostSettings, pose_from_mm_deg, robot_kinematics
+    from drakedeburr.units import m_from_mm
+
+    return PostSettings(
+        robot=robot_kinematics(args.robot),
+        X_WO=pose_from_mm_deg(args.wobj, "--wobj") if args.wobj is not None else None,
+        X_FT=pose_from_mm_deg(args.tool if args.tool is not None else [0, 0, 200, 0, 0, 0],
+                              "--tool"),
+        spin_mode=args.spin, zone=m_from_mm(args.zone),
+        feed=None if args.feed is None else m_from_mm(args.feed), force=args.force)
+
+
+def _phase_progress():
+    """One tqdm bar per phase label (read CL, spin + IK, write)."""
+    from drakedeburr.cli import tqdm_progress
+
+    bars: dict = {}
+
+    def update(done: int, total: int, label: str = "") -> None:
+        if label not in bars:
+            bars[label] = tqdm_progress(label)
+        bars[label](done, total, "")
+
+    return update
+
+
+def _report(summary, robot: str) -> None:
+    cl = summary.cl
+    for line in cl.summary():
+        if not line.startswith("not applied:"):
+            log.info("%s", line)
+    for line, unit, before in cl.mid_file_unit_changes:
+        log.warning("%s:%d: UNITS switched to %s after %d moves: the following coordinates "
+                    "are read in %s", Path(cl.source).name, line, unit, before, unit)
+    words = cl.not_applied
+    if words:
+        log.warning("%d word(s) of the file are not in the program:", len(words))
+        for w in words[:_WORDS_SHOWN]:
+            log.warning("  %s", w.describe())
+        if len(words) > _WORDS_SHOWN:
+            log.warning("  ... %d more", len(words) - _WORDS_SHOWN)
+    for w in cl.warnings:
+        log.warning("%s:%d: %s: %s", Path(cl.source).name, w.line, w.word, w.message)
+    extra = sum(cl.warning_counts.values()) - len(cl.warnings)
+    if extra > 0:
+        log.warning("... and %d more warnings of the same kinds", extra)
+    if summary.unreachable_lines:
+        shown = ", ".join(map(str, summary.unreachable_lines[:30]))
+        more = "" if len(summary.unreachable_lines) <= 30 else " ..."
         log.error("%d CL point(s) unreachable for %s at line(s): %s%s",
-                  len(result.unreachable_lines), args.robot, shown, more)
-    if result.program is None:
+                  len(summary.unreachable_lines), robot, shown, more)
+
+
+def _run_post(args) -> int:
+    from drakedeburr.errors import InputError
+    from drakedeburr.post.cl_post import MAX_MOVES, post_cl_file
+    from drakedeburr.programs.writers import format_for_controller
+
+    _check_args(args)
+    name = program_name(args.cl_file, args.name)
+    settings = settings_from_args(args)
+    own = format_for_controller(settings.robot.controller)
+    if args.fmt is not None and args.fmt != own:
+        raise InputError(f"--format {args.fmt}: {args.robot} has a {settings.robot.controller} "
+                         f"controller, which runs {own.upper()} (--format {own})")
+    try:
+        summary = post_cl_file(
+            args.cl_file, args.output,
+            args.fmt or format_for_controller(settings.robot.controller), name, settings,
+            units=args.units,
+            cutcom="ignore" if args.ignore_cutcom else "refuse",
+            max_moves=args.max_moves or MAX_MOVES, progress=_phase_progress())
+    except KeyboardInterrupt:
+        log.error("interrupted: nothing new written")
+        return 130
+    except OSError as exc:
+        if isinstance(exc, FileNotFoundError) and Path(args.cl_file).exists():
+            raise InputError(f"{args.output}: cannot write: {exc}") from exc
+        raise InputError(f"{exc.filename or args.output}: {exc.strerror or exc}") from exc
+    _report(summary, args.robot)
+    if not summary.files:
         log.error("no program written%s", "" if args.force else " (use --force to write the "
                   "reachable part, flagged FORCED)")
         return 1
-    paths = write_program(result.program, args.output, args.fmt)
-    for path in paths:
+    for path in summary.files:
         log.info("wrote %s", path)
-    return 1 if result.unreachable_lines else 0
+    return 1 if summary.unreachable_lines else 0
