@@ -53,13 +53,12 @@ def segments_per_circle(radius_mm: float, sag_mm: float = ARC_SAG_MM) -> int:
 
 def densify(poly: np.ndarray, step: float) -> np.ndarray:
     """Insert collinear points so that no segment of the closed polygon exceeds ``step``."""
-    out = []
     nxt = np.roll(poly, -1, axis=0)
-    for a, b in zip(poly, nxt, strict=True):
-        n = max(1, int(math.ceil(np.linalg.norm(b - a) / step - 1e-9)))
-        t = np.arange(n)[:, None] / n
-        out.append(a + (b - a) * t)
-    return np.concatenate(out)
+    n = np.maximum(1, np.ceil(np.linalg.norm(nxt - poly, axis=1) / step - 1e-9).astype(int))
+    seg = np.repeat(np.arange(len(poly)), n)
+    start = np.repeat(np.cumsum(n) - n, n)
+    t = ((np.arange(len(seg)) - start) / n[seg])[:, None]
+    return poly[seg] + (nxt[seg] - poly[seg]) * t
 
 
 def _dedupe(poly: np.ndarray, tol: float = 0.01) -> np.ndarray:
@@ -116,9 +115,9 @@ def _forked_arms(spec: HubSpec, th: float, r_split: float, r_out: float, w_out: 
                                   math.sin(th + sgn * spec.split_angle)])
             d = (c - a) / np.linalg.norm(c - a)
             polys.append(_band(np.stack([a, c + d * ext]), np.array([w_out, w_out])))
-        else:  # twin: fork over 2 * offset, then parallel to the spoke axis
+        else:  # twin: a 45 deg fork, then parallel to the spoke axis
             off = 0.5 * (spec.twin_gap * 1e3 + w_out)
-            b = a + u * (2.0 * off) + sgn * off * v
+            b = a + u * off + sgn * off * v  # 45 deg fork
             c = (r_out + ext) * u + sgn * off * v
             polys.append(_band(np.stack([a, b]), np.array([w_out, w_out])))
             polys.append(_band(np.stack([b, c]), np.array([w_out, w_out])))
@@ -240,25 +239,47 @@ def window_center_xy(poly_xy: np.ndarray, grid: int = 80) -> np.ndarray:
     return cand[int(np.argmax(d))]
 
 
-def inscribed_width(poly_xy: np.ndarray, grid: int = 160) -> float:
+def _distance_to_outline(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """(K,) distance of points q (K, 2) to the closed polyline ``poly`` (N, 2)."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    ab = b - a
+    L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    out = np.empty(len(q))
+    for s in range(0, len(q), 256):
+        d = q[s:s + 256, None, :] - a[None]
+        t = np.clip(np.einsum("kij,ij->ki", d, ab) / L2, 0.0, 1.0)
+        out[s:s + 256] = np.linalg.norm(d - t[..., None] * ab[None], axis=2).min(axis=1)
+    return out
+
+
+def inscribed_width(poly_xy: np.ndarray, cells: int = 100) -> float:
     """Diameter of the largest circle inside a closed 2-D polygon (N, 2), same unit: the
-    window's width for a tool that must pass it (grid search refined by a local grid)."""
+    window's width for a tool that must pass it. A distance transform of a raster of
+    ``cells`` across (scipy.ndimage) finds the centre, exact point-to-outline distances on a
+    local grid around it refine the radius."""
     from matplotlib.path import Path as MplPath
-    from scipy.spatial import cKDTree
+    from scipy import ndimage
 
     lo, hi = poly_xy.min(axis=0), poly_xy.max(axis=0)
-    tree = cKDTree(densify(poly_xy, (hi - lo).max() / 2000))
+    h = float((hi - lo).max()) / cells
+    gx = np.arange(lo[0] - h, hi[0] + 2 * h, h)
+    gy = np.arange(lo[1] - h, hi[1] + 2 * h, h)
+    X, Y = np.meshgrid(gx, gy, indexing="ij")
     path = MplPath(poly_xy)
-    center, step = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    best = 0.0
-    for _ in range(3):
-        gx, gy = np.meshgrid(np.linspace(-1, 1, grid), np.linspace(-1, 1, grid))
-        cand = center + np.column_stack([gx.ravel(), gy.ravel()]) * step
+    mask = path.contains_points(np.column_stack([X.ravel(), Y.ravel()])).reshape(X.shape)
+    if not mask.any():
+        return 0.0
+    edt = ndimage.distance_transform_edt(mask)
+    i, j = np.unravel_index(int(np.argmax(edt)), mask.shape)
+    best, centre = 0.0, np.array([gx[i], gy[j]])
+    for step in (h, 0.25 * h, 0.0625 * h):
+        g = np.linspace(-2 * step, 2 * step, 9)
+        cand = centre + np.array(np.meshgrid(g, g)).reshape(2, -1).T
         cand = cand[path.contains_points(cand)]
         if not len(cand):
             break
-        d = tree.query(cand)[0]
+        d = _distance_to_outline(cand, poly_xy)
         k = int(np.argmax(d))
-        best, center = max(best, float(d[k])), cand[k]
-        step = step * 4.0 / grid
+        if d[k] > best:
+            best, centre = float(d[k]), cand[k]
     return 2.0 * best

@@ -36,7 +36,7 @@ Optional features (off by default; written to YAML only when set):
 * ``twin`` spokes: a stem up to ``split_radius`` that forks into two parallel arms of width
   ``spoke_width_outer`` with a slot ``twin_gap`` wide between them (a *small* window).
 * ``spoke_twist``: straight, curved and twin spokes turn about their radial centre line, by
-  ``spoke_twist * sin(pi u)`` (u = 0 at the window inner radius, 1 at the outer one), so the
+  ``spoke_twist * sin^2(pi u)`` (u = 0 at the window inner radius, 1 at the outer one), so the
   face height changes across the spoke.
 * ``face_rise_angle``: within ``face_rise_band`` of a window edge the front face falls toward
   the edge; it meets the edge at this angle (the face *rises* away from the window).
@@ -298,7 +298,7 @@ def _check_spokes(s: HubSpec, bad) -> None:
         gap_out = 2 * s.window_outer_radius * math.sin(math.pi / n) - span
         if s.twin_gap < 2 * s.fillet_radius_small + 0.002:
             raise bad("twin_gap", "the slot between twin arms cannot hold its fillets")
-        if s.split_radius + s.twin_gap + s.spoke_width_outer + 2 * s.fillet_radius_small \
+        if s.split_radius + 0.5 * (s.twin_gap + s.spoke_width_outer) + 2 * s.fillet_radius_small \
                 + 0.002 > s.window_outer_radius:
             raise bad("split_radius", "twin arms fork too close to the window outer radius")
     if gap_in < 2 * s.fillet_radius + 0.002:

@@ -5,7 +5,7 @@ Front height ``z = dish(r) + twist(x, y) + rise(x, y)``, back ``dish(r) + twist(
 face_thickness`` (see :mod:`drakedeburr.hub.spec` for the parameters):
 
 * ``dish(r) = HubSpec.z_face(r)`` (C1 smoothstep);
-* ``twist``: each spoke turns about its radial centre line by ``a(r) = spoke_twist sin(pi u)``,
+* ``twist``: each spoke turns about its radial centre line by ``a(r) = spoke_twist sin^2(pi u)``,
   ``u`` from 0 at the window inner radius to 1 at the outer one; a point at signed lateral
   distance ``l`` from the nearest spoke's centre line is lifted by ``l tan a(r)``. (The switch
   between neighbouring spokes lies inside the windows, where there is no material.)
@@ -31,7 +31,7 @@ from drakedeburr.hub.spec import HubSpec
 
 __all__ = ["FaceSurface", "EdgeRings", "edge_rings", "ROUND_SEGMENTS"]
 
-ROUND_SEGMENTS = 6  # segments of an edge round's arc in the mesh
+ROUND_SEGMENTS = 4  # segments of an edge round's arc in the mesh
 _GRAD_STEP_MM = 1e-3  # central differences of the smooth part of the face [mm]
 
 
@@ -62,7 +62,7 @@ class FaceSurface:
         r = np.hypot(xy[:, 0], xy[:, 1])
         r_in, r_out = s.window_inner_radius * 1e3, s.window_outer_radius * 1e3
         u = np.clip((r - r_in) / (r_out - r_in), 0.0, 1.0)
-        alpha = s.spoke_twist * np.sin(np.pi * u)
+        alpha = s.spoke_twist * np.sin(np.pi * u) ** 2  # C1 where the spoke meets the rings
         theta = np.arctan2(xy[:, 1], xy[:, 0])
         centre = s.spoke_phase + s.spoke_sweep * u * u
         pitch = 2 * math.pi / s.spoke_count
