@@ -35,7 +35,7 @@ import numpy as np
 
 __all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANGLE"]
 
-BAND_ANGLE = math.radians(5.0)  # a round/chamfer band turns more than this per lag
+BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
 WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
 JUMP = 0.8e-3  # [m] height step between two samples (0.1 mm apart) that is a hidden wall
 MAX_STEP = 3e-3  # [m] largest jump between neighbouring edge points of a plausible loop

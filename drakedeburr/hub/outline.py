@@ -252,7 +252,7 @@ def _distance_to_outline(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
     return out
 
 
-def inscribed_width(poly_xy: np.ndarray, cells: int = 100) -> float:
+def inscribed_width(poly_xy: np.ndarray, cells: int = 64) -> float:
     """Diameter of the largest circle inside a closed 2-D polygon (N, 2), same unit: the
     window's width for a tool that must pass it. A distance transform of a raster of
     ``cells`` across (scipy.ndimage) finds the centre, exact point-to-outline distances on a

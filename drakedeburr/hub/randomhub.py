@@ -28,18 +28,17 @@ import numpy as np
 
 from drakedeburr._io import atomic_write_bytes, atomic_write_text
 from drakedeburr.errors import InputError
+from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, WIDTH_FACTOR
 from drakedeburr.hub.spec import HubSpec
 
-__all__ = ["random_spec", "random_catalogue", "export_mesh", "spec_window_widths",
+__all__ = ["random_spec", "random_catalogue", "export_mesh", "export_choice",
+           "spec_window_widths",
            "BOLT_PATTERNS", "RIM_DIAMETERS_IN", "DEFAULT_BURR_DIAMETER", "MIN_WIDTH_FACTOR",
            "STYLES"]
 
 log = logging.getLogger(__name__)
 
-#: head diameter of the burr the catalogue is sized for [m]; the hub stage may not import the
-#: cell stage, tests check it equals ``drakedeburr.cell.tools.BURR.head_diameter``
-DEFAULT_BURR_DIAMETER = 12e-3
-MIN_WIDTH_FACTOR = 2.5  # narrowest window >= this x the burr diameter (issue 16)
+MIN_WIDTH_FACTOR = WIDTH_FACTOR  # narrowest window >= this x the burr diameter (issue 16)
 RIM_DIAMETERS_IN = (15, 16, 17, 18, 19, 20)
 #: (bolts, PCD [mm], centre bores [mm]) of common passenger cars
 BOLT_PATTERNS = (
@@ -228,6 +227,15 @@ def _spec_and_attempt(seed: int, index: int, burr_diameter: float, min_width_fac
                        f"draws; last reasons: {reasons[-3:]}")
 
 
+def export_choice(seed: int, index: int) -> tuple[str, np.ndarray, str]:
+    """(unit, X_MH (4, 4) [m], front file axis) of hub ``index``'s STL export: 60 % in mm,
+    the axle along a file axis, a random origin offset along it (seeded)."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index, 1 << 20]))
+    unit = "mm" if rng.random() < 0.6 else "m"
+    front, X_MH = _export_pose(rng)
+    return unit, X_MH, front
+
+
 def _export_pose(rng) -> tuple[str, np.ndarray]:
     """A CAD-like pose of H in the exported file M: axle along a file axis, origin on the
     axle at a random offset (e.g. the rim's centre plane)."""
@@ -298,10 +306,7 @@ def random_catalogue(seed: int, count: int, out: str | Path, *, start: int = 0,
             raise RuntimeError(f"random hub seed {seed} index {index}: no spec could be "
                                f"meshed in {_ATTEMPTS} attempts")
         if export:
-            rng = np.random.default_rng(np.random.SeedSequence([seed, index, 1 << 20]))
-            unit = "mm" if rng.random() < 0.6 else "m"
-            front, X_MH = _export_pose(rng)
-            export_mesh(res.dir, unit, X_MH, front)
+            export_mesh(res.dir, *export_choice(seed, index))
         results.append(res)
     if progress is not None:
         progress(count, count, "done")
