@@ -202,3 +202,54 @@ def test_extraction_from_a_degraded_file(hubs, i, kind, tmp_path):
         return
     assert back.notes["front"]["decided_by"] == "user"
     assert back.X_MH[:3, 2] @ res.X_MH[:3, 2] < -0.9999
+
+
+def test_import_of_an_open_face_only_file(hubs, tmp_path):
+    """`hub import` of a face-only, mirrored millimetre file (open mesh): the windows of the
+    generator, the front decided, a surface-shell collision model that covers the face and
+    leaves the openings free (re-checked with the pieces' own half-spaces), a folder the cell
+    loads."""
+    import trimesh
+    from scipy.spatial import ConvexHull
+
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
+    from drakedeburr.hub.model import read_obj
+
+    hub = hubs[5]
+    V, F, X_MH = degraded_mesh(hub, np.random.default_rng(0), mirror=True, no_barrel=True)
+    path = tmp_path / "face_only_mm.stl"
+    trimesh.Trimesh(V, F, process=False).export(path)
+    res = import_mesh(path, tmp_path / "hubs", options=ImportOptions(edge_spacing=1e-3))
+    assert res.window_count == len(hub.windows)
+    imp = res.summary["import"]
+    assert not imp["closed_mesh"] and imp["front"]["decided_by"] == "cues"
+    assert "shell" in res.summary["collision"]["method"]
+    assert res.summary["collision"]["max_window_intrusion_mm"] <= 1.0
+    X_HtH = np.linalg.inv(X_MH) @ res.X_MH  # imported H in the generator's H
+    assert X_HtH[2, 2] > 0.9999
+    eqs = [ConvexHull(read_obj(p)[0]).equations for p in sorted(
+        (res.dir / "collision").glob("piece_*.obj"))]
+    assert len(eqs) == res.piece_count
+
+    def outside_all(q_Ht):  # (K,) largest violation over the pieces' planes, min over pieces
+        q = (q_Ht - X_HtH[:3, 3]) @ X_HtH[:3, :3]
+        return np.min([np.max(q @ e[:, :3].T + e[:, 3], axis=1) for e in eqs], axis=0)
+
+    # the face is covered: points on the generator's front face (ray hits) lie in a piece
+    scene = _scene(hub.vertices_H, hub.faces)
+    g = np.random.default_rng(1).uniform(-0.2, 0.2, (4000, 2))
+    th, _ = _cast(scene, np.c_[g, np.full(len(g), 0.5)], np.tile([0, 0, -1.0], (len(g), 1)))
+    face = np.c_[g, 0.5 - th][np.isfinite(th)]
+    face = face[np.hypot(face[:, 0], face[:, 1]) < hub.spec.rim_barrel_inner_radius - 2e-3]
+    assert len(face) > 1000
+    assert np.mean(outside_all(face) <= 1e-7) > 0.999
+    # the openings are free: window centre lines through the face, 2 mm past every wall
+    for w in hub.windows:
+        c = hub.window_center_H(w.index)
+        q = c + np.c_[np.zeros((5, 2)), np.linspace(-0.03, 0.01, 5)]
+        assert np.all(outside_all(q) > 1e-3)
+        p = w.p_HE[::10] + (2e-3 + hub.spec.edge_round_radius) * w.n_wall_H[::10] * [1, 1, 0]
+        assert np.all(outside_all(p - [0, 0, 2e-3]) > 0)
+    cell = load_cell("tool_in_hand", res.dir)
+    assert len(cell.hub_ids) == res.piece_count
