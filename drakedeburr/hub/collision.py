@@ -61,6 +61,10 @@ class WindowProbes:
 
     def __init__(self, pts: np.ndarray):
         self.pts = np.asarray(pts, float)
+        # sorted along x so a hull's bounding box selects its candidates by bisection
+        self._order = np.argsort(self.pts[:, 0], kind="stable") if len(self.pts) else \
+            np.zeros(0, np.int64)
+        self._x = self.pts[self._order, 0] if len(self.pts) else np.zeros(0)
 
     @classmethod
     def from_spec(cls, spec: HubSpec, windows: list[Window],
@@ -91,19 +95,24 @@ class WindowProbes:
                     pts.append(np.column_stack([q, z - f * t]))
         return cls(np.concatenate(pts))
 
-    def inside(self, hull_pts: np.ndarray) -> np.ndarray:
-        """Indices of the probes inside the convex hull of ``hull_pts``."""
+    def inside(self, hull_pts: np.ndarray, equations: np.ndarray | None = None) -> np.ndarray:
+        """Indices of the probes inside the convex hull of ``hull_pts`` (its half-space
+        ``equations`` (F, 4) when already known)."""
         from scipy.spatial import ConvexHull
 
         lo, hi = hull_pts.min(axis=0), hull_pts.max(axis=0)
-        m = np.flatnonzero(np.all((self.pts >= lo) & (self.pts <= hi), axis=1))
+        a = np.searchsorted(self._x, lo[0], side="left")
+        b = np.searchsorted(self._x, hi[0], side="right")
+        cand = self._order[a:b]
+        box = np.all((self.pts[cand] >= lo) & (self.pts[cand] <= hi), axis=1)
+        m = np.sort(cand[box])  # ascending, as a full scan would give them
         if not len(m):
             return m
-        eq = ConvexHull(hull_pts).equations
+        eq = ConvexHull(hull_pts).equations if equations is None else equations
         return m[np.all(self.pts[m] @ eq[:, :3].T + eq[:, 3] <= 0.0, axis=1)]
 
-    def hit(self, hull_pts: np.ndarray) -> bool:
-        return bool(len(self.inside(hull_pts)))
+    def hit(self, hull_pts: np.ndarray, equations: np.ndarray | None = None) -> bool:
+        return bool(len(self.inside(hull_pts, equations)))
 
 
 @dataclass
@@ -113,9 +122,10 @@ class _Piece:
     hull_vol: float
 
 
-def _piece_ok(pc: _Piece, t: float, probes: WindowProbes) -> bool:
+def _piece_ok(pc: _Piece, t: float, probes: WindowProbes,
+              equations: np.ndarray | None = None) -> bool:
     excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
-    return excess <= COLL_TOL_MM and not probes.hit(pc.pts)
+    return excess <= COLL_TOL_MM and not probes.hit(pc.pts, equations)
 
 
 def _quadtree_pieces(plate, t: float, probes: WindowProbes, progress: Progress) -> list[_Piece]:
@@ -179,7 +189,7 @@ def _merge_pieces(pieces: list[_Piece], t: float, probes: WindowProbes) -> list[
                 pts = np.concatenate([pieces[i].pts, pieces[j].pts])
                 hull = ConvexHull(pts)
                 pc = _Piece(pts[hull.vertices], pieces[i].vol + pieces[j].vol, hull.volume)
-                if _piece_ok(pc, t, probes):
+                if _piece_ok(pc, t, probes, hull.equations):
                     score = pc.hull_vol - pc.vol
                     if best is None or score < best[0]:
                         best = (score, j, pc)

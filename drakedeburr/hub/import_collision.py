@@ -233,5 +233,20 @@ def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
         pieces.extend(hulls)
         if progress is not None:
             progress(len(pieces), len(pieces) + len(stack), "collision shell pieces")
+    stats["pieces_before_merging"] = len(pieces)
+    pieces = _merge_shell(pieces, probes, options.shell_thickness)
     stats["seconds"] = round(time.perf_counter() - t0, 2)
     return pieces, stats
+
+
+def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.ndarray]:
+    """Greedy merging of touching shell pieces under the generator's rule (in mm): the merged
+    hull holds no probe and adds at most 1 mm of average thickness to the shell it covers."""
+    from scipy.spatial import ConvexHull
+
+    from drakedeburr.hub.collision import WindowProbes, _merge_pieces, _Piece
+
+    mm = [p * 1e3 for p in pieces]
+    parts = [_Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
+    merged = _merge_pieces(parts, thickness * 1e3, WindowProbes(probes.pts * 1e3))
+    return [p.pts * 1e-3 for p in merged]
