@@ -37,9 +37,11 @@ def test_window_outlines_of_a_custom_hub():
 
 
 def test_window_count_mismatch_is_reported(monkeypatch):
+    import drakedeburr.hub.outline as outline
+
     spec = BUNDLED["h5_straight"]
-    four = mut._spoke_polygons(spec)[:4]  # one spoke missing: two windows merge
-    monkeypatch.setattr(mut, "_spoke_polygons", lambda s: four)
+    four = outline._spoke_polygons(spec)[:4]  # one spoke missing: two windows merge
+    monkeypatch.setattr(outline, "_spoke_polygons", lambda s: four)
     with pytest.raises(InputError, match="4 openings in the window annulus, expected 5"):
         mut.build_window_outlines(spec)
 

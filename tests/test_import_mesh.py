@@ -117,18 +117,20 @@ def test_absurd_sizes_are_input_errors(tmp_path):
         mut.import_mesh(tiny, tmp_path / "out")
 
 
-def test_open_mesh_and_no_windows(tmp_path, extdata):
+def test_no_windows_and_the_audibot_rim_refused_with_reasons(tmp_path, extdata):
     holed = _box_stl(tmp_path / "holed.stl", (0.4, 0.4, 0.1), holes=True)
-    with pytest.raises(InputError, match=r"holed\.stl: the mesh is not a closed solid"):
+    with pytest.raises(InputError, match=r"holed\.stl: no window found.*0 through-openings"):
         mut.import_mesh(holed, tmp_path / "out")
     disc = _box_stl(tmp_path / "disc.stl", (0.4, 0.4, 0.1))
-    with pytest.raises(InputError, match=r"disc\.stl: no through-opening"):
+    with pytest.raises(InputError, match=r"disc\.stl: no window found"):
         mut.import_mesh(disc, tmp_path / "out")
-    # a real-world low-poly rim (not watertight): refused with the reason, not a bad model
+    # a real-world low-poly rim (not watertight, spokes and rim unstitched): refused with
+    # every opening's reason, not a bad model (tests/test_extract.py checks the reasons)
     rim = extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl"
-    with pytest.raises(InputError, match=r"audibot__wheel_rim_only_DERIVED_m\.stl: the mesh is "
-                                         r"not a closed solid \(\d+ edges"):
+    with pytest.raises(InputError, match=r"audibot__wheel_rim_only_DERIVED_m\.stl: no window "
+                                         r"found.*slot 27\.\d mm wide.*the edge jumps"):
         mut.import_mesh(rim, tmp_path / "out")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
 # ------------------------------------------------------------------------------- a real hub
@@ -248,3 +250,26 @@ def test_cli_hub_import_and_verify_a_mesh(imported, tmp_path, capsys):
     assert code == (0 if doc["passed"] else 1)
     assert doc["plan"]["windows"] == [0]
     assert str(imported["res"].dir) in doc["plan"]["hub"]
+
+
+def test_front_openings_and_input_view(imported, capsys):
+    """The summary states the front side with its evidence and every opening that is not a
+    window; ``hub info --json`` gives the edges in the STL's own coordinates and unit (mm)."""
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.cli import main
+
+    res, truth, X_true = imported["res"], imported["truth"], imported["X_MH_true"]
+    imp = res.summary["import"]
+    assert imp["front"]["decided_by"] == "cues" and len(imp["front"]["evidence"]) >= 2
+    kinds = sorted(o["kind"] for o in imp["not_windows"])
+    assert kinds == ["centre bore"] + ["lug hole"] * 5
+    assert imp["min_window_width_mm"] == pytest.approx(30.0)
+    assert main(["-q", "hub", "info", str(res.dir), "--json"]) == 0
+    view = json.loads(capsys.readouterr().out)["input"]
+    assert view["unit"] == "mm" and len(view["edges"]) == 5
+    np.testing.assert_allclose(view["hub_axis"]["direction"], X_true[:3, 2], atol=1e-4)
+    truth_M = np.concatenate([w.p_HE @ X_true[:3, :3].T + X_true[:3, 3]
+                              for w in truth.windows]) * 1e3  # the STL's mm coordinates
+    pts = np.concatenate([np.asarray(e["points"]) for e in view["edges"]])
+    assert cKDTree(truth_M).query(pts)[0].max() < 0.5  # mm

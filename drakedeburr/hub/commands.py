@@ -1,5 +1,5 @@
-"""``drakedeburr hub ...``: generate the parametric hub models, import a hub mesh, list and
-inspect hub models."""
+"""``drakedeburr hub ...``: generate the parametric hub models, a seeded random catalogue,
+import a hub mesh, list and inspect hub models."""
 
 from __future__ import annotations
 
@@ -70,22 +70,35 @@ def _run_list(args: argparse.Namespace) -> int:
 
 
 def _run_info(args: argparse.Namespace) -> int:
-    from drakedeburr.hub.model import resolve_hub_dir
+    from drakedeburr.hub.inputview import input_view_of_hub
+    from drakedeburr.hub.model import load_hub, resolve_hub_dir
 
-    d = resolve_hub_dir(args.hub)
-    s = json.loads((d / "summary.json").read_text())
     if args.json:
-        json.dump(s, sys.stdout, indent=2)
+        hub = load_hub(args.hub)
+        json.dump({**hub.summary, "input": input_view_of_hub(hub)}, sys.stdout, indent=2)
         print()
         return 0
+    d = resolve_hub_dir(args.hub)
+    s = json.loads((d / "summary.json").read_text())
     print(f"hub {s['name']} ({d})")
     print(f"  mesh: {s['mesh']['vertices']} vertices, {s['mesh']['triangles']} triangles, "
-          f"genus {s['mesh']['genus']}, mass {s['mass_kg']} kg")
+          f"genus {s['mesh'].get('genus', '-')}, mass {s['mass_kg']} kg")
     c = s.get("collision", {})
     if c:
         print(f"  collision: {c['piece_count']} convex pieces, hull volume "
               f"{c['hull_volume_over_solid']:.3f} x solid, max reach into windows "
               f"{c['max_window_intrusion_mm']} mm")
+    imp = s.get("import")
+    if imp:
+        front = imp.get("front") or {}
+        print(f"  imported from {imp['source']} ({imp['unit']}); front side decided by "
+              f"{front.get('decided_by', '?')}:")
+        for e in front.get("evidence", []):
+            print(f"    - {e}")
+        for o in imp.get("not_windows", []) + imp.get("rejected", []):
+            where = o.get("center_xy_mm")
+            print(f"  not a window at {where} mm: {o.get('kind', 'rejected edge')}: "
+                  f"{o['reason']}")
     print("  window kind   points length_mm width_mm radial_mm fillet_mm kappa_max_1/mm z_mm")
     for w in s["windows"]:
         print(f"  {w['index']:>6} {w['kind']:<6} {w['points']:>6} {w['length_mm']:>9.1f} "
@@ -120,22 +133,79 @@ def _run_import(args: argparse.Namespace) -> int:
 
     options = ImportOptions(
         unit=args.unit, expected_windows=args.windows,
-        axis_M=tuple(args.axis) if args.axis else None,
+        axis_M=tuple(args.axis) if args.axis else None, front=args.front,
+        burr_diameter=m_from_mm(args.burr_mm), clearance=m_from_mm(args.clearance_mm),
+        min_window_width=None if args.min_window_width_mm is None
+        else m_from_mm(args.min_window_width_mm),
         window_reach=m_from_mm(args.window_reach_mm),
         front_reach=m_from_mm(args.front_reach_mm), seed=args.seed)
     progress = None if args.no_progress else tqdm_progress(f"import {Path(args.mesh).name}")
     res = import_mesh(args.mesh, args.out, options=options, progress=progress)
     c = res.summary["collision"]
+    imp = res.summary["import"]
     print(f"{res.name}: {res.window_count} windows, {res.piece_count} collision pieces "
           f"(max reach into a window {c['max_window_intrusion_mm']} mm), "
           f"{'cached' if res.cached else f'{res.seconds:.1f} s'} -> {res.dir}")
+    front = imp.get("front") or {}
+    print(f"  hub axis (file frame) {front.get('axis_in_file')}, front decided by "
+          f"{front.get('decided_by')}")
+    for o in imp.get("not_windows", []) + imp.get("rejected", []):
+        print(f"  not a window: {o.get('kind', 'rejected edge')} at {o['center_xy_mm']} mm: "
+              f"{o['reason']}")
     return 0
 
 
+def _run_random(args: argparse.Namespace) -> int:
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.hub.randomhub import random_catalogue
+    from drakedeburr.units import m_from_mm
+
+    progress = None if args.no_progress else tqdm_progress(f"random hubs seed {args.seed}")
+    results = random_catalogue(args.seed, args.count, args.out, start=args.start,
+                               burr_diameter=m_from_mm(args.burr_mm),
+                               with_collision=not args.no_collision,
+                               export=not args.no_export, progress=progress)
+    for res in results:
+        s = res.summary
+        kinds = [w["kind"] for w in s["windows"]]
+        spec = res.dir / "hub.yaml"
+        print(f"{res.dir.name}: {kinds.count('large')} large + {kinds.count('small')} small "
+              f"windows, {s['mesh']['triangles']} triangles, "
+              f"{s.get('collision', {}).get('piece_count', 0)} pieces, {res.seconds:.1f} s "
+              f"-> {spec.parent}")
+    return 0
+
+
+def _burr_mm() -> float:
+    from drakedeburr.cell.tools import BURR
+
+    return round(BURR.head_diameter * 1e3, 6)
+
+
+def _add_front_and_burr(p) -> None:
+    """--front, --burr-mm, --clearance-mm, --min-window-width-mm (every command taking a
+    mesh)."""
+    from drakedeburr.config import Tolerances
+    from drakedeburr.hub.front import FRONT_CHOICES
+
+    p.add_argument("--front", choices=FRONT_CHOICES, default="auto",
+                   help="which file axis the front face (the side the tool works on) looks "
+                        "along; default auto: decided from lug seats, barrel, mounting face "
+                        "and dish, with the evidence reported")
+    p.add_argument("--burr-mm", type=float, default=_burr_mm(),
+                   help="burr diameter: narrower openings are not windows (default "
+                        "%(default)s)")
+    p.add_argument("--clearance-mm", type=float,
+                   default=round(Tolerances().min_clearance * 1e3, 6),
+                   help="clearance the burr needs to the walls (default %(default)s)")
+    p.add_argument("--min-window-width-mm", type=float,
+                   help="narrowest window; default max(burr + 2 clearance, 2.5 burr)")
+
+
 def register(subparsers) -> None:
-    """Add ``drakedeburr hub {generate,import,list,info,scan}``."""
+    """Add ``drakedeburr hub {generate,random,import,list,info,scan}``."""
     hub = subparsers.add_parser(
-        "hub", help="hub models: generate, import a mesh, list, info, scan")
+        "hub", help="hub models: generate, random catalogue, import a mesh, list, info, scan")
     sub = hub.add_subparsers(dest="hub_command", metavar="HUB_COMMAND")
     sub.required = True
 
@@ -159,6 +229,7 @@ def register(subparsers) -> None:
                    help="hub axis out of the visible face, in the file's frame (default: "
                         "estimated)")
     p.add_argument("--windows", type=int, help="expected number of windows (else any)")
+    _add_front_and_burr(p)
     p.add_argument("--window-reach-mm", type=float, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
     p.add_argument("--front-reach-mm", type=float, default=3.0,
@@ -168,13 +239,33 @@ def register(subparsers) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_import)
 
+    p = sub.add_parser(
+        "random", help="a seeded catalogue of realistic random hubs (docs/hub.md)",
+        description="Write COUNT hub model folders DIR/r<SEED>_<index> (like `hub generate`: "
+                    "hub.yaml, hub.obj, edges.npz, collision pieces, summary.json) and an STL "
+                    "export of each in mm or m (export.json). The same seed gives the same "
+                    "hubs on any machine.")
+    p.add_argument("--seed", type=int, required=True, help="catalogue seed (>= 0)")
+    p.add_argument("--count", type=int, default=1, help="number of hubs (default 1)")
+    p.add_argument("--start", type=int, default=0, help="first hub index (default 0)")
+    p.add_argument("-o", "--out", required=True, help="output folder")
+    p.add_argument("--burr-mm", type=float, default=_burr_mm(),
+                   help="burr diameter the windows must admit (2.5 x; default %(default)s)")
+    p.add_argument("--no-collision", action="store_true",
+                   help="skip the collision pieces (mesh and edges only; fast)")
+    p.add_argument("--no-export", action="store_true", help="no STL export")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(_run=_run_random)
+
     p = sub.add_parser("list", help="list hub models")
     p.add_argument("--dir", help="folder of hub folders (default: bundled models/hubs)")
     p.set_defaults(_run=_run_list)
 
     p = sub.add_parser("info", help="window table and model figures of one hub")
     p.add_argument("hub", help="bundled hub name or hub folder")
-    p.add_argument("--json", action="store_true", help="print summary.json")
+    p.add_argument("--json", action="store_true",
+                   help="print summary.json plus 'input': the edge loops, hub axis and front "
+                        "side in the input mesh's coordinates and unit")
     p.set_defaults(_run=_run_info)
 
     p = sub.add_parser("scan", help="write a simulated scan point cloud (PLY/PCD, metres, H)")

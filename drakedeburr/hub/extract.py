@@ -1,24 +1,26 @@
-"""Window edge-loop extraction from any hub mesh.
+"""Window edge loops from any hub mesh: closed or not, one part or many, mm or m.
 
-Steps (each failure raises an InputError that says which step and what was found):
+Steps (each refusal raises an InputError that says which step and what was found):
 
-1. Hub axis and frame H. Given (``axis_M``, ``origin_M``) or estimated: the principal axis of
-   the area-weighted surface whose moment differs most from the other two (a wheel is a
-   body of revolution), centred on the surface centroid; the front side is the side toward
-   which the spoke disc is offset from the mid-plane (override with ``axis_M``'s sign).
-   H: +Z_H along the axis out of the front face, origin on the axis at the frontmost point of
-   the spoke region, X_H = the mesh X axis projected (or Y when X is along the axis).
-2. Windows = through-openings: rays cast along -Z_H on a plan-view grid (open3d
-   RaycastingScene); connected regions of misses (scipy.ndimage) that neither touch the grid
-   border (outside the wheel) nor contain the axis (centre bore), larger than
-   ``min_window_area``.
-3. Edge loop of each window: the front face is the set of faces whose normal is within
-   ``front_angle`` of +Z_H; the boundary edges of that face set (sharp dihedral edges on a
-   closed mesh, also open boundaries on a non-watertight one) are chained into closed loops;
-   each window takes the smallest loop whose plan view encloses the window's opening.
-4. Loops are oriented counter-clockwise seen from +Z_H and resampled at equal arc length
-   (the source's "initial CL points"); ``t_H`` holds chord tangents (central differences),
-   the wall and face normals are left None (the frames stage estimates them from the scan).
+1. Hub axis: given (``axis_M``) or the principal axis of the area-weighted surface whose
+   moment differs most from the other two (a wheel is a body of revolution); a provisional
+   origin on it at the surface centroid.
+2. Front side (:mod:`drakedeburr.hub.front`): lug seats, barrel, mounting face and dish vote;
+   the choice and its evidence are returned; ``front`` (a file axis such as "-y") or the
+   sign of a given ``axis_M`` override it. H: +Z_H out of the front face, origin on the axis
+   at the front-most point of the spoke region (``origin_M`` overrides), X_H = the mesh X axis
+   projected (or Y when X is along the axis).
+3. Openings (:mod:`drakedeburr.hub.openings`): plan-view rays along -Z_H; windows, centre
+   bore, lug holes and openings too narrow for the burr (``min_window_width``, derived from
+   the burr diameter and the clearance) are told apart, every opening that is not a window is
+   reported with its reason.
+4. Edge of each window (:mod:`drakedeburr.hub.edgeline`): where the front face ends at the
+   opening (the face side of a round or chamfer), by profiles of ray casts from the front;
+   a loop whose length, steps or planarity are implausible is rejected with its reason.
+5. Loops are oriented counter-clockwise seen from +Z_H, resampled at equal arc length
+   (``spacing``, the source's "initial CL points") and numbered CCW from +X_H; ``t_H``
+   holds chord tangents, the wall and face normals are left None (the importer reads them off
+   the mesh; the frames stage estimates them from a scan).
 """
 
 from __future__ import annotations
@@ -29,20 +31,29 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drakedeburr.errors import InputError
+from drakedeburr.hub.front import FrontDecision, decide_front, front_from_user
+from drakedeburr.hub.openings import (
+    DEFAULT_BURR_DIAMETER,
+    DEFAULT_CLEARANCE,
+    find_openings,
+)
+from drakedeburr.hub.openings import min_window_width as _min_window_width
 from drakedeburr.hub.types import WindowEdge
 
 __all__ = ["HubFrameEstimate", "ExtractionResult", "extract_window_edges", "resample_loop",
-           "hub_frame_from_mesh"]
+           "hub_frame_from_mesh", "principal_axis", "frame_from_axis"]
 
 log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, eq=False)
 class HubFrameEstimate:
-    """X_MH: (4, 4) pose of hub frame H in the mesh frame M; ``estimated``: not given."""
+    """X_MH: (4, 4) pose of hub frame H in the mesh frame M; ``estimated``: not given;
+    ``front``: how the side of the axis was chosen (None when the axis was given)."""
 
     X_MH: np.ndarray
     estimated: bool
+    front: FrontDecision | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,49 +64,98 @@ class ExtractionResult:
         windows: WindowEdge per window, in H [m], index CCW about +Z_H from +X_H.
         X_MH: (4, 4) hub frame in the mesh frame (metres).
         source: file or description.
-        notes: what was detected (units, axis, loops) for reports.
+        notes: what was detected for reports: ``axis_estimated``, ``front`` (decided_by,
+            evidence), ``not_windows`` (openings that are no window, with reasons),
+            ``rejected`` (openings whose edge loop was implausible, with reasons),
+            ``min_window_width_mm``, ``watertight``, per window ``loops`` figures.
+        outlines_xy: per window (M, 2) its opening's outline in the plan view of H [m], CCW:
+            the narrowest section of the opening (where the walls are innermost).
     """
 
     windows: list[WindowEdge]
     X_MH: np.ndarray
     source: str = ""
     notes: dict = field(default_factory=dict)
+    outlines_xy: list[np.ndarray] = field(default_factory=list)
 
 
-def hub_frame_from_mesh(mesh, axis_M: np.ndarray | None = None,
-                        origin_M: np.ndarray | None = None) -> HubFrameEstimate:
-    """Hub frame H in the mesh frame M (see module doc, step 1).
-
-    Args:
-        mesh: trimesh.Trimesh in metres.
-        axis_M: (3,) +Z_H in M (out of the front face), or None to estimate.
-        origin_M: (3,) a point on the axis in M, or None (surface centroid projected).
-    """
+def principal_axis(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """(axis (3,), centroid (3,)) in M: the axis of the area-weighted surface's second moment
+    that differs most from the other two (its sign is arbitrary)."""
     c = mesh.triangles_center
     w = mesh.area_faces
     centroid = (c * w[:, None]).sum(0) / w.sum()
-    estimated = axis_M is None
-    if axis_M is None:
-        d = c - centroid
-        cov = (d * w[:, None]).T @ d / w.sum()
-        lam, vec = np.linalg.eigh(cov)
-        # the symmetry axis: the eigenvalue farthest from the other two
-        score = [abs(lam[i] - np.mean(np.delete(lam, i))) for i in range(3)]
-        z = vec[:, int(np.argmax(score))]
-        # front: toward the axial offset of the spoke disc (area-weighted, inner radii)
-        a = d @ z
-        r = np.linalg.norm(d - np.outer(a, z), axis=1)
-        inner = r < 0.6 * r.max()
-        if inner.any():
-            mid = 0.5 * (a.min() + a.max())
-            offset = float((a[inner] * w[inner]).sum() / w[inner].sum()) - mid
-            if offset < 0:
-                z = -z
-            log.info("hub axis estimated: %s (spoke disc offset %.1f mm toward front)",
-                     np.round(z, 4), abs(offset) * 1e3)
+    d = c - centroid
+    cov = (d * w[:, None]).T @ d / w.sum()
+    lam, vec = np.linalg.eigh(cov)
+    score = [abs(lam[i] - np.mean(np.delete(lam, i))) for i in range(3)]
+    z = vec[:, int(np.argmax(score))]
+    # a deterministic sign: toward the larger file coordinate
+    k = int(np.argmax(np.abs(z)))
+    return (z if z[k] > 0 else -z), centroid
+
+
+def frame_from_axis(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(4, 4) X_MH with +Z_H = ``z``, X_H = the mesh X axis projected (or Y when X is along
+    the axis), origin ``origin``."""
+    z = np.asarray(z, float) / np.linalg.norm(z)
+    ref = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = ref - (ref @ z) * z
+    x /= np.linalg.norm(x)
+    X = np.eye(4)
+    X[:3, :3] = np.c_[x, np.cross(z, x), z]
+    X[:3, 3] = origin
+    return X
+
+
+def _to_frame(mesh, X_MH: np.ndarray) -> np.ndarray:
+    X_HM = np.linalg.inv(X_MH)
+    return mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
+
+
+def _scene(V: np.ndarray, F: np.ndarray):
+    import open3d as o3d
+
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(V.astype(np.float32)),
+                        o3d.core.Tensor(np.asarray(F).astype(np.uint32)))
+    return scene
+
+
+def hub_frame_from_mesh(mesh, axis_M: np.ndarray | None = None,
+                        origin_M: np.ndarray | None = None, *, front: str = "auto",
+                        pixel: float = 1.0e-3, min_width: float | None = None,
+                        source: str = "mesh") -> HubFrameEstimate:
+    """Hub frame H in the mesh frame M (module doc, steps 1-2).
+
+    Args:
+        mesh: trimesh.Trimesh in metres.
+        axis_M: (3,) +Z_H in M (out of the front face), or None to estimate (its side from
+            ``front``).
+        origin_M: (3,) a point on the axis in M, or None (front-most point of the spokes).
+        front: "auto" (cues) or a file axis "+x", "-x", ..., "-z" the front faces.
+        pixel: plan-view grid of the front cues' opening scan [m].
+    """
+    decision = None
+    if axis_M is not None:
+        z = np.asarray(axis_M, float) / np.linalg.norm(axis_M)
+        centroid = principal_axis(mesh)[1]
+        if front not in (None, "auto"):
+            decision = front_from_user(front, z)
+            z = z * decision.sign
     else:
-        z = np.asarray(axis_M, float)
-        z = z / np.linalg.norm(z)
+        z, centroid = principal_axis(mesh)
+        decision = front_from_user(front, z)
+        if decision is None:
+            X0 = frame_from_axis(z, centroid)
+            V0 = _to_frame(mesh, X0)
+            scene = _scene(V0, mesh.faces)
+            r_max = float(np.hypot(V0[:, 0], V0[:, 1]).max())
+            scan = find_openings(scene, r_max, float(V0[:, 2].max()) + 0.01, pixel=pixel,
+                                 min_width=min_width, source=f"{source} (front cues)",
+                                 quiet=True)
+            decision = decide_front(scene, V0, scan, source=source)
+        z = z * decision.sign
     o = centroid if origin_M is None else np.asarray(origin_M, float)
     if origin_M is None:
         # move the origin along the axis to the frontmost point of the spoke region
@@ -104,14 +164,7 @@ def hub_frame_from_mesh(mesh, axis_M: np.ndarray | None = None,
         r = np.linalg.norm(d - np.outer(a, z), axis=1)
         inner = r < 0.75 * r.max()
         o = o + z * float(a[inner].max() if inner.any() else a.max())
-    ref = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
-    x = ref - (ref @ z) * z
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    X = np.eye(4)
-    X[:3, :3] = np.c_[x, y, z]
-    X[:3, 3] = o
-    return HubFrameEstimate(X_MH=X, estimated=estimated)
+    return HubFrameEstimate(frame_from_axis(z, o), axis_M is None, decision)
 
 
 def resample_loop(p: np.ndarray, spacing: float | None = None, n: int | None = None):
@@ -133,94 +186,40 @@ def resample_loop(p: np.ndarray, spacing: float | None = None, n: int | None = N
     return np.stack([np.interp(t, s, q[:, k]) for k in range(3)], axis=1)
 
 
-def _chain_loops(edges: np.ndarray) -> tuple[list[np.ndarray], int]:
-    """Chain undirected edges (E, 2) into closed vertex loops; returns loops and the number of
-    edges that could not be chained (open chains or branch points)."""
-    from collections import defaultdict
-
-    adj = defaultdict(list)
-    for a, b in edges:
-        adj[a].append(b)
-        adj[b].append(a)
-    used = set()
-    loops, loose = [], 0
-    for start in list(adj):
-        if len(adj[start]) != 2:
-            continue
-        for nxt in adj[start]:
-            key = (min(start, nxt), max(start, nxt))
-            if key in used:
-                continue
-            loop, prev, cur = [start], start, nxt
-            path_edges = [key]
-            ok = True
-            while cur != start:
-                if len(adj[cur]) != 2:
-                    ok = False
-                    break
-                loop.append(cur)
-                a, b = adj[cur]
-                prev, cur = cur, (b if a == prev else a)
-                path_edges.append((min(prev, cur), max(prev, cur)))
-            used.update(path_edges)
-            if ok:
-                loops.append(np.array(loop))
-            else:
-                loose += len(path_edges)
-    return loops, loose
-
-
-def _point_in_polygon(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    from matplotlib.path import Path as MplPath
-
-    return MplPath(poly).contains_points(pts)
-
-
 def _polygon_area(xy: np.ndarray) -> float:
     x, y = xy[:, 0], xy[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
-def _silhouette_loop(scene, mask: np.ndarray, g: np.ndarray, pixel: float, z0: float,
-                     spacing: float) -> np.ndarray:
-    """The outline of one opening (plan view), refined to ~1e-3 px by bisection with ray casts
-    along its normal, lifted onto the front surface just outside the opening. (N, 3) in H,
-    CCW seen from +Z_H."""
-    import contourpy
-    import open3d as o3d
+def _window_edges(scene, scan, spacing: float, source: str):
+    """(kept: [(angle, area, p (N, 3))], rejected: [dict], figures: [dict])."""
+    from drakedeburr.hub.edgeline import deburr_line, opening_outline
 
-    pad = np.pad(mask.astype(float), 1)
-    lines = contourpy.contour_generator(z=pad).lines(0.5)
-    line = max(lines, key=len)
-    xy = np.c_[np.interp(line[:, 1] - 1, np.arange(len(g)), g),
-               np.interp(line[:, 0] - 1, np.arange(len(g)), g)]
-    if np.linalg.norm(xy[0] - xy[-1]) < 1e-12:
-        xy = xy[:-1]
-    if _polygon_area(xy) < 0:
-        xy = xy[::-1]
-    xy = resample_loop(np.c_[xy, np.zeros(len(xy))], spacing / 2)[:, :2]
-    tang = np.roll(xy, -1, 0) - np.roll(xy, 1, 0)
-    nrm = np.c_[tang[:, 1], -tang[:, 0]]  # right of a CCW outline = out of the opening
-    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-
-    def cast(p2):
-        r = np.zeros((len(p2), 6), np.float32)
-        r[:, :2], r[:, 2], r[:, 5] = p2, z0, -1.0
-        t = scene.cast_rays(o3d.core.Tensor(r))["t_hit"].numpy()
-        return t
-
-    lo = np.full(len(xy), -2.0 * pixel)  # inside the opening (miss)
-    hi = np.full(len(xy), 2.0 * pixel)  # on material (hit)
-    for _ in range(14):
-        mid = 0.5 * (lo + hi)
-        h = np.isfinite(cast(xy + mid[:, None] * nrm))
-        hi = np.where(h, mid, hi)
-        lo = np.where(h, lo, mid)
-    edge = xy + hi[:, None] * nrm
-    t = cast(edge + 0.02e-3 * nrm)
-    ok = np.isfinite(t)
-    edge, t = edge[ok], t[ok]
-    return np.c_[edge, z0 - t]
+    kept, rejected, figures = [], [], []
+    for op in scan.windows:
+        outline = opening_outline(scene, op.mask, scan.grid, scan.pixel, scan.z0,
+                                  min(spacing, 0.5e-3))
+        line = deburr_line(scene, outline, scan.z0)
+        ang = float(np.arctan2(op.center_xy[1], op.center_xy[0]) % (2 * np.pi))
+        entry = {"center_xy_mm": [round(float(v) * 1e3, 2) for v in op.center_xy],
+                 "width_mm": round(op.width * 1e3, 2),
+                 **{k: round(v * (1e3 if k != "missing" else 1.0), 3)
+                    for k, v in line.figures.items()}}
+        if line.reason:
+            log.warning("%s: opening at (%.0f, %.0f) mm rejected as a window: %s", source,
+                        op.center_xy[0] * 1e3, op.center_xy[1] * 1e3, line.reason)
+            rejected.append({**entry, "reason": line.reason})
+            continue
+        p = line.p_H
+        if _polygon_area(p[:, :2]) < 0:
+            p = p[::-1]
+        band = line.band[np.isfinite(line.band)]
+        entry["edge_band_mm"] = [round(float(band.min()) * 1e3, 2),
+                                 round(float(np.median(band)) * 1e3, 2),
+                                 round(float(band.max()) * 1e3, 2)]
+        kept.append((ang, op.area, p, outline))
+        figures.append((ang, entry))
+    return kept, rejected, [f for _, f in sorted(figures, key=lambda t: t[0])]
 
 
 def extract_window_edges(
@@ -229,13 +228,13 @@ def extract_window_edges(
     source: str = "mesh",
     axis_M: np.ndarray | None = None,
     origin_M: np.ndarray | None = None,
+    front: str = "auto",
     spacing: float = 2.0e-3,
     pixel: float = 0.5e-3,
-    front_angle_deg: float = 60.0,
-    min_window_area: float = 2.0e-4,
-    min_window_width: float = 30e-3,
+    burr_diameter: float = DEFAULT_BURR_DIAMETER,
+    clearance: float = DEFAULT_CLEARANCE,
+    min_window_width: float | None = None,
     expected_windows: int | None = None,
-    edge_source: str = "auto",
 ) -> ExtractionResult:
     """Find the window edge loops of a hub mesh (see module doc).
 
@@ -244,135 +243,55 @@ def extract_window_edges(
         source: name for messages.
         axis_M, origin_M: hub axis (+Z_H, out of the front face) and a point on it in the
             mesh frame; None estimates them. For a mesh already in H pass (0, 0, 1), (0, 0, 0).
+        front: "auto" or the file axis the front faces ("+z", "-y", ...).
         spacing: arc-length spacing of the returned loop points [m].
         pixel: plan-view grid step for finding openings [m].
-        front_angle_deg: faces within this angle of +Z_H belong to the front face.
-        min_window_area: smaller openings (bolt holes, noise) are ignored [m^2].
-        min_window_width: openings whose largest inscribed circle is narrower than this
-            (slits between twin spokes, bolt holes) are not windows [m]; they are logged.
+        burr_diameter, clearance: the burr and the clearance it needs [m]; they set the
+            narrowest window (:func:`drakedeburr.hub.openings.min_window_width`) unless
+            ``min_window_width`` [m] is given.
         expected_windows: if given, a different count is an error.
-        edge_source: "mesh" (front-face boundary loops only), "silhouette" (the opening's
-            plan-view outline, refined by ray casts and lifted onto the front surface), or
-            "auto": mesh loops where they exist, else the silhouette (for meshes whose parts
-            are not stitched, e.g. low-poly game models); the choice is logged per window.
 
     Returns:
         ExtractionResult with one WindowEdge per window (points in H).
 
     Raises:
-        InputError: no opening found, an opening without a closed front-face loop, or the
-            wrong number of windows; the message names the window and what was found.
+        InputError: no opening, no plausible window edge, or the wrong number of windows;
+            the message names the openings and why each was not used.
     """
-    import open3d as o3d
-    from scipy import ndimage
-
-    if edge_source not in ("auto", "mesh", "silhouette"):
-        raise InputError(f"edge_source must be auto, mesh or silhouette, got {edge_source!r}")
-    frame = hub_frame_from_mesh(mesh, axis_M, origin_M)
-    X_HM = np.linalg.inv(frame.X_MH)
-    v_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
-    f = np.asarray(mesh.faces)
+    min_w = (min_window_width if min_window_width is not None
+             else _min_window_width(burr_diameter, clearance))
+    frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
+                                source=source)
+    v_H = _to_frame(mesh, frame.X_MH)
+    scene = _scene(v_H, mesh.faces)
     r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
-
-    # --- 2. openings by plan-view ray casting --------------------------------------------
-    n_px = int(np.ceil(2 * r_max / pixel)) + 3
-    g = (np.arange(n_px) - (n_px - 1) / 2) * pixel
-    gx, gy = np.meshgrid(g, g, indexing="ij")
-    z0 = float(v_H[:, 2].max()) + 0.01
-    rays = np.zeros((n_px * n_px, 6), np.float32)
-    rays[:, 0], rays[:, 1], rays[:, 2], rays[:, 5] = gx.ravel(), gy.ravel(), z0, -1.0
-    scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(v_H.astype(np.float32)),
-                        o3d.core.Tensor(f.astype(np.uint32)))
-    hit = np.isfinite(scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()).reshape(n_px, n_px)
-    labels, n_lab = ndimage.label(~hit)
-    border = set(np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-    centre = labels[n_px // 2, n_px // 2]
-    openings, skipped = [], []
-    for lab in range(1, n_lab + 1):
-        if lab in border or lab == centre:
-            continue
-        mask = labels == lab
-        area = mask.sum() * pixel**2
-        if area < min_window_area:
-            continue
-        dist = ndimage.distance_transform_edt(mask)
-        i, j = np.unravel_index(np.argmax(dist), mask.shape)
-        width = 2 * dist[i, j] * pixel
-        if width < min_window_width:
-            log.info("%s: opening of %.0f mm^2 at r = %.0f mm skipped: %.1f mm wide < "
-                     "min_window_width %.1f mm", source, area * 1e6,
-                     np.hypot(g[i], g[j]) * 1e3, width * 1e3, min_window_width * 1e3)
-            skipped.append({"area_mm2": area * 1e6, "width_mm": width * 1e3})
-            continue
-        openings.append({"mask": mask, "area": area, "inner": np.array([g[i], g[j]]),
-                         "pts": np.c_[gx[mask], gy[mask]]})
-    notes = {"axis_estimated": frame.estimated, "openings": len(openings),
-             "skipped_openings": skipped,
+    scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
+                         min_width=min_w, source=source)
+    notes = {"axis_estimated": frame.estimated,
+             "front": None if frame.front is None else frame.front.as_dict(frame.X_MH[:3, 2]),
+             "min_window_width_mm": round(min_w * 1e3, 3),
+             "not_windows": [o.as_dict() for o in scan.not_windows],
              "watertight": bool(mesh.is_watertight)}
-    if not openings:
+    kept, rejected, figures = _window_edges(scene, scan, spacing, source)
+    notes.update(rejected=rejected, loops=figures)
+    if not kept:
+        why = "; ".join(f"{o['kind']} at r = {o['radius_mm']:.0f} mm: {o['reason']}"
+                        for o in notes["not_windows"][:6])
+        why += "".join(f"; rejected edge at {r['center_xy_mm']} mm: {r['reason']}"
+                       for r in rejected[:6])
         raise InputError(
-            f"{source}: no through-opening larger than {min_window_area * 1e6:.0f} mm^2 found "
-            f"looking along the hub axis {np.round(frame.X_MH[:3, 2], 4)} (estimated="
-            f"{frame.estimated}); pass the axis if it is wrong"
-        )
-
-    # --- 3. front-face boundary loops ----------------------------------------------------
-    n_H = mesh.face_normals @ X_HM[:3, :3].T
-    front = n_H[:, 2] > np.cos(np.radians(front_angle_deg))
-    fe = np.sort(np.stack([f[front][:, [0, 1]], f[front][:, [1, 2]], f[front][:, [2, 0]]],
-                          axis=1).reshape(-1, 2), axis=1)
-    uniq, counts = np.unique(fe, axis=0, return_counts=True)
-    loops, loose = _chain_loops(uniq[counts == 1])
-    notes.update(front_faces=int(front.sum()), front_loops=len(loops), loose_edges=int(loose))
-
-    windows = []
-    for k, op in enumerate(openings):
-        best = None
-        sample = op["pts"][:: max(1, len(op["pts"]) // 200)]
-        for loop in loops:
-            xy = v_H[loop, :2]
-            area = abs(_polygon_area(xy))
-            # the front edge encloses the opening's silhouette, but not much more
-            if not 0.9 * op["area"] <= area <= 2.0 * op["area"]:
-                continue
-            if best is not None and area >= best[0]:
-                continue
-            if not _point_in_polygon(op["inner"][None], xy)[0]:
-                continue
-            if _point_in_polygon(sample, xy).mean() < 0.95:
-                continue
-            best = (area, loop)
-        if edge_source == "silhouette" or (best is None and edge_source == "auto"):
-            p = _silhouette_loop(scene, op["mask"], g, pixel, z0, spacing)
-            if edge_source == "auto":
-                log.warning("%s: opening %d: no closed front-face edge loop in the mesh; using "
-                            "the opening's silhouette lifted onto the front surface", source, k)
-            notes.setdefault("edge_source", {})[k] = "silhouette"
-            windows.append((np.arctan2(*op["inner"][::-1]) % (2 * np.pi), op["area"], p))
-            continue
-        if best is None:
-            ang = np.degrees(np.arctan2(op["inner"][1], op["inner"][0]))
-            raise InputError(
-                f"{source}: opening {k} (area {op['area'] * 1e6:.0f} mm^2, at r = "
-                f"{np.linalg.norm(op['inner']) * 1e3:.0f} mm, {ang:.0f} deg about +Z_H) has no "
-                f"closed front-face edge loop around it: the front face ({int(front.sum())} "
-                f"faces within {front_angle_deg:.0f} deg of the axis) has {len(loops)} closed "
-                f"boundary loops and {loose} edges in open chains or branches"
-                + ("" if mesh.is_watertight else "; the mesh is not watertight")
-            )
-        p = v_H[best[1]]
-        if _polygon_area(p[:, :2]) < 0:
-            p = p[::-1]
-        notes.setdefault("edge_source", {})[k] = "mesh"
-        windows.append((np.arctan2(*op["inner"][::-1]) % (2 * np.pi), best[0], p))
-
-    if expected_windows is not None and len(windows) != expected_windows:
-        raise InputError(f"{source}: found {len(windows)} windows, expected {expected_windows}")
-    windows.sort(key=lambda t: t[0])
-    a_max = max(w[1] for w in windows)
+            f"{source}: no window found looking along the hub axis "
+            f"{np.round(frame.X_MH[:3, 2], 4)} (estimated={frame.estimated}); "
+            f"{len(scan.openings)} through-openings: {why or 'none'}; pass the axis or "
+            f"--front if they are wrong")
+    if expected_windows is not None and len(kept) != expected_windows:
+        raise InputError(f"{source}: found {len(kept)} windows, expected {expected_windows}"
+                         + "".join(f"; {o['kind']}: {o['reason']}"
+                                   for o in notes["not_windows"] + rejected if o.get("reason")))
+    kept.sort(key=lambda t: t[0])
+    a_max = max(w[1] for w in kept)
     out = []
-    for idx, (_, area, p) in enumerate(windows):
+    for idx, (_, area, p, _) in enumerate(kept):
         q = resample_loop(p, spacing)
         kind = "large" if area >= 0.6 * a_max else "small"
         t = np.roll(q, -1, axis=0) - np.roll(q, 1, axis=0)  # central differences, loop order
@@ -381,4 +300,5 @@ def extract_window_edges(
     log.info("%s: %d windows, loop lengths %s mm", source, len(out),
              [round(float(np.linalg.norm(np.diff(np.vstack([w.p_HE, w.p_HE[:1]]), axis=0),
                                          axis=1).sum() * 1e3), 1) for w in out])
-    return ExtractionResult(windows=out, X_MH=frame.X_MH, source=source, notes=notes)
+    return ExtractionResult(windows=out, X_MH=frame.X_MH, source=source, notes=notes,
+                            outlines_xy=[w[3] for w in kept])

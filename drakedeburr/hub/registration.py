@@ -168,102 +168,25 @@ def register_hub(
     Returns:
         RegistrationResult (check ``accepted`` or call ``require()``).
     """
-    import open3d as o3d
-    import trimesh
-
     t0 = time.perf_counter()
     tolerances = tolerances or Tolerances()
-    reg = o3d.pipelines.registration
     p_W = np.asarray(scan.p_S, float)
     if p_W.ndim != 2 or p_W.shape[1] != 3 or len(p_W) < 100:
         raise InputError(f"{scan.source or 'scan'}: need an (N>=100, 3) cloud, got {p_W.shape}")
     X0 = RigidTransform() if X_WH_prior is None else RigidTransform(X_WH_prior)
     n_sym = max(int(options.symmetry_order), 1)
     turn_range = options.prior_turn_range if options.prior_turn_range is not None else np.pi / n_sym
-
-    # scan, in the prior hub frame, optionally cut to the region of interest
-    p_Hprior = X0.inverse().multiply(p_W.T).T
-    keep = np.ones(len(p_W), bool)
-    if options.roi_radii is not None:
-        rad = np.hypot(p_Hprior[:, 0], p_Hprior[:, 1])
-        keep = (rad >= options.roi_radii[0]) & (rad <= options.roi_radii[1])
-        if keep.sum() < 100:
-            raise InputError(f"{scan.source or 'scan'}: fewer than 100 points inside the region "
-                             f"of interest r = {options.roi_radii} m")
-    scan_pc = _cloud(p_W[keep])
-    # model: samples with exact face normals (H), only near the scanned region
-    margin = 0.02
-    lo = p_Hprior[keep].min(axis=0) - margin
-    hi = p_Hprior[keep].max(axis=0) + margin
-    tri = np.asarray(mesh.triangles)
-    faces = np.flatnonzero(np.all((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi), axis=1))
-    sub = mesh.submesh([faces], append=True)
-    count = int(np.ceil(sub.area / options.model_spacing**2))
-    p_H, fid = trimesh.sample.sample_surface(sub, count, seed=options.seed)
-    n_H = sub.face_normals[fid]
-    if options.roi_radii is not None:
-        rad = np.hypot(p_H[:, 0], p_H[:, 1])
-        sel = (rad >= options.roi_radii[0] - margin) & (rad <= options.roi_radii[1] + margin)
-        p_H, n_H = p_H[sel], n_H[sel]
-    model = _cloud(p_H, n_H)
-    gv = options.global_voxel
-    model_c = model.voxel_down_sample(gv)
-    scan_c = scan_pc.voxel_down_sample(gv)
-    model_f = model.voxel_down_sample(options.fine_voxel)
-    scan_f = scan_pc.voxel_down_sample(options.fine_voxel)
-
-    # candidate starts (as X_WH)
-    starts: list[tuple[str, RigidTransform]] = []
-    try:  # global, feature based
-        fv = options.feature_voxel
-        src_g, tgt_g = model.voxel_down_sample(fv), scan_pc.voxel_down_sample(fv)
-        f_src, f_tgt = _fpfh(src_g, fv), _fpfh(tgt_g, fv)
-        o3d.utility.random.seed(options.seed)
-        glob = reg.registration_ransac_based_on_feature_matching(
-            src_g, tgt_g, f_src, f_tgt, True, 1.5 * fv,
-            reg.TransformationEstimationPointToPoint(False), 3,
-            [reg.CorrespondenceCheckerBasedOnEdgeLength(0.9),
-             reg.CorrespondenceCheckerBasedOnDistance(1.5 * fv)],
-            reg.RANSACConvergenceCriteria(options.ransac_iterations, 0.999))
-        X_g = RigidTransform(glob.transformation)
-        # snap to the symmetric equivalent nearest the prior
-        best = min(range(n_sym), key=lambda k: abs(_z_turn(
-            X0.rotation().matrix(), turn_about_hub_axis(X_g, 2 * np.pi * k / n_sym)
-            .rotation().matrix())))
-        starts.append(("global", turn_about_hub_axis(X_g, 2 * np.pi * best / n_sym)))
-    except RuntimeError as exc:  # pragma: no cover - open3d failure is reported, not fatal
-        log.warning("global registration failed: %s", exc)
-    n_starts = max(int(np.ceil(2 * turn_range / options.start_step)) + 1, 1)
-    for phi in np.linspace(-turn_range, turn_range, n_starts):
-        starts.append((f"prior{np.degrees(phi):+.1f}deg", turn_about_hub_axis(X0, float(phi))))
-
-    scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
-                        o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
-    thr = tolerances.registration_inlier_distance
-    scan_all = np.asarray(scan_pc.points)
-
-    def score(X_WH: RigidTransform) -> tuple[float, float]:
-        """(fitness, inlier RMS [m]) of the scan against the posed mesh (exact distances)."""
-        q_H = X_WH.inverse().multiply(scan_all.T).T.astype(np.float32)
-        d = scene.compute_distance(o3d.core.Tensor(q_H)).numpy().astype(float)
-        inl = d <= thr
-        fit = float(inl.mean())
-        rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else float("inf")
-        return fit, rmse
-
-    def icp(source, target, X_HW: np.ndarray, dist: float, iters: int):
-        return reg.registration_icp(source, target, dist, X_HW,
-                                    reg.TransformationEstimationPointToPlane(),
-                                    reg.ICPConvergenceCriteria(1e-9, 1e-9, iters))
-
+    scan_pc, model = _clouds(scan, p_W, mesh, X0, options)
+    starts = _starts(scan_pc, model, X0, n_sym, turn_range, options)
+    scan_c = scan_pc.voxel_down_sample(options.global_voxel)
+    model_c = model.voxel_down_sample(options.global_voxel)
     # coarse: point-to-plane ICP of the scan onto the model (exact normals) from every start
-    X0_R = X0.rotation().matrix()
     cands = []
     for label, X in starts:
-        r = icp(scan_c, model_c, X.inverse().GetAsMatrix4(), 2.0 * gv, 30)
+        r = _icp(scan_c, model_c, X.inverse().GetAsMatrix4(), 2.0 * options.global_voxel, 30)
         cands.append((float(r.fitness), float(r.inlier_rmse), label,
                       RigidTransform(np.linalg.inv(r.transformation))))
+    X0_R = X0.rotation().matrix()
 
     def plausible(X: RigidTransform) -> bool:
         """Within the vision's turn window and hub axis within max_tilt of the prior's."""
@@ -281,11 +204,14 @@ def register_hub(
             [(c[0], c[1], c[2]) for c in cands])
     _, _, label, X = max(pool, key=lambda c: (round(c[0], 3), -c[1]))
     # fine: point-to-plane ICP at the fine voxel size, shrinking the correspondence distance
+    scan_f = scan_pc.voxel_down_sample(options.fine_voxel)
+    model_f = model.voxel_down_sample(options.fine_voxel)
     T = X.inverse().GetAsMatrix4()
     for dist in (4 * options.fine_voxel, 2 * options.fine_voxel, options.fine_voxel):
-        T = icp(scan_f, model_f, T, dist, 60).transformation
+        T = _icp(scan_f, model_f, T, dist, 60).transformation
     X = RigidTransform(np.linalg.inv(T))
-    fit, rmse = score(X)
+    fit, rmse = _score(mesh, np.asarray(scan_pc.points), X,
+                       tolerances.registration_inlier_distance)
     turn = _z_turn(X0.rotation().matrix(), X.rotation().matrix())
     ok = fit >= tolerances.registration_fitness_min and rmse <= tolerances.registration_rmse_max
     verdict = "accepted" if ok else "REFUSED (wrong hub model, or a poor scan?)"
@@ -298,3 +224,90 @@ def register_hub(
              np.round(np.degrees(rpy), 3))
     return RegistrationResult(X, ok, fit, rmse, message, turn, time.perf_counter() - t0,
                               [(c[0], c[1], c[2]) for c in cands])
+
+
+def _clouds(scan: ScanCloud, p_W: np.ndarray, mesh, X0: RigidTransform,
+            options: RegistrationOptions):
+    """(scan cloud in W, optionally cut to the region of interest; model cloud in H: samples
+    with exact face normals near the scanned region)."""
+    import trimesh
+
+    p_Hprior = X0.inverse().multiply(p_W.T).T
+    keep = np.ones(len(p_W), bool)
+    if options.roi_radii is not None:
+        rad = np.hypot(p_Hprior[:, 0], p_Hprior[:, 1])
+        keep = (rad >= options.roi_radii[0]) & (rad <= options.roi_radii[1])
+        if keep.sum() < 100:
+            raise InputError(f"{scan.source or 'scan'}: fewer than 100 points inside the region "
+                             f"of interest r = {options.roi_radii} m")
+    scan_pc = _cloud(p_W[keep])
+    margin = 0.02
+    lo = p_Hprior[keep].min(axis=0) - margin
+    hi = p_Hprior[keep].max(axis=0) + margin
+    tri = np.asarray(mesh.triangles)
+    faces = np.flatnonzero(np.all((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi), axis=1))
+    sub = mesh.submesh([faces], append=True)
+    count = int(np.ceil(sub.area / options.model_spacing**2))
+    p_H, fid = trimesh.sample.sample_surface(sub, count, seed=options.seed)
+    n_H = sub.face_normals[fid]
+    if options.roi_radii is not None:
+        rad = np.hypot(p_H[:, 0], p_H[:, 1])
+        sel = (rad >= options.roi_radii[0] - margin) & (rad <= options.roi_radii[1] + margin)
+        p_H, n_H = p_H[sel], n_H[sel]
+    return scan_pc, _cloud(p_H, n_H)
+
+
+def _starts(scan_pc, model, X0: RigidTransform, n_sym: int, turn_range: float,
+            options: RegistrationOptions) -> list[tuple[str, RigidTransform]]:
+    """Candidate starts (as X_WH): the global feature-based result snapped to the symmetric
+    equivalent nearest the prior, and turns about the hub axis around the prior."""
+    import open3d as o3d
+
+    reg = o3d.pipelines.registration
+    starts: list[tuple[str, RigidTransform]] = []
+    try:  # global, feature based
+        fv = options.feature_voxel
+        src_g, tgt_g = model.voxel_down_sample(fv), scan_pc.voxel_down_sample(fv)
+        f_src, f_tgt = _fpfh(src_g, fv), _fpfh(tgt_g, fv)
+        o3d.utility.random.seed(options.seed)
+        glob = reg.registration_ransac_based_on_feature_matching(
+            src_g, tgt_g, f_src, f_tgt, True, 1.5 * fv,
+            reg.TransformationEstimationPointToPoint(False), 3,
+            [reg.CorrespondenceCheckerBasedOnEdgeLength(0.9),
+             reg.CorrespondenceCheckerBasedOnDistance(1.5 * fv)],
+            reg.RANSACConvergenceCriteria(options.ransac_iterations, 0.999))
+        X_g = RigidTransform(glob.transformation)
+        best = min(range(n_sym), key=lambda k: abs(_z_turn(
+            X0.rotation().matrix(), turn_about_hub_axis(X_g, 2 * np.pi * k / n_sym)
+            .rotation().matrix())))
+        starts.append(("global", turn_about_hub_axis(X_g, 2 * np.pi * best / n_sym)))
+    except RuntimeError as exc:  # pragma: no cover - open3d failure is reported, not fatal
+        log.warning("global registration failed: %s", exc)
+    n_starts = max(int(np.ceil(2 * turn_range / options.start_step)) + 1, 1)
+    for phi in np.linspace(-turn_range, turn_range, n_starts):
+        starts.append((f"prior{np.degrees(phi):+.1f}deg", turn_about_hub_axis(X0, float(phi))))
+    return starts
+
+
+def _icp(source, target, X_HW: np.ndarray, dist: float, iters: int):
+    import open3d as o3d
+
+    reg = o3d.pipelines.registration
+    return reg.registration_icp(source, target, dist, X_HW,
+                                reg.TransformationEstimationPointToPlane(),
+                                reg.ICPConvergenceCriteria(1e-9, 1e-9, iters))
+
+
+def _score(mesh, scan_all: np.ndarray, X_WH: RigidTransform, thr: float) -> tuple[float, float]:
+    """(fitness, inlier RMS [m]) of the scan against the posed mesh (exact distances)."""
+    import open3d as o3d
+
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
+                        o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
+    q_H = X_WH.inverse().multiply(scan_all.T).T.astype(np.float32)
+    d = scene.compute_distance(o3d.core.Tensor(q_H)).numpy().astype(float)
+    inl = d <= thr
+    fit = float(inl.mean())
+    rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else float("inf")
+    return fit, rmse

@@ -86,75 +86,28 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
     Raises:
         InputError: invalid arguments.
     """
-    import open3d as o3d
-    from scipy.spatial import cKDTree
-
     if not (sigma >= 0 and math.isfinite(sigma)):
         raise InputError(f"simulate_scan: sigma must be >= 0, got {sigma}")
     if not (spacing > 0 and math.isfinite(spacing)) or spacing < 5e-5:
         raise InputError(f"simulate_scan: spacing must be >= 0.05 mm, got {spacing}")
-    V, F = hub.vertices_H, hub.faces
-    tri = V[F]
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area2 = np.linalg.norm(cross, axis=1)
-    normal = cross / np.maximum(area2, 1e-300)[:, None]
-    centroid = tri.mean(axis=1)
-    views = scanner_origins_H(view_dir, distance=distance, tilt=tilt, n_tilted=n_tilted)
-    cos_max = math.cos(max_incidence)
-    # triangles facing at least one view
-    facing = np.zeros(len(F), bool)
-    for o in views:
-        to = o - centroid
-        to /= np.linalg.norm(to, axis=1, keepdims=True)
-        facing |= np.sum(normal * to, axis=1) > cos_max
-    cand = facing & (area2 > 0)
-    T, N = tri[cand], normal[cand]
-    if max_edge_distance is not None:
-        # split large triangles (longest-edge bisection) so the band test per triangle is tight
-        edge_pts = np.concatenate([w.p_HE for w in hub.windows])
-        etree = cKDTree(edge_pts)
-        lim = max(max_edge_distance, 2 * spacing)
-        for _ in range(16):
-            c = T.mean(axis=1)
-            size = np.max(np.linalg.norm(T - c[:, None, :], axis=2), axis=1)
-            d, _ = etree.query(c)
-            near = d <= max_edge_distance + size
-            T, N, size = T[near], N[near], size[near]
-            big = size > lim
-            if not big.any():
-                break
-            Tb = T[big]
-            e = np.stack([np.linalg.norm(Tb[:, 1] - Tb[:, 0], axis=1),
-                          np.linalg.norm(Tb[:, 2] - Tb[:, 1], axis=1),
-                          np.linalg.norm(Tb[:, 0] - Tb[:, 2], axis=1)], axis=1)
-            k = np.argmax(e, axis=1)  # longest edge k: vertices k, k+1
-            rows = np.arange(len(Tb))
-            a, b, o = Tb[rows, k], Tb[rows, (k + 1) % 3], Tb[rows, (k + 2) % 3]
-            m = 0.5 * (a + b)
-            T = np.concatenate([T[~big], np.stack([a, m, o], axis=1), np.stack([m, b, o], axis=1)])
-            N = np.concatenate([N[~big], N[big], N[big]])
     if partial is not None:
         th0, th1 = (float(x) for x in partial)
         if not th1 > th0:
             raise InputError(f"simulate_scan: partial sector needs theta_max > theta_min, "
                              f"got {partial}")
-    areas = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
-    total = float(areas.sum())
-    n = int(round(total / spacing**2))
-    if n > 5_000_000:
-        raise InputError(f"simulate_scan: {n} points requested (area {total:.3f} m^2 at "
-                         f"{spacing * 1e3:.2f} mm spacing); raise spacing or set "
-                         "max_edge_distance")
-    rng = np.random.default_rng(seed)
-    pick = rng.choice(len(T), size=n, p=areas / total)
-    u, v = rng.random(n), rng.random(n)
-    flip = u + v > 1
-    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
-    t = T[pick]
-    p = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
-    nrm = N[pick]
-    keep = np.ones(n, bool)
+    views = scanner_origins_H(view_dir, distance=distance, tilt=tilt, n_tilted=n_tilted)
+    cos_max = math.cos(max_incidence)
+    T, N = _facing_triangles(hub.vertices_H, hub.faces, views, cos_max)
+    etree = None
     if max_edge_distance is not None:
+        from scipy.spatial import cKDTree
+
+        etree = cKDTree(np.concatenate([w.p_HE for w in hub.windows]))
+        T, N = _split_near_edges(T, N, etree, max_edge_distance, spacing)
+    rng = np.random.default_rng(seed)
+    p, nrm, n = _sample(T, N, spacing, rng)
+    keep = np.ones(len(p), bool)
+    if etree is not None:
         d, _ = etree.query(p)
         keep &= d <= max_edge_distance
     if partial is not None:
@@ -162,7 +115,92 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
         th = th0 + np.mod(th - th0, 2 * math.pi)
         keep &= th <= th1
     p, nrm = p[keep], nrm[keep]
-    # visibility: the first hit of the ray from each view towards the point is the point itself
+    seen = _visible(hub.vertices_H, hub.faces, p, nrm, views, cos_max)
+    p, nrm = p[seen], nrm[seen]
+    if sigma > 0:
+        p = p + rng.normal(0.0, sigma, size=p.shape)
+    frame = "H"
+    if X_SH is not None:
+        p, nrm = _to_scan_frame(p, nrm, X_SH)
+        frame = "S"
+    log.debug("simulate_scan %s: %d points (%d candidates)", hub.name, len(p), n)
+    meta = {"sigma": sigma, "spacing": spacing, "seed": seed, "frame": frame,
+            "X_SH": None if X_SH is None else np.asarray(X_SH, float).tolist(),
+            "view_dir": [float(x) for x in _unit(view_dir)], "views_H": views.tolist(),
+            "partial": None if partial is None else [float(x) for x in partial],
+            "max_edge_distance": max_edge_distance, "count": int(len(p)), "hub": hub.name}
+    return ScanCloud(p_S=p, n_S=nrm.copy() if with_normals else None,
+                     source=f"simulated scan of hub {hub.name} (sigma {sigma * 1e3:.3f} mm, "
+                            f"seed {seed})", meta=meta)
+
+
+def _facing_triangles(V: np.ndarray, F: np.ndarray, views: np.ndarray, cos_max: float):
+    """Triangles (K, 3, 3) facing at least one view, and their unit normals (K, 3)."""
+    tri = V[F]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area2 = np.linalg.norm(cross, axis=1)
+    normal = cross / np.maximum(area2, 1e-300)[:, None]
+    centroid = tri.mean(axis=1)
+    facing = np.zeros(len(F), bool)
+    for o in views:
+        to = o - centroid
+        to /= np.linalg.norm(to, axis=1, keepdims=True)
+        facing |= np.sum(normal * to, axis=1) > cos_max
+    cand = facing & (area2 > 0)
+    return tri[cand], normal[cand]
+
+
+def _split_near_edges(T: np.ndarray, N: np.ndarray, etree, max_edge_distance: float,
+                      spacing: float):
+    """Keep triangles near the window edges, split large ones (longest-edge bisection) so the
+    band test per triangle is tight."""
+    lim = max(max_edge_distance, 2 * spacing)
+    for _ in range(16):
+        c = T.mean(axis=1)
+        size = np.max(np.linalg.norm(T - c[:, None, :], axis=2), axis=1)
+        d, _ = etree.query(c)
+        near = d <= max_edge_distance + size
+        T, N, size = T[near], N[near], size[near]
+        big = size > lim
+        if not big.any():
+            break
+        Tb = T[big]
+        e = np.stack([np.linalg.norm(Tb[:, 1] - Tb[:, 0], axis=1),
+                      np.linalg.norm(Tb[:, 2] - Tb[:, 1], axis=1),
+                      np.linalg.norm(Tb[:, 0] - Tb[:, 2], axis=1)], axis=1)
+        k = np.argmax(e, axis=1)  # longest edge k: vertices k, k+1
+        rows = np.arange(len(Tb))
+        a, b, o = Tb[rows, k], Tb[rows, (k + 1) % 3], Tb[rows, (k + 2) % 3]
+        m = 0.5 * (a + b)
+        T = np.concatenate([T[~big], np.stack([a, m, o], axis=1), np.stack([m, b, o], axis=1)])
+        N = np.concatenate([N[~big], N[big], N[big]])
+    return T, N
+
+
+def _sample(T: np.ndarray, N: np.ndarray, spacing: float, rng):
+    """Points drawn uniformly by area (area / spacing^2 of them), their normals, the count."""
+    areas = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    total = float(areas.sum())
+    n = int(round(total / spacing**2))
+    if n > 5_000_000:
+        raise InputError(f"simulate_scan: {n} points requested (area {total:.3f} m^2 at "
+                         f"{spacing * 1e3:.2f} mm spacing); raise spacing or set "
+                         "max_edge_distance")
+    pick = rng.choice(len(T), size=n, p=areas / total)
+    u, v = rng.random(n), rng.random(n)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    t = T[pick]
+    p = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
+    return p, N[pick], n
+
+
+def _visible(V: np.ndarray, F: np.ndarray, p: np.ndarray, nrm: np.ndarray, views: np.ndarray,
+             cos_max: float) -> np.ndarray:
+    """(K,) bool: some view sees the point (facing it, and the first hit of the ray from the
+    view toward the point is the point itself)."""
+    import open3d as o3d
+
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.core.Tensor(V.astype(np.float32)),
                         o3d.core.Tensor(F.astype(np.uint32)))
@@ -178,24 +216,12 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
         rays = np.concatenate([np.broadcast_to(o, (int(todo.sum()), 3)), ray[todo]], axis=1)
         hit = scene.cast_rays(o3d.core.Tensor(rays.astype(np.float32)))["t_hit"].numpy()
         seen[np.flatnonzero(todo)[hit >= dist[todo] - 2e-5]] = True
-    p, nrm = p[seen], nrm[seen]
-    if sigma > 0:
-        p = p + rng.normal(0.0, sigma, size=p.shape)
-    frame = "H"
-    if X_SH is not None:
-        X = np.asarray(X_SH, float)
-        R = X[:3, :3] if X.shape == (4, 4) else None
-        if R is None or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
-            raise InputError("simulate_scan: X_SH must be a (4, 4) rigid transform")
-        p = p @ R.T + X[:3, 3]
-        nrm = nrm @ R.T
-        frame = "S"
-    log.debug("simulate_scan %s: %d points (%d candidates)", hub.name, len(p), n)
-    meta = {"sigma": sigma, "spacing": spacing, "seed": seed, "frame": frame,
-            "X_SH": None if X_SH is None else np.asarray(X_SH, float).tolist(),
-            "view_dir": [float(x) for x in _unit(view_dir)], "views_H": views.tolist(),
-            "partial": None if partial is None else [float(x) for x in partial],
-            "max_edge_distance": max_edge_distance, "count": int(len(p)), "hub": hub.name}
-    return ScanCloud(p_S=p, n_S=nrm.copy() if with_normals else None,
-                     source=f"simulated scan of hub {hub.name} (sigma {sigma * 1e3:.3f} mm, "
-                            f"seed {seed})", meta=meta)
+    return seen
+
+
+def _to_scan_frame(p: np.ndarray, nrm: np.ndarray, X_SH) -> tuple[np.ndarray, np.ndarray]:
+    X = np.asarray(X_SH, float)
+    R = X[:3, :3] if X.shape == (4, 4) else None
+    if R is None or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+        raise InputError("simulate_scan: X_SH must be a (4, 4) rigid transform")
+    return p @ R.T + X[:3, 3], nrm @ R.T

@@ -26,8 +26,45 @@ def register(subparsers) -> None:
                    help="max chord length [mm] (default %(default)s)")
     p.add_argument("--delta-max-mm", type=float, default=pp.delta_max * 1e3,
                    help="max chord-height error [mm] (default %(default)s)")
-    p.add_argument("--json", metavar="FILE", help="write the table as JSON")
+    p.add_argument("--json", metavar="FILE",
+                   help="write the table as JSON, with 'input': each window's edge loop, the "
+                        "hub axis and the front side in the input mesh's coordinates and unit")
+    p.add_argument("--unit", choices=("m", "mm"), help="force a mesh file's unit")
+    from drakedeburr.hub.commands import _add_front_and_burr
+
+    _add_front_and_burr(p)
     p.set_defaults(_run=_run_cl)
+
+
+def _windows_and_view(args: argparse.Namespace):
+    """(windows for the planners, the input view for --json, source description)."""
+    from pathlib import Path
+
+    from drakedeburr.hub.extract import extract_window_edges, resample_loop
+    from drakedeburr.hub.inputview import input_view, input_view_of_hub
+    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, load_hub_mesh
+    from drakedeburr.hub.model import load_hub
+    from drakedeburr.hub.types import WindowEdge
+    from drakedeburr.units import m_from_mm
+
+    path = Path(args.source)
+    if path.is_file() and path.suffix.lower() in MESH_SUFFIXES:
+        lm = load_hub_mesh(path, unit=args.unit)
+        res = extract_window_edges(
+            lm.mesh, source=str(path), spacing=2.0e-3, front=args.front,
+            burr_diameter=m_from_mm(args.burr_mm), clearance=m_from_mm(args.clearance_mm),
+            min_window_width=None if args.min_window_width_mm is None
+            else m_from_mm(args.min_window_width_mm))
+        view = input_view(res.windows, res.X_MH, lm.unit, front=res.notes["front"],
+                          not_windows=res.notes["not_windows"] + res.notes["rejected"],
+                          source=str(path))
+        return res.windows, view, str(path)
+    hub = load_hub(args.source)
+    # the ground truth is dense (mesh vertices); the planners start from equidistant
+    # "initial CL points" as in the source
+    windows = [WindowEdge(index=w.index, kind=w.kind, p_HE=resample_loop(w.p_HE, 2.0e-3))
+               for w in hub.windows]
+    return windows, input_view_of_hub(hub), f"hub {hub.name}"
 
 
 def _run_cl(args: argparse.Namespace) -> int:
@@ -44,8 +81,10 @@ def _run_cl(args: argparse.Namespace) -> int:
             from drakedeburr.errors import InputError
 
             raise InputError(f"--method {m!r}: choose from {', '.join(METHODS)}")
-    table = cl_table(args.source, methods, params, progress=tqdm_progress("windows"))
+    windows, view, desc = _windows_and_view(args)
+    table = cl_table(windows, methods, params, progress=tqdm_progress("windows"))
+    table["source"] = desc
     print(format_table(table))
     if args.json:
-        atomic_write_json(args.json, table)
+        atomic_write_json(args.json, {**table, "input": view})
     return 0

@@ -1,0 +1,220 @@
+"""The deburring edge of one window, read off any hub mesh by ray casts from the front.
+
+**Which line is deburred.** The edge where the front face ends at a window: on a sharp edge
+the crease between face and wall; on a rounded or chamfered edge the line where the face
+surface meets the round or chamfer (its face-side tangent line). This is the line the
+generator stores as ground truth (``drakedeburr.hub.surface``) and the one extracted here, the
+same way on every mesh.
+
+**How.** The opening's plan-view outline (the boundary of the misses of rays along -Z_H,
+refined by bisection) is walked outward, away from the opening, along its 2-D normal; rays
+along -Z_H at ``step`` spacing sample the surface seen from the front: height z(s) and facet
+normal n(s). From the outline outward a profile crosses, in this order: what is seen through
+the opening's wider front part (a drafted wall, anything below), the edge band (round,
+chamfer), then the face. A sample belongs to the face when its normal is less than
+``WALL_ANGLE`` off the axis (walls are steeper), does not differ by more than
+``BAND_ANGLE`` from the normal ``lag`` further out (the band turns faster), and the profile
+does not jump there (a step of more than ``JUMP`` between samples is a wall hidden from the
+front). The edge point is the first sample of the first run of ``run`` face samples, unless
+the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
+wider front part): then the first run after that step.
+
+**Plausibility** (a loop that fails is rejected with its reason, not used): no jump of more
+than ``MAX_STEP`` between neighbouring edge points (the walk left the face onto another
+surface), the 3-D length at most ``MAX_LENGTH_RATIO`` x the opening outline's, and the
+loop's deviation from its best-fit plane at most ``MAX_WARP`` x its plan-view size; at most
+``MAX_MISSING`` of the outline without a face beside it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANGLE"]
+
+BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
+WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
+JUMP = 0.8e-3  # [m] height step between two samples (0.1 mm apart) that is a hidden wall
+MAX_STEP = 3e-3  # [m] largest jump between neighbouring edge points of a plausible loop
+MAX_LENGTH_RATIO = 1.6  # 3-D loop length / opening outline length
+MAX_WARP = 0.35  # deviation from the best-fit plane / plan-view diameter
+MAX_MISSING = 0.05  # share of the outline without a face beside it
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeLine:
+    """The deburring edge of one opening, or why there is none.
+
+    Attributes:
+        p_H: (N, 3) edge points in H [m] (outline order, CCW seen from +Z_H), or None.
+        band: (N,) distance [m] in plan view from the opening's outline to the edge point.
+        outline_xy: (M, 2) the opening's refined outline [m].
+        reason: "" or why the loop was rejected.
+        figures: length [m], outline length [m], largest step [m], warp [m], missing share.
+    """
+
+    p_H: np.ndarray | None
+    band: np.ndarray | None
+    outline_xy: np.ndarray
+    reason: str
+    figures: dict
+
+
+def _cast(scene, xy: np.ndarray, z0: float):
+    import open3d as o3d
+
+    r = np.zeros((len(xy), 6), np.float32)
+    r[:, :2], r[:, 2], r[:, 5] = xy, z0, -1.0
+    ans = scene.cast_rays(o3d.core.Tensor(r))
+    return ans["t_hit"].numpy().astype(float), ans["primitive_normals"].numpy().astype(float)
+
+
+def _area(xy: np.ndarray) -> float:
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _resample2(xy: np.ndarray, spacing: float) -> np.ndarray:
+    q = np.vstack([xy, xy[:1]])
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+    n = max(16, int(round(s[-1] / spacing)))
+    t = np.linspace(0.0, s[-1], n, endpoint=False)
+    return np.column_stack([np.interp(t, s, q[:, 0]), np.interp(t, s, q[:, 1])])
+
+
+def opening_outline(scene, mask: np.ndarray, grid: np.ndarray, pixel: float, z0: float,
+                    spacing: float) -> np.ndarray:
+    """(M, 2) outline of one opening in H [m], CCW, at ``spacing``, refined to ~1e-3 of a
+    grid cell by bisection with rays along its normal (hit = material)."""
+    import contourpy
+
+    lines = contourpy.contour_generator(z=np.pad(mask.astype(float), 1)).lines(0.5)
+    line = max(lines, key=len)
+    ax = np.arange(len(grid))
+    xy = np.c_[np.interp(line[:, 1] - 1, ax, grid), np.interp(line[:, 0] - 1, ax, grid)]
+    if np.linalg.norm(xy[0] - xy[-1]) < 1e-12:
+        xy = xy[:-1]
+    if _area(xy) < 0:
+        xy = xy[::-1]
+    xy = _resample2(xy, spacing)
+    out = _outward(xy)
+    lo = np.full(len(xy), -2.0 * pixel)  # in the opening (miss)
+    hi = np.full(len(xy), 2.0 * pixel)  # on material (hit)
+    for _ in range(14):
+        mid = 0.5 * (lo + hi)
+        h = np.isfinite(_cast(scene, xy + mid[:, None] * out, z0)[0])
+        hi = np.where(h, mid, hi)
+        lo = np.where(h, lo, mid)
+    return xy + hi[:, None] * out
+
+
+def _outward(xy: np.ndarray) -> np.ndarray:
+    """Unit 2-D normals of a CCW outline pointing out of the opening (to its right)."""
+    tang = np.roll(xy, -1, axis=0) - np.roll(xy, 1, axis=0)
+    out = np.c_[tang[:, 1], -tang[:, 0]]
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
+                run: int, ledge: int) -> np.ndarray:
+    """Per profile (rows) the index of the edge sample, or -1 (module doc).
+
+    Args:
+        t: (P, K) ray hit distances (inf: miss); n: (P, K, 3) facet normals.
+        ledge: a face stretch followed within this many samples by a step *up* is a ledge
+            inside the opening (seen through its wider front part): the edge is further out.
+    """
+    z = z0 - t
+    hit = np.isfinite(t)
+    steep = np.abs(n[..., 2]) < math.cos(WALL_ANGLE)
+    # the band: the normal turns by more than BAND_ANGLE over `lag` samples (facets of a
+    # non-watertight mesh may face either way: compare |n . n'|)
+    nxt = np.concatenate([n[:, lag:], np.repeat(n[:, -1:], lag, axis=1)], axis=1)
+    turning = np.abs(np.einsum("pkd,pkd->pk", n, nxt)) < math.cos(BAND_ANGLE)
+    dz = np.diff(z, axis=1, prepend=z[:, :1])
+    jump_tol = JUMP * step / 1e-4
+    up = hit & (dz > jump_tol)
+    face = hit & ~steep & ~turning & ~(np.abs(dz) > jump_tol)
+    face[:, -lag:] = False
+    win = np.lib.stride_tricks.sliding_window_view(face, run, axis=1).all(axis=2)
+    K = win.shape[1]
+    cols = np.arange(K)
+    first = np.where(win.any(axis=1), np.argmax(win, axis=1), -1)
+    for _ in range(4):  # move past ledges (a step up shortly after the chosen stretch)
+        lo = first[:, None]
+        near_up = up[:, :K] & (cols > lo) & (cols <= lo + ledge) & (lo >= 0)
+        if not near_up.any():
+            break
+        last_up = np.where(near_up.any(axis=1), K - 1 - np.argmax(near_up[:, ::-1], axis=1), -1)
+        moved = last_up >= 0
+        later = win & (cols >= last_up[:, None])
+        first = np.where(moved, np.where(later.any(axis=1), np.argmax(later, axis=1), -1), first)
+    return first
+
+
+def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-3,
+                reach: float = 10e-3, lag_length: float = 1.0e-3,
+                run_length: float = 1.0e-3, ledge_length: float = 5.0e-3) -> EdgeLine:
+    """The deburring edge beside one opening's outline (module doc).
+
+    Args:
+        scene: open3d RaycastingScene of the mesh in H [m].
+        outline_xy: (M, 2) refined CCW outline of the opening [m].
+        z0: ray origin height above the mesh [m].
+        step: profile sample spacing [m]; reach: how far out the profile goes [m].
+        lag_length: the band test compares normals this far apart [m].
+        run_length: the face must continue this far past the edge point [m].
+        ledge_length: a face stretch this close before a step up is a ledge [m].
+    """
+    out = _outward(outline_xy)
+    s = 0.02e-3 + np.arange(int(round(reach / step)) + 1) * step
+    P, K = len(outline_xy), len(s)
+    xy = outline_xy[:, None, :] + s[None, :, None] * out[:, None, :]
+    t, n = _cast(scene, xy.reshape(-1, 2), z0)
+    t, n = t.reshape(P, K), n.reshape(P, K, 3)
+    lag, run = max(1, int(round(lag_length / step))), max(2, int(round(run_length / step)))
+    first = _face_start(t, n, z0, step, lag, run, int(round(ledge_length / step)))
+    ok = first >= 0
+    rows = np.flatnonzero(ok)
+    k = first[ok]
+    p = np.column_stack([xy[rows, k], z0 - t[rows, k]])
+    band = np.full(P, np.nan)
+    band[rows] = s[k]
+    figures = {"outline_length": float(np.linalg.norm(
+        np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1).sum()),
+        "missing": float(1.0 - ok.mean())}
+    reason = _implausible(p, figures)
+    return EdgeLine(None if reason else p, band, outline_xy, reason, figures)
+
+
+def _implausible(p: np.ndarray, fig: dict) -> str:
+    """'' or why the loop is not a plausible window edge (module doc); fills ``fig``."""
+    if fig["missing"] > MAX_MISSING:
+        return (f"no front face found beside {fig['missing']:.0%} of the opening's outline "
+                f"(within 10 mm of it)")
+    if len(p) < 16:
+        return "fewer than 16 edge points"
+    d = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+    fig["length"] = float(d.sum())
+    dz = np.abs(np.roll(p[:, 2], -1) - p[:, 2])
+    fig["max_step"] = float(dz.max())
+    c = p.mean(axis=0)
+    normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
+    fig["warp"] = float(np.abs((p - c) @ normal).max())
+    size = float(np.ptp(p[:, :2], axis=0).max())
+    if fig["max_step"] > MAX_STEP:
+        i = int(np.argmax(dz))
+        return (f"the edge jumps {fig['max_step'] * 1e3:.1f} mm in height at "
+                f"({p[i, 0] * 1e3:.0f}, {p[i, 1] * 1e3:.0f}) mm: the line leaves the face "
+                f"onto another surface")
+    if fig["length"] > MAX_LENGTH_RATIO * fig["outline_length"]:
+        ratio = fig["length"] / fig["outline_length"]
+        return (f"loop {fig['length'] * 1e3:.0f} mm long, {ratio:.2f} x the opening's outline "
+                f"({fig['outline_length'] * 1e3:.0f} mm)")
+    if fig["warp"] > MAX_WARP * size:
+        return (f"loop not planar enough for a window edge: {fig['warp'] * 1e3:.0f} mm off its "
+                f"best-fit plane over a {size * 1e3:.0f} mm window")
+    return ""

@@ -1,0 +1,252 @@
+"""Convex collision pieces of an imported hub mesh (metres, frame H).
+
+* **Closed meshes**: CoACD (approximate convex decomposition, Wei et al. 2022) on the solid
+  simplified by ``simplify_tolerance``; then every piece that reaches more than
+  ``window_reach`` into a window opening (probe points: edge points pushed into the opening and
+  down the wall, kept where they are outside the solid) is replaced by the hulls of the solid
+  inside it cut in two at an offending probe's edge point (across the edge, else along the
+  wall plane, else across the longest extent), round after round. The same for pieces standing
+  more than ``front_reach`` proud of the surface seen from the front (probes on a plan-view
+  grid; cut circumferentially, else radially).
+* **Open meshes** (not watertight, several parts, inconsistent winding): inside and outside
+  are undefined, so the pieces cover the *surface*: triangles are subdivided to at most
+  ``shell_max_edge``, a plan-view quadtree groups them into cells, each connected group of a
+  cell becomes the hull of its triangles offset by +-``shell_thickness``/2 along their
+  normals, and a cell is split while a hull holds a probe (in a window opening, or above the
+  front surface). A tool reaching the hub from outside must cross such a shell first.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["front_probes", "solid_pieces", "shell_pieces", "coacd_version"]
+
+Progress = Callable[[int, int, str], None] | None
+
+
+def front_probes(scene, face_normals: np.ndarray, options, closed: bool = True):
+    """Probes ``front_reach`` above the surface seen along -Z_H (plan-view grid) and their cut
+    data (K, 9): surface point, circumferential and radial directions (cut planes that part
+    a hull bridging a concave corner of the face or a ring; circumferential first: fewer
+    pieces, measured)."""
+    import open3d as o3d
+
+    h = options.front_probe_spacing
+    r_max = 0.35  # [m] half the largest wheel diameter the importer accepts
+    g = np.arange(-r_max, r_max + h, h)
+    gx, gy = np.meshgrid(g, g, indexing="ij")
+    keep = np.hypot(gx, gy).ravel() <= r_max
+    rays = np.zeros((int(keep.sum()), 6), np.float32)
+    rays[:, 0], rays[:, 1] = gx.ravel()[keep], gy.ravel()[keep]
+    rays[:, 2], rays[:, 5] = 1.0, -1.0
+    ans = scene.cast_rays(o3d.core.Tensor(rays))
+    t = ans["t_hit"].numpy()
+    hit = np.isfinite(t)
+    foot = rays[hit, :3].astype(float) - np.c_[np.zeros((hit.sum(), 2)), t[hit]]
+    n = face_normals[ans["primitive_ids"].numpy()[hit].astype(np.int64)]
+    n[n[:, 2] < 0] *= -1.0
+    q = foot + options.front_reach * n
+    er = np.c_[foot[:, :2], np.zeros(len(foot))]
+    er /= np.maximum(np.linalg.norm(er, axis=1, keepdims=True), 1e-12)
+    et = np.c_[-er[:, 1], er[:, 0], np.zeros(len(er))]
+    qt = o3d.core.Tensor(q.astype(np.float32))
+    d = (scene.compute_signed_distance(qt) if closed else scene.compute_distance(qt)).numpy()
+    ok = d > 0.5 * options.front_reach
+    return q[ok], np.c_[foot, et, er][ok]
+
+
+# --------------------------------------------------------------------------- collision
+def _coacd(V: np.ndarray, F: np.ndarray, threshold: float, options,
+           max_hulls: int = -1) -> list[np.ndarray]:
+    """CoACD pieces (hull vertex arrays, metres) of a closed mesh."""
+    import coacd
+
+    coacd.set_log_level("error")
+    parts = coacd.run_coacd(
+        coacd.Mesh(np.ascontiguousarray(V, float), np.ascontiguousarray(F, np.int32)),
+        threshold=threshold, max_convex_hull=max_hulls, preprocess_mode="off",
+        resolution=options.resolution, mcts_nodes=options.mcts_nodes,
+        mcts_iterations=options.mcts_iterations, mcts_max_depth=options.mcts_max_depth,
+        merge=True, seed=options.seed)
+    return [np.asarray(v, float) for v, _ in parts if len(v) >= 4]
+
+
+def _manifold_arrays(m) -> tuple[np.ndarray, np.ndarray]:
+    mesh = m.to_mesh64()
+    return np.asarray(mesh.vert_properties[:, :3], float), np.asarray(mesh.tri_verts, np.int64)
+
+
+def _halves(part, point: np.ndarray | None = None, normals: tuple = ()) -> list:
+    """Cut a manifold in two by the first plane through ``point`` with one of ``normals`` that
+    leaves material on both sides; else across its longest bounding-box extent (middle)."""
+    for normal in normals:
+        a, b = part.split_by_plane(normal.tolist(), float(normal @ point))
+        if a.volume() > 1e-9 and b.volume() > 1e-9:
+            return [a, b]
+    bb = np.asarray(part.bounding_box(), float)
+    ext = bb[3:] - bb[:3]
+    k = int(np.argmax(ext))
+    normal = np.zeros(3)
+    normal[k] = 1.0
+    a, b = part.split_by_plane(normal.tolist(), float(0.5 * (bb[k] + bb[k + 3])))
+    return [h for h in (a, b) if not h.is_empty()]
+
+
+def solid_pieces(solid, probes, probe_edge: np.ndarray, options,
+                      progress: Progress = None):
+    """Convex pieces (list of (M, 3) hull vertices, metres, H) and refinement statistics.
+
+    ``probe_edge`` (K, 9): for each probe the edge point it was pushed from, the wall normal
+    and the edge tangent there. A piece holding probes is cut at the edge point of its middle
+    probe: along the wall's tangent plane (separates a window's wall from material across the
+    opening), else across the edge (halving a hull that bridges a window's concave corner
+    shrinks the bridge about fourfold)."""
+    from manifold3d import Manifold
+
+    V, F = _manifold_arrays(solid)
+    t0 = time.perf_counter()
+    pieces = _coacd(V, F, options.threshold, options, options.max_convex_hull)
+    stats = {"coacd_first_pass_pieces": len(pieces),
+             "coacd_first_pass_seconds": round(time.perf_counter() - t0, 2),
+             "refined_pieces": 0, "refine_rounds": 0}
+    min_vol = 1e-9  # [m^3] parts smaller than 1 mm^3 are slivers of the boolean
+    for rnd in range(options.max_refine_rounds):
+        hits = {i: probes.inside(p) for i, p in enumerate(pieces)}
+        bad = [i for i, h in hits.items() if len(h)]
+        if progress is not None:
+            progress(rnd, options.max_refine_rounds,
+                     f"collision refinement {rnd + 1}: {len(bad)} pieces reach into a window")
+        if not bad:
+            break
+        stats["refine_rounds"] = rnd + 1
+        stats["refined_pieces"] += len(bad)
+        keep = [p for i, p in enumerate(pieces) if i not in set(bad)]
+        for i in bad:
+            part = solid ^ Manifold.hull_points(pieces[i])
+            for comp in part.decompose():
+                if comp.volume() < min_vol:
+                    continue
+                if options.refine == "coacd":
+                    sub = _coacd(*_manifold_arrays(comp), options.threshold * 0.5 ** (rnd + 1),
+                                 options)
+                else:
+                    sub = []
+                if len(sub) <= 1:  # cut it in two across the window edge
+                    e = probe_edge[hits[i][len(hits[i]) // 2]]
+                    sub = [_manifold_arrays(h.hull())[0]
+                           for h in _halves(comp, e[:3], (e[6:], e[3:6]))
+                           if h.volume() >= min_vol]
+                keep.extend(sub)
+        pieces = keep
+    return pieces, stats
+
+
+def coacd_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("coacd")
+    except PackageNotFoundError:
+        return "?"
+
+
+def _components(faces: np.ndarray) -> np.ndarray:
+    """(F,) connected-component label of each triangle (shared vertices)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n_v = int(faces.max()) + 1
+    rows = np.repeat(np.arange(len(faces)), 3)
+    g = coo_matrix((np.ones(len(rows)), (rows, faces.ravel())),
+                   shape=(len(faces), n_v)).tocsr()
+    adj = g @ g.T
+    return connected_components(adj, directed=False)[1]
+
+
+def _shell_hull(V: np.ndarray, faces: np.ndarray, normals: np.ndarray,
+                half: float) -> np.ndarray | None:
+    from scipy.spatial import ConvexHull, QhullError
+
+    tri = V[faces]  # (k, 3, 3)
+    off = normals[:, None, :] * half
+    pts = np.concatenate([(tri + off).reshape(-1, 3), (tri - off).reshape(-1, 3)])
+    try:
+        return pts[ConvexHull(pts).vertices]
+    except QhullError:
+        return None
+
+
+def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
+                 progress: Progress = None) -> tuple[list[np.ndarray], dict]:
+    """Convex pieces covering the surface of an open mesh (module doc) and statistics.
+
+    Args:
+        V: (N, 3) vertices in H [m]; F: (M, 3) triangles.
+        probes: :class:`~drakedeburr.hub.collision.WindowProbes` (metres) that must stay
+            outside every piece.
+        options: :class:`~drakedeburr.hub.import_mesh.ImportOptions`.
+    """
+    import trimesh
+
+    t0 = time.perf_counter()
+    V, F = trimesh.remesh.subdivide_to_size(V, F, options.shell_max_edge)
+    tri = V[F]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    c = tri.mean(axis=1)
+    half = 0.5 * options.shell_thickness
+    lo = c[:, :2].min(axis=0) - 1e-6
+    size = float((c[:, :2].max(axis=0) - lo).max()) + 2e-6
+    n0 = int(np.ceil(size / options.shell_cell))
+    edge = size / n0
+    stack = [(lo[0] + i * edge, lo[1] + j * edge, edge) for j in range(n0) for i in range(n0)]
+    pieces, stats = [], {"triangles_subdivided": int(len(F)), "cells_split": 0,
+                         "pieces_with_probes": 0}
+    while stack:
+        x0, y0, h = stack.pop()
+        sel = np.flatnonzero((c[:, 0] >= x0) & (c[:, 0] < x0 + h) & (c[:, 1] >= y0)
+                             & (c[:, 1] < y0 + h))
+        if not len(sel):
+            continue
+        labels = _components(F[sel])
+        hulls, split = [], False
+        for lab in np.unique(labels):
+            part = sel[labels == lab]
+            hull = _shell_hull(V, F[part], n[part], half)
+            if hull is None:
+                continue
+            if len(probes.inside(hull)):
+                if h > options.shell_min_cell:
+                    split = True
+                    break
+                stats["pieces_with_probes"] += 1
+            hulls.append(hull)
+        if split:
+            stats["cells_split"] += 1
+            g = h / 2
+            stack.extend([(x0, y0, g), (x0 + g, y0, g), (x0, y0 + g, g), (x0 + g, y0 + g, g)])
+            continue
+        pieces.extend(hulls)
+        if progress is not None:
+            progress(len(pieces), len(pieces) + len(stack), "collision shell pieces")
+    stats["pieces_before_merging"] = len(pieces)
+    pieces = _merge_shell(pieces, probes, options.shell_thickness)
+    stats["seconds"] = round(time.perf_counter() - t0, 2)
+    return pieces, stats
+
+
+def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.ndarray]:
+    """Greedy merging of touching shell pieces under the generator's rule (in mm): the merged
+    hull holds no probe and adds at most 1 mm of average thickness to the shell it covers."""
+    from scipy.spatial import ConvexHull
+
+    from drakedeburr.hub.collision import WindowProbes, _merge_pieces, _Piece
+
+    mm = [p * 1e3 for p in pieces]
+    parts = [_Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
+    merged = _merge_pieces(parts, thickness * 1e3, WindowProbes(probes.pts * 1e3))
+    return [p.pts * 1e-3 for p in merged]

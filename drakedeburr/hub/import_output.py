@@ -1,0 +1,126 @@
+"""What ``hub import`` writes: the summary (``summary.json``) and the hub folder (atomically:
+a temporary folder renamed into place)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr._io import atomic_write_text
+from drakedeburr.hub.types import WindowEdge
+
+__all__ = ["window_summary", "import_summary", "write_folder"]
+
+
+def window_summary(windows: list[WindowEdge], spacing: float) -> list[dict]:
+    from drakedeburr.hub.outline import window_center_xy
+    from drakedeburr.hub.truth import loop_curvature
+
+    out = []
+    for w in windows:
+        p = w.p_HE
+        seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+        kappa = loop_curvature(p, max(2, int(round(2e-3 / spacing))))
+        c_xy = window_center_xy(p[:, :2])
+        u = c_xy / np.linalg.norm(c_xy)
+        out.append({
+            "index": w.index, "kind": w.kind, "points": int(len(p)),
+            "length_mm": round(float(seg.sum()) * 1e3, 3),
+            "max_spacing_mm": round(float(seg.max()) * 1e3, 4),
+            "fillet_mm": round(1e-3 / max(float(np.percentile(kappa, 99.5)) * 1e-3, 1e-9), 3),
+            "max_curvature_per_mm": round(float(np.percentile(kappa, 99.5)) * 1e-3, 4),
+            "z_range_mm": [round(float(p[:, 2].min()) * 1e3, 3),
+                           round(float(p[:, 2].max()) * 1e3, 3)],
+            "center_xy_mm": [round(float(c_xy[0]) * 1e3, 3), round(float(c_xy[1]) * 1e3, 3)],
+            "width_mm": round(float(np.ptp(p[:, :2] @ np.array([-u[1], u[0]]))) * 1e3, 2),
+            "radial_size_mm": round(float(np.ptp(p[:, :2] @ u)) * 1e3, 2),
+        })
+    return out
+
+
+def write_folder(target: Path, out_root: Path, name: str, path: Path, sha: str, V_H, F,
+                  windows, hulls, mass, com, I_com, summary: dict) -> None:
+    """Write the hub folder into a temporary folder and rename it into place."""
+    import yaml
+
+    from drakedeburr.hub.files import obj_text, sdf_text, write_npz
+    from drakedeburr.hub.solid import mesh_arrays
+
+    out_root.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=out_root))
+    try:
+        atomic_write_text(tmp / "hub.yaml", (
+            "# drakedeburr hub imported from a mesh by `drakedeburr hub import` (see "
+            "docs/hub.md); do not edit.\n"
+            + yaml.safe_dump({"name": name, "imported_from": str(path.resolve()),
+                              "mesh_sha256": sha}, sort_keys=False)))
+        atomic_write_text(tmp / "hub.obj", obj_text(V_H, F, f"drakedeburr hub {name} "
+                                                     f"(imported from {path.name})"))
+        arrays: dict[str, np.ndarray] = {"kinds": np.array([w.kind for w in windows])}
+        for w in windows:
+            for k in ("p_HE", "t_H", "n_wall_H", "n_face_H"):
+                arrays[f"w{w.index}_{k}"] = getattr(w, k)
+        write_npz(tmp / "edges.npz", arrays)
+        (tmp / "collision").mkdir()
+        piece_files = []
+        for i, hull in enumerate(hulls):
+            hv, hf = mesh_arrays(hull)
+            rel = f"collision/piece_{i:03d}.obj"
+            atomic_write_text(tmp / rel, obj_text(hv, hf, f"hub {name} convex piece {i}"))
+            piece_files.append(rel)
+        atomic_write_text(tmp / "hub.sdf", sdf_text(
+            name, mass, com, I_com, piece_files,
+            origin="hub {name} imported from a mesh by `drakedeburr hub import`"))
+        atomic_write_text(tmp / "summary.json", json.dumps(summary, indent=2) + "\n")
+        if target.exists():  # a stale or incomplete import with the same key
+            shutil.rmtree(target)
+        os.rename(tmp, target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H, F, volume, how,
+             diameter, mass, com, windows, pieces, hull_volume, coll) -> dict:
+    """The content of summary.json (the bundled hubs' keys plus ``import``)."""
+    from drakedeburr.hub.import_collision import coacd_version
+    from drakedeburr.hub.import_mesh import IMPORT_VERSION, _options_json
+
+    return {
+        "name": name,
+        "import": {"source": str(path.resolve()), "sha256": sha, "cache_key": key,
+                   "version": IMPORT_VERSION, "unit": unit, "closed_mesh": closed,
+                   "axis_estimated": bool(options.axis_M is None),
+                   "X_MH": np.round(X_MH, 9).tolist(), "options": _options_json(options),
+                   "front": notes.get("front"),
+                   "min_window_width_mm": notes["min_window_width_mm"],
+                   "not_windows": notes["not_windows"], "rejected": notes["rejected"],
+                   "loops": notes["loops"]},
+        "frame": "H: origin on the hub axis at the front face of the centre, +Z out of the "
+                 "visible face",
+        "units": "metres in every data file; mm in this summary",
+        "mesh": {"vertices": int(len(V_H)), "triangles": int(len(F)),
+                 "watertight": closed, "volume_m3": round(volume, 9),
+                 "volume_from": how, "diameter_mm": round(diameter * 1e3, 2)},
+        "mass_kg": round(mass, 4),
+        "center_of_mass_m": [round(float(c), 6) for c in com],
+        "window_count": len(windows), "windows": window_summary(windows, options.edge_spacing),
+        "collision": {
+            "method": (f"CoACD {coacd_version()} on the solid simplified within "
+                       f"{options.simplify_tolerance * 1e3:g} mm (threshold "
+                       f"{options.threshold:g}), pieces reaching into a window or proud of "
+                       f"the front cut at the offending probe ({options.refine})" if closed
+                       else "surface shell (open mesh): hulls of the triangles in plan-view "
+                            f"cells, {options.shell_thickness * 1e3:g} mm thick, cells split "
+                            "while a hull holds a probe in a window opening or above the front"),
+            "piece_count": len(pieces),
+            "hull_volume_over_solid": round(hull_volume / volume, 4),
+            "window_reach_allowed_mm": round(options.window_reach * 1e3, 3),
+            "front_reach_allowed_mm": round(options.front_reach * 1e3, 3), **coll,
+        },
+    }
