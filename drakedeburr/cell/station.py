@@ -55,6 +55,7 @@ from drakedeburr.robots import (
 __all__ = [
     "Cell",
     "load_cell",
+    "load_plan_cell",
     "resolve_hub_sdf",
     "TOOL_FRAME_NAME",
     "HUB_MOUNT_FRAME_NAME",
@@ -367,11 +368,21 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
     return spec
 
 
+def load_plan_cell(plan) -> Cell:
+    """The cell a plan was made in: its scenario and hub, its arm and its hub placement
+    (``plan.meta["robot"]``, ``plan.meta["hub_pose"]``)."""
+    meta = plan.meta or {}
+    pose = meta.get("hub_pose")
+    return load_cell(plan.scenario, plan.hub, robot=meta.get("robot"),
+                     hub_pose=None if pose is None else np.asarray(pose, float))
+
+
 def load_cell(
     scenario: str | Path,
     hub: str | Path | None = None,
     *,
     robot: str | RobotSpec | None = None,
+    hub_pose: np.ndarray | None = None,
     time_step: float = 0.0,
 ) -> Cell:
     """Build the cell of a scenario with a hub.
@@ -383,6 +394,9 @@ def load_cell(
             with its body frame = H). ``None``: the first bundled hub.
         robot: registered arm name (``drakedeburr robots``) or spec; ``None``: the scenario's
             own arm. A bundled cell is built with the arm at its mount there.
+        hub_pose: (4, 4) pose of the hub frame H in the ``hub_mount`` frame [m] (where a
+            placement search put this hub: :mod:`drakedeburr.plan.placement`); ``None``: H on
+            the mount frame itself.
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
 
     Returns:
@@ -416,7 +430,8 @@ def load_cell(
     if plant.HasModelInstanceNamed(HUB_MODEL_NAME):
         raise InputError(f"{scenario_file}: the model name {HUB_MODEL_NAME!r} is reserved for "
                          "the hub that load_cell adds")
-    hub_instance, hub_body, hub_mount, tool_frame = _add_hub(plant, parser, hub_sdf, scenario_file)
+    hub_instance, hub_body, hub_mount, tool_frame = _add_hub(plant, parser, hub_sdf, scenario_file,
+                                                             hub_pose)
     plant.Finalize()
     _check_joints(plant, robot_instance, scenario_file)
     mode, world_group = _mode(plant, tool_frame, hub_body, scenario_file)
@@ -449,7 +464,7 @@ def load_cell(
     return cell
 
 
-def _add_hub(plant, parser, hub_sdf: Path, scenario_file: Path):
+def _add_hub(plant, parser, hub_sdf: Path, scenario_file: Path, hub_pose=None):
     """Parse the hub and weld its frame H onto ``hub_mount``; returns (instance, body,
     hub_mount frame, tool frame)."""
     try:
@@ -463,7 +478,10 @@ def _add_hub(plant, parser, hub_sdf: Path, scenario_file: Path):
                          f"{HUB_MODEL_NAME!r} (its body frame is the hub frame H)")
     hub_body = plant.GetBodyByName(HUB_MODEL_NAME, hub_instance)
     hub_mount = _unique_frame(plant, HUB_MOUNT_FRAME_NAME, scenario_file)
-    plant.WeldFrames(hub_mount, hub_body.body_frame())
+    from pydrake.math import RigidTransform
+
+    X_MH = RigidTransform() if hub_pose is None else RigidTransform(np.asarray(hub_pose, float))
+    plant.WeldFrames(hub_mount, hub_body.body_frame(), X_MH)
     tool_frame = _unique_frame(plant, TOOL_FRAME_NAME, scenario_file)
     return hub_instance, hub_body, hub_mount, tool_frame
 

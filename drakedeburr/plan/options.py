@@ -68,6 +68,11 @@ class PlanOptions:
         fillets: fillet repair (:mod:`drakedeburr.plan.fillets`): where the timed cut falls
             below the speed band, a KTO over the joints may find a tool orientation that holds
             the feed; None: off.
+        placement: choose the hub's pose on its mount and each window's arm branch by a
+            search before planning (:mod:`drakedeburr.plan.placement`); False: the hub where
+            the cell's mount puts it, starts ranked from the previous window.
+        relax: plan a window the recipe cannot cut again with a milder tilt box, the
+            deviation recorded (:mod:`drakedeburr.plan.relax`).
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -91,6 +96,8 @@ class PlanOptions:
     retry_in_band: float = 0.5
     acceleration_scale: float = 1.0
     fillets: FilletOptions | None = None
+    placement: bool = True
+    relax: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):
@@ -102,7 +109,8 @@ class PlanOptions:
 class PlanContext:
     """What a planning run works with: the loaded cell, its kinematics, clearance checkers
     (``checker``: the burr head/hub contact filtered, for cutting moves; ``free_checker``: not
-    filtered, for moves that do not cut), the run's configuration and the options."""
+    filtered, for moves that do not cut), the run's configuration, the options and the
+    per-window branch references."""
 
     cell: object
     kin: object
@@ -110,6 +118,8 @@ class PlanContext:
     free_checker: object
     config: Config
     options: PlanOptions
+    #: window -> (6,) a configuration on the branch chosen to cut it (placement search)
+    q_refs: dict = field(default_factory=dict)
 
     @property
     def process(self):

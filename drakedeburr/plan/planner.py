@@ -63,6 +63,7 @@ def plan_windows(
     *,
     options: PlanOptions | None = None,
     progress: Progress = None,
+    q_refs: dict | None = None,
 ) -> Plan:
     """Plan the given windows of a loaded cell, from home and back.
 
@@ -73,6 +74,9 @@ def plan_windows(
             clearance, wrist margin, program orientation); its scenario and hub are recorded.
         options: planner settings.
         progress: optional callback (done, total, label) per window.
+        q_refs: window -> (6,) a configuration on the branch to cut it on (the placement
+            search's choice, :mod:`drakedeburr.plan.placement`); the window's IK starts are
+            ranked from it first.
 
     Returns:
         Plan; ``failures`` lists every point/move that failed (empty when all planned).
@@ -83,7 +87,7 @@ def plan_windows(
     # moves that do not cut keep the burr head clear of the hub too
     ctx = PlanContext(cell=cell, kin=kin, checker=ClearanceChecker(cell),
                       free_checker=ClearanceChecker(cell, filter_burr_contact=False),
-                      config=config, options=options)
+                      config=config, options=options, q_refs=dict(q_refs or {}))
     process = config.process
     failures, stretches, window_stats, window_seconds = [], [], [], []
     q_cur = kin.q_home.copy()
@@ -186,6 +190,37 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
                 trajectory=traj, tool_path=tool_paths, failures=tuple(failures), meta=meta)
 
 
+def _relax(cell, hub_model, wts, config, options, plan, q_refs, progress) -> Plan:
+    """The hub planned again with a milder recipe for each window the default could not cut
+    (:mod:`drakedeburr.plan.relax`), kept when it leaves fewer failure records; every
+    deviation recorded in ``plan.meta["recipe_deviations"]``."""
+    from drakedeburr.plan.relax import relaxed_targets
+
+    edges = {e.index: e for e in hub_model.windows}
+    first = {}
+    for f in plan.failures:
+        first.setdefault(f.window, str(f))
+    wts = list(wts)
+    deviations = []
+    for k, wt in enumerate(wts):
+        w = wt.window_index
+        if w not in first or w not in edges:
+            continue
+        new, dev = relaxed_targets(edges[w], config.process, first[w], lambda x: plan_windows(
+            cell, [x], config, options=options, q_refs=q_refs))
+        if new is not None:
+            wts[k], deviations = new, deviations + [dev]
+    if not deviations:
+        return plan
+    relaxed = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
+    if len(relaxed.failures) >= len(plan.failures):
+        return plan
+    relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
+    log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
+                "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
+    return relaxed
+
+
 def window_targets_for_hub(hub_model, *, source: str = "auto",
                            params: ProcessParameters | None = None,
                            windows: Sequence[int] | None = None,
@@ -261,6 +296,7 @@ def plan_hub(
     """
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import load_hub
+    from drakedeburr.plan.placement import place_hub
 
     options = options or PlanOptions()
     cell = load_cell(config.scenario, config.hub, robot=config.robot)
@@ -269,6 +305,20 @@ def plan_hub(
     wts = window_targets_for_hub(hub_model, source=source, params=config.process,
                                  windows=options.windows)
     t_targets = time.perf_counter() - t0
-    plan = plan_windows(cell, wts, config, options=options, progress=progress)
+    placement = None
+    if options.placement and wts:
+        t1 = time.perf_counter()
+        placement = place_hub(cell, hub_model, wts, config, options)
+        cell = load_cell(config.scenario, config.hub, robot=config.robot,
+                         hub_pose=placement.hub_pose)
+        t_place = time.perf_counter() - t1
+    q_refs = placement.q_refs if placement else None
+    plan = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
+    if options.relax and any(f.window >= 0 for f in plan.failures):
+        plan = _relax(cell, hub_model, wts, config, options, plan, q_refs, progress)
     plan.run["timings"]["targets_seconds"] = t_targets
+    if placement is not None:
+        plan.meta["hub_pose"] = placement.hub_pose.tolist()
+        plan.meta["placement"] = placement.record()
+        plan.run["timings"]["placement_seconds"] = t_place
     return plan

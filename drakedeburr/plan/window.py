@@ -87,15 +87,20 @@ def rewound_start(kin, trial, q_first: np.ndarray | None,
 
 
 def _seeds(ctx: PlanContext, wt: WindowTargets, p_HT0: np.ndarray, q_from: np.ndarray) -> list:
-    """Start configurations to try: the best few distinct ones from ``q_from``, then those
-    ranked from home (the previous window's end may hold the arm in a configuration from which
-    this loop cannot be closed; the joint move goes anywhere)."""
+    """Start configurations to try: the best few distinct ones ranked from the window's branch
+    reference (:mod:`drakedeburr.plan.placement`, when there is one), from ``q_from``, then
+    from home (the previous window's end may hold the arm in a configuration from which this
+    loop cannot be closed; the joint move goes anywhere)."""
     kin, opt = ctx.kin, ctx.options
-    seeds = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], q_from, opt.ik,
-                         count=opt.window_attempts) or [None]
-    more = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], kin.q_home, opt.ik,
-                        count=opt.window_attempts) or []
-    return list(seeds) + [q for q in more if q is not None and not _known(q, seeds)]
+    refs = [q_from, kin.q_home]
+    if wt.window_index in ctx.q_refs:  # the branch the placement chose for this window first
+        refs.insert(0, np.asarray(ctx.q_refs[wt.window_index], float))
+    seeds: list = []
+    for q_ref in refs:
+        more = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], q_ref, opt.ik,
+                            count=opt.window_attempts) or []
+        seeds += [q for q in more if q is not None and not _known(q, seeds)]
+    return seeds or [None]
 
 
 def _known(q: np.ndarray, seeds: list) -> bool:

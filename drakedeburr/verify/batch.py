@@ -109,6 +109,8 @@ def run_job(job: BatchJob) -> dict:
             from drakedeburr.verify.html import write_report_html
 
             write_report_html(report, out / "report.html")
+        row.update(failure_kinds=sorted({f.kind for f in plan.failures}),
+                   failure_notes=[str(f) for f in plan.failures[:5]])
         row.update(passed=report.passed, failed=report.failed,
                    advisory_failed=report.advisory_failed,
                    cycle_s=plan.trajectory.duration, samples=report.settings["samples"],

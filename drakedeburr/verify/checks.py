@@ -104,9 +104,43 @@ def verify_plan(
         InputError: the plan is malformed (trajectory shapes, non-increasing knots, no targets).
     """
     started = _time.perf_counter()
+    if len(plan.trajectory.t) < 2 and plan.failures and plan.targets:
+        return _nothing_planned(plan, config, hub_model, expected_windows)
     sp = sample_plan(plan, config, cell=cell, hub_model=hub_model,
                      expected_windows=expected_windows, progress=progress)
     return verify_sampled(sp, config, elapsed=_time.perf_counter() - started)
+
+
+def _nothing_planned(plan, config: Config, hub_model, expected_windows) -> VerificationReport:
+    """The report of a plan in which no window could be planned (it holds only home): the
+    planner's failure records say per window what failed and what was tried."""
+    from drakedeburr.verify.checks_plan import failures_item
+    from drakedeburr.verify.report import CheckItem
+
+    if hub_model is None:
+        from drakedeburr.hub.model import load_hub
+
+        hub_model = load_hub(plan.hub)
+    windows = expected_windows or [w.index for w in hub_model.windows]
+    detail = "; ".join(str(f) for f in plan.failures[:8])
+    items = (
+        CheckItem("windows", False, float(len(windows)), 0.0, "count", "<=",
+                  window=windows[0] if windows else None,
+                  detail=f"no window of hub {hub_model.name} could be planned: {detail}",
+                  per_window={w: {"cut": False} for w in windows}),
+        failures_item(plan),
+    )
+    return VerificationReport(
+        passed=False, items=items,
+        plan_info={"scenario": str(plan.scenario), "hub": str(plan.hub), "mode": plan.mode,
+                   "expected_windows": windows, "windows": [], "targets": len(plan.targets),
+                   "segments": len(plan.segments), "knots": len(plan.trajectory.t),
+                   "duration_s": 0.0, "planner": str(plan.meta.get("planner", "")),
+                   "robot": (plan.meta or {}).get("robot"), "identity": plan_identity(plan)},
+        settings={"tolerances": {k: getattr(config.tolerances, k)
+                                 for k in config.tolerances.__dataclass_fields__},
+                  "samples": 0, "grinding_speed": config.process.grinding_speed},
+        run={"elapsed_s": 0.0})
 
 
 def config_for_plan(plan, *, tolerances=None, grinding_speed: float | None = None) -> Config:

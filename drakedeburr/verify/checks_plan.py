@@ -7,7 +7,8 @@ import numpy as np
 from drakedeburr.plan.program_reading import rot_angle
 from drakedeburr.verify.report import CheckItem
 
-__all__ = ["structure", "planner_failures", "windows", "fk_agreement", "target_consistency"]
+__all__ = ["structure", "planner_failures", "failures_item", "windows", "fk_agreement",
+           "target_consistency", "recipe_deviations"]
 
 
 def _structure_problems(plan) -> list[str]:
@@ -47,12 +48,30 @@ def structure(sp, cfg) -> CheckItem:
         detail="; ".join(problems[:5]) or "segments tile the trajectory and the target list")
 
 
-def planner_failures(sp, cfg) -> CheckItem:
-    f = sp.plan.failures
+def failures_item(plan) -> CheckItem:
+    """The planner's failure records: per window what failed, where, by how much and what was
+    tried (``per_window``), the first of each window in the detail."""
+    f = plan.failures
+    per: dict = {}
+    for rec in f:
+        entry = per.setdefault(rec.window, {"records": 0, "kinds": [], "first": str(rec)})
+        entry["records"] += 1
+        if rec.kind not in entry["kinds"]:
+            entry["kinds"].append(rec.kind)
+        if rec.value is not None:
+            entry.setdefault("worst", {"value": rec.value, "limit": rec.limit, "unit": rec.unit})
+        if rec.tried:
+            entry.setdefault("tried", list(rec.tried))
     return CheckItem(
         "planner_failures", not f, float(len(f)), 0.0, "count", "<=",
-        detail=(f"{len(f)} failure record(s) in the plan, first: {f[0]}" if f
-                else "the plan records no failed points"))
+        window=next(iter(per), None),
+        detail=("; ".join(v["first"] for v in per.values())[:2000] if f
+                else "the plan records no failed points"),
+        per_window=per)
+
+
+def planner_failures(sp, cfg) -> CheckItem:
+    return failures_item(sp.plan)
 
 
 def _missing_cl(sp) -> dict:
@@ -123,3 +142,21 @@ def target_consistency(sp, cfg) -> CheckItem:
         window=int(targets[k_w].window_index), target_index=k_w,
         detail=f"FK(target.q) vs target.X_HT / X_WF and trajectory at segment ends; max "
                f"orientation error {np.degrees(rot_err.max()):.3g} deg")
+
+
+def recipe_deviations(sp, cfg) -> CheckItem:
+    """Where the plan departed from the part's recipe (the planner's automatic relaxation,
+    :mod:`drakedeburr.plan.relax`) and where it placed the hub: shown, not judged."""
+    meta = sp.plan.meta or {}
+    devs = meta.get("recipe_deviations") or []
+    place = meta.get("placement")
+    parts = [f"window {d['window']}: {d['item']} {d['default']} -> {d['used']} ({d['reason']})"
+             for d in devs]
+    if place:
+        parts.append(f"hub placed turned {np.degrees(place['turn_rad']):.1f} deg, offset "
+                     f"{1e3 * place['offset_m']:.0f} mm, seat {1e3 * place['seat_m']:.1f} mm "
+                     f"on its mount (placement search)")
+    return CheckItem(
+        "recipe_deviations", True, float(len(devs)), None, "count", "info",
+        detail="; ".join(parts) or "the plan follows the part's recipe",
+        per_window={d["window"]: d for d in devs})

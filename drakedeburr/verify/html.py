@@ -151,9 +151,9 @@ def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
         log.warning("no Meshcat replay: %s", exc)
         return None
     if cell is None:
-        from drakedeburr.cell.station import load_cell
+        from drakedeburr.cell.station import load_plan_cell
 
-        cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
+        cell = load_plan_cell(plan)
     meshcat = scene.get_meshcat(new=True)
     try:
         scene.publish_cell(meshcat, cell, plan.trajectory.q[0])

@@ -45,6 +45,8 @@ CHECKS: tuple[Check, ...] = (
           "segments tile the trajectory and the target list"),
     Check("planner_failures", plan.planner_failures, "required",
           "the plan records no failed point or move"),
+    Check("recipe_deviations", plan.recipe_deviations, "info",
+          "where the plan departs from the part's recipe, and where the hub was placed"),
     Check("fk_agreement", plan.fk_agreement, "required",
           "Drake plant and analytic OPW forward kinematics agree"),
     Check("target_consistency", plan.target_consistency, "required",

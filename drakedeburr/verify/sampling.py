@@ -339,9 +339,9 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
 
     validate_plan(plan)
     if cell is None:
-        from drakedeburr.cell.station import load_cell
+        from drakedeburr.cell.station import load_plan_cell
 
-        cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
+        cell = load_plan_cell(plan)
     if hub_model is None:
         from drakedeburr.hub.model import load_hub
 

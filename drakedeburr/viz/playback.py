@@ -24,10 +24,9 @@ log = logging.getLogger(__name__)
 def _unique_cell(plan, cell):
     if cell is not None:
         return cell
-    from drakedeburr.cell.station import load_cell
+    from drakedeburr.cell.station import load_plan_cell
 
-    return load_cell(plan.scenario or ("tool_in_hand" if plan.mode == "tool"
-                                       else "workpiece_in_hand"), plan.hub or None)
+    return load_plan_cell(plan)
 
 
 def draw_tool_path(meshcat, plan, path: str = "/plan/tool_path") -> None:
