@@ -27,7 +27,8 @@ def _unique_cell(plan, cell):
     from drakedeburr.cell.station import load_cell
 
     return load_cell(plan.scenario or ("tool_in_hand" if plan.mode == "tool"
-                                       else "workpiece_in_hand"), plan.hub or None)
+                                       else "workpiece_in_hand"), plan.hub or None,
+                     robot=plan.meta.get("robot") if isinstance(plan.meta, dict) else None)
 
 
 def draw_tool_path(meshcat, plan, path: str = "/plan/tool_path") -> None:
