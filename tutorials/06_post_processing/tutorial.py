@@ -40,6 +40,7 @@ from drakedeburr.post import (  # noqa: E402
     virtual_tcp_poses,
 )
 from drakedeburr.programs import compare_programs, read_program, write_program  # noqa: E402
+from drakedeburr.resources import extdata_dir  # noqa: E402
 from drakedeburr.robots import (  # noqa: E402
     IRB1600_10_120_ROBOT,
     abb_confdata,
@@ -49,7 +50,6 @@ from drakedeburr.robots import (  # noqa: E402
     joints_from_configuration,
     kuka_status_turn,
 )
-from drakedeburr.resources import extdata_dir  # noqa: E402
 
 ROBOT = IRB1600_10_120_ROBOT
 
