@@ -164,8 +164,8 @@ def header_lines(program, fmt: str, extra: tuple[str, ...] = ()) -> list[str]:
         lines.append(f"source: {p.source}")
     lines.append(f"moves: {len(p.moves)}")
     if p.flag:
-        lines += ["!" * 40, f"{p.flag.upper()}: {p.flag_reason}".rstrip(": "),
-                  f"{p.flag.upper()}: check this program before running it", "!" * 40]
+        lines += ["!" * 30, f"{p.flag.upper()}: {p.flag_reason}".rstrip(": "),
+                  f"{p.flag.upper()}: check this program before running it", "!" * 30]
     return lines + list(p.notes) + list(extra)
 
 

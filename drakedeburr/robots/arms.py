@@ -56,6 +56,16 @@ def _translation(x: float, y: float, z: float) -> np.ndarray:
     return X
 
 
+def _mount(arm: str, cell: str, xyz: tuple[float, float, float], q_home: tuple,
+           study: str) -> tuple[str, CellMount]:
+    """A bundled-cell mount: base at ``xyz`` in W (facing +X), the study's home, the arm's
+    generated pedestal (``drakedeburr.cell.mounts``)."""
+    short = cell.split("_")[0]
+    return cell, CellMount(X_WB=_translation(*xyz), q_home=q_home,
+                           pedestal_url=f"package://drakedeburr/fixtures/pedestal_{arm}_{short}.sdf",
+                           study=study)
+
+
 def _accel(v_max: np.ndarray) -> np.ndarray:
     """The assumed acceleration rule (module docstring): top speed in ~0.3 s, rounded down."""
     return np.floor(np.asarray(v_max) / 0.3)
@@ -118,6 +128,15 @@ KR6_R700 = RobotSpec(
     j23_coupling=0.0, X_BR=np.eye(4), payload_kg=6.0,
     flange="$FLANGE: flange face centre, +Z out of the flange (= ROS tool0)",
     model_url="package://drakedeburr/robots/kr6_r700_sixx.sdf",
+    mounts=(
+        _mount("kr6_r700", "tool_in_hand", (0.20, 0.0, -0.30),
+               (0.0, -1.5109, 1.9084, 0.0, 0.3978, 0.0),
+               "rim survey 33/35 (best of x 0.15-0.25, z -0.4..-0.2; the column must clear the "
+               "fixture table); docs/cell.md"),
+        _mount("kr6_r700", "workpiece_in_hand", (0.30, 0.0, 0.30),
+               (0.0, -0.8149, 0.6378, 0.0, 1.7379, 0.0),
+               "rim survey 35/35 (x 0.3-0.5, z 0.1-0.3); docs/cell.md"),
+    ),
     conventions=("KUKA: all axes 0 = arm stretched horizontally forward (+X); the mastering "
                  "pose is A2 = -90 deg (upper arm vertical), A3 = +90 deg; A1, A4, A6 turn about "
                  "-Z, -X, -X (A1 positive = clockwise seen from above), A2, A3, A5 about +Y."),
@@ -148,6 +167,14 @@ LRMATE200IC = RobotSpec(
     j23_coupling=1.0, X_BR=_translation(0.0, 0.0, 0.330), payload_kg=5.0,
     flange="faceplate (UTOOL 0): +Z out of the faceplate (= ROS tool0)",
     model_url="package://drakedeburr/robots/lrmate200ic.sdf",
+    mounts=(
+        _mount("lrmate200ic", "tool_in_hand", (0.20, 0.0, -0.30),
+               (0.0, -0.0294, -0.3341, 0.0, -0.4906, 3.1416),
+               "rim survey 34/35 (x 0.20-0.25, z -0.4..-0.2); docs/cell.md"),
+        _mount("lrmate200ic", "workpiece_in_hand", (0.35, 0.0, 0.30),
+               (-0.0021, 0.6513, 0.9274, -0.0020, -1.8371, 0.0),
+               "rim survey 35/35 (x 0.35-0.55, z 0.2-0.4); docs/cell.md"),
+    ),
     conventions=_FANUC_CONV,
     sources=(
         "geometry, limits, speeds: ros-industrial/fanuc lrmate200ic_macro.xacro @61ecc5c (BSD)",
@@ -173,6 +200,15 @@ M10IA = RobotSpec(
     j23_coupling=1.0, X_BR=_translation(0.0, 0.0, 0.450), payload_kg=10.0,
     flange="faceplate (UTOOL 0): +Z out of the faceplate (= ROS tool0)",
     model_url="package://drakedeburr/robots/m10ia.sdf",
+    mounts=(
+        _mount("m10ia", "tool_in_hand", (0.0, 0.0, -0.20),
+               (0.0, 0.0305, -1.1882, 0.0, 0.4334, 3.1416),
+               "rim survey 35/35 everywhere in x -0.2..0, z -0.2..0; most clearance; "
+               "docs/cell.md"),
+        _mount("m10ia", "workpiece_in_hand", (0.0, 0.0, 0.0),
+               (-0.0066, 0.1318, -0.0917, -0.0094, -1.3432, 0.0),
+               "rim survey 35/35, most clearance (x -0.2..0, z -0.2..0); docs/cell.md"),
+    ),
     conventions=_FANUC_CONV,
     sources=(
         "geometry, limits, speeds: ros-industrial/fanuc m10ia_macro.xacro @e9bafce (BSD)",

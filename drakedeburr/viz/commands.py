@@ -44,7 +44,7 @@ def _run_show(args: argparse.Namespace) -> int:
     if _is_scenario(args.target):
         from drakedeburr.cell import load_cell
 
-        cell = load_cell(args.target, hub=args.hub)
+        cell = load_cell(args.target, hub=args.hub, robot=args.robot)
         q = None
         if args.q is not None:
             if len(args.q) != cell.num_joints:
@@ -100,6 +100,8 @@ def register(subparsers) -> None:
     p.add_argument("--hub", default=None,
                    help="hub for a scenario: bundled name, folder or hub.sdf (default: the "
                         "default bundled hub)")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="registered arm for a bundled cell (drakedeburr robots)")
     p.add_argument("--html", type=Path, default=None, help="write a static HTML snapshot here")
     p.add_argument("--q", type=float, nargs="+", default=None, metavar="DEG",
                    help="robot joints J1..J6 in degrees (default: the scenario's home)")
