@@ -287,3 +287,54 @@ def test_post_cl_file_reports_progress_and_never_prints(extdata, tmp_path, capsy
     assert [c[1:] for c in calls if c[0] == "write"] == [(1, 3), (2, 3), (3, 3)]
     out = capsys.readouterr()
     assert out.out == "" and out.err == ""
+
+
+@pytest.mark.parametrize("robot, suffix, spindle", [
+    ("irb1600", ".mod", [700.0, 0, 500, 0, -90, 0]), ("kr6_r700", ".src", [450.0, 0, 300, 0, 0, 0]),
+    ("lrmate200ic", ".ls", [400.0, 0, 400, 0, -90, 0]), ("m10ia", ".ls", [450.0, 0, 300, 0, 0, 0])])
+def test_cli_workpiece_in_hand(extdata, tmp_path, robot, suffix, spindle):
+    """post --workpiece-in-hand: a stationary-tool program (ABB robhold FALSE, KUKA external
+    TCP, FANUC RTCP) whose every pose, read back from the file and put through the arm's own
+    configuration -> joints, brings the CL point onto the spindle tip with the CL axis along
+    the spindle."""
+    from drakedeburr.programs import read_program
+    from drakedeburr.robots import get_robot, joints_from_configuration
+
+    cl_path = extdata / "cl_files" / CREO
+    out = tmp_path / f"wih{suffix}"
+    part = [0.0, 0, 100, 0, 0, 0]
+    args = ["post", str(cl_path), "--robot", robot, "--workpiece-in-hand", "-o", str(out),
+            "--tool", ",".join(map(str, spindle)), "--wobj", ",".join(map(str, part))]
+    assert main(args) == 0
+    back = read_program(out)
+    cl = read_cl(cl_path)
+    assert back.stationary_tool and len(back.moves) == len(cl.moves)
+    text = out.read_text()
+    if suffix == ".mod":
+        from test_programs_formats import rapidcheck
+
+        assert rapidcheck(text) == [] and "PERS tooldata tSpindle := [FALSE," in text
+    elif suffix == ".src":
+        assert "$IPO_MODE = #TCP" in text
+    else:
+        assert all(" RTCP" in ln for ln in text.splitlines() if re.match(r"\s*\d+:\s+L P", ln))
+    spec = get_robot(robot)
+    X_BS, X_FO = mut.pose_from_mm_deg(spindle), mut.pose_from_mm_deg(part)
+    assert np.abs(spec.X_BR @ back.X_RO - X_BS).max() < 1e-6  # the fixed frame is the spindle
+    assert np.abs(back.X_FT - X_FO).max() < 1e-6  # the flange carries the part's CL frame
+    for m, cm in zip(back.moves, cl.moves, strict=True):
+        X_SO = m.X_OT  # the part in the spindle's frame, as the controller stores it
+        X_OS = np.linalg.inv(X_SO)  # the spindle tip in the part
+        assert np.allclose(X_OS[:3, 3], cm.p_C, atol=1e-6)  # [m]: written to 1e-3 mm
+        assert np.allclose(X_OS[:3, 2], -np.asarray(cm.axis_C), atol=1e-6)
+        X_BF = spec.X_BR @ back.X_RO @ X_SO @ np.linalg.inv(back.X_FT)
+        q = joints_from_configuration(spec.kinematics, X_BF, spec.controller, m.configuration)
+        X = fk_opw(spec.kinematics.opw, q) @ X_FO @ X_OS  # the spindle, by forward kinematics
+        assert np.abs(X - X_BS).max() < 1e-6
+
+
+def test_workpiece_in_hand_needs_the_spindle(extdata, tmp_path, capsys):
+    out = tmp_path / "wih.mod"
+    assert main(["post", str(extdata / "cl_files" / CREO), "--workpiece-in-hand",
+                 "-o", str(out)]) == 2
+    assert "--tool" in capsys.readouterr().err and not out.exists()

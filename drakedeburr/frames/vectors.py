@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["angle_between", "perpendicular_basis"]
+__all__ = ["angle_between", "perpendicular_basis", "inverse_transform"]
 
 
 def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -23,3 +23,14 @@ def perpendicular_basis(z: np.ndarray) -> np.ndarray:
     e1 = np.cross(z, h)
     e1 /= np.linalg.norm(e1)
     return np.stack([e1, np.cross(z, e1), z], axis=1)
+
+
+def inverse_transform(X: np.ndarray) -> np.ndarray:
+    """Inverse of (..., 4, 4) rigid transforms (transpose and back-rotated translation)."""
+    X = np.asarray(X, float)
+    out = np.zeros_like(X)
+    Rt = np.swapaxes(X[..., :3, :3], -1, -2)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, X[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out

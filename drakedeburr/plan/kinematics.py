@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drakedeburr.frames.vectors import inverse_transform
+
 __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "DISTANCE_SLACK"]
 
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
@@ -60,14 +62,14 @@ class CellKinematics:
         X_HT = np.asarray(X_HT, float)
         if self.mode == "tool":
             return self.X_WH @ X_HT @ np.linalg.inv(self.X_FT)
-        return self.X_WT @ _inv(X_HT) @ np.linalg.inv(self.X_FH)
+        return self.X_WT @ inverse_transform(X_HT) @ np.linalg.inv(self.X_FH)
 
     def X_HT_from_X_WF(self, X_WF: np.ndarray) -> np.ndarray:
         """(..., 4, 4) flange poses -> (..., 4, 4) process poses X_HT [m]."""
         X_WF = np.asarray(X_WF, float)
         if self.mode == "tool":
             return np.linalg.inv(self.X_WH) @ X_WF @ self.X_FT
-        return _inv(X_WF @ self.X_FH) @ self.X_WT
+        return inverse_transform(X_WF @ self.X_FH) @ self.X_WT
 
     def fk_flange(self, q: np.ndarray) -> np.ndarray:
         """(..., 6) joints [rad] -> (..., 4, 4) X_WF (analytic)."""
@@ -108,7 +110,7 @@ class CellKinematics:
         """
         from drakedeburr.robots.opw_ik import ik_opw
 
-        X_BF = _inv(self.X_WB) @ np.asarray(X_WF, float).reshape(-1, 4, 4)
+        X_BF = inverse_transform(self.X_WB) @ np.asarray(X_WF, float).reshape(-1, 4, 4)
         sols = ik_opw(self.robot.opw, X_BF)
         return sols.q, sols.branch
 
@@ -151,17 +153,6 @@ class CellKinematics:
             ok[i] = bool(self.within_limits(cand[j]))
             q_prev = cand[j]
         return q_out, ok
-
-
-def _inv(X: np.ndarray) -> np.ndarray:
-    X = np.asarray(X, float)
-    out = np.zeros_like(X)
-    R = X[..., :3, :3]
-    Rt = np.swapaxes(R, -1, -2)
-    out[..., :3, :3] = Rt
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, X[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
 
 
 def cell_kinematics(cell) -> CellKinematics:

@@ -8,7 +8,13 @@ the file goes into the program in file order; its first move carries the path's 
 comment and the header lists the paths, UNITS switches, expanded drilling cycles and the
 words of the file that are not in the program. Rapids of the file are joint moves; the rapids
 of an expanded drilling cycle are linear moves at rapid speed (the tool is in or right over
-a hole). Points the robot cannot reach are reported with their CL line numbers; they are left
+a hole).
+
+Workpiece in hand (``stationary_tool``): the spindle stands still and the robot holds the part.
+The CL points are then in the held part's frame O, ``X_WO`` is the spindle's TCP in the robot
+base and ``X_FT`` is O in the flange frame (the frame the flange carries); the program is a
+stationary-tool program (ABB robhold FALSE, KUKA external TCP, FANUC RTCP). Points the robot
+cannot reach are reported with their CL line numbers; they are left
 out of the program only when the caller forces it, and the header then says FORCED.
 
 :func:`post_cl_file` is the streaming form the CLI uses: the file is read into arrays (about
@@ -71,8 +77,10 @@ class PostSettings:
 
     Attributes:
         robot: kinematics and limits.
-        X_WO: (4, 4) work object (CL frame) in the robot base [m]; None = identity.
-        X_FT: (4, 4) tool in the flange frame [m]; None = 0.2 m along the flange axis.
+        X_WO: (4, 4) the fixed frame in the robot base [m]: the work object (CL frame), or
+            the spindle's TCP with ``stationary_tool``; None = identity (tool in hand only).
+        X_FT: (4, 4) the frame the flange carries [m]: the tool, or the part's CL frame with
+            ``stationary_tool``; None = 0.2 m along the flange axis (tool), the flange (part).
         spin_mode: "min_travel", "greedy" or "theta6_zero".
         zone: corner zone of feed moves [m].
         feed: TCP speed of feed moves [m/s]; None = the file's FEDRAT, else the process speed.
@@ -80,6 +88,7 @@ class PostSettings:
         force: write the reachable part when points are unreachable (flagged FORCED).
         q_start: (6,) joints the robot starts from [rad]; None = tool_axis.READY_POSE.
         process: process parameters for the defaults.
+        stationary_tool: workpiece in hand (module docstring).
     """
 
     robot: RobotKinematics = IRB1600_10_120_ROBOT
@@ -92,10 +101,16 @@ class PostSettings:
     force: bool = False
     q_start: np.ndarray | None = None
     process: ProcessParameters | None = None
+    stationary_tool: bool = False
 
     def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.stationary_tool and self.X_WO is None:
+            raise InputError("workpiece in hand: give the stationary spindle's TCP in the robot "
+                             "base (--tool)")
         X_WO = np.eye(4) if self.X_WO is None else np.asarray(self.X_WO, float)
-        if self.X_FT is None:
+        if self.X_FT is None and self.stationary_tool:
+            X_FT = np.eye(4)
+        elif self.X_FT is None:
             X_FT = np.eye(4)
             X_FT[2, 3] = 0.2
         else:
@@ -131,6 +146,9 @@ def _solve(cl: ClProgram, s: PostSettings,
     if len(cl) == 0:
         raise InputError(f"{cl.source}: no moves in the CL file")
     X_WO, X_FT = s.frames()
+    if s.stationary_tool:  # CL data stay in the held part's frame; the spindle is X_WO
+        return solve_tool_axis_path(s.robot, cl.p_C, cl.axis_C, X_FT, mode=s.spin_mode,
+                                    q_start=s.q_start, progress=progress, X_WS=X_WO)
     p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
     axis_W = cl.axis_C @ X_WO[:3, :3].T
     return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, mode=s.spin_mode,
@@ -183,6 +201,13 @@ def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: 
     return moves
 
 
+def _names(s: PostSettings) -> dict:
+    """Program fields that differ with workpiece in hand."""
+    if not s.stationary_tool:
+        return {}
+    return dict(stationary_tool=True, tool_name="tSpindle", wobj_name="wobjPart")
+
+
 def _flag(bad: tuple[int, ...]) -> tuple[str, str]:
     if bad:
         return "FORCED", (f"{len(bad)} unreachable CL point(s) left out, lines "
@@ -204,6 +229,7 @@ def program_from_cl(
     process: ProcessParameters | None = None,
     q_start: np.ndarray | None = None,
     progress: Callable[[int, int, str], None] | None = None,
+    stationary_tool: bool = False,
 ) -> PostResult:
     """Post-process a read CL file for a robot.
 
@@ -211,8 +237,7 @@ def program_from_cl(
         cl: the CL data (:func:`~drakedeburr.post.cl_reader.read_cl`).
         name: program name.
         robot: kinematics and limits.
-        X_WO: (4, 4) work object (CL frame) in the robot base [m]; None = identity.
-        X_FT: (4, 4) tool in the flange frame [m]; None = 0.2 m along the flange axis.
+        X_WO, X_FT: the fixed and the flange-carried frames (:class:`PostSettings`).
         spin_mode: "min_travel", "greedy" or "theta6_zero".
         zone: corner zone of feed moves [m] (the last move is always a stop point).
         feed: TCP speed of feed moves [m/s]; None = the CL file's FEDRAT, else
@@ -224,9 +249,10 @@ def program_from_cl(
         q_start: (6,) joints the robot starts from [rad] (default: tool_axis.READY_POSE);
             the first point's configuration is the one closest to it.
         progress: optional callback (done, total, label).
+        stationary_tool: workpiece in hand (module docstring).
     """
     s = PostSettings(robot, X_WO, X_FT, spin_mode, zone, feed, rapid_speed, force, q_start,
-                     process)
+                     process, stationary_tool)
     res = _solve(cl, s, progress)
     bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
@@ -243,7 +269,7 @@ def program_from_cl(
     program = RobotProgram(
         name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]))),
         X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
-        flag_reason=reason, notes=notes)
+        flag_reason=reason, notes=notes, **_names(s))
     return PostResult(program, bad, changes, res, notes)
 
 
@@ -323,7 +349,7 @@ def post_cl_file(
             name=name if len(parts) == 1 else f"{name[:20]}_{k + 1:03d}",
             moves=tuple(_program_moves(cl, res, part, settings, int(keep[-1]))),
             X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
-            flag=flag, flag_reason=reason, notes=notes + extra)
+            flag=flag, flag_reason=reason, notes=notes + extra, **_names(settings))
         files += write_program(program, _part_path(Path(out), k, len(parts)), fmt)
         del program
         if progress is not None:

@@ -49,11 +49,17 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--robot", default="irb1600", choices=robot_names(),
                    help="registered arm (drakedeburr robots); its controller's format is "
                         "the default --format")
+    p.add_argument("--workpiece-in-hand", action="store_true",
+                   help="the robot holds the part against a stationary spindle: --tool is the "
+                        "spindle's TCP in the robot base (required), --wobj the part's CL "
+                        "frame in the flange frame (default: the flange frame); the program "
+                        "uses a stationary tool (ABB), an external TCP (KUKA), RTCP (FANUC)")
     p.add_argument("--wobj", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="work object (CL frame, after MSYS) in the robot base: mm, deg, "
-                        "R = Rz Ry Rx")
+                        "R = Rz Ry Rx (with --workpiece-in-hand: in the flange frame)")
     p.add_argument("--tool", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
-                   help="TCP in the flange frame: mm, deg (default 0,0,200,0,0,0)")
+                   help="TCP in the flange frame: mm, deg (default 0,0,200,0,0,0); with "
+                        "--workpiece-in-hand the stationary spindle's TCP in the robot base")
     p.add_argument("--spin", default="min_travel",
                    choices=["min_travel", "greedy", "theta6_zero"],
                    help="rule for the free rotation about the tool axis")
@@ -120,6 +126,9 @@ def _check_args(args) -> None:
         raise InputError(f"--feed must be > 0 mm/s, got {args.feed}")
     if not args.zone >= 0:
         raise InputError(f"--zone must be >= 0 mm, got {args.zone}")
+    if args.workpiece_in_hand and args.tool is None:
+        raise InputError("--workpiece-in-hand: give the stationary spindle's TCP in the robot "
+                         "base with --tool X,Y,Z,RX,RY,RZ (mm, deg)")
     if args.max_moves is not None and args.max_moves < 1:
         raise InputError(f"--max-moves must be >= 1, got {args.max_moves}")
     out = Path(args.output)
@@ -137,13 +146,19 @@ def settings_from_args(args):
     from drakedeburr.post.cl_post import PostSettings, pose_from_mm_deg, robot_kinematics
     from drakedeburr.units import m_from_mm
 
+    wobj = pose_from_mm_deg(args.wobj, "--wobj") if args.wobj is not None else None
+    stationary = bool(getattr(args, "workpiece_in_hand", False))
+    if stationary:  # spindle fixed in the base, the part's CL frame on the flange
+        X_WO, X_FT = pose_from_mm_deg(args.tool, "--tool"), wobj
+    else:
+        X_WO = wobj
+        X_FT = pose_from_mm_deg(args.tool if args.tool is not None else [0, 0, 200, 0, 0, 0],
+                                "--tool")
     return PostSettings(
-        robot=robot_kinematics(args.robot),
-        X_WO=pose_from_mm_deg(args.wobj, "--wobj") if args.wobj is not None else None,
-        X_FT=pose_from_mm_deg(args.tool if args.tool is not None else [0, 0, 200, 0, 0, 0],
-                              "--tool"),
+        robot=robot_kinematics(args.robot), X_WO=X_WO, X_FT=X_FT,
         spin_mode=args.spin, zone=m_from_mm(args.zone),
-        feed=None if args.feed is None else m_from_mm(args.feed), force=args.force)
+        feed=None if args.feed is None else m_from_mm(args.feed), force=args.force,
+        stationary_tool=stationary)
 
 
 def _phase_progress():

@@ -14,6 +14,11 @@ rotation about Z_T (the spin) is free. Three rules:
 - ``"greedy"``: point by point with no look-ahead, the state closest to the previous point's
   joints (5 deg grid, then 4 zooms of 1/16 on the chosen branch): the baseline rule.
 
+Workpiece in hand (``X_WS`` given): the spindle stands still at ``X_WS`` in the robot base and
+the robot carries the part; the CL points and axes are then in the held part's frame O, the
+flange-carried frame is O (``X_FT`` = X_FO) and the flange pose at a spin is
+``X_WF = X_WS X_OC(spin)^-1 X_FO^-1`` (the CL tool frame C brought onto the spindle's TCP).
+
 When the tool's axis lies on the flange axis (TCP on the flange Z axis, Z_T parallel to Z_F),
 the spin only turns joint 6: joints 1-5 follow from one IK per point and the rules are exact
 (J6 held still for min_travel and greedy, J6 = 0 for theta6_zero; the branch sequence by the
@@ -34,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drakedeburr.errors import InputError
+from drakedeburr.frames.vectors import inverse_transform
 from drakedeburr.robots.opw_ik import RobotKinematics, ik_opw, travel_weights
 
 __all__ = [
@@ -103,7 +109,8 @@ class ToolAxisPathResult:
 
     Attributes:
         q: (N, 6) joints [rad]; NaN rows at unreachable points.
-        X_WT: (N, 4, 4) tool poses with the chosen spin [m].
+        X_WT: (N, 4, 4) poses of the flange-carried frame with the chosen spin [m]: the tool,
+            or the held part (workpiece in hand).
         spin: (N,) chosen spin about Z_T [rad] (NaN where unreachable).
         reachable: (N,) bool.
         failed: indices of unreachable points.
@@ -141,6 +148,13 @@ class _Problem:
     period: np.ndarray  # (6,) 2 pi where wraps, inf elsewhere
     w_edge: np.ndarray  # (6,) travel weights of one step
     w_node6: float  # weight of |J6| at each point (theta6_zero)
+    X_WS: np.ndarray | None = None  # (4, 4) stationary tool (workpiece in hand), else None
+
+    def carried(self, idx: np.ndarray, spins: np.ndarray) -> np.ndarray:
+        """(K, 4, 4) pose in the base of the flange-carried frame at points ``idx``, ``spins``:
+        the tool (tool in hand) or the held part (workpiece in hand)."""
+        X_C = tool_frames(self.p_W[idx], self.axis_W[idx], spins, self.x_ref_W)
+        return X_C if self.X_WS is None else self.X_WS @ inverse_transform(X_C)
 
     def ik(self, idx: np.ndarray, spins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(K, 8, 6) joints wrapped to (-pi, pi] and (K, 8) feasible, for points ``idx`` (K,)
@@ -150,8 +164,7 @@ class _Problem:
         ok = np.empty((k, 8), bool)
         for a in range(0, k, _IK_CHUNK):
             sl = slice(a, a + _IK_CHUNK)
-            X = tool_frames(self.p_W[idx[sl]], self.axis_W[idx[sl]], spins[sl],
-                            self.x_ref_W) @ self.X_TF
+            X = self.carried(idx[sl], spins[sl]) @ self.X_TF
             sols = ik_opw(self.robot.opw, X)
             inside = ((sols.q >= self.lo) & (sols.q <= self.hi)) | self.wraps
             q[sl] = np.nan_to_num(sols.q)
@@ -432,7 +445,8 @@ def _unwrap(prob: _Problem, q: np.ndarray, ok: np.ndarray, q_start: np.ndarray
     return out, np.array(sorted(set(jumps)), int)
 
 
-def _problem(robot: RobotKinematics, p_W, axis_W, X_FT, mode: str, x_ref_W) -> _Problem:
+def _problem(robot: RobotKinematics, p_W, axis_W, X_FT, mode: str, x_ref_W,
+             X_WS: np.ndarray | None = None) -> _Problem:
     if mode not in SPIN_MODES:
         raise InputError(f"spin mode {mode!r}: use one of {', '.join(SPIN_MODES)}")
     p_W = np.atleast_2d(np.asarray(p_W, float))
@@ -448,7 +462,8 @@ def _problem(robot: RobotKinematics, p_W, axis_W, X_FT, mode: str, x_ref_W) -> _
                     x_ref_W=np.asarray(x_ref_W, float), mode=mode, lo=lo, hi=hi,
                     wraps=wraps, period=np.where(wraps, _TWO_PI, np.inf),
                     w_edge=w * (1e-3 if theta6 else 1.0),
-                    w_node6=_THETA6_WEIGHT if theta6 else 0.0)
+                    w_node6=_THETA6_WEIGHT if theta6 else 0.0,
+                    X_WS=None if X_WS is None else np.asarray(X_WS, float))
 
 
 def solve_tool_axis_path(
@@ -461,6 +476,7 @@ def solve_tool_axis_path(
     n_spin: int = 16,
     x_ref_W: np.ndarray = (1.0, 0.0, 0.0),
     progress: Callable[[int, int, str], None] | None = None,
+    X_WS: np.ndarray | None = None,
 ) -> ToolAxisPathResult:
     """Joints for tool tip positions and axes, resolving the free spin (see module docstring).
 
@@ -474,17 +490,20 @@ def solve_tool_axis_path(
         n_spin: spin grid of the dynamic programme (then refined continuously).
         x_ref_W: spin-0 reference direction of X_T.
         progress: optional callback (done, total, label), once per segment.
+        X_WS: (4, 4) the stationary tool's TCP in the robot base (workpiece in hand); then
+            ``p_W``/``axis_W`` are in the held part's frame O, ``X_FT`` is O in the flange
+            frame, and the result's ``X_WT`` are the part's poses in the base.
 
     Returns:
         ToolAxisPathResult; unreachable points are listed, not raised.
     """
-    prob = _problem(robot, p_W, axis_W, X_FT, mode, x_ref_W)
+    prob = _problem(robot, p_W, axis_W, X_FT, mode, x_ref_W, X_WS)
     if n_spin < 4:
         raise InputError(f"n_spin must be >= 4, got {n_spin}")
     n = prob.p_W.shape[0]
     q0 = READY_POSE.copy() if q_start is None else np.asarray(q_start, float)
     X_FT = np.asarray(X_FT, float)
-    flange_axis = _flange_axis_tool(X_FT)
+    flange_axis = X_WS is None and _flange_axis_tool(X_FT)
     j6 = float(np.clip(0.0 if mode == "theta6_zero" else q0[5], prob.lo[5], prob.hi[5]))
     sign6 = float(np.sign(X_FT[2, 2]) * robot.opw.sign_corrections[5])
     q_out, spin, branch = np.zeros((n, 6)), np.full(n, np.nan), np.zeros(n, int)
@@ -521,7 +540,7 @@ def _result(prob: _Problem, q: np.ndarray, spin: np.ndarray, branch: np.ndarray,
         big = np.abs(np.diff(q[idx], axis=0)).max(axis=1) > np.pi
         changed[idx[1:]] = (branch[idx[1:]] != branch[idx[:-1]]) | big
     changed[jumps] = True
-    X = tool_frames(prob.p_W, prob.axis_W, np.nan_to_num(spin), prob.x_ref_W)
+    X = prob.carried(np.arange(prob.p_W.shape[0]), np.nan_to_num(spin))
     failed = tuple(int(i) for i in np.flatnonzero(~reach))
     if failed:
         log.info("%d of %d CL points unreachable", len(failed), reach.size)
