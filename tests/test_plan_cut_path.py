@@ -30,6 +30,11 @@ def test_blends_stay_within_the_deviation_both_ways(dev):
     assert np.allclose(d_corner[1:-1], bp.zone[1:-1] / 2 * np.sin(turn / 2), rtol=0.02)
     assert np.allclose(bp.p[0], P[0]) and np.allclose(bp.p[-1], P[-1])
     assert np.all(np.diff(bp.s) > 0) and np.all(np.diff(bp.target_s) > 0)
+    # each target's sample is where the path passes it (its nearest point: the program's move
+    # ends there and its speed is read there), not the nearest sample to it
+    assert np.array_equal(bp.s[bp.target_index], bp.target_s)
+    assert np.allclose(np.linalg.norm(bp.p[bp.target_index] - P, axis=1), d_corner, atol=1e-12)
+    assert np.min(np.diff(bp.s)) > 0.2 * 0.02e-3  # no near-duplicate sample added
     # arc length of the samples equals the parameter
     assert np.allclose(np.cumsum(np.linalg.norm(np.diff(bp.p, axis=0), axis=1)), bp.s[1:] - bp.s[0],
                        rtol=1e-3)

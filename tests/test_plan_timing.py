@@ -75,3 +75,47 @@ def test_curved_path_keeps_the_acceleration_limits_on_the_stored_trajectory():
     a4 = A_MAX[3] * lim.acceleration_fraction
     peak = np.argmax(np.abs(q[:, 3]))
     assert tp.sdot[peak] <= np.sqrt(a4 / (0.4 * (2 * np.pi / 0.01) ** 2)) * 1.01
+
+
+def test_certified_acceleration_bound_holds_under_the_verifiers_certificate():
+    """Paths with the IK's jitter on them (3e-4 rad noise at 0.25 mm samples): every piece's
+    acceleration, certified by the verifier's own reading (spline_extremes), stays within the
+    limits: the timing bounds each quartic between its readings, not only at them."""
+    from drakedeburr.verify.geometry import spline_extremes
+
+    rng = np.random.default_rng(7)
+    for _ in range(6):  # five readings per piece alone let these reach 1.03 of the limit
+        s = np.linspace(0.0, 0.05, 201)
+        q = np.outer(s, rng.uniform(-3, 3, 6)) + rng.normal(scale=3e-4, size=(201, 6))
+        p = np.stack([s, np.zeros_like(s), np.zeros_like(s)], 1)
+        lim = mut.TimingLimits(v_cap=0.15, a_cap=3.0, v_max=V_MAX, a_max=A_MAX)
+        tp = mut.time_path(s, q, p, lim)
+        vals, _, rem = spline_extremes(JointTrajectory(t=tp.t, c=tp.c))["qdd"]
+        ratio = (np.abs(vals) + rem[:, None]) / np.asarray(A_MAX)
+        assert ratio.max() <= 1.0, ratio.max()
+
+
+def test_tcp_speed_is_the_speed_of_the_path_the_robot_runs():
+    """With ``fk`` the TCP path speed comes from the joint spline through forward kinematics:
+    the timed v_tcp equals the speed measured on the stored trajectory, even where the
+    commanded points carry the IK's residuals."""
+    rng = np.random.default_rng(3)
+    s = np.linspace(0.0, 0.04, 161)
+    q = np.zeros((161, 6))
+    q[:, 0] = s / 0.5  # J1 turns a 0.5 m arm: p = 0.5 (cos q1, sin q1, 0)
+
+    def fk(qq):
+        return 0.5 * np.stack([np.cos(qq[..., 0]), np.sin(qq[..., 0]),
+                               np.zeros(qq.shape[:-1])], -1)
+
+    p_cmd = fk(q) + rng.normal(scale=2e-5, size=(161, 3))  # what IK was asked for
+    lim = mut.TimingLimits(v_cap=0.15, a_cap=3.0, v_max=V_MAX, a_max=A_MAX)
+    tp = mut.time_path(s, q, p_cmd, lim, fk=fk)
+    traj = JointTrajectory(t=tp.t, c=tp.c)
+    h = 1e-7
+    t_mid = tp.t[1:-1]
+    v_run = np.linalg.norm(fk(traj.value(t_mid + h)) - fk(traj.value(t_mid - h)), axis=1) / (2 * h)
+    assert np.allclose(v_run, tp.v_tcp[1:-1], rtol=1e-4, atol=1e-6)
+    assert v_run.max() <= 0.15 * (1 + 1e-4)
+    without = mut.time_path(s, q, p_cmd, lim)  # the commanded points' spline: off by the noise
+    assert np.abs(without.v_tcp[1:-1] / np.maximum(v_run, 1e-9) - 1).max() > 0.01

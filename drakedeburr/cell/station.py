@@ -562,6 +562,9 @@ def _filter_holder(scene_graph, plant, hub_mount, hub_body, hub_ids) -> None:
                 GeometrySet(list(hub_ids)), GeometrySet(holder_ids)))
 
 
+_PAYLOAD_WARNED: set = set()
+
+
 def _check_payload(cell: Cell) -> None:
     """Warn when what the arm carries (every moving body that is not an arm link) exceeds the
     arm's rated payload; planning is kinematic and goes on."""
@@ -571,6 +574,8 @@ def _check_payload(cell: Cell) -> None:
         if instance == cell.robot:
             continue
         carried += sum(plant.get_body(b).default_mass() for b in plant.GetBodyIndices(instance))
-    if carried > cell.arm.payload_kg:
+    key = (cell.scenario.name, cell.arm.name, round(carried, 1))
+    if carried > cell.arm.payload_kg and key not in _PAYLOAD_WARNED:
+        _PAYLOAD_WARNED.add(key)  # once per process: planning loads the cell many times
         log.warning("%s: the arm %s carries %.1f kg (tool/gripper/hub models) but is rated for "
                     "%.1f kg", cell.scenario.name, cell.arm.name, carried, cell.arm.payload_kg)

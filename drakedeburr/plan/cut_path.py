@@ -124,13 +124,21 @@ def blend_corners(P: np.ndarray, deviation: float | np.ndarray, step: float,
             + (tt ** 2)[:, None] * c_end
         sl = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(B, axis=0), axis=1))])
         n = max(2, int(np.ceil(sl[-1] / step)))
+        s_mid = float(np.interp(0.5, tt, sl))  # where the path passes the target
+        # the passing point is a sample: the target's sample is exactly where the program's
+        # move ends (its speed is read there), not up to half a step beyond
         sq = np.arange(1, n + 1) / n * sl[-1]
+        j = int(np.argmin(np.abs(sq[:-1] - s_mid)))
+        if abs(sq[j] - s_mid) < 0.25 * sl[-1] / n:
+            sq[j] = s_mid  # moved onto it (no near-duplicate sample)
+        else:
+            sq = np.union1d(sq, [s_mid])
         tq = np.interp(sq, sl, tt)
         Bq = ((1 - tq) ** 2)[:, None] * b + (2 * (1 - tq) * tq)[:, None] * P[k + 1] \
             + (tq ** 2)[:, None] * c_end
         out_p.append(Bq)
         out_s.append(s_acc + sq)
-        target_s[k + 1] = s_acc + float(np.interp(0.5, tt, sl))
+        target_s[k + 1] = s_acc + s_mid
         s_acc += sl[-1]
     s = np.concatenate(out_s)
     p = np.concatenate(out_p)

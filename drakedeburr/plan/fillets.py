@@ -208,7 +208,7 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
     v_g = ctx.process.grinding_speed
     lim = ctx.limits(v_g)
     s = cut.s
-    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim)
+    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim, fk=ctx.kin.p_HT)
     X, q, d, best = cut.X_HT, cut.q, dist, float(base.t[-1])
     band = (1 - ctx.config.tolerances.speed_band) * v_g
     for _a, _b, c in slow_stretches(s, base.v_tcp, band):
@@ -225,7 +225,7 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
         new = _repair_one(ctx, cp, X, q, d, cone, half_angle, st, R, window, s[c])
         if new is None:
             continue
-        t_new = float(time_path(s, new[1], new[0][:, :3, 3], lim).t[-1])
+        t_new = float(time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT).t[-1])
         log.debug("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
                  1e3 * s[c], 1e3 * base.v_tcp[c], best, t_new)
         if t_new < best - 1e-3:

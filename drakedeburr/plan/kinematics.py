@@ -81,6 +81,10 @@ class CellKinematics:
         """(..., 6) joints -> (..., 4, 4) tool pose relative to the hub."""
         return self.X_HT_from_X_WF(self.fk_flange(q))
 
+    def p_HT(self, q: np.ndarray) -> np.ndarray:
+        """(..., 6) joints -> (..., 3) tool point relative to the hub [m]."""
+        return self.X_HT_from_q(q)[..., :3, 3]
+
     def X_WT_from_q(self, q: np.ndarray) -> np.ndarray:
         """(..., 6) joints -> (..., 4, 4) tool pose in world."""
         if self.mode == "tool":

@@ -35,7 +35,7 @@ def time_cartesian(ctx: PlanContext, q, s, X, v_cap, interpolate: bool = False
     limits = ctx.limits(v_cap)
     opt = ctx.options
     for spacing in ((None,) if interpolate else (*opt.fit_spacings, None)):
-        timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing)
+        timed = time_path(s, q, X[:, :3, 3], limits, fit_spacing=spacing, fk=ctx.kin.p_HT)
         dev = float(np.max(np.linalg.norm(ctx.kin.X_HT_from_q(timed.q)[:, :3, 3] - X[:, :3, 3],
                                           axis=1)))
         if dev <= opt.fit_tolerance or spacing is None:
@@ -46,7 +46,7 @@ def time_cartesian(ctx: PlanContext, q, s, X, v_cap, interpolate: bool = False
 def time_joint(ctx: PlanContext, q, s, v_cap) -> TimedPath:
     """Timed joint move (``s``: joint-space arc length) under a TCP speed cap."""
     p = ctx.kin.X_HT_from_q(q)[:, :3, 3]
-    return time_path(s, q, p, ctx.limits(v_cap))
+    return time_path(s, q, p, ctx.limits(v_cap), fk=ctx.kin.p_HT)
 
 
 def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label

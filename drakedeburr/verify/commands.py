@@ -90,7 +90,8 @@ def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
 
-    res = import_mesh(mesh, _hub_cache(args), options=ImportOptions(unit=args.unit),
+    options = ImportOptions(unit=args.unit, front=getattr(args, "front", "auto"))
+    res = import_mesh(mesh, _hub_cache(args), options=options,
                       progress=tqdm_progress("import mesh"))
     log.info("%s: %s hub folder %s (%d windows, %d collision pieces)", mesh,
              "cached" if res.cached else "imported", res.dir, res.window_count,
@@ -102,7 +103,22 @@ def _config(args: argparse.Namespace, scenario: str, hub: str):
     from drakedeburr.config import load_config
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
-    return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed)
+    return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed,
+                       robot=getattr(args, "robot", None))
+
+
+def _same_robot(plan, robot: str | None) -> None:
+    """A plan is verified for the arm it was made for: --robot must name it (or be left out)."""
+    if robot is None:
+        return
+    from drakedeburr.errors import InputError
+    from drakedeburr.programs.plan_program import plan_robot
+    from drakedeburr.robots import get_robot
+
+    made_for = plan_robot(plan)
+    if get_robot(robot) is not made_for:
+        raise InputError(f"--robot {robot}: the plan was made for {made_for.name}; re-plan the "
+                         "hub with --robot to verify it for another arm")
 
 
 def _tolerances(args: argparse.Namespace):
@@ -159,6 +175,7 @@ def _run_verify(args: argparse.Namespace) -> int:
         folder = Path(rest[0])
         folder = folder.parent if folder.name == "plan.json" else folder
         plan = _load_plan(folder)
+        _same_robot(plan, getattr(args, "robot", None))
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
         config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
     else:
@@ -237,6 +254,13 @@ def register(subparsers) -> None:
                                        "--json/--html, or ~/.cache/drakedeburr/hubs)")
     p.add_argument("--unit", choices=("m", "mm"),
                    help="unit of a mesh target (default: detected from its size)")
+    p.add_argument("--front", default="auto",
+                   choices=("auto", "+x", "-x", "+y", "-y", "+z", "-z"),
+                   help="mesh target: the file axis its front face (the side the tool works "
+                        "on) looks along; default auto (decided from the mesh, evidence logged)")
+    p.add_argument("--robot", metavar="NAME", default=None,
+                   help="hub or mesh target: the arm to plan for (drakedeburr robots; default "
+                        "the scenario's); a plan is verified for the arm it was made for")
     _common(p)
     p.set_defaults(_run=_run_verify)
 
