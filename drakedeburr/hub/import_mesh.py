@@ -359,7 +359,8 @@ def _collision(path: Path, V_H, F, walls, closed: bool, options: ImportOptions,
     in_opening = _opening_test(scene, closed, options.window_reach, float(V_H[:, 2].max()) + 0.01)
     probe_pts, probe_edge = [], []
     for wall in walls:
-        wall = wall[::max(1, int(round(1e-3 / options.edge_spacing)))]  # ~1 mm apart
+        # probes at most window_reach / 2 apart along the wall (closer on the outline)
+        wall = wall[::max(1, int(0.5 * options.window_reach / options.edge_spacing))]
         q0 = wall[:, :3] + options.window_reach * wall[:, 3:6]
         for f in np.linspace(0.02, 0.98, 6):
             probe_pts.append(q0 - np.array([0.0, 0.0, f * options.probe_depth]))
