@@ -128,8 +128,6 @@ def survey_reach(
         progress: optional callback (done, total, label).
     """
     from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
-    from pydrake.multibody.inverse_kinematics import InverseKinematics
-    from pydrake.solvers import SnoptSolver, Solve
 
     plant = cell.plant
     context = cell.create_context()
@@ -156,40 +154,14 @@ def survey_reach(
 
     results = []
     for i, target in enumerate(targets):
-        a_H = np.asarray(target.a_H, float) / np.linalg.norm(target.a_H)
-        found = None
         prev = results[-1].q if results and results[-1].success else None
-        for seed in ([prev] if prev is not None else []) + seed_list:
-            for sign in (1.0, -1.0):
-                ik = InverseKinematics(plant, plant_context, with_joint_limits=False)
-                ik.AddPositionConstraint(
-                    cell.hub_frame, target.p_HQ, cell.tool_frame,
-                    -position_tolerance * np.ones(3), position_tolerance * np.ones(3))
-                ik.AddAngleBetweenVectorsConstraint(
-                    cell.hub_frame, a_H, cell.tool_frame, [0.0, 0.0, 1.0], 0.0, axis_tolerance)
-                if min_distance is not None:
-                    ik.AddMinimumDistanceLowerBoundConstraint(min_distance, 0.05)
-                prog = ik.get_mutable_prog()
-                q = ik.q()
-                lo_i, hi_i = lo.copy(), hi.copy()
-                if sign > 0:
-                    lo_i[4] = max(lo_i[4], wrist_margin)
-                else:
-                    hi_i[4] = min(hi_i[4], -wrist_margin)
-                prog.AddBoundingBoxConstraint(lo_i, hi_i, q)
-                start = np.clip(seed, lo_i, hi_i)
-                prog.AddQuadraticErrorCost(0.05 * np.eye(6), start, q)
-                prog.SetInitialGuess(q, start)
-                solver = SnoptSolver()
-                result = solver.Solve(prog) if solver.available() else Solve(prog)
-                if result.is_success():
-                    found = result.GetSolution(q)
-                    break
-            if found is not None:
-                break
+        found = _solve_target(cell, plant_context, target, ([prev] if prev is not None else [])
+                              + seed_list, lo, hi, wrist_margin, min_distance, axis_tolerance,
+                              position_tolerance)
         if found is None:
             results.append(ReachResult(target, False, np.full(6, np.nan), np.nan, np.nan, np.nan))
         else:
+            a_H = np.asarray(target.a_H, float) / np.linalg.norm(target.a_H)
             X_HT = cell.X_HT(found)
             pos_err = float(np.linalg.norm(X_HT.inverse().multiply(target.p_HQ)))
             z_T = X_HT.rotation().matrix()[:, 2]
@@ -203,6 +175,43 @@ def survey_reach(
         if progress is not None:
             progress(i + 1, len(targets), "reach")
     return ReachSurvey(tuple(results))
+
+
+def _solve_target(cell: Cell, plant_context, target: ReachTarget, seeds: list, lo: np.ndarray,
+                  hi: np.ndarray, wrist_margin: float, min_distance: float | None,
+                  axis_tolerance: float, position_tolerance: float) -> np.ndarray | None:
+    """Joints reaching one target from the first seed (and J5 sign) that solves, or None."""
+    from pydrake.multibody.inverse_kinematics import InverseKinematics
+    from pydrake.solvers import SnoptSolver, Solve
+
+    plant = cell.plant
+    a_H = np.asarray(target.a_H, float) / np.linalg.norm(target.a_H)
+    for seed in seeds:
+        for sign in (1.0, -1.0):
+            ik = InverseKinematics(plant, plant_context, with_joint_limits=False)
+            ik.AddPositionConstraint(
+                cell.hub_frame, target.p_HQ, cell.tool_frame,
+                -position_tolerance * np.ones(3), position_tolerance * np.ones(3))
+            ik.AddAngleBetweenVectorsConstraint(
+                cell.hub_frame, a_H, cell.tool_frame, [0.0, 0.0, 1.0], 0.0, axis_tolerance)
+            if min_distance is not None:
+                ik.AddMinimumDistanceLowerBoundConstraint(min_distance, 0.05)
+            prog = ik.get_mutable_prog()
+            q = ik.q()
+            lo_i, hi_i = lo.copy(), hi.copy()
+            if sign > 0:
+                lo_i[4] = max(lo_i[4], wrist_margin)
+            else:
+                hi_i[4] = min(hi_i[4], -wrist_margin)
+            prog.AddBoundingBoxConstraint(lo_i, hi_i, q)
+            start = np.clip(seed, lo_i, hi_i)
+            prog.AddQuadraticErrorCost(0.05 * np.eye(6), start, q)
+            prog.SetInitialGuess(q, start)
+            solver = SnoptSolver()
+            result = solver.Solve(prog) if solver.available() else Solve(prog)
+            if result.is_success():
+                return result.GetSolution(q)
+    return None
 
 
 def _clearance(cell: Cell, context, q: np.ndarray) -> float:

@@ -185,7 +185,7 @@ def _burr_mm() -> float:
 def _add_front_and_burr(p) -> None:
     """--front, --burr-mm, --clearance-mm, --min-window-width-mm (every command taking a
     mesh)."""
-    from drakedeburr.config import Tolerances
+    from drakedeburr.config import default_tolerances
     from drakedeburr.hub.front import FRONT_CHOICES
 
     p.add_argument("--front", choices=FRONT_CHOICES, default="auto",
@@ -196,7 +196,7 @@ def _add_front_and_burr(p) -> None:
                    help="burr diameter: narrower openings are not windows (default "
                         "%(default)s)")
     p.add_argument("--clearance-mm", type=float,
-                   default=round(Tolerances().min_clearance * 1e3, 6),
+                   default=round(default_tolerances().min_clearance * 1e3, 6),
                    help="clearance the burr needs to the walls (default %(default)s)")
     p.add_argument("--min-window-width-mm", type=float,
                    help="narrowest window; default max(burr + 2 clearance, 2.5 burr)")

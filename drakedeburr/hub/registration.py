@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
-from drakedeburr.config import Tolerances
+from drakedeburr.config import Tolerances, default_tolerances
 from drakedeburr.errors import DrakeDeburrError, InputError
 from drakedeburr.hub.types import ScanCloud
 
@@ -163,13 +163,13 @@ def register_hub(
         mesh: ``trimesh.Trimesh`` hub model in H [m].
         X_WH_prior: the vision's rough hub pose (default identity).
         options: see RegistrationOptions.
-        tolerances: acceptance thresholds (registration_* fields); default Tolerances().
+        tolerances: acceptance thresholds (registration_* fields); default tolerances.
 
     Returns:
         RegistrationResult (check ``accepted`` or call ``require()``).
     """
     t0 = time.perf_counter()
-    tolerances = tolerances or Tolerances()
+    tolerances = tolerances or default_tolerances()
     p_W = np.asarray(scan.p_S, float)
     if p_W.ndim != 2 or p_W.shape[1] != 3 or len(p_W) < 100:
         raise InputError(f"{scan.source or 'scan'}: need an (N>=100, 3) cloud, got {p_W.shape}")
