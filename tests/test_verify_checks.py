@@ -288,3 +288,24 @@ def test_slow_stretches_are_located_and_needless_slack_is_named():
     s_mid = float(np.interp(t_mid_bad, tt, run))
     assert inside[0]["from_m"] < s_mid < inside[0]["to_m"]
     assert inside[0]["min_mps"] == pytest.approx(vs.PARAMS.grinding_speed / 2.0, rel=0.05)
+
+
+def test_wrist_singularity_guards_the_linear_segments():
+    """J5 = 0 on a joint move (the controller interpolates joints there) is reported, not
+    failed; on a cut it fails at that sample."""
+    from types import SimpleNamespace
+
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.verify.checks_motion import wrist_singularity
+    from drakedeburr.verify.sampling import KIND_CODE
+
+    q = np.zeros((5, 6))
+    q[:, 4] = [0.6, 0.0, 0.4, 0.5, 0.3]
+    kind = np.array([KIND_CODE[k] for k in ("home", "transition", "approach", "cut", "cut")])
+    sp = SimpleNamespace(samples=SimpleNamespace(q=q, kind=kind), where=lambda i: {})
+    cfg = SimpleNamespace(tolerances=default_tolerances())
+    item = wrist_singularity(sp, cfg)
+    assert item.passed and item.value == pytest.approx(0.3) and "0.00 deg" in item.detail
+    q[3, 4] = 0.01
+    item = wrist_singularity(sp, cfg)
+    assert not item.passed and item.value == pytest.approx(0.01)

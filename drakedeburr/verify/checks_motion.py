@@ -97,18 +97,37 @@ def configuration(sp, cfg) -> CheckItem:
 
 
 def wrist_singularity(sp, cfg) -> CheckItem:
+    """|J5| on every Cartesian (linear) segment: near J5 = 0 a linear move needs unbounded wrist
+    speeds. Joint moves (home, transitions) may pass J5 = 0: the controller interpolates the
+    joints there ("during joint interpolation there is never any problem when the robot passes
+    singular points", ABB RAPID overview, "Singularities"); their speeds and accelerations are
+    certified by the joint checks. The joint moves' least |J5| is given in the detail."""
     tol = cfg.tolerances
     j5 = np.abs(sp.samples.q[:, 4])
-    i = int(np.argmin(j5))
+    linear = np.isin(sp.samples.kind, [KIND_CODE[k] for k in LINEAR_KINDS])
+    joint_moves = f"; joint moves down to {np.degrees(j5[~linear].min()):.2f} deg" \
+        if (~linear).any() else ""
+    if not linear.any():
+        return CheckItem("wrist_singularity", True, None, tol.wrist_margin, "rad", ">=",
+                         detail="no linear segment" + joint_moves)
+    i = int(np.flatnonzero(linear)[np.argmin(j5[linear])])
     return CheckItem(
         "wrist_singularity", bool(j5[i] >= tol.wrist_margin), float(j5[i]), tol.wrist_margin,
-        "rad", ">=", **sp.where(i), detail="smallest |J5| (J5 = 0: axes 4 and 6 align)")
+        "rad", ">=", **sp.where(i),
+        detail="smallest |J5| on the linear segments (J5 = 0: axes 4 and 6 align)" + joint_moves)
 
 
 def manipulability(sp, cfg) -> CheckItem:
+    """Smallest |det J| on the linear segments (the joint moves' is no hazard: see
+    :func:`wrist_singularity`)."""
     tol, m = cfg.tolerances, sp.distances.manipulability
-    i = int(np.nanargmin(m))
+    linear = np.isin(sp.samples.kind, [KIND_CODE[k] for k in LINEAR_KINDS]) & np.isfinite(m)
+    if not linear.any():
+        return CheckItem("manipulability", True, None, tol.min_manipulability, "-", ">=",
+                         detail="no linear segment")
+    i = int(np.flatnonzero(linear)[np.argmin(m[linear])])
     return CheckItem(
         "manipulability", bool(m[i] >= tol.min_manipulability), float(m[i]),
         tol.min_manipulability, "-", ">=", **sp.where(i),
-        detail="smallest |det J| of the flange's spatial Jacobian (Yoshikawa measure)")
+        detail="smallest |det J| of the flange's spatial Jacobian on the linear segments "
+               "(Yoshikawa measure)")

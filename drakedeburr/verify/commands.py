@@ -89,8 +89,12 @@ def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
     """Import a hub mesh file (cached) and return its hub folder."""
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
+    from drakedeburr.units import m_from_mm as mm
 
-    options = ImportOptions(unit=args.unit, front=getattr(args, "front", "auto"))
+    width = args.min_window_width_mm
+    options = ImportOptions(unit=args.unit, front=args.front, burr_diameter=mm(args.burr_mm),
+                            clearance=mm(args.clearance_mm),
+                            min_window_width=None if width is None else mm(width))
     res = import_mesh(mesh, _hub_cache(args), options=options,
                       progress=tqdm_progress("import mesh"))
     log.info("%s: %s hub folder %s (%d windows, %d collision pieces)", mesh,
@@ -254,10 +258,9 @@ def register(subparsers) -> None:
                                        "--json/--html, or ~/.cache/drakedeburr/hubs)")
     p.add_argument("--unit", choices=("m", "mm"),
                    help="unit of a mesh target (default: detected from its size)")
-    p.add_argument("--front", default="auto",
-                   choices=("auto", "+x", "-x", "+y", "-y", "+z", "-z"),
-                   help="mesh target: the file axis its front face (the side the tool works "
-                        "on) looks along; default auto (decided from the mesh, evidence logged)")
+    from drakedeburr.hub.commands import _add_front_and_burr
+
+    _add_front_and_burr(p)  # mesh target: --front, --burr-mm, --clearance-mm, ...
     p.add_argument("--robot", metavar="NAME", default=None,
                    help="hub or mesh target: the arm to plan for (drakedeburr robots; default "
                         "the scenario's); a plan is verified for the arm it was made for")
