@@ -276,30 +276,26 @@ WIN = 0  # h5_split's large window 0
 
 @pytest.mark.slow
 def test_program_orientation_follows_the_executed_cut_with_via_targets():
-    """h5_split window 0 (real chain) turns the tool unevenly at its corners: planned without
-    via targets and without pulling the executed orientation onto the program, the program
-    (slerp between consecutive targets, as a controller interpolates) strays more than the
-    verifier's 10 mrad from the executed cut (11.1 mrad measured); with the vias 5.7 mrad (the
-    pull is needed at the small windows' tighter corners, where moves are too short to split:
-    tests/test_plan_hubs.py). Re-checked independently (Drake FK of the
-    timed trajectory, the test's own reading); every CL point is still a target, in order;
+    """h5_split window 0 (real chain) turns the tool unevenly at its corners. The program
+    (slerp between consecutive targets, as a controller interpolates) must stay within the
+    verifier's 10 mrad of the executed cut, with and without via targets (measured November
+    2026 after the certified timing: 4.6 mrad bare, 5.4 mrad with 7 vias; the vias were
+    needed against the older timing, 11.1 mrad bare). Re-checked independently (Drake FK of
+    the timed trajectory, the test's own reading); every CL point is still a target, in order;
     vias lie on the executed path and between their CL neighbours on the edge chord."""
-    from drakedeburr.cell.station import load_cell
+    from drakedeburr.cell.station import load_plan_cell
 
-    cell = load_cell("tool_in_hand", "h5_split")
     bare = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
                         options=mut.PlanOptions(windows=(WIN,), via_rounds=0,
                                                 conform_program=False))
-    vias_only = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
-                             options=mut.PlanOptions(windows=(WIN,), conform_program=False))
     plan = mut.plan_hub(load_config("tool_in_hand", "h5_split"), source="toolpath",
                         options=mut.PlanOptions(windows=(WIN,)))
-    assert plan.failures == ()
-    worst_bare, _ = _program_orientation_worst(bare, cell)
-    worst_vias, _ = _program_orientation_worst(vias_only, cell)
+    assert bare.failures == () and plan.failures == ()
+    # each plan read in its own cell (the placement search may seat the hub differently)
+    worst_bare, _ = _program_orientation_worst(bare, load_plan_cell(bare))
+    cell = load_plan_cell(plan)
     worst, tg = _program_orientation_worst(plan, cell)
-    assert worst_bare > Tolerances().orientation_match
-    assert worst_vias < worst_bare
+    assert worst_bare <= Tolerances().orientation_match
     assert worst <= Tolerances().orientation_match
     cl = [t.cl_index for t in tg]
     vias = [k for k, c in enumerate(cl) if c < 0]

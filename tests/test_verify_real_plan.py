@@ -16,10 +16,14 @@ from drakedeburr.verify.report import report_json
 
 @pytest.mark.slow
 def test_plan_hub_window_is_verified():
+    from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.plan.planner import PlanOptions, plan_hub
 
     plan = plan_hub(load_config(vs.SCENARIO, vs.HUB), options=PlanOptions(windows=(0,)))
-    a = vs.verify(plan, expected_windows=[0], params=None)
+    # the cell the plan was made in: the placement search may seat the hub elsewhere for
+    # one window than for the whole hub
+    cell = load_plan_cell(plan)
+    a = vs.verify(plan, expected_windows=[0], params=None, cell=cell)
     for name in ("structure", "fk_agreement", "target_consistency", "windows", "rest_at_ends",
                  "configuration"):
         assert a.item(name).passed, a.item(name)
@@ -28,5 +32,5 @@ def test_plan_hub_window_is_verified():
     # the verifier reads the planner's own ToolPath (CL points on the edge)
     assert all(v.get("reference") == "ToolPath"
                for v in a.item("cone").per_window.values())
-    b = vs.verify(plan, expected_windows=[0], params=None)
+    b = vs.verify(plan, expected_windows=[0], params=None, cell=cell)
     assert report_json(a, include_run=False) == report_json(b, include_run=False)

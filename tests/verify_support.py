@@ -46,6 +46,7 @@ def verify(plan, coarse: bool = True, **kwargs):
     from drakedeburr.verify.checks import verify_plan
 
     cell, hub = cell_and_hub()
+    cell = kwargs.pop("cell", cell)
     params = kwargs.pop("params", PARAMS)
     sampling = dict(COARSE) if coarse else {}
     sampling.update(kwargs.pop("sampling", {}))

@@ -47,6 +47,7 @@ from drakedeburr.plan.ik_seeds import (
     analytic_seed,
     clearance_seed,
     cone_clearance_probe,
+    reach_shortfall,
     recheck,
     seed_by_spin,
     unreachable,
@@ -256,8 +257,8 @@ def solve_window_ik(
                       seed_by_spin(kin, checker, p_T_pref[i], pref_retract_H[i], t_H[i], q_ref,
                                    options))
             if q_seed is None:
-                failures.append(FailureRecord(window=window_index, kind="ik", point=i,
-                                              reason="no IK branch reaches the first target"))
+                failures.append(_unreached(kin, window_index, i, p_T_pref[i], pref_retract_H[i],
+                                           t_H[i]))
                 continue
             anchor = q_seed
         else:
@@ -289,6 +290,19 @@ def solve_window_ik(
              1e3 * stats["seconds_per_point"], c["analytic"], c["distance"])
     return WindowIk(q=q_out, ok=ok, X_HT=X_out, clearance=clearance, failures=tuple(failures),
                     stats=stats)
+
+
+def _unreached(kin, window: int, i: int, p_HT, retract_H, t_H) -> FailureRecord:
+    """The record of a target no spin and no branch reaches: by how much, when out of reach."""
+    short = reach_shortfall(kin, p_HT, retract_H, t_H)
+    if short > 0:
+        return FailureRecord(window=window, kind="ik", point=i, value=short, limit=0.0,
+                             unit="m", reason=f"no IK branch reaches the first target: out of "
+                                              f"the arm's reach by {short * 1e3:.0f} mm")
+    return FailureRecord(window=window, kind="ik", point=i,
+                         reason="no IK branch reaches the first target: within the arm's reach, "
+                                "but every spin and branch leaves a joint limit, the wrist "
+                                "margin or the clearance")
 
 
 @dataclass(frozen=True, eq=False)

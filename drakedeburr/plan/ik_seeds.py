@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 JOINT_WEIGHTS = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
 
 __all__ = ["JOINT_WEIGHTS", "seed_by_spin", "cone_clearance_probe", "analytic_seed",
-           "analytic_accept", "clearance_seed", "unreachable", "recheck"]
+           "analytic_accept", "clearance_seed", "unreachable", "recheck", "reach_shortfall"]
 
 
 def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
@@ -240,3 +240,23 @@ def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_retract_H
     ok = (err <= 10 * options.position_tolerance and ang <= half_angle + 1e-6
           and bool(kin.within_limits(q)))
     return ok, err, ang, X
+
+
+def reach_shortfall(kin: CellKinematics, p_HT: np.ndarray, retract_H: np.ndarray,
+                    t_H: np.ndarray, spins: int = 72) -> float:
+    """How far [m] the wrist centre of the best spin lies outside the arm's reach for one
+    target (<= 0: within reach): the OPW wrist centre C = p_F - c4 z_F, at the distance
+    d = |(sqrt(x^2 + y^2 - b^2) - a1, z - c1)| from the shoulder, against the annulus
+    |c2 - l3| <= d <= c2 + l3 (l3 = sqrt(a2^2 + c3^2), the forearm). For the report: an
+    unreachable target says by how much."""
+    o = kin.robot.opw
+    s = np.linspace(-np.pi, np.pi, spins, endpoint=False)
+    X_HT = X_HT_from_axis(np.repeat(p_HT[None], spins, 0), np.repeat(retract_H[None], spins, 0),
+                          np.repeat(t_H[None], spins, 0), s)
+    X_BF = np.linalg.inv(kin.X_WB) @ kin.X_WF_from_X_HT(X_HT)
+    c = X_BF[:, :3, 3] - o.c4 * X_BF[:, :3, 2]
+    n = np.sqrt(np.maximum(c[:, 0] ** 2 + c[:, 1] ** 2 - o.b ** 2, 0.0)) - o.a1
+    d = np.hypot(n, c[:, 2] - o.c1)
+    l3 = np.hypot(o.a2, o.c3)
+    out = np.maximum(d - (o.c2 + l3), abs(o.c2 - l3) - d)
+    return float(out.min())

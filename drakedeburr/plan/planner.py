@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from drakedeburr.plan.options import PlanContext, PlanOptions
 from drakedeburr.plan.results import PlanStats, Stretch
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
-from drakedeburr.plan.types import JointTrajectory, Plan, PlanSegment
+from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window import plan_window
 from drakedeburr.plan.window_targets import WindowTargets
 
@@ -134,6 +134,9 @@ def plan_windows(
     return plan
 
 
+_REST_SECONDS = 0.1  # [s] a plan that moves nowhere holds home this long (a trajectory has pieces)
+
+
 def _concatenate(kin, stretches: list[Stretch], home):
     """The stretches end to end: (targets, segments, joint trajectory)."""
     t_all, c_all = [np.zeros(1)], [np.zeros((7, 0, 6))]
@@ -151,6 +154,13 @@ def _concatenate(kin, stretches: list[Stretch], home):
         segments.append(PlanSegment(window_index=st.window_index, kind=st.kind,
                                     target_range=(first, len(targets)), t_range=(t_off, t_end)))
         t_off = t_end
+    if len(t_all) == 1:  # nothing moves (no window planned): the robot rests at home
+        rest = np.zeros((7, 1, 6))
+        rest[-1, 0] = np.asarray(home.q, float)
+        t_all.append(np.array([_REST_SECONDS]))
+        c_all.append(rest)
+        if segments:
+            segments[-1] = replace(segments[-1], t_range=(0.0, _REST_SECONDS))
     return targets, segments, JointTrajectory(t=np.concatenate(t_all),
                                               c=np.concatenate(c_all, axis=1))
 
@@ -201,15 +211,22 @@ def _relax(cell, hub_model, wts, config, options, plan, q_refs, progress) -> Pla
     for f in plan.failures:
         first.setdefault(f.window, str(f))
     wts = list(wts)
-    deviations = []
+    deviations, in_vain = [], []
     for k, wt in enumerate(wts):
         w = wt.window_index
         if w not in first or w not in edges:
             continue
-        new, dev = relaxed_targets(edges[w], config.process, first[w], lambda x: plan_windows(
-            cell, [x], config, options=options, q_refs=q_refs))
+        new, dev, tried = relaxed_targets(edges[w], config.process, first[w],
+                                          lambda x: plan_windows(cell, [x], config,
+                                                                 options=options, q_refs=q_refs))
         if new is not None:
             wts[k], deviations = new, deviations + [dev]
+        elif tried:  # say what was tried: the report shows it with the window's failures
+            in_vain.append(FailureRecord(
+                window=w, kind="relaxation", tried=tuple(t for t, _ in tried),
+                reason="milder recipes failed too: " + "; ".join(f"{t}: {r}" for t, r in tried)))
+    if in_vain:
+        plan = replace(plan, failures=(*plan.failures, *in_vain))
     if not deviations:
         return plan
     relaxed = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)

@@ -51,8 +51,8 @@ def _box(b: OrientationBounds) -> str:
 
 def relaxed_targets(edge, params, failed_reason: str, plan_one):
     """A window's targets under the first milder recipe that ``plan_one(wt)`` (a plan of the
-    window alone) plans without failure records, and the deviation; (None, None) when none
-    does.
+    window alone) plans without failure records, and the deviation ((None, None) when none
+    does), and what was tried: (recipe item, the first failure it left) per variant.
 
     Args:
         edge: the hub's WindowEdge. params: the recipe's ProcessParameters.
@@ -63,6 +63,7 @@ def relaxed_targets(edge, params, failed_reason: str, plan_one):
     from drakedeburr.plan.window_targets import WindowTargets
 
     default = params.bounds(edge.kind)
+    tried = []
     for box in TILT_STEPS:
         if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
             continue  # not milder than the recipe's own box
@@ -73,5 +74,6 @@ def relaxed_targets(edge, params, failed_reason: str, plan_one):
                  len(trial.failures))
         if not trial.failures:
             return wt, Deviation(edge.index, "tool tilt", _box(default), _box(box),
-                                 f"the recipe's box failed: {failed_reason}")
-    return None, None
+                                 f"the recipe's box failed: {failed_reason}"), tried
+        tried.append((_box(box), str(trial.failures[0])))
+    return None, None, tried

@@ -219,24 +219,28 @@ def _cl_stats(sp) -> dict:
     return sp.memo("cl_stats", compute)
 
 
+_NO_CL = "not measurable: no window has CL targets in the plan"
+
+
 def cl_chord_error(sp, cfg) -> CheckItem:
     stats = _cl_stats(sp)
     worst_w = max(stats, key=lambda w: stats[w]["max_chord_height_m"], default=None)
-    worst = stats[worst_w]["max_chord_height_m"] if worst_w is not None else 0.0
+    worst = stats[worst_w]["max_chord_height_m"] if worst_w is not None else None
     inferred = not all(r is None or r.tool_path is not None for r in sp.refs.values())
     return CheckItem(
         "cl_chord_error", bool(stats) and worst <= cfg.process.delta_max, worst,
         cfg.process.delta_max, "m", "<=", window=worst_w,
-        detail="largest distance of the true edge from a chord between consecutive CL points"
-               + (" (CL points inferred from the targets: the plan carries no ToolPath)"
-                  if inferred else ""),
+        detail=("largest distance of the true edge from a chord between consecutive CL points"
+                + (" (CL points inferred from the targets: the plan carries no ToolPath)"
+                   if inferred else "")) if stats else _NO_CL,
         per_window=stats)
 
 
 def cl_chord_length(sp, cfg) -> CheckItem:
     stats = _cl_stats(sp)
     worst_w = max(stats, key=lambda w: stats[w]["max_chord_length_m"], default=None)
-    worst = stats[worst_w]["max_chord_length_m"] if worst_w is not None else 0.0
+    worst = stats[worst_w]["max_chord_length_m"] if worst_w is not None else None
     return CheckItem(
         "cl_chord_length", bool(stats) and worst <= cfg.process.l_max + 1e-12, worst,
-        cfg.process.l_max, "m", "<=", window=worst_w, detail="longest chord between CL points")
+        cfg.process.l_max, "m", "<=", window=worst_w,
+        detail="longest chord between CL points" if stats else _NO_CL)

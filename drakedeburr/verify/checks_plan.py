@@ -54,14 +54,15 @@ def failures_item(plan) -> CheckItem:
     f = plan.failures
     per: dict = {}
     for rec in f:
-        entry = per.setdefault(rec.window, {"records": 0, "kinds": [], "first": str(rec)})
+        entry = per.setdefault(rec.window, {"records": 0, "kinds": [], "first": str(rec),
+                                            "reasons": {}, "tried": []})
         entry["records"] += 1
         if rec.kind not in entry["kinds"]:
             entry["kinds"].append(rec.kind)
+            entry["reasons"][rec.kind] = str(rec)  # the first record of each kind
         if rec.value is not None:
             entry.setdefault("worst", {"value": rec.value, "limit": rec.limit, "unit": rec.unit})
-        if rec.tried:
-            entry.setdefault("tried", list(rec.tried))
+        entry["tried"] += [t for t in rec.tried if t not in entry["tried"]]
     return CheckItem(
         "planner_failures", not f, float(len(f)), 0.0, "count", "<=",
         window=next(iter(per), None),

@@ -36,7 +36,8 @@ def show(title: str, report) -> None:
             if it.time is not None:
                 where += f", t = {it.time:.3f} s"
             pair = f", pair {it.pair[0]} <-> {it.pair[1]}" if it.pair else ""
-            print(f"   {'FAIL' if it.required else 'miss'} {it.name}: {it.value:.4g} {it.unit} "
+            value = "not measured" if it.value is None else f"{it.value:.4g} {it.unit}"
+            print(f"   {'FAIL' if it.required else 'miss'} {it.name}: {value} "
                   f"(limit {it.comparison} {it.limit}) [{where}{pair}]")
 
 
@@ -75,7 +76,10 @@ def main() -> None:
     for name in ("path_deviation", "edge_deviation", "clearance", "tcp_speed_band",
                  "joint_acceleration", "wrist_singularity"):
         it = report.item(name)
-        print(f"   {name}: {it.value:.4g} {it.unit} (limit {it.comparison} {it.limit:.4g})")
+        value = "not measured" if it.value is None else f"{it.value:.4g} {it.unit}"
+        # process figures (the speed band) carry no pass limit: they are reported
+        limit = "reported" if it.limit is None else f"limit {it.comparison} {it.limit:.4g}"
+        print(f"   {name}: {value} ({limit})")
 
     # 3. reports
     write_report_json(report, out / "report.json")
