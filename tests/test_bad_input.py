@@ -1,0 +1,666 @@
+"""Issue 21: every bad input gets one clear line and its exit code, and nothing is lost.
+
+One table of bad inputs across the commands (:data:`CASES`): each runs ``drakedeburr`` in a
+copy of a small workspace (a reference plan, broken copies of it, a hub with a bad recipe, a
+mesh with a NaN vertex, files and folders in the way) and asserts the exit code, that stderr
+is one line naming the file or argument and what is wrong, that there is no traceback, and
+that the workspace is byte for byte what it was. Then interruptions (Ctrl-C, SIGTERM, a full
+disk) and leftovers of killed runs, the umask, and property-based fuzzing of the plan, report
+and program readers: any bytes load or raise InputError, never another exception.
+
+The contract (drakedeburr/cli.py): 0 done/passed, 1 the result failed (a report says why), 2 bad
+input or usage, 130 interrupted; no traceback without -vv.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import verify_support as vs
+from drakedeburr.cli import main
+from drakedeburr.errors import InputError
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+# --------------------------------------------------------------------------- the workspace
+
+def _write_npz(path: Path, arrays: dict) -> None:
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    path.write_bytes(buf.getvalue())
+
+
+def _broken_plans(root: Path, good: Path) -> None:
+    """Copies of the good plan folder, each broken in one item."""
+    arrays = dict(np.load(good / "arrays.npz"))
+    doc = json.loads((good / "plan.json").read_text())
+
+    def copy(name: str) -> Path:
+        shutil.copytree(good, root / name)
+        return root / name
+
+    (copy("plan_list") / "plan.json").write_text("[1, 2, 3]\n")
+    (copy("plan_badjson") / "plan.json").write_text(json.dumps(doc)[:500])
+    npz = (good / "arrays.npz").read_bytes()
+    (copy("plan_trunc") / "arrays.npz").write_bytes(npz[: len(npz) // 3])
+    (copy("plan_nonpz") / "arrays.npz").unlink()
+    for name, change in (
+            ("plan_shape", lambda a: a.update(q_targets=a["q_targets"][:, :5])),
+            ("plan_nan", lambda a: a["q_targets"].__setitem__((3, 2), np.nan)),
+            ("plan_missing", lambda a: a.pop("X_WF"))):
+        a = {k: v.copy() for k, v in arrays.items()}
+        change(a)
+        _write_npz(copy(name) / "arrays.npz", a)
+    bad = json.loads(json.dumps(doc))
+    bad["targets"][3]["speed"] = "fast"
+    (copy("plan_badtarget") / "plan.json").write_text(json.dumps(bad))
+    bad = json.loads(json.dumps(doc))
+    bad["segments"][1]["target_range"] = [0, 10**6]
+    (copy("plan_badsegment") / "plan.json").write_text(json.dumps(bad))
+    report = {"passed": True, "plan": {"identity": [1]}, "settings": {"tolerances": {}},
+              "summary": {"failed": []}}
+    (copy("plan_badreport") / "report.json").write_text(json.dumps(report))
+    (copy("plan_cutreport") / "report.json").write_text('{"passed": tr')
+
+
+def _files(root: Path) -> None:
+    import trimesh
+
+    (root / "afile").write_text("a file where a folder is needed\n")
+    (root / "adir").mkdir()
+    (root / "userdir").mkdir()
+    (root / "userdir" / "keep.txt").write_text("the user's own folder\n")
+    m = trimesh.creation.annulus(r_min=0.1, r_max=0.2, height=0.05)
+    v = np.array(m.vertices)
+    v[3] = np.nan
+    (root / "nan.stl").write_bytes(trimesh.Trimesh(v, m.faces, process=False)
+                                   .export(file_type="stl"))
+    (root / "bin.mod").write_bytes(b"MODULE x\n\x00\xff\xfe\nENDMODULE\n")
+    (root / "bad.mod").write_text("MODULE x\nENDMODULE garbage\n")
+    (root / "c.ls").write_text("a program written before\n")
+    (root / "x.mod").write_text("a program written before\n")
+    (root / "garbage.yaml").write_text(": : [\n")
+    (root / "small.cl").write_text("TOOL PATH/P1\nGOTO/800,0,600,0,0,1\nGOTO/810,0,600,0,0,1"
+                                   "\nEND-OF-PATH\n")
+    hub = REPO / "models" / "hubs" / vs.HUB
+    for name, recipe in (("hub_negspeed", "grinding_speed: -1\n"),
+                         ("hub_listrecipe", "[1, 2]\n"),
+                         ("hub_badkey", "grinding_sped: 0.1\n")):
+        (root / name).mkdir()
+        for f in hub.iterdir():  # the bundled hub's files, its own recipe
+            if f.name != "process.yaml":
+                (root / name / f.name).symlink_to(f)
+        (root / name / "process.yaml").write_text(recipe)
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory) -> Path:
+    """The workspace every case starts from (built once)."""
+    from drakedeburr.plan.io import save_plan
+
+    root = tmp_path_factory.mktemp("bad_input_base")
+    save_plan(vs.good_plan(), root / "plan")
+    _broken_plans(root, root / "plan")
+    _files(root)
+    return root
+
+
+@pytest.fixture
+def ws(base, tmp_path, monkeypatch) -> Path:
+    """A fresh copy of the workspace, the working directory of the case."""
+    root = tmp_path / "ws"
+    # hard links: every output is written to a new file and renamed (the tree hash catches
+    # any write in place)
+    shutil.copytree(base, root, symlinks=True, copy_function=os.link)
+    monkeypatch.chdir(root)
+    return root
+
+
+def tree(root: Path) -> dict[str, str]:
+    """Every file, folder and link under ``root`` (hidden ones too) -> its content hash."""
+    out = {}
+    for dirpath, dirs, files in os.walk(root):
+        for name in dirs + files:
+            p = Path(dirpath) / name
+            rel = str(p.relative_to(root))
+            if p.is_symlink():
+                out[rel] = f"link {os.readlink(p)}"
+            elif p.is_dir():
+                out[rel] = "dir"
+            else:
+                out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+def run(argv: list[str], capsys) -> tuple[int, str, str]:
+    capsys.readouterr()
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# --------------------------------------------------------------------------- the table
+
+@dataclass(frozen=True)
+class Case:
+    argv: str
+    code: int
+    says: tuple[str, ...]
+
+    def __str__(self) -> str:
+        return self.argv
+
+
+C = Case
+CASES = [
+    # usage
+    C("plan --bogus", 2, ("unrecognized arguments: --bogus", "--help")),
+    C("", 2, ("COMMAND",)),
+    C("verify plan --grinding-speed x", 2, ("--grinding-speed", "expected a number > 0 mm/s")),
+    # plan: arguments, the hub's windows, outputs, the recipe and the scenario
+    C("plan --windows 0,99 -o p", 2, ("--windows", "no window 99", "its windows: 0, 1, 2, 3, 4")),
+    C("plan --windows x -o p", 2, ("--windows", "'x'", "window numbers")),
+    C("plan --windows 1,1 -o p", 2, ("--windows", "twice")),
+    C("plan --windows -2 -o p", 2, ("--windows", ">= 0")),
+    C("plan -o afile", 2, ("afile", "is a file", "folder is needed")),
+    C("plan -o userdir", 2, ("userdir", "did not write")),
+    C("plan -o plan --html adir", 2, ("adir", "--html", "folder")),
+    C("plan --hub missing -o p", 2, ("missing",)),
+    C("plan nosuchcell -o p", 2, ("nosuchcell", "tool_in_hand")),
+    C("plan garbage.yaml --windows 0 -o p", 2, ("garbage.yaml",)),
+    C("plan --robot bogus -o p", 2, ("bogus", "irb1600")),
+    C("plan --hub hub_negspeed -o p", 2, ("process.yaml", "grinding_speed", "positive")),
+    C("plan --hub hub_listrecipe -o p", 2, ("process.yaml", "mapping")),
+    C("plan --hub hub_badkey -o p", 2, ("process.yaml", "grinding_sped", "known")),
+    # verify: numbers, the plan folder's files, outputs
+    C("verify plan --grinding-speed 0", 2, ("--grinding-speed", "> 0 mm/s", "'0'")),
+    C("verify plan --grinding-speed -5", 2, ("--grinding-speed", "> 0 mm/s")),
+    C("verify plan --grinding-speed nan", 2, ("--grinding-speed", "> 0 mm/s")),
+    C("verify plan_list", 2, ("plan_list/plan.json", "not an object")),
+    C("verify plan_badjson", 2, ("plan_badjson/plan.json", "not valid JSON")),
+    C("verify plan_trunc", 2, ("plan_trunc/arrays.npz", "BadZipFile")),
+    C("verify plan_nonpz", 2, ("plan_nonpz", "missing arrays.npz")),
+    C("verify plan_shape", 2, ("arrays.npz", "'q_targets'", "shape (357, 5)", "(357, 6)")),
+    C("verify plan_nan", 2, ("arrays.npz", "'q_targets'", "not finite")),
+    C("verify plan_missing", 2, ("arrays.npz", "'X_WF'", "missing")),
+    C("verify plan_badtarget", 2, ("plan.json", "targets[3].speed", "finite number")),
+    C("verify plan_badsegment", 2, ("plan.json", "segments[1].target_range", "357 targets")),
+    C("verify nothere", 2, ("nothere", "SCENARIO/HUB")),
+    C("verify plan --json adir", 2, ("adir", "--json", "folder")),
+    C("verify plan --html adir", 2, ("adir", "--html", "folder")),
+    C("verify plan --program missing.mod", 2, ("missing.mod", "not found")),
+    C("verify plan --program bin.mod", 2, ("bin.mod:2", "UTF-8")),
+    C("verify plan --program bad.mod", 2, ("bad.mod",)),
+    C("verify plan --program afile", 2, ("afile", "program file type")),
+    C("verify plan -o p2", 2, ("-o/--out", "only for a hub")),
+    C("verify tool_in_hand/h5_straight --planner reference --windows 0,99", 2,
+      ("--windows", "no window 99")),
+    C("verify tool_in_hand/h5_straight --windows 0 -o afile", 2, ("afile", "folder is needed")),
+    C("verify tool_in_hand/h5_straight --windows 0 -o userdir", 2, ("userdir", "did not write")),
+    C("verify missing.stl", 2, ("missing.stl", "no such hub mesh file")),
+    C("verify nan.stl", 2, ("nan.stl", "not finite")),
+    C("verify-all nothere", 2, ("nothere", "catalogue")),
+    C("verify-all . -j 0", 2, ("--workers", ">= 1")),
+    # export: output, the plan, the format for its arm, then the gate (exit 1)
+    C("export plan -o adir", 2, ("adir", "-o/--output is a folder")),
+    C("export plan -o x.src", 2, ("x.src", "RAPID", ".mod")),
+    C("export plan -o x.txt", 2, ("x.txt", ".mod")),
+    C("export plan -o x.mod --name 9bad", 2, ("--name", "'9bad'", "a letter")),
+    C("export plan -o x.mod --robot kr6_r700", 2, ("--robot kr6_r700", "irb1600")),
+    C("export plan -o x.mod --format krl", 2, ("--format krl", "RAPID")),
+    C("export nothere -o x.mod", 2, ("nothere", "no such plan folder")),
+    C("export plan_list -o x.mod", 2, ("plan_list/plan.json",)),
+    C("export plan_trunc -o x.mod", 2, ("plan_trunc/arrays.npz",)),
+    C("export plan -o x.mod", 1, ("refusing to export", "no verification report")),
+    C("export plan_badreport -o x.mod", 1, ("refusing", "report.json", "'plan.identity'")),
+    C("export plan_cutreport -o x.mod", 1, ("refusing", "report.json", "not valid JSON")),
+    # cl, orient
+    C("cl missing.stl", 2, ("missing.stl", "not found")),
+    C("cl nan.stl", 2, ("nan.stl", "facet", "not finite")),
+    C("cl nothere", 2, ("nothere",)),
+    C("cl h5_straight --l-max-mm 0", 2, ("--l-max-mm", "> 0 mm")),
+    C("cl h5_straight --delta-max-mm -1", 2, ("--delta-max-mm", "> 0 mm")),
+    C("cl h5_straight --json adir", 2, ("adir", "--json")),
+    C("cl h5_straight --burr-mm 0", 2, ("--burr-mm", "> 0 mm")),
+    C("orient missing", 2, ("missing",)),
+    C("orient h5_straight --spacing-mm 0 --cl loop", 2, ("--spacing-mm", "> 0 mm")),
+    C("orient h5_straight --sigma-mm -1", 2, ("--sigma-mm", ">= 0 mm")),
+    C("orient h5_straight --seed -3", 2, ("--seed", ">= 0")),
+    C("orient h5_straight --json adir", 2, ("adir", "--json")),
+    # hub
+    C("hub import missing.stl --out hubs", 2, ("missing.stl", "not found")),
+    C("hub import afile --out hubs", 2, ("afile", ".stl, .obj, .ply")),
+    C("hub import nan.stl --out hubs", 2, ("nan.stl", "not finite")),
+    C("hub import nan.stl --out afile", 2, ("afile", "--out", "folder is needed")),
+    C("hub import nan.stl --out hubs --axis 0 0 0", 2, ("--axis", "non-zero")),
+    C("hub import nan.stl --out hubs --windows 0", 2, ("--windows", ">= 1")),
+    C("hub random --seed 1 --count 0 -o r", 2, ("--count", ">= 1")),
+    C("hub random --seed -1 -o r", 2, ("--seed", ">= 0")),
+    C("hub random --seed 1 -o afile --no-collision", 2, ("afile", "folder is needed")),
+    C("hub generate --spec missing.yaml --out g", 2, ("missing.yaml", "not found")),
+    C("hub generate h5_straight --out afile", 2, ("afile", "folder is needed")),
+    C("hub info missing", 2, ("missing",)),
+    C("hub scan h5_straight adir", 2, ("adir", "folder")),
+    C("hub list --dir nothere", 2, ("nothere", "--dir")),
+    # post (checked by the post command itself)
+    C("post missing.cl -o p.mod", 2, ("missing.cl", "not found")),
+    C("post small.cl -o adir", 2, ("adir", "folder")),
+    C("post small.cl -o p.mod --feed 0", 2, ("--feed", "> 0")),
+    # laser
+    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "> 0")),
+    C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2, ("--spacing", "> 0")),
+    C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "> 0")),
+    C("laser shape circle --diameter 10 -o adir", 2, ("adir", "folder")),
+    C("laser shape circle --diameter 10 -o c.txt", 2, ("c.txt", ".ls")),
+    C("laser shape circle --diameter 10 --name 9x -o c.ls", 2, ("'9x'", "letter")),
+    C("laser shape circle --diameter 10 --min-command 5 --max-command 2 -o c.ls", 2,
+      ("--max-command", "--min-command")),
+    C("laser shape polyline --points missing.csv -o c.ls", 2, ("missing.csv", "not found")),
+    C("laser tool --sdf adir", 2, ("adir", "--sdf")),
+    # show, demo
+    C("show missing --html s.html", 2, ("missing",)),
+    C("show tool_in_hand --hub missing --html s.html", 2, ("missing",)),
+    C("show tool_in_hand --html adir", 2, ("adir", "--html")),
+    C("demo --out afile --test-mode", 2, ("afile", "folder is needed")),
+    C("demo --out d --hub missing --test-mode", 2, ("missing",)),
+    C("demo --out d --robot bogus --test-mode", 2, ("bogus", "irb1600")),
+]
+
+
+@pytest.mark.parametrize("case", CASES, ids=str)
+def test_bad_input(case, ws, capsys):
+    before = tree(ws)
+    code, out, err = run(case.argv.split(), capsys)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == case.code, err
+    assert "Traceback" not in err + out
+    for text in case.says:
+        assert text in err, f"{text!r} not in {err!r}"
+    if code == 2:
+        assert len(lines) == 1, f"one line expected, got {lines}"
+        assert ": error: " in lines[0]
+    assert tree(ws) == before  # nothing written, nothing changed, no leftovers
+
+
+def test_every_help_states_the_exit_codes(capsys):
+    from drakedeburr.cli import _build_parser
+
+    import argparse
+
+    def parsers(p):
+        yield p
+        for a in p._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for sub in a.choices.values():
+                    yield from parsers(sub)
+
+    for p in parsers(_build_parser()):
+        text = p.format_help()
+        assert "exit codes:" in text and "130" in text and "-vv" in text, p.prog
+
+
+def test_unwritable_folder(ws, capsys):
+    if os.geteuid() == 0:  # root writes anywhere a mode allows nothing; /proc/1 refuses even root
+        folder = Path("/proc/1")
+    else:
+        folder = ws / "ro"
+        folder.mkdir()
+        folder.chmod(0o555)
+    before = tree(ws)
+    for argv in (f"export plan -o {folder}/x.mod", f"plan -o {folder}/p",
+                 f"laser shape circle --diameter 10 -o {folder}/c.ls"):
+        code, _, err = run(argv.split(), capsys)
+        assert code == 2 and "not writable" in err and str(folder) in err, err
+    assert tree(ws) == before
+
+
+def test_free_space_is_checked_before_the_work(ws, capsys, monkeypatch):
+    import collections
+
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9 - 1000, 1000))
+    before = tree(ws)
+    code, _, err = run("plan --windows 0 -o p".split(), capsys)
+    assert code == 2 and "MB free" in err and "needs about" in err
+    code, _, err = run("export plan -o x.mod --force".split(), capsys)
+    assert code == 2 and "MB free" in err
+    assert tree(ws) == before
+
+
+def _fail_on_write(monkeypatch, exc: BaseException) -> None:
+    """Every file written through drakedeburr._io fails at its fsync with ``exc``."""
+    from drakedeburr import _io
+
+    def fsync(fd):
+        raise exc
+
+    monkeypatch.setattr(_io.os, "fsync", fsync)
+
+
+@pytest.mark.parametrize("exc, code, says", [
+    (OSError(28, "No space left on device"), 2, "no space left"),
+    (KeyboardInterrupt(), 130, "interrupted"),
+], ids=["disk-full", "ctrl-c"])
+def test_a_write_that_fails_leaves_the_old_output(ws, capsys, monkeypatch, exc, code, says):
+    """ENOSPC or Ctrl-C while writing: the earlier program stays whole, no temporary file."""
+    before = tree(ws)
+    _fail_on_write(monkeypatch, exc)
+    for argv in ("export plan -o x.mod --force", "laser shape circle --diameter 10 -o c.ls"):
+        got, _, err = run(argv.split(), capsys)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert got == code and says in lines[-1] and "Traceback" not in err, err
+    assert tree(ws) == before
+
+
+def test_a_plan_folder_write_that_fails_leaves_the_old_plan(ws, capsys, monkeypatch):
+    from drakedeburr.plan import io as plan_io
+    from drakedeburr.plan.io import save_plan
+
+    before = tree(ws)
+    for exc in (OSError(28, "No space left on device"), KeyboardInterrupt()):
+        def broken(*args, exc=exc, **kwargs):
+            raise exc
+
+        monkeypatch.setattr(plan_io, "write_joint_csv", broken)
+        with pytest.raises(type(exc)):
+            save_plan(vs.good_plan(), ws / "plan")
+    assert tree(ws) == before
+
+
+def test_internal_errors_are_one_line_and_vv_shows_the_traceback(ws, capsys, monkeypatch):
+    from drakedeburr.laser import commands
+
+    def bug(args):
+        return 1 / 0
+
+    monkeypatch.setattr(commands, "_run_tool", bug)  # main() builds its parser afresh
+    code, _, err = run(["laser", "tool"], capsys)
+    assert code == 1 and "Traceback" not in err
+    assert err.count("\n") == 1 and "internal error: ZeroDivisionError" in err
+    assert "-vv" in err
+    code, _, err = run(["-vv", "laser", "tool"], capsys)
+    assert code == 1 and "Traceback" in err and "ZeroDivisionError" in err
+    code, _, err = run(["verify", "plan_trunc", "-vv"], capsys)  # -vv after the command too
+    assert code == 2 and "Traceback" in err and "BadZipFile" in err.splitlines()[-1]
+
+
+# --------------------------------------------------------------------------- signals, leftovers
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "drakedeburr", *args]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_interrupted_plan_exits_130_and_keeps_the_old_plan(ws, sig):
+    """A signal during planning: exit 130, one line, the previous plan folder untouched."""
+    before = tree(ws)
+    proc = subprocess.Popen(_cli("plan", "--windows", "0", "--source", "edges", "-o", "plan"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ws)
+    # the first log line comes once the command runs (its handlers are installed)
+    first = proc.stderr.readline()
+    assert first, proc.communicate()
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    lines = [ln for ln in err.splitlines() if ln.strip() and "%|" not in ln]
+    assert proc.returncode == 130, err
+    assert "interrupted" in lines[-1] and "Traceback" not in err
+    assert tree(ws) == before
+
+
+def test_the_next_run_removes_what_a_killed_run_left(ws, capsys):
+    """Temporaries of a run that was killed (its process has ended) go; a live run's stay."""
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    live = os.getppid()
+    left = [ws / f".plan.tmp-{dead.pid}-abcdefgh", ws / f".x.mod.{dead.pid}-abcdefgh.tmp",
+            ws / f".c.ls.{dead.pid}-abcdefgh.tmp"]
+    kept = [ws / f".plan.tmp-{live}-abcdefgh", ws / f".x.mod.{live}-abcdefgh.tmp"]
+    for p in left + kept:
+        p.mkdir() if ".tmp-" in p.name else p.write_text("partial")
+    code, _, err = run("laser shape circle --diameter 10 -o c.ls".split(), capsys)
+    assert code == 0, err
+    code, _, err = run("export plan -o x.mod --force".split(), capsys)
+    assert code == 0, err
+    from drakedeburr.plan.io import save_plan
+
+    save_plan(vs.good_plan(), ws / "plan")
+    assert not any(p.exists() for p in left)
+    assert all(p.exists() for p in kept)
+
+
+def test_outputs_get_the_users_umask(ws, capsys):
+    from drakedeburr._io import temp_folder_beside
+    from drakedeburr.hub.import_output import write_folder
+
+    old = os.umask(0o027)
+    try:
+        code, _, _ = run("laser shape circle --diameter 10 -o c2.ls".split(), capsys)
+        assert code == 0 and (ws / "c2.ls").stat().st_mode & 0o777 == 0o640
+        from drakedeburr.plan.io import save_plan
+
+        save_plan(vs.good_plan(), ws / "p2")
+        assert (ws / "p2").stat().st_mode & 0o777 == 0o750
+        assert (ws / "p2" / "plan.json").stat().st_mode & 0o777 == 0o640
+        assert temp_folder_beside(ws / "t").stat().st_mode & 0o777 == 0o750
+        # the imported hub folder (was 0700: made by mkdtemp)
+        V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.1
+        F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        write_folder(ws / "hubs" / "h_1", ws / "hubs", "h", ws / "nan.stl", "0" * 64, V, F,
+                     [], [], 1.0, np.zeros(3), np.eye(3) * 1e-3, {"name": "h"})
+        assert (ws / "hubs" / "h_1").stat().st_mode & 0o777 == 0o750
+    finally:
+        os.umask(old)
+
+
+def test_no_user_output_is_made_by_mkdtemp_or_mkstemp():
+    """Temporary files and folders that become outputs come from drakedeburr._io, which gives
+    them the user's umask and names the next run can clean up."""
+    import ast
+
+    root = REPO / "drakedeburr"
+    found = []
+    for f in root.rglob("*.py"):
+        if f.name == "_io.py":
+            continue
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr in ("mkdtemp", "mkstemp"):
+                found.append(f"{f.relative_to(root)}:{node.lineno}")
+    assert not found, found
+
+
+# --------------------------------------------------------------------------- fuzzing the readers
+
+_JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=6),
+    lambda c: st.lists(c, max_size=3) | st.dictionaries(st.text(max_size=6), c, max_size=3),
+    max_leaves=10)
+
+
+def _paths(obj, prefix=()):
+    yield prefix
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _paths(v, (*prefix, k))
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj[:2]):
+            yield from _paths(v, (*prefix, i))
+
+
+@pytest.fixture(scope="module")
+def seed_plan(base):
+    doc = json.loads((base / "plan" / "plan.json").read_text())
+    return (doc, [p for p in _paths(doc) if p], dict(np.load(base / "plan" / "arrays.npz")),
+            (base / "plan" / "arrays.npz").read_bytes())
+
+
+@pytest.fixture(scope="module")
+def fuzz_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("fuzz")
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data())
+def test_fuzz_load_plan(seed_plan, fuzz_dir, data):
+    """Any plan.json and arrays.npz: the plan loads, or InputError names the file."""
+    from drakedeburr.plan.io import load_plan
+
+    doc, paths, arrays, npz = seed_plan
+    doc = json.loads(json.dumps(doc))
+    folder = fuzz_dir / "plan"
+    folder.mkdir(exist_ok=True)
+    if data.draw(st.booleans()):
+        for _ in range(data.draw(st.integers(1, 3))):
+            path = data.draw(st.sampled_from(paths))
+            obj = doc
+            try:
+                for k in path[:-1]:
+                    obj = obj[k]
+                if data.draw(st.booleans()):
+                    obj[path[-1]] = data.draw(_JSON)
+                else:
+                    del obj[path[-1]]
+            except (KeyError, IndexError, TypeError):
+                pass
+        text = json.dumps(doc).encode()
+    else:
+        text = data.draw(st.binary(max_size=200) | st.sampled_from(
+            [b"[1,2,3]", b"{}", b"null", b"[" * 5000, b'{"format": "drakedeburr-plan"}']))
+    (folder / "plan.json").write_bytes(text)
+    how = data.draw(st.sampled_from(["same", "drop", "shape", "dtype", "value", "bytes"]))
+    a = dict(arrays)
+    key = data.draw(st.sampled_from(sorted(a)))
+    if how == "bytes":
+        cut = data.draw(st.integers(0, len(npz)))
+        (folder / "arrays.npz").write_bytes(npz[:cut] + data.draw(st.binary(max_size=20)))
+    else:
+        if how == "drop":
+            del a[key]
+        elif how == "shape":
+            a[key] = a[key].reshape(-1)[: data.draw(st.integers(0, 30))]
+        elif how == "dtype":
+            a[key] = a[key].astype(data.draw(st.sampled_from(["U3", "complex128", "int8",
+                                                              "bool", "float32"])))
+        elif how == "value":
+            a[key] = a[key].copy()
+            a[key].reshape(-1)[data.draw(st.integers(0, a[key].size - 1))] = data.draw(
+                st.sampled_from([np.nan, np.inf, -1e300, 0.0]))
+        _write_npz(folder / "arrays.npz", a)
+    try:
+        plan = load_plan(folder)
+    except InputError as exc:
+        assert str(folder) in str(exc)
+        return
+    assert plan.X_WH.shape == (4, 4) and all(t.q.shape == (6,) for t in plan.targets)
+
+
+@settings(max_examples=600, deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data())
+def test_fuzz_read_report(fuzz_dir, data):
+    """Any report.json: it reads, or InputError names the file; the gate never raises."""
+    from drakedeburr.verify.gate import read_report
+
+    good = {"passed": True, "plan": {"identity": {"plan_digest": "a", "cell_digest": "b",
+                                                  "verifier_version": "c"}},
+            "settings": {"tolerances": {"min_clearance": 0.002}}, "summary": {"failed": []}}
+    if data.draw(st.booleans()):
+        doc = json.loads(json.dumps(good))
+        for path in data.draw(st.lists(st.sampled_from([p for p in _paths(good) if p]),
+                                       min_size=1, max_size=3)):
+            obj = doc
+            try:
+                for k in path[:-1]:
+                    obj = obj[k]
+                obj[path[-1]] = data.draw(_JSON | st.integers(min_value=10**308))
+            except (KeyError, IndexError, TypeError):
+                pass
+        text = json.dumps(doc).encode()
+    else:
+        text = data.draw(st.binary(max_size=300))
+    path = fuzz_dir / "report.json"
+    path.write_bytes(text)
+    try:
+        report = read_report(path)
+    except InputError as exc:
+        assert str(path) in str(exc)
+        return
+    assert isinstance(report["passed"], bool)
+
+
+_SEED_PROGRAMS: dict = {}
+
+
+def _seed_programs(root: Path) -> dict:
+    import program_support as ps
+    from drakedeburr.programs import write_program
+
+    if not _SEED_PROGRAMS:
+        root.mkdir(exist_ok=True)
+        for fmt in ("rapid", "krl", "ls"):
+            for stationary in (False, True):
+                d = root / f"{fmt}_{stationary}"
+                d.mkdir()
+                paths = write_program(ps.random_program(ps.ARMS[fmt], stationary, n=4,
+                                                        name="prog"),
+                                      d / f"prog{ps.SUFFIX[fmt]}", fmt)
+                _SEED_PROGRAMS[(fmt, stationary)] = {p.name: p.read_bytes() for p in paths}
+    return _SEED_PROGRAMS
+
+
+@settings(max_examples=1000, deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data())
+def test_fuzz_read_program(fuzz_dir, data):
+    """Any bytes in a RAPID, KRL (.src and .dat) or LS file: read, or InputError
+    (ProgramFormatError) naming the file."""
+    from drakedeburr.programs import read_program
+
+    seeds = _seed_programs(fuzz_dir / "seeds")
+    fmt, stationary = data.draw(st.sampled_from(sorted(seeds)))
+    files = dict(seeds[(fmt, stationary)])
+    name = data.draw(st.sampled_from(sorted(files)))
+    lines = files[name].split(b"\n")
+    for _ in range(data.draw(st.integers(1, 4))):
+        op = data.draw(st.sampled_from(["del", "dup", "text", "bytes", "char", "cut"]))
+        i = data.draw(st.integers(0, max(0, len(lines) - 1)))
+        if op == "del" and lines:
+            del lines[i]
+        elif op == "dup" and lines:
+            lines.insert(i, lines[i])
+        elif op == "text":
+            lines.insert(i, data.draw(st.text(max_size=40)).encode("utf-8", "surrogatepass"))
+        elif op == "bytes":
+            lines.insert(i, data.draw(st.binary(max_size=20)))
+        elif op == "char" and lines and lines[i]:
+            line = bytearray(lines[i])
+            line[data.draw(st.integers(0, len(line) - 1))] = data.draw(
+                st.sampled_from(list(b"0123456789-+.,[]{}():=;'\"/ eE\x00\xffXYZ")))
+            lines[i] = bytes(line)
+        elif op == "cut":
+            lines = lines[:i]
+    files[name] = b"\n".join(lines)
+    d = fuzz_dir / "prog"
+    shutil.rmtree(d, ignore_errors=True)
+    d.mkdir()
+    for n, b in files.items():
+        (d / n).write_bytes(b)
+    first = next(n for n in sorted(files) if not n.endswith(".dat"))
+    try:
+        read_program(d / first)
+    except InputError as exc:
+        assert str(d) in str(exc)
