@@ -91,6 +91,10 @@ def _files(root: Path) -> None:
     v[3] = np.nan
     (root / "nan.stl").write_bytes(trimesh.Trimesh(v, m.faces, process=False)
                                    .export(file_type="stl"))
+    (root / "garbage.stl").write_bytes(bytes(range(256)) * 2)
+    (root / "nan.obj").write_text("v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n")
+    (root / "badidx.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    (root / "adir.stl").mkdir()
     (root / "bin.mod").write_bytes(b"MODULE x\n\x00\xff\xfe\nENDMODULE\n")
     (root / "bad.mod").write_text("MODULE x\nENDMODULE garbage\n")
     (root / "c.ls").write_text("a program written before\n")
@@ -189,6 +193,7 @@ CASES = [
     C("plan --hub hub_listrecipe -o p", 2, ("process.yaml", "mapping")),
     C("plan --hub hub_badkey -o p", 2, ("process.yaml", "grinding_sped", "known")),
     # verify: numbers, the plan folder's files, outputs
+    C("verify plan --windows 0,99", 2, ("--windows", "no window 99", "its windows: 0, 1")),
     C("verify plan --grinding-speed 0", 2, ("--grinding-speed", "> 0 mm/s", "'0'")),
     C("verify plan --grinding-speed -5", 2, ("--grinding-speed", "> 0 mm/s")),
     C("verify plan --grinding-speed nan", 2, ("--grinding-speed", "> 0 mm/s")),
@@ -234,6 +239,10 @@ CASES = [
     C("cl missing.stl", 2, ("missing.stl", "not found")),
     C("cl nan.stl", 2, ("nan.stl", "facet", "not finite")),
     C("cl nothere", 2, ("nothere",)),
+    C("cl garbage.stl", 2, ("garbage.stl", "no triangles")),
+    C("cl nan.obj", 2, ("nan.obj", "vertex 1", "not finite")),
+    C("cl badidx.obj", 2, ("badidx.obj", "cannot read mesh")),
+    C("cl adir.stl", 2, ("adir.stl", "folder")),
     C("cl h5_straight --l-max-mm 0", 2, ("--l-max-mm", "> 0 mm")),
     C("cl h5_straight --delta-max-mm -1", 2, ("--delta-max-mm", "> 0 mm")),
     C("cl h5_straight --json adir", 2, ("adir", "--json")),

@@ -197,6 +197,7 @@ def _run_verify(args: argparse.Namespace) -> int:
         folder = folder.parent if folder.name == "plan.json" else folder
         _check_outputs(args, kind, folder)
         plan = _load_plan(folder)
+        check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
         config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
     else:
