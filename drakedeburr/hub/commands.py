@@ -18,14 +18,13 @@ _SEED = number(0, integer=True)
 
 
 def _run_generate(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.catalogue import BUNDLED
     from drakedeburr.hub.generate import generate_hub
     from drakedeburr.hub.spec import load_spec
     from drakedeburr.resources import hubs_dir
-
-    from drakedeburr import argcheck
 
     out_root = Path(args.out) if args.out else hubs_dir()
     argcheck.output_folder(out_root, "--out")
@@ -126,11 +125,10 @@ def _run_info(args: argparse.Namespace) -> int:
 def _run_scan(args: argparse.Namespace) -> int:
     import open3d as o3d
 
+    from drakedeburr.argcheck import output_file
     from drakedeburr.hub.model import load_hub
     from drakedeburr.hub.scan import simulate_scan
     from drakedeburr.units import m_from_mm
-
-    from drakedeburr.argcheck import output_file
 
     output_file(args.output, "output point-cloud file")
     hub = load_hub(args.hub)
@@ -145,10 +143,10 @@ def _run_scan(args: argparse.Namespace) -> int:
 
 
 def _run_import(args: argparse.Namespace) -> int:
-    from drakedeburr.cli import tqdm_progress
-    from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
     from drakedeburr import argcheck
+    from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
+    from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
     from drakedeburr.hub.mesh_io import MESH_SUFFIXES
     from drakedeburr.units import m_from_mm
 
@@ -182,9 +180,9 @@ def _run_import(args: argparse.Namespace) -> int:
 
 
 def _run_random(args: argparse.Namespace) -> int:
+    from drakedeburr.argcheck import output_folder
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.hub.randomhub import random_catalogue
-    from drakedeburr.argcheck import output_folder
     from drakedeburr.units import m_from_mm
 
     output_folder(args.out, "-o/--out")

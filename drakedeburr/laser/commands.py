@@ -114,6 +114,7 @@ def _make_shape(args):
 
 def _run_shape(args) -> int:
     from drakedeburr._io import atomic_write_json
+    from drakedeburr.argcheck import output_file
     from drakedeburr.errors import InputError
     from drakedeburr.laser import fanuc_ls
     from drakedeburr.laser.feature import FeatureSettings, plan_contour
@@ -122,8 +123,6 @@ def _run_shape(args) -> int:
     from drakedeburr.laser.power import PowerMap
     from drakedeburr.laser.shapes import build_contour
     from drakedeburr.units import m_from_mm, rad_from_deg
-
-    from drakedeburr.argcheck import output_file
 
     output_file(args.output, "-o/--output")
     output_file(args.summary, "--summary")
@@ -178,11 +177,10 @@ def _run_tool(args) -> int:
     import numpy as np
 
     from drakedeburr._io import atomic_write_text
+    from drakedeburr.argcheck import output_file
     from drakedeburr.laser.kinematics import FiveBarGeometry, inverse_kinematics
     from drakedeburr.laser.kinematics import singularity_measures as sm
     from drakedeburr.laser.model import five_bar_sdf
-
-    from drakedeburr.argcheck import output_file
 
     output_file(args.sdf, "--sdf")
     g = FiveBarGeometry()

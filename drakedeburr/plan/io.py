@@ -255,7 +255,8 @@ def _array(arr: dict, name: str, shape: tuple, where, nan_rows: bool = False) ->
     if a.dtype.kind not in "biuf":
         raise _Bad(where[f"array {name!r}: expected numbers, got dtype {a.dtype}"])
     a = a.astype(float)
-    if a.ndim != len(shape) or any(n is not None and n != m for n, m in zip(shape, a.shape)):
+    if a.ndim != len(shape) or any(n is not None and n != m
+                                   for n, m in zip(shape, a.shape, strict=True)):
         want = "(" + ", ".join("N" if n is None else str(n) for n in shape) + ")"
         raise _Bad(where[f"array {name!r}: shape {a.shape}, expected {want}"])
     bad = ~np.isfinite(a)

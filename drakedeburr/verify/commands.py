@@ -181,13 +181,12 @@ def _print_report(report) -> None:
 def _run_verify(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from drakedeburr.argcheck import check_windows, hub_windows
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.plan.io import save_plan
     from drakedeburr.verify.batch import make_plan
     from drakedeburr.verify.checks import config_for_plan, verify_plan
     from drakedeburr.verify.report import write_report_files, write_report_json
-
-    from drakedeburr.argcheck import check_windows, hub_windows
 
     windows = _windows(args.windows)
     kind, *rest = _resolve_target(args.target, args.scenario)

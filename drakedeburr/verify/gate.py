@@ -88,7 +88,7 @@ def read_report(path: str | Path) -> dict:
     if not isinstance(report, dict):
         raise InputError(f"{path}: a JSON {type(report).__name__}, not a verification report")
     _item(report, "passed", bool, path)
-    identity = _item(report, "plan.identity", dict, path)
+    _item(report, "plan.identity", dict, path)
     for key in ("plan_digest", "cell_digest", "verifier_version"):
         _item(report, f"plan.identity.{key}", str, path)
     tolerances = _item(report, "settings.tolerances", dict, path)

@@ -37,11 +37,10 @@ def _run_show(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from drakedeburr.argcheck import output_file
     from drakedeburr.errors import InputError
     from drakedeburr.units import rad_from_deg
     from drakedeburr.viz import scene
-
-    from drakedeburr.argcheck import output_file
 
     output_file(args.html, "--html")
     from drakedeburr.cell import resolve_hub_sdf
