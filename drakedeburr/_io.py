@@ -91,11 +91,26 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
         # mkstemp creates 0600; give the file the permissions a normal open() would
         os.chmod(tmp, 0o666 & ~umask())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        _name_the_output(exc, path, Path(tmp))
         raise
     return path
+
+
+def _name_the_output(exc: BaseException, path: Path, tmp: Path) -> None:
+    """Let an OSError name the output being written, not its temporary (or nothing, as
+    ``os.fsync`` raises it): ``path/inner`` for a file inside a temporary folder."""
+    if not isinstance(exc, OSError):
+        return
+    name = exc.filename
+    if name is None:
+        exc.filename = str(path)
+    elif str(name).startswith(str(tmp)):
+        exc.filename = str(path) + str(name)[len(str(tmp)):]
+    if exc.filename2 is not None and str(exc.filename2) == str(path):
+        exc.filename2 = None  # the rename's target is the output itself
 
 
 def atomic_write_text(path: str | Path, text: str, encoding: str = "utf-8") -> Path:
@@ -203,8 +218,9 @@ def atomic_folder(path: str | Path, is_ours=lambda p: True):
             os.rename(path, old)
             os.rename(tmp, path)
             shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
+        _name_the_output(exc, path, tmp)
         raise
 
 
@@ -227,9 +243,11 @@ def atomic_write_files(texts: dict) -> list[Path]:
             os.chmod(tmp, 0o666 & ~mask)
         for tmp, path in temps:
             os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         for tmp, _ in temps:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+        if temps:
+            _name_the_output(exc, temps[-1][1], Path(temps[-1][0]))
         raise
     return [path for _, path in temps]

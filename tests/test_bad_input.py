@@ -366,10 +366,18 @@ def test_a_write_that_fails_leaves_the_old_output(ws, capsys, monkeypatch, exc, 
     """ENOSPC or Ctrl-C while writing: the earlier program stays whole, no temporary file."""
     before = tree(ws)
     _fail_on_write(monkeypatch, exc)
-    for argv in ("export plan -o x.mod --force", "laser shape circle --diameter 10 -o c.ls"):
+    for argv, output in (("export plan -o x.mod --force", "x.mod"),
+                         ("laser shape circle --diameter 10 -o c.ls", "c.ls")):
         got, _, err = run(argv.split(), capsys)
         lines = [ln for ln in err.splitlines() if ln.strip()]
         assert got == code and says in lines[-1] and "Traceback" not in err, err
+        if code == 2:  # the file is named, not its temporary
+            assert lines[-1].split(": ")[2] == output and ".tmp" not in err, err
+    from drakedeburr._io import atomic_write_files
+
+    pair = {ws / "k.src": "new src", ws / "k.dat": "new dat"}  # a KRL pair: both or neither
+    with pytest.raises(type(exc)):
+        atomic_write_files(pair)
     assert tree(ws) == before
 
 
@@ -383,8 +391,10 @@ def test_a_plan_folder_write_that_fails_leaves_the_old_plan(ws, capsys, monkeypa
             raise exc
 
         monkeypatch.setattr(plan_io, "write_joint_csv", broken)
-        with pytest.raises(type(exc)):
+        with pytest.raises(type(exc)) as info:
             save_plan(vs.good_plan(), ws / "plan")
+        if isinstance(exc, OSError):  # names the plan folder, not its temporary
+            assert info.value.filename == str(ws / "plan")
     assert tree(ws) == before
 
 
