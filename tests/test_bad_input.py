@@ -353,7 +353,7 @@ def _fail_on_write(monkeypatch, exc: BaseException) -> None:
     from drakedeburr import _io
 
     def fsync(fd):
-        raise exc
+        raise type(exc)(*exc.args)  # a new one each time, as the system gives
 
     monkeypatch.setattr(_io.os, "fsync", fsync)
 
