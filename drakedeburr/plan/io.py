@@ -432,7 +432,10 @@ def _tool_paths(plan: Plan) -> list:
 def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Path:
     """Joint CSV ``t_s,q1_deg,...,q6_deg``: the trajectory knots, or samples every ``dt`` [s]."""
     tr = plan.trajectory
-    if dt is None:
+    if len(tr.t) < 2:  # nothing could be planned: the plan stands at its first target (home)
+        t = np.asarray(tr.t, float)[:1]
+        q = np.array([tg.q for tg in plan.targets[:1]]).reshape(-1, 6)[:len(t)]
+    elif dt is None:
         t, q = tr.t, tr.q
     else:
         t = np.arange(0.0, tr.duration + 0.5 * dt, dt)
