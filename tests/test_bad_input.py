@@ -415,6 +415,46 @@ def test_internal_errors_are_one_line_and_vv_shows_the_traceback(ws, capsys, mon
     assert code == 2 and "Traceback" in err and "BadZipFile" in err.splitlines()[-1]
 
 
+def _nothing_planned():
+    """The plan the planner returns when no window could be planned: home only, one knot."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.types import FailureRecord, JointTrajectory, PlanSegment
+
+    good = vs.good_plan()
+    return replace(good, targets=good.targets[:1],
+                   segments=(PlanSegment(-1, "home", (0, 1), (0.0, 0.0)),),
+                   trajectory=JointTrajectory(t=np.zeros(1), c=np.zeros((7, 0, 6))),
+                   tool_path=None, meta={**good.meta, "windows": []},
+                   failures=(FailureRecord(window=0, kind="window", reason="IK reached only "
+                                           "28 of 93 targets; window skipped"),))
+
+
+def test_nothing_planned_is_a_failed_result_with_a_report(ws, capsys, monkeypatch):
+    """A hub whose windows cannot be cut is not bad input: exit 1 and a report saying why,
+    and no program even with --force (the planner's part is faked: planning a hub that
+    cannot be cut takes minutes; test_plan_* cover the planner)."""
+    from drakedeburr.verify import batch
+
+    monkeypatch.setattr(batch, "make_plan", lambda *a, **k: _nothing_planned())
+    code, out, err = run("verify tool_in_hand/h5_straight --windows 0 -o np".split(), capsys)
+    assert code == 1 and "Traceback" not in err and "error" not in err, err
+    assert "FAIL  windows" in out and "FAILED" in out
+    report = json.loads((ws / "np" / "report.json").read_text())
+    assert not report["passed"] and "windows" in report["summary"]["failed"]
+    assert "could be planned" in json.dumps(report["items"])
+    assert (ws / "np" / "report.html").stat().st_size > 0
+    assert (ws / "np" / "joints.csv").read_text().count("\n") == 2  # header + home
+    before = tree(ws)
+    for force in ([], ["--force"]):
+        code, _, err = run(["export", "np", "-o", "n.mod", *force], capsys)
+        assert code == 1 and ("refusing" in err or "no program to write" in err), err
+    code, out, _ = run("verify np".split(), capsys)  # the saved plan verifies the same way
+    assert code == 1 and "FAILED" in out
+    assert {k: v for k, v in tree(ws).items() if "report" not in k} == {
+        k: v for k, v in before.items() if "report" not in k}
+
+
 # --------------------------------------------------------------------------- signals, leftovers
 
 def _cli(*args: str) -> list[str]:
