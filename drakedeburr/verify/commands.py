@@ -148,12 +148,15 @@ def _read_program_file(path: str | None):
 
 
 def _program_item(plan, actual):
-    """A required report item: the program file as read, compared with the plan's own program
-    (:func:`drakedeburr.programs.compare_programs`), every difference named by line."""
+    """A required report item: the program (a file, or as read by :func:`_read_program_file`)
+    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
+    every difference named by line."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs import compare_programs
     from drakedeburr.verify.report import CheckItem
 
+    if isinstance(actual, (str, Path)):
+        actual = _read_program_file(str(actual))
     path = actual.files[0]
     expected = plan_program(plan, actual.name)
     found = compare_programs(expected, actual)
