@@ -455,6 +455,25 @@ def test_nothing_planned_is_a_failed_result_with_a_report(ws, capsys, monkeypatc
         k: v for k, v in before.items() if "report" not in k}
 
 
+def test_a_window_without_a_tool_path_is_a_failure_not_bad_input(ws, capsys, monkeypatch):
+    """The real planner (plan_hub) on a hub where the orientation stage gives an axis into
+    the hub (seen on a real mesh: was exit 2, no report): the window is a failure record,
+    verify exits 1 with the report naming it."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    def into_the_hub(cls, tool_path, **kwargs):
+        raise InputError(f"ToolPath of window {tool_path.window_index}: tool axis (tip -> "
+                         "spindle) points into the hub at CL point 7")
+
+    monkeypatch.setattr(WindowTargets, "from_tool_path", classmethod(into_the_hub))
+    code, out, err = run("verify tool_in_hand/h5_straight --windows 1 -o np".split(), capsys)
+    assert code == 1 and "Traceback" not in err and "error" not in err, err
+    report = json.loads((ws / "np" / "report.json").read_text())
+    assert not report["passed"] and "planner_failures" in report["summary"]["failed"]
+    assert "window 1 (window): no tool path" in json.dumps(report["items"])
+
+
 # --------------------------------------------------------------------------- signals, leftovers
 
 def _cli(*args: str) -> list[str]:
