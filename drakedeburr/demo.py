@@ -127,8 +127,28 @@ def run_demo(
     return summary
 
 
+def _check_args(args: argparse.Namespace) -> None:
+    """The cell, hub, arm and output folder, before any work."""
+    from drakedeburr import argcheck
+    from drakedeburr.resources import resolve_hub_dir, scenario_path
+
+    scenario_path(args.scenario)
+    resolve_hub_dir(args.hub or _default_hub())
+    if args.robot is not None:
+        from drakedeburr.robots import get_robot
+
+        get_robot(args.robot)
+    from drakedeburr.plan.io import is_plan_folder
+
+    argcheck.output_folder(args.out, "--out")
+    argcheck.output_folder(Path(args.out) / "plan", "--out", is_ours=is_plan_folder)
+    argcheck.free_space(args.out, 8_000_000, "--out")
+
+
 def _run(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
+
+    _check_args(args)
 
     summary = run_demo(Path(args.out), hub=args.hub, scenario=args.scenario,
                        test_mode=args.test_mode, force=args.force,

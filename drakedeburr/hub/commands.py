@@ -8,10 +8,17 @@ import json
 import sys
 from pathlib import Path
 
+from drakedeburr.argcheck import number
+
 __all__ = ["register"]
+
+_POSITIVE_MM = number(0, lo_open=True, unit="mm")
+_NONNEGATIVE_MM = number(0, unit="mm")
+_SEED = number(0, integer=True)
 
 
 def _run_generate(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.catalogue import BUNDLED
@@ -20,6 +27,9 @@ def _run_generate(args: argparse.Namespace) -> int:
     from drakedeburr.resources import hubs_dir
 
     out_root = Path(args.out) if args.out else hubs_dir()
+    argcheck.output_folder(out_root, "--out")
+    if args.spec:
+        argcheck.input_file(args.spec, "--spec hub.yaml")
     specs = []
     if args.spec:
         if args.names or args.all:
@@ -54,6 +64,10 @@ def _run_list(args: argparse.Namespace) -> int:
     from drakedeburr.resources import hubs_dir
 
     root = Path(args.dir) if args.dir else hubs_dir()
+    if not root.is_dir():
+        from drakedeburr.errors import InputError
+
+        raise InputError(f"{root}: --dir is not a folder of hub folders")
     rows = []
     for d in sorted(p for p in root.iterdir() if (p / "hub.yaml").is_file()):
         summ = d / "summary.json"
@@ -111,10 +125,12 @@ def _run_info(args: argparse.Namespace) -> int:
 def _run_scan(args: argparse.Namespace) -> int:
     import open3d as o3d
 
+    from drakedeburr.argcheck import output_file
     from drakedeburr.hub.model import load_hub
     from drakedeburr.hub.scan import simulate_scan
     from drakedeburr.units import m_from_mm
 
+    output_file(args.output, "output point-cloud file")
     hub = load_hub(args.hub)
     cloud = simulate_scan(hub, sigma=m_from_mm(args.sigma_mm), spacing=m_from_mm(args.spacing_mm),
                           seed=args.seed)
@@ -127,10 +143,18 @@ def _run_scan(args: argparse.Namespace) -> int:
 
 
 def _run_import(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
     from drakedeburr.cli import tqdm_progress
+    from drakedeburr.errors import InputError
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
+    from drakedeburr.hub.mesh_io import MESH_SUFFIXES
     from drakedeburr.units import m_from_mm
 
+    argcheck.input_file(args.mesh, "hub mesh file", MESH_SUFFIXES)
+    argcheck.output_folder(args.out, "--out")
+    if args.axis and not sum(a * a for a in args.axis) > 0:
+        raise InputError(f"--axis {' '.join(map(str, args.axis))}: the hub axis needs a "
+                         "direction (a non-zero vector)")
     options = ImportOptions(
         unit=args.unit, expected_windows=args.windows,
         axis_M=tuple(args.axis) if args.axis else None, front=args.front,
@@ -156,10 +180,12 @@ def _run_import(args: argparse.Namespace) -> int:
 
 
 def _run_random(args: argparse.Namespace) -> int:
+    from drakedeburr.argcheck import output_folder
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.hub.randomhub import random_catalogue
     from drakedeburr.units import m_from_mm
 
+    output_folder(args.out, "-o/--out")
     progress = None if args.no_progress else tqdm_progress(f"random hubs seed {args.seed}")
     results = random_catalogue(args.seed, args.count, args.out, start=args.start,
                                burr_diameter=m_from_mm(args.burr_mm),
@@ -192,14 +218,14 @@ def _add_front_and_burr(p) -> None:
                    help="which file axis the front face (the side the tool works on) looks "
                         "along; default auto: decided from lug seats, barrel, mounting face "
                         "and dish, with the evidence reported")
-    p.add_argument("--burr-mm", type=float, default=_burr_mm(),
-                   help="burr diameter: narrower openings are not windows (default "
+    p.add_argument("--burr-mm", type=_POSITIVE_MM, default=_burr_mm(),
+                   help="burr diameter, > 0: narrower openings are not windows (default "
                         "%(default)s)")
-    p.add_argument("--clearance-mm", type=float,
+    p.add_argument("--clearance-mm", type=_NONNEGATIVE_MM,
                    default=round(default_tolerances().min_clearance * 1e3, 6),
-                   help="clearance the burr needs to the walls (default %(default)s)")
-    p.add_argument("--min-window-width-mm", type=float,
-                   help="narrowest window; default max(burr + 2 clearance, 2.5 burr)")
+                   help="clearance the burr needs to the walls, >= 0 (default %(default)s)")
+    p.add_argument("--min-window-width-mm", type=_POSITIVE_MM,
+                   help="narrowest window, > 0; default max(burr + 2 clearance, 2.5 burr)")
 
 
 def register(subparsers) -> None:
@@ -225,17 +251,18 @@ def register(subparsers) -> None:
     p.add_argument("mesh", help="STL, OBJ or PLY file (metres or millimetres)")
     p.add_argument("--out", required=True, help="parent folder of the hub folder")
     p.add_argument("--unit", choices=("m", "mm"), help="force the file's unit (default: by size)")
-    p.add_argument("--axis", type=float, nargs=3, metavar=("X", "Y", "Z"),
+    p.add_argument("--axis", type=number(), nargs=3, metavar=("X", "Y", "Z"),
                    help="hub axis out of the visible face, in the file's frame (default: "
                         "estimated)")
-    p.add_argument("--windows", type=int, help="expected number of windows (else any)")
+    p.add_argument("--windows", type=number(1, integer=True),
+                   help="expected number of windows, >= 1 (else any)")
     _add_front_and_burr(p)
-    p.add_argument("--window-reach-mm", type=float, default=1.0,
+    p.add_argument("--window-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
-    p.add_argument("--front-reach-mm", type=float, default=3.0,
+    p.add_argument("--front-reach-mm", type=_NONNEGATIVE_MM, default=3.0,
                    help="how far a collision piece may stand proud of the surface seen from "
                         "the front [mm]")
-    p.add_argument("--seed", type=int, default=0, help="CoACD random seed")
+    p.add_argument("--seed", type=_SEED, default=0, help="CoACD random seed, >= 0")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_import)
 
@@ -245,12 +272,14 @@ def register(subparsers) -> None:
                     "hub.yaml, hub.obj, edges.npz, collision pieces, summary.json) and an STL "
                     "export of each in mm or m (export.json). The same seed gives the same "
                     "hubs on any machine.")
-    p.add_argument("--seed", type=int, required=True, help="catalogue seed (>= 0)")
-    p.add_argument("--count", type=int, default=1, help="number of hubs (default 1)")
-    p.add_argument("--start", type=int, default=0, help="first hub index (default 0)")
+    p.add_argument("--seed", type=_SEED, required=True, help="catalogue seed (>= 0)")
+    p.add_argument("--count", type=number(1, integer=True), default=1,
+                   help="number of hubs, >= 1 (default 1)")
+    p.add_argument("--start", type=_SEED, default=0, help="first hub index, >= 0 (default 0)")
     p.add_argument("-o", "--out", required=True, help="output folder")
-    p.add_argument("--burr-mm", type=float, default=_burr_mm(),
-                   help="burr diameter the windows must admit (2.5 x; default %(default)s)")
+    p.add_argument("--burr-mm", type=_POSITIVE_MM, default=_burr_mm(),
+                   help="burr diameter the windows must admit (2.5 x), > 0 (default "
+                        "%(default)s)")
     p.add_argument("--no-collision", action="store_true",
                    help="skip the collision pieces (mesh and edges only; fast)")
     p.add_argument("--no-export", action="store_true", help="no STL export")
@@ -271,7 +300,9 @@ def register(subparsers) -> None:
     p = sub.add_parser("scan", help="write a simulated scan point cloud (PLY/PCD, metres, H)")
     p.add_argument("hub", help="bundled hub name or hub folder")
     p.add_argument("output", help="output point-cloud file (.ply, .pcd, .xyz)")
-    p.add_argument("--sigma-mm", type=float, default=0.05, help="noise sigma [mm]")
-    p.add_argument("--spacing-mm", type=float, default=1.0, help="mean point spacing [mm]")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--sigma-mm", type=_NONNEGATIVE_MM, default=0.05,
+                   help="noise sigma [mm], >= 0")
+    p.add_argument("--spacing-mm", type=_POSITIVE_MM, default=1.0,
+                   help="mean point spacing [mm], > 0")
+    p.add_argument("--seed", type=_SEED, default=0, help="scan seed, >= 0")
     p.set_defaults(_run=_run_scan)

@@ -6,12 +6,11 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from drakedeburr._io import atomic_write_text
+from drakedeburr._io import atomic_write_text, temp_folder_beside
 from drakedeburr.hub.types import WindowEdge
 
 __all__ = ["window_summary", "import_summary", "write_folder"]
@@ -52,7 +51,8 @@ def write_folder(target: Path, out_root: Path, name: str, path: Path, sha: str, 
     from drakedeburr.hub.solid import mesh_arrays
 
     out_root.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=out_root))
+    # the user's umask (mkdtemp makes 0700); a killed import's leftovers are removed
+    tmp = temp_folder_beside(target)
     try:
         atomic_write_text(tmp / "hub.yaml", (
             "# drakedeburr hub imported from a mesh by `drakedeburr hub import` (see "

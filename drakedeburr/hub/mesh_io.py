@@ -60,14 +60,21 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise InputError(f"{path}: unsupported mesh type {path.suffix!r}; use STL, OBJ or PLY")
     try:
-        mesh = trimesh.load(path, force="mesh", process=True)
+        # unprocessed first: trimesh's processing drops non-finite vertices silently
+        mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds; name the file
         raise InputError(f"{path}: cannot read mesh: {exc}") from exc
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError(f"{path}: no triangles found")
     if not np.isfinite(mesh.vertices).all():
         bad = int(np.flatnonzero(~np.isfinite(mesh.vertices).all(axis=1))[0])
-        raise InputError(f"{path}: vertex {bad} is not finite")
+        where = f"facet {bad // 3}" if path.suffix.lower() == ".stl" else f"vertex {bad}"
+        raise InputError(f"{path}: {where}: a vertex is not finite "
+                         f"({mesh.vertices[bad].tolist()}); every vertex needs finite "
+                         "coordinates")
+    if len(mesh.faces) and (mesh.faces.min() < 0 or mesh.faces.max() >= len(mesh.vertices)):
+        raise InputError(f"{path}: a face refers to a vertex the file does not have")
+    mesh.process()
     mesh.merge_vertices()
     size = float(mesh.extents.max())
     if unit is None:

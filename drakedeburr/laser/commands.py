@@ -10,6 +10,11 @@ import json
 import sys
 from pathlib import Path
 
+from drakedeburr.argcheck import number
+
+_POS = number(0, lo_open=True)
+_NONNEG = number(0)
+
 _SIZES = {
     "circle": [("diameter", "hole diameter [mm]")],
     "semicircle": [("diameter", "diameter [mm]")],
@@ -34,7 +39,8 @@ def register(subparsers) -> None:
     for kind, sizes in _SIZES.items():
         p = kinds.add_parser(kind, help=f"{kind} contour")
         for name, text in sizes:
-            p.add_argument(f"--{name}", type=float, required=name != "corner-radius",
+            p.add_argument(f"--{name}", type=_NONNEG if name == "corner-radius" else _POS,
+                           required=name != "corner-radius",
                            default=0.0 if name == "corner-radius" else None, help=text)
         if kind == "polyline":
             p.add_argument("--points", required=True,
@@ -48,26 +54,32 @@ def register(subparsers) -> None:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--center", type=float, nargs=2, default=(0.0, 0.0), metavar=("X", "Y"),
+    p.add_argument("--center", type=number(), nargs=2, default=(0.0, 0.0), metavar=("X", "Y"),
                    help="shape origin [mm] (tool mode: offset from the tool's home point)")
-    p.add_argument("--rotation", type=float, default=0.0, help="rotation [deg]")
-    p.add_argument("--lead-in", type=float, default=0.0, help="lead-in length [mm]")
+    p.add_argument("--rotation", type=number(), default=0.0, help="rotation [deg]")
+    p.add_argument("--lead-in", type=_NONNEG, default=0.0, help="lead-in length [mm], >= 0")
     p.add_argument("--clockwise", action="store_true", help="cut clockwise")
-    p.add_argument("--spacing", type=float, default=None,
-                   help="point spacing [mm] (default 0.2 tool / 2 robot)")
+    p.add_argument("--spacing", type=_POS, default=None,
+                   help="point spacing [mm], > 0 (default 0.2 tool / 2 robot)")
     p.add_argument("--mode", choices=("auto", "tool", "robot"), default="auto",
                    help="tool: Cutting Tool alone; robot: robot contour; auto: tool if it fits")
-    p.add_argument("--feed", type=float, default=10.0, help="cutting speed [m/min]")
-    p.add_argument("--servo-velocity", type=float, default=10.0, help="servo limit [rad/s]")
-    p.add_argument("--servo-acceleration", type=float, default=300.0,
-                   help="servo limit [rad/s^2]")
-    p.add_argument("--travel-angle", type=float, default=0.0, help="robot mode [deg]")
-    p.add_argument("--work-angle", type=float, default=0.0, help="robot mode [deg]")
-    p.add_argument("--robot-acceleration", type=float, default=3.0,
-                   help="robot mode TCP acceleration [m/s^2]")
-    p.add_argument("--min-command", type=float, default=0.5, help="laser command floor [V]")
-    p.add_argument("--max-command", type=float, default=10.0, help="laser command ceiling [V]")
-    p.add_argument("--ao", type=int, default=1, help="analogue output port")
+    p.add_argument("--feed", type=_POS, default=10.0, help="cutting speed [m/min], > 0")
+    p.add_argument("--servo-velocity", type=_POS, default=10.0,
+                   help="servo limit [rad/s], > 0")
+    p.add_argument("--servo-acceleration", type=_POS, default=300.0,
+                   help="servo limit [rad/s^2], > 0")
+    p.add_argument("--travel-angle", type=number(-90, 90, lo_open=True, hi_open=True),
+                   default=0.0, help="robot mode [deg], between -90 and 90")
+    p.add_argument("--work-angle", type=number(-90, 90, lo_open=True, hi_open=True),
+                   default=0.0, help="robot mode [deg], between -90 and 90")
+    p.add_argument("--robot-acceleration", type=_POS, default=3.0,
+                   help="robot mode TCP acceleration [m/s^2], > 0")
+    p.add_argument("--min-command", type=_NONNEG, default=0.5,
+                   help="laser command floor [V], >= 0")
+    p.add_argument("--max-command", type=_POS, default=10.0,
+                   help="laser command ceiling [V], > the floor")
+    p.add_argument("--ao", type=number(1, integer=True), default=1,
+                   help="analogue output port, >= 1")
     p.add_argument("--name", default=None, help="FANUC program name (default: from -o)")
     p.add_argument("-o", "--output", type=Path, required=True, help="output .ls file")
     p.add_argument("--summary", type=Path, help="also write a JSON summary here")
@@ -83,6 +95,10 @@ def _make_shape(args):
                   clockwise=args.clockwise)
     if args.kind == "polyline":
         src = Path(args.points)
+        if src.suffix.lower() in (".csv", ".txt") or src.is_dir():
+            from drakedeburr.argcheck import input_file
+
+            input_file(src, "polyline --points file")
         try:
             text = src.read_text() if src.is_file() else args.points.replace(" ", "\n")
             rows = [ln.replace(";", ",").split(",") for ln in text.splitlines() if ln.strip()]
@@ -98,6 +114,7 @@ def _make_shape(args):
 
 def _run_shape(args) -> int:
     from drakedeburr._io import atomic_write_json
+    from drakedeburr.argcheck import output_file
     from drakedeburr.errors import InputError
     from drakedeburr.laser import fanuc_ls
     from drakedeburr.laser.feature import FeatureSettings, plan_contour
@@ -107,6 +124,14 @@ def _run_shape(args) -> int:
     from drakedeburr.laser.shapes import build_contour
     from drakedeburr.units import m_from_mm, rad_from_deg
 
+    output_file(args.output, "-o/--output")
+    output_file(args.summary, "--summary")
+    if args.output.suffix.lower() != ".ls":
+        raise InputError(f"{args.output}: -o/--output is a FANUC program: a .ls file")
+    if not args.max_command > args.min_command:
+        raise InputError(f"--max-command {args.max_command:g} V must be above --min-command "
+                         f"{args.min_command:g} V")
+    fanuc_ls._check_name(args.name or args.output.stem)
     shape = _make_shape(args)
     feed = args.feed / 60.0
     power = PowerMap(nominal_speed=feed, min_command=args.min_command,
@@ -115,12 +140,13 @@ def _run_shape(args) -> int:
     g = FiveBarGeometry()
     mode = args.mode
     if mode == "auto":
-        probe = build_contour(shape, m_from_mm(args.spacing or 0.5))
+        probe = build_contour(shape, m_from_mm(0.5 if args.spacing is None else args.spacing))
         mode = "tool" if check_reach(g, g.p_CHome + probe.p_P).reachable.all() else "robot"
     if mode == "tool":
         limits = ServoLimits(velocity=args.servo_velocity,
                              acceleration=args.servo_acceleration, feed=feed)
-        prog = plan_hole(shape, m_from_mm(args.spacing or 0.2), g, limits, power)
+        prog = plan_hole(shape, m_from_mm(0.2 if args.spacing is None else args.spacing), g,
+                         limits, power)
         text = fanuc_ls.hole_program_ls(prog, name)
         summary = {"mode": "tool", "shape": shape.kind, "points": len(prog.q),
                    "perimeter_mm": prog.contour.perimeter * 1e3,
@@ -131,7 +157,8 @@ def _run_shape(args) -> int:
             raise InputError(f"--feed must be > 0, got {args.feed}")
         settings = FeatureSettings(travel_angle=rad_from_deg(args.travel_angle),
                                    work_angle=rad_from_deg(args.work_angle),
-                                   point_spacing=m_from_mm(args.spacing or 2.0), speed=feed,
+                                   point_spacing=m_from_mm(2.0 if args.spacing is None
+                                                           else args.spacing), speed=feed,
                                    acceleration=args.robot_acceleration)
         tg = plan_contour(shape, None, settings, power)
         text = fanuc_ls.contour_program_ls(tg, name)
@@ -150,10 +177,12 @@ def _run_tool(args) -> int:
     import numpy as np
 
     from drakedeburr._io import atomic_write_text
+    from drakedeburr.argcheck import output_file
     from drakedeburr.laser.kinematics import FiveBarGeometry, inverse_kinematics
     from drakedeburr.laser.kinematics import singularity_measures as sm
     from drakedeburr.laser.model import five_bar_sdf
 
+    output_file(args.sdf, "--sdf")
     g = FiveBarGeometry()
     a = np.linspace(0, 2 * np.pi, 181)
     rr = np.linspace(0, g.work_radius, 11)

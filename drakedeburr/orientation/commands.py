@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 
+from drakedeburr.argcheck import number
+
 __all__ = ["register", "run_orient", "cl_points_from_edge", "cl_points_planned"]
 
 log = logging.getLogger(__name__)
@@ -22,15 +24,16 @@ def register(subparsers) -> None:
                    help="axis: world-axis smoothness (default); paper: eq. 11 as printed")
     p.add_argument("--normals", choices=["cloud", "mesh", "truth"], default="cloud",
                    help="normal source: simulated scan (default), mesh, or the model's truth")
-    p.add_argument("--sigma-mm", type=float, default=0.05, help="scan noise [mm] (cloud)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--sigma-mm", type=number(0, unit="mm"), default=0.05,
+                   help="scan noise [mm] (cloud), >= 0")
+    p.add_argument("--seed", type=number(0, integer=True), default=0, help="scan seed, >= 0")
     p.add_argument("--cl", default="proposed",
                    choices=["proposed", "isoparametric", "equal_chord_height", "adaptive",
                             "loop"],
                    help="CL planner of the path stage (default: the source's proposed method); "
                         "'loop': points of the edge loop every --spacing-mm")
-    p.add_argument("--spacing-mm", type=float, default=2.0,
-                   help="CL point spacing [mm] for --cl loop")
+    p.add_argument("--spacing-mm", type=number(0, lo_open=True, unit="mm"), default=2.0,
+                   help="CL point spacing [mm] for --cl loop, > 0")
     p.add_argument("--json", metavar="FILE", help="write the per-window results as JSON")
     p.set_defaults(_run=_run)
 
@@ -145,6 +148,9 @@ def _run(args: argparse.Namespace) -> int:
         from drakedeburr.hub import load_hub
     except ImportError as exc:  # the hub stage is not in this build
         raise InputError(f"cannot load hubs: {exc}") from exc
+    from drakedeburr.argcheck import output_file
+
+    output_file(args.json, "--json")
     hub = load_hub(args.hub)
     rows = run_orient(hub, solver=args.solver, model=args.model, normals=args.normals,
                       sigma=args.sigma_mm * 1e-3, seed=args.seed, spacing=args.spacing_mm * 1e-3,

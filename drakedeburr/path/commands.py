@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from drakedeburr.argcheck import number
+
 __all__ = ["register"]
 
 
@@ -22,10 +24,11 @@ def register(subparsers) -> None:
     p.add_argument("--method", action="append", default=None,
                    help="planner (repeatable): proposed, isoparametric, equal_chord_height, "
                    "adaptive; default all")
-    p.add_argument("--l-max-mm", type=float, default=pp.l_max * 1e3,
-                   help="max chord length [mm] (default %(default)s)")
-    p.add_argument("--delta-max-mm", type=float, default=pp.delta_max * 1e3,
-                   help="max chord-height error [mm] (default %(default)s)")
+    p.add_argument("--l-max-mm", type=number(0, lo_open=True, unit="mm"),
+                   default=pp.l_max * 1e3, help="max chord length [mm], > 0 (default %(default)s)")
+    p.add_argument("--delta-max-mm", type=number(0, lo_open=True, unit="mm"),
+                   default=pp.delta_max * 1e3,
+                   help="max chord-height error [mm], > 0 (default %(default)s)")
     p.add_argument("--json", metavar="FILE",
                    help="write the table as JSON, with 'input': each window's edge loop, the "
                         "hub axis and the front side in the input mesh's coordinates and unit")
@@ -48,7 +51,7 @@ def _windows_and_view(args: argparse.Namespace):
     from drakedeburr.units import m_from_mm
 
     path = Path(args.source)
-    if path.is_file() and path.suffix.lower() in MESH_SUFFIXES:
+    if path.suffix.lower() in MESH_SUFFIXES:
         lm = load_hub_mesh(path, unit=args.unit)
         res = extract_window_edges(
             lm.mesh, source=str(path), spacing=2.0e-3, front=args.front,
@@ -67,7 +70,22 @@ def _windows_and_view(args: argparse.Namespace):
     return windows, input_view_of_hub(hub), f"hub {hub.name}"
 
 
+def _check_source(source: str) -> None:
+    """A mesh file that exists, or a hub (bundled name or folder), before any work."""
+    from pathlib import Path
+
+    from drakedeburr import argcheck
+    from drakedeburr.hub.mesh_io import MESH_SUFFIXES
+    from drakedeburr.resources import resolve_hub_dir
+
+    if Path(source).suffix.lower() in MESH_SUFFIXES:
+        argcheck.input_file(source, "hub mesh file")
+    else:
+        resolve_hub_dir(source)
+
+
 def _run_cl(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
     from drakedeburr._io import atomic_write_json
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.path.cl_planning import METHODS, PlannerParams
@@ -81,6 +99,8 @@ def _run_cl(args: argparse.Namespace) -> int:
             from drakedeburr.errors import InputError
 
             raise InputError(f"--method {m!r}: choose from {', '.join(METHODS)}")
+    _check_source(args.source)
+    argcheck.output_file(args.json, "--json")
     windows, view, desc = _windows_and_view(args)
     table = cl_table(windows, methods, params, progress=tqdm_progress("windows"))
     table["source"] = desc

@@ -10,39 +10,67 @@ from pathlib import Path
 EXPORT_FORMATS = ("rapid", "krl", "ls")
 
 
-def _parse_windows(text: str | None) -> tuple[int, ...] | None:
-    if not text:
-        return None
-    from drakedeburr.errors import InputError
+#: bytes a plan folder takes at least, per window (plan.json, arrays.npz, joints.csv: ~0.2 MB
+#: per window measured on the bundled hubs, doubled), and a Meshcat replay
+_PLAN_BYTES_PER_WINDOW = 400_000
+_HTML_BYTES = 4_000_000
 
-    try:
-        return tuple(int(x) for x in text.split(",") if x.strip())
-    except ValueError as exc:
-        raise InputError(f"--windows: expected comma-separated window numbers, "
-                         f"got {text!r}") from exc
+
+def _default_output(scenario: str, hub: str) -> Path:
+    """``plan_<hub>_<mode>``, the mode from the bundled scenario's name or the cell."""
+    from drakedeburr.resources import scenario_names
+
+    if scenario in scenario_names():
+        mode = "workpiece" if scenario.startswith("workpiece") else "tool"
+    else:
+        from drakedeburr.cell.station import load_cell
+
+        mode = load_cell(scenario, hub).mode
+    return Path(f"plan_{Path(hub).name}_{mode}")
+
+
+def _check_plan_args(args: argparse.Namespace, scenario: str, hub: str) -> tuple:
+    """Everything checked before planning: scenario, hub, windows, outputs. Returns
+    (windows, output folder)."""
+    from drakedeburr import argcheck
+    from drakedeburr.plan.io import is_plan_folder
+    from drakedeburr.resources import resolve_hub_dir, scenario_path
+
+    scenario_path(scenario)
+    resolve_hub_dir(hub)
+    windows = argcheck.parse_windows(args.windows)
+    have = argcheck.hub_windows(hub)
+    argcheck.check_windows(windows, have, Path(hub).name)
+    out = Path(args.output) if args.output else _default_output(scenario, hub)
+    argcheck.output_folder(out, "-o/--output", is_ours=is_plan_folder)
+    argcheck.output_file(args.html, "--html")
+    argcheck.free_space(out, _PLAN_BYTES_PER_WINDOW * len(windows or have), "-o/--output")
+    if args.html:
+        argcheck.free_space(Path(args.html).parent, _HTML_BYTES, "--html")
+    return windows, out
 
 
 def _run_plan(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from drakedeburr.cli import tqdm_progress
+    from drakedeburr.config import load_config
+    from drakedeburr.hub import DEFAULT_HUB
     from drakedeburr.plan.io import save_plan
     from drakedeburr.plan.planner import PlanOptions, plan_hub
 
-    options = replace(PlanOptions(), windows=_parse_windows(args.windows))
+    scenario = args.scenario
+    if args.mode is not None:
+        scenario = "tool_in_hand" if args.mode == "tool" else "workpiece_in_hand"
+    hub = args.hub or DEFAULT_HUB
+    windows, out = _check_plan_args(args, scenario, hub)
+    options = replace(PlanOptions(), windows=windows)
     if args.fillets:
         from drakedeburr.plan.fillets import FilletOptions
 
         options = replace(options, fillets=FilletOptions())
-    scenario = args.scenario
-    if args.mode is not None:
-        scenario = "tool_in_hand" if args.mode == "tool" else "workpiece_in_hand"
-    from drakedeburr.config import load_config
-    from drakedeburr.hub import DEFAULT_HUB
-
-    config = load_config(scenario, args.hub or DEFAULT_HUB, robot=args.robot)
+    config = load_config(scenario, hub, robot=args.robot)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
-    out = Path(args.output or f"plan_{Path(plan.hub).name}_{plan.mode}")
     save_plan(plan, out)
     if args.html:
         from drakedeburr.viz.playback import save_plan_html
@@ -63,12 +91,52 @@ def _run_plan(args: argparse.Namespace) -> int:
     return 0 if not plan.failures else 1
 
 
+def _check_export_args(args: argparse.Namespace):
+    """The output file, then the plan (read and checked), the format for its arm, the program
+    name the file gives and the file's suffix: all before the gate and any writing. Returns
+    (plan folder, plan, format)."""
+    from drakedeburr import argcheck
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.io import load_plan
+    from drakedeburr.programs import plan_robot
+    from drakedeburr.programs.common import _NAMES, SUFFIXES, program_name_for
+    from drakedeburr.robots import get_robot
+
+    out = argcheck.output_file(args.output, "-o/--output")
+    folder = Path(args.plan)
+    folder = folder.parent if folder.name == "plan.json" else folder
+    if not folder.exists():
+        raise InputError(f"{folder}: no such plan folder")
+    plan = load_plan(folder)
+    spec = plan_robot(plan)
+    if args.robot is not None and get_robot(args.robot) is not spec:
+        raise InputError(f"--robot {args.robot}: the plan {folder} was made for {spec.name}")
+    fmt = args.format or spec.program_format
+    if fmt != spec.program_format:
+        raise InputError(f"--format {fmt}: the plan's arm {spec.name} runs "
+                         f"{spec.program_format.upper()} (--format {spec.program_format})")
+    if out.suffix.lower() not in SUFFIXES[fmt]:
+        raise InputError(f"{out}: a {fmt.upper()} program file ends in "
+                         f"{' or '.join(SUFFIXES[fmt])}")
+    if fmt in ("krl", "ls"):
+        program_name_for(out, fmt)
+    else:
+        pattern, rule = _NAMES["rapid"]
+        if not pattern.fullmatch(args.name):
+            raise InputError(f"--name {args.name!r}: a RAPID module name is {rule}")
+    if fmt == "krl":
+        argcheck.output_file(out.with_suffix(".dat"), "-o/--output (.dat beside the .src)")
+    argcheck.free_space(out.parent, 400 * len(plan.targets), "-o/--output")
+    return folder, plan, fmt
+
+
 def _run_export(args: argparse.Namespace) -> int:
     from drakedeburr.post.export import ExportRefused, export_plan
 
+    folder, plan, fmt = _check_export_args(args)
     try:
-        done = export_plan(args.plan, args.output, args.format, name=args.name, force=args.force,
-                           robot=args.robot)
+        done = export_plan(folder, args.output, fmt, name=args.name, force=args.force,
+                           robot=args.robot, plan=plan)
     except ExportRefused as exc:
         print(f"drakedeburr export: {exc}", file=sys.stderr)
         return 1

@@ -142,10 +142,12 @@ def save_plan(plan: Plan, path: str | Path) -> Path:
 
 
 def load_plan(path: str | Path) -> Plan:
-    """Read a plan folder written by :func:`save_plan` (or its ``plan.json``).
+    """Read a plan folder written by :func:`save_plan` (or its ``plan.json``), checking every
+    item a consumer uses: types, shapes, finite values, indices in range.
 
     Raises:
-        FileNotFoundError: no plan there. InputError: wrong format or version.
+        FileNotFoundError: no plan there (no ``plan.json``).
+        InputError: anything else wrong, naming the file and the item.
     """
     folder = Path(path)
     if folder.name == "plan.json":
@@ -153,57 +155,257 @@ def load_plan(path: str | Path) -> Plan:
     doc_path = folder / "plan.json"
     if not doc_path.is_file():
         raise FileNotFoundError(f"no plan at {folder} (missing plan.json)")
-    try:
-        doc = json.loads(doc_path.read_text())
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{doc_path}: not valid JSON ({exc})") from exc
-    if doc.get("format") != PLAN_FORMAT:
-        raise InputError(f"{doc_path}: not a drakedeburr plan (format {doc.get('format')!r})")
-    if doc.get("version") not in (1, PLAN_VERSION):
-        raise InputError(f"{doc_path}: plan version {doc.get('version')} is not supported "
-                         f"(this drakedeburr reads versions 1 and {PLAN_VERSION})")
+    doc = _read_doc(doc_path)
     npz_path = folder / "arrays.npz"
     if not npz_path.is_file():
-        raise FileNotFoundError(f"{folder}: missing arrays.npz")
-    with np.load(npz_path) as a:
-        arr = {k: a[k] for k in a.files}
-    if len(doc["targets"]) != len(arr["q_targets"]):
-        raise InputError(f"{folder}: {len(doc['targets'])} targets in plan.json but "
-                         f"{len(arr['q_targets'])} in arrays.npz")
-    targets = []
-    for i, t in enumerate(doc["targets"]):
-        p, n = arr["p_HC"][i], arr["n_H"][i]
-        targets.append(CartesianTarget(
-            window_index=int(t["window_index"]), segment=t["segment"], cl_index=int(t["cl_index"]),
-            X_HT=arr["X_HT"][i], X_WF=arr["X_WF"][i], q=arr["q_targets"][i],
-            speed=float(t["speed"]), zone=float(t["zone"]), motion=t.get("motion", "linear"),
-            p_HC=None if np.any(np.isnan(p)) else p, n_H=None if np.any(np.isnan(n)) else n))
-    segments = tuple(PlanSegment(window_index=int(s["window_index"]), kind=s["kind"],
-                                 target_range=tuple(s["target_range"]),
-                                 t_range=tuple(s["t_range"])) for s in doc["segments"])
+        raise InputError(f"{folder}: missing arrays.npz (the plan's arrays): not a complete "
+                         "plan folder")
+    arr = _read_arrays(npz_path)
+    try:
+        return _plan_from(doc, arr, folder, _Where(doc_path), _Where(npz_path))
+    except _Bad as exc:
+        raise InputError(str(exc)) from None
+
+
+def _read_doc(doc_path: Path) -> dict:
+    try:
+        doc = json.loads(doc_path.read_bytes().decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise InputError(f"{doc_path}: not valid JSON ({type(exc).__name__}: "
+                         f"{str(exc)[:120]})") from None
+    if not isinstance(doc, dict):
+        raise InputError(f"{doc_path}: not a drakedeburr plan (a JSON {type(doc).__name__}, "
+                         "not an object)")
+    if doc.get("format") != PLAN_FORMAT:
+        raise InputError(f"{doc_path}: not a drakedeburr plan (format "
+                         f"{str(doc.get('format'))[:40]!r}, expected {PLAN_FORMAT!r})")
+    if doc.get("version") not in (1, PLAN_VERSION) or isinstance(doc.get("version"), bool):
+        raise InputError(f"{doc_path}: plan version {str(doc.get('version'))[:20]} is not "
+                         f"supported (this drakedeburr reads versions 1 and {PLAN_VERSION})")
+    return doc
+
+
+def _read_arrays(npz_path: Path) -> dict[str, np.ndarray]:
+    """The arrays of ``arrays.npz``; anything numpy or zipfile cannot read (truncated,
+    corrupt, pickled objects, not an archive) is an InputError naming the file."""
+    try:
+        with np.load(npz_path, allow_pickle=False) as a:
+            if not hasattr(a, "files"):
+                raise ValueError("a single array, not an .npz archive")
+            return {str(k): a[k] for k in a.files}
+    except InputError:
+        raise
+    except Exception as exc:  # zipfile, zlib, numpy's format reader raise many kinds
+        raise InputError(f"{npz_path}: not a readable .npz archive ({type(exc).__name__}: "
+                         f"{str(exc)[:120]})") from None
+
+
+class _Bad(Exception):
+    """An item of a plan file that is wrong (turned into InputError by load_plan)."""
+
+
+class _Where:
+    """A file name for messages: ``where["targets[3].speed"]`` -> ``file: targets[3].speed``."""
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def __getitem__(self, item: str) -> str:
+        return f"{self.path}: {item}"
+
+
+def _get(d, key: str, kind, where: str, default=...):
+    """``d[key]`` of type ``kind`` (int: not bool; float: a finite int or float)."""
+    if not isinstance(d, dict):
+        raise _Bad(f"{where}: expected an object, got {type(d).__name__}")
+    if key not in d:
+        if default is not ...:
+            return default
+        raise _Bad(f"{where}.{key}: missing")
+    return _value(d[key], kind, f"{where}.{key}")
+
+
+def _value(v, kind, where: str):
+    if kind is float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            raise _Bad(f"{where}: expected a finite number, got {str(v)[:40]!r}")
+        return float(v)
+    if kind is int:
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise _Bad(f"{where}: expected an integer, got {str(v)[:40]!r}")
+        return v
+    if not isinstance(v, kind):
+        name = getattr(kind, "__name__", None) or "/".join(k.__name__ for k in kind)
+        raise _Bad(f"{where}: expected {name}, got {type(v).__name__}")
+    return v
+
+
+def _choice(v, allowed, where: str):
+    if not isinstance(v, str) or v not in allowed:
+        raise _Bad(f"{where}: {str(v)[:40]!r} is not one of {', '.join(allowed)}")
+    return v
+
+
+def _array(arr: dict, name: str, shape: tuple, where, nan_rows: bool = False) -> np.ndarray:
+    """Array ``name`` as floats with ``shape`` (None: any length), finite (``nan_rows``: rows
+    may be all NaN, meaning none)."""
+    if name not in arr:
+        raise _Bad(where[f"array {name!r}: missing"])
+    a = arr[name]
+    if a.dtype.kind not in "biuf":
+        raise _Bad(where[f"array {name!r}: expected numbers, got dtype {a.dtype}"])
+    a = a.astype(float)
+    if a.ndim != len(shape) or any(n is not None and n != m
+                                   for n, m in zip(shape, a.shape, strict=True)):
+        want = "(" + ", ".join("N" if n is None else str(n) for n in shape) + ")"
+        raise _Bad(where[f"array {name!r}: shape {a.shape}, expected {want}"])
+    bad = ~np.isfinite(a)
+    if nan_rows and a.ndim > 1:
+        rows = bad.reshape(len(a), -1)
+        bad = rows.any(axis=1) & ~(np.isnan(a).reshape(len(a), -1).all(axis=1))
+    if bad.any():
+        first = np.argwhere(bad)[0]
+        raise _Bad(where[f"array {name!r}: not finite at {tuple(int(i) for i in first)}"])
+    return a
+
+
+_KINDS = ("home", "approach", "cut", "retract", "transition")
+_POSES = ("X_WB", "X_FT", "X_FH", "X_WT", "hub_pose")
+
+
+def _targets(doc: dict, arr: dict, jw, aw) -> tuple[CartesianTarget, ...]:
+    items = _get(doc, "targets", list, jw["plan"])
+    n = len(items)
+    X_HT = _array(arr, "X_HT", (n, 4, 4), aw)
+    X_WF = _array(arr, "X_WF", (n, 4, 4), aw)
+    q = _array(arr, "q_targets", (n, 6), aw)
+    p_HC = _array(arr, "p_HC", (n, 3), aw, nan_rows=True)
+    n_H = _array(arr, "n_H", (n, 3), aw, nan_rows=True)
+    out = []
+    for i, t in enumerate(items):
+        w = jw[f"targets[{i}]"]
+        speed, zone = _get(t, "speed", float, w), _get(t, "zone", float, w)
+        if speed < 0 or zone < 0:
+            raise _Bad(f"{w}: speed and zone must be >= 0, got {speed}, {zone}")
+        p, nn = p_HC[i], n_H[i]
+        out.append(CartesianTarget(
+            window_index=_get(t, "window_index", int, w),
+            segment=_choice(_get(t, "segment", str, w), _KINDS, f"{w}.segment"),
+            cl_index=_get(t, "cl_index", int, w), X_HT=X_HT[i], X_WF=X_WF[i], q=q[i],
+            speed=speed, zone=zone,
+            motion=_choice(t.get("motion", "linear"), ("linear", "joint"), f"{w}.motion"),
+            p_HC=None if np.isnan(p).any() else p, n_H=None if np.isnan(nn).any() else nn))
+    return tuple(out)
+
+
+def _segments(doc: dict, n_targets: int, jw) -> tuple[PlanSegment, ...]:
+    out = []
+    for i, s in enumerate(_get(doc, "segments", list, jw["plan"])):
+        w = jw[f"segments[{i}]"]
+        tr, trange = _get(s, "target_range", list, w), _get(s, "t_range", list, w)
+        if len(tr) != 2 or len(trange) != 2:
+            raise _Bad(f"{w}: target_range and t_range need 2 values each")
+        a, b = (_value(v, int, f"{w}.target_range") for v in tr)
+        if not 0 <= a <= b <= n_targets:
+            raise _Bad(f"{w}.target_range: [{a}, {b}] is not within the {n_targets} targets")
+        t0, t1 = (_value(v, float, f"{w}.t_range") for v in trange)
+        out.append(PlanSegment(window_index=_get(s, "window_index", int, w),
+                               kind=_choice(_get(s, "kind", str, w), _KINDS, f"{w}.kind"),
+                               target_range=(a, b), t_range=(t0, t1)))
+    return tuple(out)
+
+
+def _failures(doc: dict, jw) -> tuple[FailureRecord, ...]:
+    out = []
+    for i, f in enumerate(_get(doc, "failures", list, jw["plan"])):
+        w = jw[f"failures[{i}]"]
+        _get(f, "window", int, w, -1)
+        _get(f, "point", int, w, -1)
+        for key in ("value", "limit"):
+            if f.get(key) is not None:
+                _get(f, key, float, w)
+        _get(f, "where", (dict, type(None)), w, None)
+        _get(f, "tried", (list, type(None)), w, None)
+        out.append(FailureRecord.from_dict(f))
+    return tuple(out)
+
+
+def _meta(doc: dict, jw) -> dict:
+    meta = _get(doc, "meta", dict, jw["plan"])
+    w = jw["meta"]
+    for key in _POSES:
+        if meta.get(key) is not None:
+            try:
+                X = np.asarray(meta[key], float)
+            except (TypeError, ValueError):
+                X = np.zeros(0)
+            if X.shape != (4, 4) or not np.isfinite(X).all():
+                raise _Bad(f"{w}.{key}: expected a 4x4 pose of finite numbers")
+    _get(meta, "robot", (str, type(None)), w, None)
+    _get(meta, "planner", (str, type(None)), w, None)
+    _get(meta, "config", (dict, type(None)), w, None)
+    for i, row in enumerate(_get(meta, "windows", list, w, [])):
+        if isinstance(row, dict):  # the planner's per-window figures (a list of numbers also)
+            _get(row, "window", int, f"{w}.windows[{i}]", -1)
+            _get(row, "cone_half_angle_rad", float, f"{w}.windows[{i}]", 0.0)
+    return meta
+
+
+def _trajectory(doc: dict, arr: dict, aw) -> JointTrajectory:
+    if "c" not in arr and doc["version"] == 1:  # version 1: cubic Hermite through the knots
+        t = _array(arr, "t", (None,), aw)
+        q, qd = _array(arr, "q", (len(t), 6), aw), _array(arr, "qd", (len(t), 6), aw)
+        if len(t) < 2 or np.any(np.diff(t) <= 0):
+            raise _Bad(aw["array 't': knot times must increase strictly (at least 2)"])
+        return JointTrajectory.from_hermite(t, q, qd)
+    t = _array(arr, "t", (None,), aw)
+    if len(t) < 1 or np.any(np.diff(t) <= 0):
+        raise _Bad(aw["array 't': knot times must increase strictly"])
+    c = _array(arr, "c", (None, len(t) - 1, 6), aw)
+    if len(c) < 1:
+        raise _Bad(aw["array 'c': no polynomial coefficients"])
+    return JointTrajectory(t=t, c=c)
+
+
+def _records(doc: dict, arr: dict, jw, aw) -> tuple[ToolPathRecord, ...]:
     records = []
-    for d in doc.get("tool_paths", []):
-        w = int(d["window_index"])
+    for i, d in enumerate(_get(doc, "tool_paths", list, jw["plan"], [])):
+        w = jw[f"tool_paths[{i}]"]
+        win = _get(d, "window_index", int, w)
         for new, old in (("zT_H", "axis_H"), ("cone_zT_H", "cone_axis_H")):  # version 1 names
-            if f"tp{w}_{new}" not in arr and f"tp{w}_{old}" in arr:
-                arr[f"tp{w}_{new}"] = arr[f"tp{w}_{old}"]
-        missing = [n for n in TOOL_PATH_ARRAYS if f"tp{w}_{n}" not in arr]
+            if f"tp{win}_{new}" not in arr and f"tp{win}_{old}" in arr:
+                arr[f"tp{win}_{new}"] = arr[f"tp{win}_{old}"]
+        missing = [n for n in TOOL_PATH_ARRAYS if f"tp{win}_{n}" not in arr]
         if missing:
-            raise InputError(f"{npz_path}: tool path of window {w} lacks {', '.join(missing)}")
+            raise _Bad(aw[f"tool path of window {win} lacks {', '.join(missing)}"])
+        m = len(arr[f"tp{win}_p_HC"])
+        shapes = dict(p_HC=(m, 3), R_HL=(m, 3, 3), zT_H=(m, 3), theta_A=(m,), theta_B=(m,),
+                      cone_zT_H=(m, 3))
+        arrays = {n: _array(arr, f"tp{win}_{n}", shapes[n], aw) for n in TOOL_PATH_ARRAYS}
+        bounds = _get(d, "bounds", list, w)
+        try:
+            box = OrientationBounds(*(_value(b, float, f"{w}.bounds") for b in bounds))
+        except (TypeError, ValueError) as exc:
+            raise _Bad(f"{w}.bounds: {exc}") from None
         records.append(ToolPathRecord(
-            window_index=w, kind=d["kind"], bounds=OrientationBounds(*d["bounds"]),
-            cone_half_angle=float(d["cone_half_angle"]),
-            cone_outer_half_angle=float(d["cone_outer_half_angle"]),
-            depth_of_cut=float(d["depth_of_cut"]),
-            **{n: arr[f"tp{w}_{n}"] for n in TOOL_PATH_ARRAYS}))
-    return Plan(scenario=doc["scenario"], hub=doc["hub"], mode=doc["mode"], X_WH=arr["X_WH"],
-                targets=tuple(targets), segments=segments,
-                trajectory=(JointTrajectory(t=arr["t"], c=arr["c"]) if "c" in arr else
-                            # version 1: a cubic Hermite spline through the knots
-                            JointTrajectory.from_hermite(arr["t"], arr["q"], arr["qd"])),
-                tool_path=tuple(records) or None,
-                failures=tuple(FailureRecord.from_dict(f) for f in doc["failures"]),
-                meta=doc["meta"], run=_run_record(folder))
+            window_index=win, kind=_choice(_get(d, "kind", str, w), ("large", "small"),
+                                           f"{w}.kind"),
+            bounds=box, cone_half_angle=_get(d, "cone_half_angle", float, w),
+            cone_outer_half_angle=_get(d, "cone_outer_half_angle", float, w),
+            depth_of_cut=_get(d, "depth_of_cut", float, w), **arrays))
+    return tuple(records)
+
+
+def _plan_from(doc: dict, arr: dict, folder: Path, jw, aw) -> Plan:
+    targets = _targets(doc, arr, jw, aw)
+    return Plan(scenario=_get(doc, "scenario", str, jw["plan"]),
+                hub=_get(doc, "hub", str, jw["plan"]),
+                mode=_choice(doc.get("mode"), ("tool", "workpiece"), jw["mode"]),
+                X_WH=_array(arr, "X_WH", (4, 4), aw), targets=targets,
+                segments=_segments(doc, len(targets), jw),
+                trajectory=_trajectory(doc, arr, aw),
+                tool_path=_records(doc, arr, jw, aw) or None,
+                failures=_failures(doc, jw), meta=_meta(doc, jw), run=_run_record(folder))
 
 
 def _run_record(folder: Path) -> dict:
@@ -230,7 +432,10 @@ def _tool_paths(plan: Plan) -> list:
 def write_joint_csv(plan: Plan, path: str | Path, dt: float | None = None) -> Path:
     """Joint CSV ``t_s,q1_deg,...,q6_deg``: the trajectory knots, or samples every ``dt`` [s]."""
     tr = plan.trajectory
-    if dt is None:
+    if len(tr.t) < 2:  # nothing could be planned: the plan stands at its first target (home)
+        t = np.asarray(tr.t, float)[:1]
+        q = np.array([tg.q for tg in plan.targets[:1]]).reshape(-1, 6)[:len(t)]
+    elif dt is None:
         t, q = tr.t, tr.q
     else:
         t = np.arange(0.0, tr.duration + 0.5 * dt, dt)

@@ -31,6 +31,7 @@ from dataclasses import asdict, replace
 import numpy as np
 
 from drakedeburr.config import Config, ProcessParameters
+from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
@@ -241,7 +242,8 @@ def _relax(cell, hub_model, wts, config, options, plan, q_refs, progress) -> Pla
 def window_targets_for_hub(hub_model, *, source: str = "auto",
                            params: ProcessParameters | None = None,
                            windows: Sequence[int] | None = None,
-                           progress: Progress = None) -> list[WindowTargets]:
+                           progress: Progress = None,
+                           skipped: list | None = None) -> list[WindowTargets]:
     """Targets of a hub's windows: hub edges -> CL points -> orientation (-> WindowTargets).
 
     Args:
@@ -252,6 +254,9 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
             that is wrong raises, as with "toolpath").
         params: process parameters (default: the hub's, ``hub_model.process``).
         windows: window indices (default all).
+        skipped: when given, a window whose ToolPath cannot give targets (an axis pointing
+            into the hub on this part) is left out and its FailureRecord appended here
+            instead of raising: a result of planning this hub, not bad input.
     """
     params = params or hub_model.process
     chosen = [w for w in hub_model.windows if windows is None or w.index in set(windows)]
@@ -263,6 +268,14 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
         if source in ("toolpath", "auto"):
             try:
                 wt = WindowTargets.from_tool_path(_tool_path(edge, params))
+            except InputError as exc:
+                if skipped is None:
+                    raise
+                log.warning("window %d not planned: %s", edge.index, exc)
+                skipped.append(FailureRecord(window=edge.index, kind="window",
+                                             reason=f"no tool path: {exc}",
+                                             tried=("orientation stage (recipe's theta box)",)))
+                continue
             except ImportError as exc:
                 if source == "toolpath":
                     raise
@@ -319,8 +332,9 @@ def plan_hub(
     cell = load_cell(config.scenario, config.hub, robot=config.robot)
     hub_model = load_hub(cell.hub_sdf.parent)
     t0 = time.perf_counter()
+    skipped: list[FailureRecord] = []
     wts = window_targets_for_hub(hub_model, source=source, params=config.process,
-                                 windows=options.windows)
+                                 windows=options.windows, skipped=skipped)
     t_targets = time.perf_counter() - t0
     placement = None
     if options.placement and wts:
@@ -333,6 +347,8 @@ def plan_hub(
     plan = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
     if options.relax and any(f.window >= 0 for f in plan.failures):
         plan = _relax(cell, hub_model, wts, config, options, plan, q_refs, progress)
+    if skipped:  # windows without a tool path are failures of this plan, reported as such
+        plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets
     if placement is not None:
         plan.meta["hub_pose"] = placement.hub_pose.tolist()

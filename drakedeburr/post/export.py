@@ -58,7 +58,8 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
         plan: the plan already loaded from ``folder`` (default: load it).
 
     Raises:
-        ExportRefused: the gate refused and ``force`` is not given (nothing is written).
+        ExportRefused: the gate refused and ``force`` is not given, or the plan holds no
+            motion (nothing could be planned); nothing is written.
         InputError: the folder is not a plan, or the format does not suit the arm.
     """
     from drakedeburr.plan.io import load_plan
@@ -68,6 +69,10 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
     folder = Path(folder)
     folder = folder.parent if folder.name == "plan.json" else folder
     plan = plan if plan is not None else load_plan(folder)
+    if len(plan.trajectory.t) < 2:  # not even --force: there is no motion to write
+        raise ExportRefused(f"{folder}: no program to write: nothing could be planned "
+                            f"({len(plan.failures)} failure records; drakedeburr verify "
+                            f"{folder} reports them)")
     verdict = gate(folder, plan)
     flag = reason = ""
     if not verdict.ok:

@@ -148,6 +148,21 @@ def format_of(path: str | Path) -> str:
                              ".prg, KRL .src (+ .dat), FANUC .ls)")
 
 
+def _check_utf8(path: Path) -> None:
+    """Refuse a file that is not UTF-8 text, naming the line (a missing file is left to the
+    reader)."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise ProgramFormatError(f"{path}:{line}: not UTF-8 text (byte "
+                                 f"0x{data[exc.start]:02x})") from None
+
+
 def read_program(path: str | Path, fmt: str | None = None, check_name: bool = True
                  ) -> ReadProgram:
     """Read a program file strictly (RAPID module, KRL .src with its .dat, FANUC .ls).
@@ -162,6 +177,8 @@ def read_program(path: str | Path, fmt: str | None = None, check_name: bool = Tr
     """
     path = Path(path)
     fmt = fmt or format_of(path)
+    for f in (path.with_suffix(".src"), path.with_suffix(".dat")) if fmt == "krl" else (path,):
+        _check_utf8(f)
     if fmt == "rapid":
         from drakedeburr.programs.rapid import read_rapid
 

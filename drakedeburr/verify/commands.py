@@ -16,6 +16,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from drakedeburr.argcheck import number
 from drakedeburr.units import m_from_mm
 
 log = logging.getLogger(__name__)
@@ -24,14 +25,39 @@ _MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 
 def _windows(text: str | None) -> list[int] | None:
-    if not text:
-        return None
-    from drakedeburr.errors import InputError
+    from drakedeburr.argcheck import parse_windows
 
-    try:
-        return [int(v) for v in text.split(",") if v.strip()]
-    except ValueError as exc:
-        raise InputError(f"--windows: expected comma-separated integers, got {text!r}") from exc
+    windows = parse_windows(text)
+    return None if windows is None else list(windows)
+
+
+#: bytes the outputs take at least: a plan folder per window, an HTML report with the replay
+_PLAN_BYTES_PER_WINDOW = 400_000
+_HTML_BYTES = 4_000_000
+
+
+def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
+    """Output paths and the program file, before any work."""
+    from drakedeburr import argcheck
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.io import is_plan_folder
+
+    argcheck.output_file(args.json, "--json")
+    argcheck.output_file(args.html, "--html")
+    if args.html:
+        argcheck.free_space(Path(args.html).parent, _HTML_BYTES, "--html")
+    if kind == "plan":
+        if args.out:
+            raise InputError(f"-o/--out {args.out}: only for a hub or mesh target; the report "
+                             f"of the plan {target} goes into its folder")
+        argcheck.output_folder(target, "the plan folder (its report is written into it)")
+    else:
+        argcheck.output_folder(args.out, "-o/--out", is_ours=is_plan_folder)
+        if args.out:
+            argcheck.free_space(args.out, _PLAN_BYTES_PER_WINDOW + _HTML_BYTES, "-o/--out")
+        argcheck.output_folder(args.hub_cache, "--hub-cache")
+    if args.program:
+        argcheck.input_file(args.program, "--program file")
 
 
 def _resolve_target(target: str, scenario: str | None):
@@ -132,14 +158,26 @@ def _tolerances(args: argparse.Namespace):
     return default_tolerances(**QUICK_SAMPLING) if args.quick else None
 
 
-def _program_item(plan, path: str):
-    """A required report item: the program file read back and compared with the plan's own
-    program (:func:`drakedeburr.programs.compare_programs`), every difference named by line."""
+def _read_program_file(path: str | None):
+    """The --program file read (strictly) before any work, or None."""
+    if path is None:
+        return None
+    from drakedeburr.programs import read_program
+
+    return read_program(path)
+
+
+def _program_item(plan, actual):
+    """A required report item: the program (a file, or as read by :func:`_read_program_file`)
+    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
+    every difference named by line."""
     from drakedeburr.post.export import plan_program
-    from drakedeburr.programs import compare_programs, read_program
+    from drakedeburr.programs import compare_programs
     from drakedeburr.verify.report import CheckItem
 
-    actual = read_program(path)
+    if isinstance(actual, (str, Path)):
+        actual = _read_program_file(str(actual))
+    path = actual.files[0]
     expected = plan_program(plan, actual.name)
     found = compare_programs(expected, actual)
     lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
@@ -166,6 +204,7 @@ def _print_report(report) -> None:
 def _run_verify(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from drakedeburr.argcheck import check_windows, hub_windows
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.plan.io import save_plan
     from drakedeburr.verify.batch import make_plan
@@ -178,22 +217,31 @@ def _run_verify(args: argparse.Namespace) -> int:
     if kind == "plan":
         folder = Path(rest[0])
         folder = folder.parent if folder.name == "plan.json" else folder
+        _check_outputs(args, kind, folder)
         plan = _load_plan(folder)
         _same_robot(plan, getattr(args, "robot", None))
+        check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
         config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
     else:
         scenario, hub = rest
+        _check_outputs(args, kind, None)
+        from drakedeburr.resources import scenario_path
+
+        scenario_path(scenario)
+    program = _read_program_file(args.program)
+    if kind != "plan":
         if Path(hub).suffix.lower() in _MESH_SUFFIXES:
             hub = _import_mesh(hub, args)
+        check_windows(windows, hub_windows(hub), Path(hub).name)
         config = _config(args, scenario, hub)
         plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
         if args.out:
             folder = save_plan(plan, args.out)
     report = verify_plan(plan, config, expected_windows=windows,
                          progress=tqdm_progress("verify"))
-    if args.program:
-        items = (*report.items, _program_item(plan, args.program))
+    if program is not None:
+        items = (*report.items, _program_item(plan, program))
         report = replace(report, items=items,
                          passed=all(i.passed for i in items if i.required))
     if folder is not None:
@@ -211,8 +259,17 @@ def _run_verify(args: argparse.Namespace) -> int:
 
 
 def _run_verify_all(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
     from drakedeburr.cli import tqdm_progress
+    from drakedeburr.errors import InputError
+    from drakedeburr.resources import scenario_path
     from drakedeburr.verify.batch import summary_markdown, verify_all
+
+    if not Path(args.hubs).is_dir():
+        raise InputError(f"{args.hubs}: no such catalogue folder (a folder of hub folders)")
+    argcheck.output_folder(args.out, "-o/--out")
+    for scenario in args.scenario or []:
+        scenario_path(scenario)
 
     scenarios = args.scenario or ["tool_in_hand", "workpiece_in_hand"]
     summary = verify_all(
@@ -233,8 +290,9 @@ def _common(p: argparse.ArgumentParser) -> None:
                                      "(default: all windows of the hub)")
     p.add_argument("--quick", action="store_true",
                    help="coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate")
-    p.add_argument("--grinding-speed", type=float, default=None, metavar="MM_PER_S",
-                   help="process speed [mm/s] (default: config, 150)")
+    p.add_argument("--grinding-speed", type=number(0, lo_open=True, unit="mm/s"), default=None,
+                   metavar="MM_PER_S", help="process speed [mm/s], > 0 (default: the hub's "
+                                            "recipe, 150)")
 
 
 def register(subparsers) -> None:
@@ -275,7 +333,8 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", default="verify-all", help="output folder")
     p.add_argument("--scenario", action="append",
                    help="cell(s) to verify in (repeatable; default: both bundled cells)")
-    p.add_argument("-j", "--workers", type=int, default=1, help="local processes")
+    p.add_argument("-j", "--workers", type=number(1, integer=True), default=1,
+                   help="local processes (>= 1)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--html", action="store_true", help="also write report.html per hub")
     _common(p)

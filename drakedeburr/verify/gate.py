@@ -6,10 +6,12 @@ version. ``--force`` writes anyway, and the program's header says why."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["REPORT_FILE", "REPORT_HTML", "GateResult", "gate", "plan_identity"]
+__all__ = ["REPORT_FILE", "REPORT_HTML", "GateResult", "gate", "plan_identity",
+           "read_report"]
 
 REPORT_FILE = "report.json"
 REPORT_HTML = "report.html"
@@ -49,6 +51,60 @@ def _certifying(tolerances: dict) -> bool:
         abs(float(tolerances[k]) - v) <= 1e-9 * max(1.0, abs(v)) for k, v in own.items())
 
 
+def _item(doc, path: str, kind, where: Path):
+    """``doc[a][b]...`` for ``path`` "a.b" of type ``kind``; InputError naming the item."""
+    from drakedeburr.errors import InputError
+
+    value = doc
+    for key in path.split("."):
+        if not isinstance(value, dict) or key not in value:
+            raise InputError(f"{where}: item {path!r} missing: not a verification report")
+        value = value[key]
+    if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
+        raise InputError(f"{where}: item {path!r} is a {type(value).__name__}, not a "
+                         f"{getattr(kind, '__name__', kind)}")
+    return value
+
+
+def read_report(path: str | Path) -> dict:
+    """A verification report (``report.json``) with the items the gate needs checked: ``passed``
+    (bool), ``plan.identity`` (the three digests, strings), ``settings.tolerances`` (numbers)
+    and ``summary.failed`` (names).
+
+    Raises:
+        InputError: not readable, not JSON, or an item missing or of the wrong type (names
+            the file and the item). FileNotFoundError: no file.
+    """
+    from drakedeburr.errors import InputError
+
+    path = Path(path)
+    try:
+        report = json.loads(path.read_bytes().decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise InputError(f"{path}: not valid JSON ({type(exc).__name__}: {str(exc)[:100]})"
+                         ) from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: a folder, not a report file") from None
+    if not isinstance(report, dict):
+        raise InputError(f"{path}: a JSON {type(report).__name__}, not a verification report")
+    _item(report, "passed", bool, path)
+    _item(report, "plan.identity", dict, path)
+    for key in ("plan_digest", "cell_digest", "verifier_version"):
+        _item(report, f"plan.identity.{key}", str, path)
+    tolerances = _item(report, "settings.tolerances", dict, path)
+    for key, value in tolerances.items():
+        try:
+            ok = not isinstance(value, bool) and math.isfinite(float(value))
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise InputError(f"{path}: item 'settings.tolerances.{key}' is not a finite number")
+    failed = _item(report, "summary.failed", list, path)
+    if not all(isinstance(f, str) for f in failed):
+        raise InputError(f"{path}: item 'summary.failed' is not a list of check names")
+    return report
+
+
 def gate(folder: str | Path, plan) -> GateResult:
     """Check the report in plan folder ``folder`` against ``plan`` (loaded from it)."""
     folder = Path(folder)
@@ -56,12 +112,13 @@ def gate(folder: str | Path, plan) -> GateResult:
     if not path.is_file():
         return GateResult(False, "UNVERIFIED", f"no verification report in {folder} (run "
                                                f"drakedeburr verify {folder})")
+    from drakedeburr.errors import InputError
+
     try:
-        report = json.loads(path.read_text())
-        identity = report["plan"]["identity"]
-        passed = bool(report["passed"])
-    except (OSError, ValueError, KeyError, TypeError):
-        return GateResult(False, "UNVERIFIED", f"{path}: not a readable verification report")
+        report = read_report(path)
+    except (OSError, InputError) as exc:
+        return GateResult(False, "UNVERIFIED", f"no readable verification report ({exc})")
+    identity, passed = report["plan"]["identity"], report["passed"]
     try:
         now = plan_identity(plan)
     except FileNotFoundError as exc:
@@ -73,11 +130,11 @@ def gate(folder: str | Path, plan) -> GateResult:
         if identity.get(key) != now[key]:
             return GateResult(False, "UNVERIFIED", f"{path} is for {what}; run drakedeburr "
                                                    f"verify {folder} again")
-    if not _certifying(report.get("settings", {}).get("tolerances", {})):
+    if not _certifying(report["settings"]["tolerances"]):
         return GateResult(False, "UNVERIFIED", f"{path} was made with other tolerances or "
                                                "sampling than the verifier's own (--quick?); run "
                                                f"drakedeburr verify {folder} again")
     if not passed:
-        failed = ", ".join(report.get("summary", {}).get("failed", [])) or "?"
+        failed = ", ".join(report["summary"]["failed"]) or "?"
         return GateResult(False, "FORCED", f"verification FAILED ({failed}): {path}")
     return GateResult(True, "", f"verified: {path}")

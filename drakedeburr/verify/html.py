@@ -70,6 +70,8 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
 
     plt.rcParams["svg.hashsalt"] = "drakedeburr"  # deterministic SVG ids
     s = report.series
+    if "t" not in s:  # no samples: nothing could be planned (the items say why)
+        return {}
     t = s["t"]
     tol = report.settings["tolerances"]
     out = {}
@@ -149,6 +151,9 @@ def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
         from drakedeburr.viz import scene
     except ImportError as exc:  # pragma: no cover - depends on the viz stage being installed
         log.warning("no Meshcat replay: %s", exc)
+        return None
+    if len(plan.trajectory.t) < 2:
+        log.info("no Meshcat replay: the plan holds no motion (nothing could be planned)")
         return None
     if cell is None:
         from drakedeburr.cell.station import load_plan_cell

@@ -175,12 +175,15 @@ def write_report_files(report: VerificationReport, folder: str | Path, *, plan=N
                        replay: bool = True) -> tuple[Path, Path]:
     """Write the report into its plan's folder, where the export gate reads it:
     ``report.json`` and ``report.html`` (with a Meshcat replay of ``plan`` when given and
-    ``replay``). Each file is written atomically. Returns their paths."""
+    ``replay``). The two are written together (:func:`drakedeburr._io.atomic_write_files`):
+    an interruption leaves both as they were. Returns their paths."""
+    from drakedeburr._io import atomic_write_files
     from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
-    from drakedeburr.verify.html import meshcat_replay_html, write_report_html
+    from drakedeburr.verify.html import meshcat_replay_html, report_html
 
     folder = Path(folder)
-    html = write_report_html(report, folder / REPORT_HTML,
-                             replay_html=meshcat_replay_html(plan) if plan is not None and replay
-                             else None)
-    return write_report_json(report, folder / REPORT_FILE), html
+    html = report_html(report, replay_html=meshcat_replay_html(plan) if plan is not None and
+                       replay else None)
+    written = atomic_write_files({folder / REPORT_HTML: html,
+                                  folder / REPORT_FILE: report_json(report)})
+    return written[1], written[0]

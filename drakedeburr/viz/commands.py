@@ -6,6 +6,8 @@ import argparse
 import logging
 from pathlib import Path
 
+from drakedeburr.argcheck import number
+
 log = logging.getLogger(__name__)
 
 
@@ -35,10 +37,18 @@ def _run_show(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from drakedeburr.argcheck import output_file
     from drakedeburr.errors import InputError
     from drakedeburr.units import rad_from_deg
     from drakedeburr.viz import scene
 
+    output_file(args.html, "--html")
+    from drakedeburr.cell import resolve_hub_sdf
+
+    if not _is_scenario(args.target):
+        resolve_hub_sdf(args.target)
+    elif args.hub is not None:
+        resolve_hub_sdf(args.hub)
     meshcat = scene.get_meshcat()
     role = "proximity" if args.collision else "illustration"
     if _is_scenario(args.target):
@@ -103,7 +113,7 @@ def register(subparsers) -> None:
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="registered arm for a bundled cell (drakedeburr robots)")
     p.add_argument("--html", type=Path, default=None, help="write a static HTML snapshot here")
-    p.add_argument("--q", type=float, nargs="+", default=None, metavar="DEG",
+    p.add_argument("--q", type=number(), nargs="+", default=None, metavar="DEG",
                    help="robot joints J1..J6 in degrees (default: the scenario's home)")
     p.add_argument("--collision", action="store_true", help="draw collision geometry instead")
     p.add_argument("--wait", action="store_true",

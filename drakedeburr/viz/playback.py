@@ -77,8 +77,11 @@ def plan_replay(plan, *, cell=None, meshcat=None, dt: float = 0.04, show_path: b
     plant_context = cell.plant.GetMyMutableContextFromRoot(context)
     viz_context = viz.GetMyContextFromRoot(context)
     tr = plan.trajectory
-    times = np.append(np.arange(tr.t[0], tr.t[-1], dt), tr.t[-1])
-    q = tr.value(times)
+    if len(tr.t) < 2:  # nothing could be planned: the plan stands at home
+        times, q = np.asarray(tr.t, float)[:1], np.array([plan.targets[0].q])
+    else:
+        times = np.append(np.arange(tr.t[0], tr.t[-1], dt), tr.t[-1])
+        q = tr.value(times)
     recording = viz.StartRecording(set_transforms_while_recording=False)
     for ti, qi in zip(times, q, strict=True):
         context.SetTime(float(ti))
