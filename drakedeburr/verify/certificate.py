@@ -9,8 +9,9 @@ the links' reach). From the distances at both ends of an interval this gives a l
 over the interval for every pair; the certificate of a class is the smallest such bound.
 
 The tracked sweep (:mod:`drakedeburr.verify.sweep`) reads at each sample the pairs that
-could come within ``max(class minimum, limit) + delta + 2 e`` of their track, so every pair
-it leaves unread is certified above the class minimum without more work. Where a bound falls
+could come within ``level + delta + 2 e`` of their track, ``level`` the target for the
+smallest distance read so far, so every pair it leaves unread is certified above the target
+without more work. Where a bound falls
 below the *target* (the smallest distance read, at most the query distance, less the larger
 of ``Tolerances.certificate_gap`` and ``certificate_share`` of its margin above the limit),
 the interval is refined: the pairs read at its ends are read at its
@@ -36,7 +37,7 @@ from drakedeburr.verify.motion_bounds import (
     track_interval_bounds,
 )
 from drakedeburr.verify.pair_scene import CLEARANCE, SELF
-from drakedeburr.verify.sweep import class_limits
+from drakedeburr.verify.sweep import class_limits, resolution_target
 
 __all__ = ["ClassCertificate", "ClearanceCertificate", "certify", "METHOD"]
 
@@ -105,7 +106,7 @@ class _Refiner:
         self.qd = float(tol.query_distance)
         self.gap, self.floor = float(tol.certificate_gap), float(tol.certificate_floor)
         self.share = float(tol.certificate_share)
-        self.limits = limits
+        self.limits, self.tol = limits, tol
         self.readings = 0
         self.observed = {}  # class -> (value, time, pair)
         for c in (CLEARANCE, SELF):
@@ -116,8 +117,7 @@ class _Refiner:
     def target(self, c: int) -> float:
         """What every bound of class ``c`` must reach: the smallest distance read (at most the
         query distance) less the resolution (module docstring)."""
-        level = min(self.observed[c][0], self.qd)
-        return level - max(self.gap, self.share * (level - self.limits[c]))
+        return resolution_target(min(self.observed[c][0], self.qd), self.limits[c], self.tol)
 
     def note(self, d: float, t: float, p: int) -> None:
         c = int(self.scene.cls[p])
@@ -250,18 +250,13 @@ def _refine(ref: _Refiner, fail, tally: _Tally) -> tuple[int, int]:
     return len(intervals), depth
 
 
-def _unread_bounds(sw, tracks, limits: dict, qd: float) -> np.ndarray:
+def _unread_bounds(sw, tracks) -> np.ndarray:
     """(T, N - 1) bound over each interval of the pairs of each track the sweep left unread at
-    both ends: they were at least ``max(min(class minimum, qd), limit) + pad`` there."""
-    pad_int = sw.delta + 2.0 * sw.e
+    both ends: they were at least their class's ``level`` + the track's pad there."""
     pad = np.zeros(sw.lower.shape)
-    pad[:, 1:] = pad_int
-    pad[:, :-1] = np.maximum(pad[:, :-1], pad_int)
-    level = np.full(sw.lower.shape, np.inf)
-    for c, lim in limits.items():
-        rows = tracks.cls == c
-        level[rows] = np.maximum(np.minimum(sw.best[c], qd), lim)[None]
-    theta = level + pad
+    pad[:, 1:] = sw.delta + 2.0 * sw.e
+    pad[:, :-1] = np.maximum(pad[:, :-1], pad[:, 1:])
+    theta = sw.level[tracks.cls] + pad
     return interval_lower_bound(theta[:, :-1], theta[:, 1:], sw.delta, sw.e)
 
 
@@ -274,11 +269,10 @@ def certify(scene, traj, sweep, tol) -> ClearanceCertificate:
         tol: the tolerances (limits, query distance, ``certificate_gap``/``_floor``).
     """
     limits = class_limits(tol)
-    qd = float(tol.query_distance)
     ref = _Refiner(scene, traj, sweep, tol, limits)
     tracks, t = scene.tracks, sweep.t
     B = interval_lower_bound(sweep.lower[:, :-1], sweep.lower[:, 1:], sweep.delta, sweep.e)
-    U = _unread_bounds(sweep, tracks, limits, qd)
+    U = _unread_bounds(sweep, tracks)
     target = np.array([ref.target(c) if c in limits else -np.inf for c in tracks.cls])
     fail = B < target[:, None]
     tally = _Tally(limits)

@@ -33,7 +33,8 @@ import numpy as np
 
 from drakedeburr.verify.chain import rotation_angle
 
-__all__ = ["Tracks", "relative_pose", "chord_bound", "rate_bounds", "accel_bound",
+__all__ = ["Tracks", "relative_pose", "chord_bound", "rate_bounds", "accel_weights",
+           "accel_bound",
            "interval_lower_bound", "track_interval_bounds"]
 
 #: relative slack on every bound (floating-point rounding of the chains of products)
@@ -97,6 +98,20 @@ def rate_bounds(traj, t_a: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.nd
     return qd * (1.0 + _SLACK), qdd * (1.0 + _SLACK)
 
 
+def accel_weights(qd: np.ndarray, qdd: np.ndarray, seq: np.ndarray) -> np.ndarray:
+    """(K, nq) weights F with ``|p''| <= F @ reach`` for a track's joint sequence ``seq``
+    ((K, nq) or (nq,), -1 padded): the module docstring's bound regrouped per axis,
+    ``sum_j r_j (qdd_j + qd_j (3 W_j + qd_j))`` (``sum_j qd_j sum_{i >= j} qd_i r_i =
+    sum_i qd_i r_i (W_i + qd_i)``)."""
+    seq = np.broadcast_to(seq, qd.shape)
+    valid = seq >= 0
+    idx = np.where(valid, seq, 0)
+    w = np.where(valid, np.take_along_axis(qd, idx, axis=1), 0.0)
+    a = np.where(valid, np.take_along_axis(qdd, idx, axis=1), 0.0)
+    before = np.cumsum(w, axis=1) - w  # rates of the joints between R and axis j
+    return a + w * (3.0 * before + w)
+
+
 def accel_bound(qd: np.ndarray, qdd: np.ndarray, seq: np.ndarray, reach: np.ndarray
                 ) -> np.ndarray:
     """Bound of |p''| for the points of a track's ball (module docstring) -> (K,) [m/s^2].
@@ -105,16 +120,7 @@ def accel_bound(qd: np.ndarray, qdd: np.ndarray, seq: np.ndarray, reach: np.ndar
         qd, qdd: (K, nq) rate bounds; seq, reach: (K, nq) or (nq,) the track's joints from the
             reference outward (-1 padded) and reach bounds [m].
     """
-    seq = np.broadcast_to(seq, qd.shape)
-    reach = np.broadcast_to(reach, qd.shape)
-    valid = seq >= 0
-    idx = np.where(valid, seq, 0)
-    w = np.where(valid, np.take_along_axis(qd, idx, axis=1), 0.0)
-    a = np.where(valid, np.take_along_axis(qdd, idx, axis=1), 0.0)
-    before = np.cumsum(w, axis=1) - w  # rates of the joints between R and axis j
-    wr = w * reach
-    tail = np.cumsum(wr[:, ::-1], axis=1)[:, ::-1]  # sum_{i >= j} qd_i r_i
-    return np.sum(a * reach + w * (2.0 * before * reach + tail), axis=1)
+    return np.sum(accel_weights(qd, qdd, seq) * np.broadcast_to(reach, qd.shape), axis=1)
 
 
 def interval_lower_bound(d_a, d_b, delta, e) -> np.ndarray:

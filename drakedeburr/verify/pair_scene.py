@@ -212,16 +212,23 @@ class PairScene:
         self.plant_context = plant.CreateDefaultContext()
         self._poses = FramePoseVector()
         self._frames = [(frames[b], plant.get_body(BodyIndex(b))) for b in bodies]
+        # per track, the moving bodies its pairs involve (positions in self._frames)
+        slot = {b: n for n, b in enumerate(bodies)}
+        self.track_bodies = [sorted({slot[int(self.body[g])] for p in pairs
+                                     for g in (self.a[p], self.b[p]) if self.moving[g]})
+                             for pairs in self.track_pairs]
         self._A = [self.scene_ids[i] for i in self.a]
         self._B = [self.scene_ids[i] for i in self.b]
         self._query = None
 
-    def set_configuration(self, q: np.ndarray) -> None:
-        """Pose every moving body at joints ``q`` (nq,) [rad] through the Drake plant (its
-        context :attr:`plant_context` then holds ``q``)."""
+    def set_configuration(self, q: np.ndarray, bodies=None) -> None:
+        """Pose the moving bodies at joints ``q`` (nq,) [rad] through the Drake plant (its
+        context :attr:`plant_context` then holds ``q``): all of them, or only ``bodies``
+        (indices into :attr:`track_bodies` lists) when the caller reads only their pairs."""
         plant, pc = self.cell.plant, self.plant_context
         plant.SetPositions(pc, q)
-        for frame, body in self._frames:
+        frames = self._frames if bodies is None else [self._frames[b] for b in bodies]
+        for frame, body in frames:
             self._poses.set_value(frame, plant.EvalBodyPoseInWorld(pc, body))
         self._pose_port.FixValue(self._ctx, self._poses)
         self._query = self._query_port.Eval(self._ctx)
