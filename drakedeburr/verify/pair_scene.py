@@ -178,10 +178,7 @@ class PairScene:
         from pydrake.multibody.tree import BodyIndex
 
         plant, inspector = self.cell.plant, self._inspector
-        # the cell's own world poses of the fixed geometry, as Drake composes them
-        context = self.cell.diagram.CreateDefaultContext()
-        world_query = self.cell.scene_graph.get_query_output_port().Eval(
-            self.cell.scene_graph.GetMyContextFromRoot(context))
+        self.plant_context = plant.CreateDefaultContext()
         sg = SceneGraph()
         source = sg.RegisterSource("drakedeburr.verify")
         bodies = sorted({int(b) for b, m in zip(self.body, self.moving, strict=True) if m})
@@ -189,7 +186,11 @@ class PairScene:
         self.scene_ids = []
         for i, g in enumerate(self.ids):
             b = int(self.body[i])
-            X = inspector.GetPoseInFrame(g) if self.moving[i] else world_query.GetPoseInWorld(g)
+            # fixed geometry at its world pose as the cell's scene graph composes it (Drake's
+            # X_WB * X_BG: the same arithmetic, so the same distances bit for bit)
+            X = inspector.GetPoseInFrame(g) if self.moving[i] else plant.EvalBodyPoseInWorld(
+                self.plant_context, plant.get_body(BodyIndex(b))).multiply(
+                inspector.GetPoseInFrame(g))
             inst = GeometryInstance(X, inspector.GetShape(g).Clone(), self.names[i])
             inst.set_proximity_properties(ProximityProperties(
                 inspector.GetProximityProperties(g)))
@@ -209,7 +210,6 @@ class PairScene:
         self._ctx = sg.CreateDefaultContext()
         self._pose_port = sg.get_source_pose_port(source)
         self._query_port = sg.get_query_output_port()
-        self.plant_context = plant.CreateDefaultContext()
         self._poses = FramePoseVector()
         self._frames = [(frames[b], plant.get_body(BodyIndex(b))) for b in bodies]
         # per track, the moving bodies its pairs involve (positions in self._frames)
