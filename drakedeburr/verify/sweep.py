@@ -134,9 +134,7 @@ class _Reader:
         self.cur_k = [-1] * 3
         self.bodies: list[int] = []
         self.cls_t: list[int] = []
-        self.rec_i: list[int] = []
-        self.rec_p: list[int] = []
-        self.rec_d: list[float] = []
+        self.rec: list[tuple[int, int, float]] = []  # (sample, pair, distance) in read order
 
     def _visit(self, i: int) -> None:
         if self.at != i:
@@ -146,9 +144,7 @@ class _Reader:
     def _note(self, i: int, p: int, d: float, Ci: float) -> float:
         """Record a reading; update the sample's class minimum; -> the pair's new key."""
         self.stamp[p] = i
-        self.rec_i.append(i)
-        self.rec_p.append(p)
-        self.rec_d.append(d)
+        self.rec.append((i, p, d))
         c = self.cls[p]
         if d <= self.qd and d < self.cur[c]:
             self.cur[c], self.cur_k[c] = d, self.track[p]
@@ -196,18 +192,23 @@ class _Reader:
         (once per sample; with ``shrink``, ``below`` drops to each smaller distance read, so
         only what can still be the minimum is read)."""
         heap, Ci, stash, stamp = self.heaps[k], float(self.C[k, i]), [], self.stamp
+        pop, distance, note = heapq.heappop, self.scene.distance, self._note
         while heap and heap[0][0] - Ci < below:
-            key, p = heapq.heappop(heap)
+            key, p = pop(heap)
             if stamp[p] == i:
                 stash.append((key, p))
                 continue
-            self._visit(i)
-            d = self.scene.distance(p)
-            stash.append((self._note(i, p, d, Ci), p))
+            if self.at != i:
+                self._visit(i)
+            d = distance(p)
+            stash.append((note(i, p, d, Ci), p))
             if shrink and d < below:
                 below = d
-        for item in stash:
-            heapq.heappush(heap, item)
+        if len(stash) == 1:
+            heapq.heappush(heap, stash[0])
+        else:
+            for item in stash:
+                heapq.heappush(heap, item)
         self.top[k] = min(heap[0][0], self.far[k]) if heap else self.far[k]
 
 
@@ -365,12 +366,13 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
             progress(i + 1, n)
     if progress is not None:
         progress(n, n)
-    best, best_pair = _class_minima(reader.rec_i, reader.rec_p, reader.rec_d, scene.cls, n, qd)
+    rec = np.array(reader.rec, float).reshape(-1, 3)
+    rec_i, rec_p = rec[:, 0].astype(int), rec[:, 1].astype(int)
+    best, best_pair = _class_minima(rec_i, rec_p, rec[:, 2], scene.cls, n, qd)
     level = np.full((3, n), -np.inf)
     for i, c, v in levels:
         level[c, i:] = v
     return Sweep(t=t, q=q, X=X, best=best, best_pair=best_pair, level=level,
                  lower=_lower(T, n, hist, C), delta=delta, e=e,
-                 rec_sample=np.array(reader.rec_i, int), rec_pair=np.array(reader.rec_p, int),
-                 rec_value=np.array(reader.rec_d), posed=reader.posed,
+                 rec_sample=rec_i, rec_pair=rec_p, rec_value=rec[:, 2], posed=reader.posed,
                  refreshes=reader.refreshes)
