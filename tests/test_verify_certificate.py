@@ -161,3 +161,11 @@ def test_certificate_is_sound_and_tight_on_a_good_plan(scenario):
 
 def test_method_is_reported():
     assert "h^2/8" in mut.METHOD and "bisection" in mut.METHOD
+
+
+def test_registered_right_after_clearance_as_required():
+    from drakedeburr.verify.registry import CHECKS
+
+    names = [c.name for c in CHECKS]
+    k = names.index("clearance_certificate")
+    assert names[k - 1] == "clearance" and CHECKS[k].purpose == "required"
