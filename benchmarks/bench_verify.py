@@ -1,98 +1,178 @@
-"""Benchmark of the verification stage.
+"""Benchmark of the verification stage, on the planner's own plan of a whole hub.
 
-1. Verification time per hub: the reference plan of every window of a hub (tool-in-hand,
-   75 mm/s), verified at the default dense sampling; seconds per hub, per window, per sample.
-2. Distances per sample: Drake's ``ComputeSignedDistancePairwiseClosestPoints`` (the default)
-   vs the culled narrow phase kept as cross-check (same answers, see the tests).
-3. verify-all speed-up: the same jobs with 1 and 2 worker processes.
+1. Verification per hub, per stage: ``sample_plan`` (samples, program reading, distances,
+   cut geometry) and the checks, with the distance stage of the previous implementation
+   (commit BASELINE: the cell's broad-phase query, a Drake FK and a Jacobian per sample) run
+   on the same samples as the baseline; the figures of both must agree. Wall time and CPU
+   time of the process (the machine is shared: the CPU time is the steadier figure).
+2. The continuous clearance certificate of each hub (clearance_certificate) and what it read.
+3. ``drakedeburr verify PLANFOLDER`` timed as a new user runs it (``--cli``).
 
-Run:  PYTHONPATH=. python benchmarks/bench_verify.py [--quick]
+The plans are made with ``plan_hub`` defaults (tool-in-hand) into ``--plans DIR`` and reused
+from there on later runs (planning a hub takes 20-40 s).
+
+Run:  PYTHONPATH=. python benchmarks/bench_verify.py [--hubs h5_straight,...] [--cli]
+      [--plans /tmp/bench_verify_plans] [--quick]
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import subprocess
+import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell.station import load_cell
-from drakedeburr.config import Config, ProcessParameters, Recipe, default_tolerances
-from drakedeburr.hub.model import load_hub
-from drakedeburr.verify.batch import verify_all
-from drakedeburr.verify.checks import verify_plan
-from drakedeburr.verify.distances import DistanceProbe
-from drakedeburr.verify.synthetic import reference_plan
+from drakedeburr.verify import cut_geometry, distances, program, sampling
+from drakedeburr.verify.checks import config_for_plan, verify_sampled
+
+#: the previous implementation of the distance stage (main before the certificate)
+BASELINE = "2de1f4b"
+ROOT = Path(__file__).resolve().parent.parent
+
+
+class Clock:
+    """Wall and process CPU time of named stages."""
+
+    def __init__(self) -> None:
+        self.t: dict[str, tuple[float, float]] = {}
+
+    def wrap(self, module, name: str, label: str) -> None:
+        f = getattr(module, name)
+
+        def timed(*a, **k):
+            w, c = time.perf_counter(), time.process_time()
+            out = f(*a, **k)
+            dw, dc = time.perf_counter() - w, time.process_time() - c
+            pw, pc = self.t.get(label, (0.0, 0.0))
+            self.t[label] = (pw + dw, pc + dc)
+            return out
+
+        setattr(module, name, timed)
+
+
+def _baseline_measure():
+    """The previous ``measure_samples`` from git (else the kept dense reference method)."""
+    try:
+        src = subprocess.run(["git", "show", f"{BASELINE}:drakedeburr/verify/distances.py"],
+                             cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    except (subprocess.CalledProcessError, FileNotFoundError):
+        return (lambda cell, s, tol, *a, **k: distances.measure_samples(
+            cell, s, tol, method="dense")), "dense reference method (git unavailable)"
+    path = Path(tempfile.mkdtemp()) / "distances_baseline.py"
+    path.write_text(src)
+    spec = importlib.util.spec_from_file_location("distances_baseline", path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses look their module up
+    spec.loader.exec_module(mod)
+    return (lambda cell, s, tol, *a, **k: mod.measure_samples(cell, s, tol)), f"git {BASELINE}"
+
+
+def _plan(hub: str, plans: Path, quick: bool):
+    from drakedeburr.config import load_config
+    from drakedeburr.plan.io import load_plan, save_plan
+    from drakedeburr.plan.options import PlanOptions
+    from drakedeburr.plan.planner import plan_hub
+
+    folder = plans / f"tool_in_hand_{hub}{'_quick' if quick else ''}"
+    if not (folder / "plan.json").exists():
+        config = load_config("tool_in_hand", hub)
+        options = PlanOptions(windows=[0]) if quick else None
+        t0 = time.perf_counter()
+        save_plan(plan_hub(config, options=options), folder)
+        print(f"  planned {hub} in {time.perf_counter() - t0:.1f} s -> {folder}")
+    return load_plan(folder), folder
+
+
+def _stage_table(clock: Clock, total: tuple[float, float], base: tuple[float, float]) -> None:
+    print(f"  {'stage':<34}{'wall s':>9}{'cpu s':>9}")
+    for label, (w, c) in clock.t.items():
+        print(f"  {label:<34}{w:>9.2f}{c:>9.2f}")
+    print(f"  {'verify (library, new)':<34}{total[0]:>9.2f}{total[1]:>9.2f}")
+    print(f"  {'distances, previous (baseline)':<34}{base[0]:>9.2f}{base[1]:>9.2f}")
+    new = clock.t["distances (tracked + certificate)"]
+    print(f"  distances speed-up vs baseline: {base[0] / new[0]:.1f}x wall, "
+          f"{base[1] / new[1]:.1f}x cpu")
+
+
+def _same_figures(old, new) -> str:
+    bad = [f for f in ("clearance", "self_distance", "burr", "clearance_pair", "self_pair",
+                       "burr_pair") if not np.array_equal(np.asarray(getattr(old, f)),
+                                                          np.asarray(getattr(new, f)))]
+    diff = {f: int(np.sum(np.asarray(getattr(old, f)) != np.asarray(getattr(new, f))))
+            for f in bad}
+    man = float(np.max(np.abs(old.manipulability - new.manipulability)))
+    return (f"per-sample minima identical: {not bad} {diff or ''}; manipulability max diff "
+            f"{man:.1e}; fk {old.fk_difference:.1e} vs {new.fk_difference:.1e} m")
+
+
+def bench_hub(hub: str, plans: Path, quick: bool, baseline) -> None:
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub.model import load_hub
+
+    plan, folder = _plan(hub, plans, quick)
+    config = config_for_plan(plan)
+    clock = Clock()
+    w, c = time.perf_counter(), time.process_time()
+    cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
+    hub_model = load_hub(plan.hub)
+    clock.t["load cell + hub"] = (time.perf_counter() - w, time.process_time() - c)
+    clock.wrap(sampling, "_samples", "samples")
+    clock.wrap(program, "read_program", "program reading")
+    clock.wrap(distances, "measure_samples", "distances (tracked + certificate)")
+    clock.wrap(cut_geometry, "cut_geometry", "cut geometry")
+    w, c = time.perf_counter(), time.process_time()
+    sp = sampling.sample_plan(plan, config, cell=cell, hub_model=hub_model)
+    w2, c2 = time.perf_counter(), time.process_time()
+    report = verify_sampled(sp, config)
+    clock.t["checks"] = (time.perf_counter() - w2, time.process_time() - c2)
+    total = (time.perf_counter() - w + clock.t["load cell + hub"][0],
+             time.process_time() - c + clock.t["load cell + hub"][1])
+    w, c = time.perf_counter(), time.process_time()
+    old = baseline(cell, sp.samples, config.tolerances)
+    base = (time.perf_counter() - w, time.process_time() - c)
+    print(f"\n## hub {hub}: {len(plan.targets)} targets, {sp.plan.trajectory.duration:.1f} s "
+          f"cycle, {len(sp.samples)} samples, verdict "
+          f"{'PASS' if report.passed else 'FAIL ' + ','.join(report.failed)}")
+    _stage_table(clock, total, base)
+    print("  " + _same_figures(old, sp.distances))
+    cert = sp.distances.certificate
+    for name, k in (("clearance", cert.clearance), ("self", cert.self_distance)):
+        print(f"  certificate {name:<9} certified {k.certified * 1e3:8.4f} mm, sampled "
+              f"{k.sampled * 1e3:8.4f} mm, smallest read {k.observed * 1e3:8.4f} mm, limit "
+              f"{k.limit * 1e3:.1f} mm -> {'PASS' if k.passed else 'FAIL'}")
+    print(f"  readings: sweep {cert.sweep_readings} pair readings at {cert.samples_posed} "
+          f"samples; refinement {cert.refined} intervals, {cert.refine_readings} readings, "
+          f"{cert.depth} levels")
+    return folder
+
+
+def bench_cli(folder: Path) -> None:
+    exe = Path(sys.executable).with_name("drakedeburr")
+    w = time.perf_counter()
+    r = subprocess.run([str(exe), "verify", str(folder)], capture_output=True, text=True)
+    print(f"  `drakedeburr verify {folder}`: {time.perf_counter() - w:.1f} s wall, exit "
+          f"{r.returncode}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="2 windows, 2 batch hubs, quick batch")
-    ap.add_argument("--hub", default="h5_straight")
+    ap.add_argument("--hubs", default="h5_straight", help="comma-separated bundled hubs")
+    ap.add_argument("--plans", default=str(Path(tempfile.gettempdir()) / "bench_verify_plans"))
+    ap.add_argument("--cli", action="store_true", help="also time the CLI on each plan")
+    ap.add_argument("--quick", action="store_true", help="window 0 only")
     args = ap.parse_args()
-    params = ProcessParameters(grinding_speed=0.075)
-
-    hub = load_hub(args.hub)
-    windows = [0, 1] if args.quick else [w.index for w in hub.windows]
-    t0 = time.perf_counter()
-    plan = reference_plan("tool_in_hand", args.hub, windows, params=params)
-    t_plan = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    cell = load_cell(plan.scenario, plan.hub)
-    t_load = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    config = Config("tool_in_hand", args.hub, Recipe(process=params), default_tolerances())
-    report = verify_plan(plan, config, expected_windows=windows, cell=cell, hub_model=hub)
-    t_verify = time.perf_counter() - t0
-    n = report.settings["samples"]
-    print("## 1. verification time per hub")
-    print(f"hub {args.hub}, {len(windows)} windows, {len(plan.targets)} targets, "
-          f"{plan.trajectory.duration:.1f} s cycle, verdict "
-          f"{'PASS' if report.passed else 'FAIL ' + ','.join(report.failed)}")
-    print(f"{'step':<26}{'seconds':>10}{'per window':>12}{'ms/sample':>11}")
-    print(f"{'reference plan (build)':<26}{t_plan:>10.2f}{t_plan / len(windows):>12.2f}")
-    print(f"{'load cell':<26}{t_load:>10.2f}")
-    print(f"{'verify_plan':<26}{t_verify:>10.2f}{t_verify / len(windows):>12.2f}"
-          f"{1e3 * t_verify / n:>11.2f}   ({n} samples)")
-
-    print("\n## 2. distances per sample (ms): 300 samples over the plan / 300 on one cut")
-    cut = next(sg for sg in plan.segments if sg.kind == "cut")
-    sets = {"whole plan": plan.trajectory.value(np.linspace(0, plan.trajectory.duration, 300)),
-            "cut only": plan.trajectory.value(np.linspace(*cut.t_range, 300))}
-    print(f"{'method':<44}{'whole plan':>12}{'cut only':>10}{'ratio (cut)':>13}")
-    base = {}
-    for method, label in (("pairwise", "Drake pairwise query (default, baseline)"),
-                          ("culled", "culled narrow phase (cross-check)")):
-        probe = DistanceProbe(cell, 0.02, method=method)
-        row = []
-        for qs in sets.values():
-            probe.measure(qs[0])
-            t0 = time.perf_counter()
-            for q in qs:
-                probe.measure(q)
-            row.append(1e3 * (time.perf_counter() - t0) / len(qs))
-        base.setdefault("cut", row[1])
-        print(f"{label:<44}{row[0]:>12.2f}{row[1]:>10.2f}{row[1] / base['cut']:>13.2f}")
-
-    hubs = ["h5_straight", "h5_split"] if args.quick else \
-        ["h5_straight", "h5_deepdish", "h5_split", "h6_curved"]
-    scope = "window 0" if args.quick else "all windows"
-    print(f"\n## 3. verify-all speed-up (reference plans of {scope}, tool-in-hand, "
-          f"{len(hubs)} hubs)")
-    opts = {"scenarios": ["tool_in_hand"], "planner": "reference",
-            "windows": [0] if args.quick else None, "quick": args.quick,
-            "grinding_speed": 0.075}
-    times = {}
-    for workers in (1, 2):
-        with tempfile.TemporaryDirectory() as tmp:
-            t0 = time.perf_counter()
-            summary = verify_all(hubs, tmp, workers=workers, **opts)
-            times[workers] = time.perf_counter() - t0
-            verdicts = ",".join("P" if r["passed"] else ("E" if r["error"] else "F")
-                                for r in summary["rows"])
-        print(f"workers={workers}: {times[workers]:.1f} s for {len(hubs)} hubs ({verdicts})")
-    print(f"speed-up 2 vs 1 workers: {times[1] / times[2]:.2f}x")
+    baseline, label = _baseline_measure()
+    print(f"## verification per hub (tool-in-hand, plan_hub defaults); baseline distances: "
+          f"{label}")
+    for hub in args.hubs.split(","):
+        folder = bench_hub(hub, Path(args.plans), args.quick, baseline)
+        if args.cli:
+            bench_cli(folder)
 
 
 if __name__ == "__main__":

@@ -151,6 +151,13 @@ class Tolerances:
     wrist_margin: float = 0.15  # [rad] smallest |J5| allowed (J5 = 0 is the wrist singularity)
     min_manipulability: float = 1e-4  # [-] |det J| of the flange Jacobian (advisory)
     query_distance: float = 0.02  # [m] distances above this are reported as "> this" (verify)
+    # the clearance certificate refines between samples until its bound is within this [m]
+    # of the smallest distance read, or within this share of that distance's margin above its
+    # limit if larger (verify.certificate)
+    certificate_gap: float = 0.01e-3
+    certificate_share: float = 0.1
+    # [s] shortest interval the certificate bisects
+    certificate_floor: float = 1e-7
     # [m] how far a hub's convex collision pieces may reach past its true surface (the hub
     # generator splits any piece reaching > 0.5 mm into a window opening); allowed on top of
     # the depth of cut when the burr head's penetration of the pieces is checked

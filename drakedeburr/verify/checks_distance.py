@@ -1,4 +1,5 @@
-"""Distance checks: clearance to the hub and the cell, self-collision, the burr's contact."""
+"""Distance checks: clearance to the hub and the cell, self-collision, the burr's contact, and
+the continuous clearance certificate between the samples."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from drakedeburr.verify.refs import LINEAR_KINDS
 from drakedeburr.verify.report import CheckItem
 from drakedeburr.verify.sampling import KIND_CODE
 
-__all__ = ["clearance", "self_collision", "burr_contact"]
+__all__ = ["clearance", "clearance_certificate", "self_collision", "burr_contact"]
 
 
 def clearance(sp, cfg) -> CheckItem:
@@ -51,3 +52,37 @@ def burr_contact(sp, cfg) -> CheckItem:
                f"edge tolerance + {tol.collision_model_excess * 1e3:.2f} mm collision-model "
                f"excess on approach/cut/retract (burr_engagement checks the true edge), full "
                f"clearance elsewhere")
+
+
+def clearance_certificate(sp, cfg) -> CheckItem:
+    tol, cert = cfg.tolerances, sp.distances.certificate
+    if cert is None:
+        return CheckItem("clearance_certificate", False, None, tol.min_clearance, "m", ">=",
+                         detail="no certificate: the distances were measured by the dense "
+                                "reference method")
+    c, s = cert.clearance, cert.self_distance
+    mm = 1e3
+    t_mid = 0.5 * (c.interval[0] + c.interval[1])
+    where = sp.where_time(t_mid) if np.isfinite(t_mid) else {}
+    problems = []
+    for name, k in (("clearance", c), ("self", s)):
+        if not k.passed:
+            problems.append(f"{name} certified {k.certified * mm:.4f} mm below its limit "
+                            f"{k.limit * mm:.4f} mm")
+        if k.observed < k.limit and k.observed < k.sampled:
+            problems.append(f"{name} {k.observed * mm:.4f} mm read at t={k.observed_time:.4f} s "
+                            f"between the samples ({k.observed_pair[0]} <-> "
+                            f"{k.observed_pair[1]}): the samples miss it")
+        if k.unresolved_below_limit:
+            problems.append(f"{name}: {k.unresolved_below_limit} pair bound(s) below the limit "
+                            f"at the {cert.floor:.0e} s floor")
+    res = f"{cert.gap * mm:.3f} mm or {cert.share:.0%} of the margin above the limit"
+    detail = (f"certified over the whole trajectory: clearance >= {c.certified * mm:.4f} mm "
+              f"(sampled {c.sampled * mm:.4f} mm, smallest read {c.observed * mm:.4f} mm), "
+              f"self >= {s.certified * mm:.4f} mm (sampled {s.sampled * mm:.4f} mm); "
+              f"method: {cert.method}; {cert.refined} intervals refined ({cert.refine_readings} "
+              f"readings, {cert.depth} levels), resolution {res}")
+    return CheckItem(
+        "clearance_certificate", c.passed and s.passed and not problems,
+        float(c.certified), float(c.limit), "m", ">=", pair=c.pair, **where,
+        detail="; ".join(problems + [detail]))

@@ -71,6 +71,8 @@ CHECKS: tuple[Check, ...] = (
           "theta_A/theta_B at the CL targets (source Tab. 3-6)"),
     Check("clearance", dist.clearance, "required",
           "robot and tool vs hub and cell, burr head-hub excepted"),
+    Check("clearance_certificate", dist.clearance_certificate, "required",
+          "clearance and self distance bounded between the samples, over the whole trajectory"),
     Check("self_collision", dist.self_collision, "required", "robot and tool vs themselves"),
     Check("burr_contact", dist.burr_contact, "required",
           "burr head into the hub at most the depth of cut (cutting moves), clear elsewhere"),

@@ -11,8 +11,9 @@ frozen record:
 * :class:`ProgramReading` - the Cartesian program as a controller executes it (linear moves
   between consecutive targets, orientation slerped), read against the samples: which move each
   sample lies on and how far from it (:mod:`drakedeburr.verify.program`);
-* :class:`Distances` - signed distances per sample from the scene graph, the Drake-plant FK
-  cross-check and the manipulability (:mod:`drakedeburr.verify.distances`);
+* :class:`Distances` - signed distances per sample from the scene graph, the continuous
+  clearance certificate between the samples, the Drake-plant FK cross-check and the
+  manipulability (:mod:`drakedeburr.verify.distances`);
 * :class:`CutGeometry` - per cut sample the executed contact point, its distance to the true
   edge, the burr's engagement, theta_A/theta_B and the cone margin
   (:mod:`drakedeburr.verify.cut_geometry`).
@@ -95,7 +96,9 @@ class ProgramReading:
 class Distances:
     """Per sample: smallest signed distance of each class [m] (inf: nothing within the query
     distance) and its pair; |det J| of the flange Jacobian; largest Drake-vs-analytic FK
-    difference over the samples [m]."""
+    difference [m] and which evaluations it covers (``fk_scope``); the continuous clearance
+    certificate (:class:`drakedeburr.verify.certificate.ClearanceCertificate`, None from the
+    dense reference method)."""
 
     clearance: np.ndarray
     clearance_pair: tuple
@@ -105,6 +108,8 @@ class Distances:
     burr_pair: tuple
     manipulability: np.ndarray
     fk_difference: float
+    fk_scope: str = ""
+    certificate: object = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -357,7 +362,8 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
     refs: dict[int, WindowRef | None] = {
         w: window_ref(w, plan.targets, tool_paths.get(w), edge_of.get(w), config.process)
         for w in cut_windows}
-    distances = measure_samples(cell, samples, tol, progress, len(plan.segments))
+    distances = measure_samples(cell, samples, tol, progress, len(plan.segments),
+                                trajectory=plan.trajectory)
     cut = cut_geometry(plan, samples, program, refs, edge_of, cut_windows, config.tolerances)
     return SampledPlan(
         plan=plan, config=config, cell=cell, kin=kin, limits=JointLimits.of_cell(cell),

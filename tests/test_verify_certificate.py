@@ -1,0 +1,171 @@
+"""The continuous clearance certificate: it catches a graze between two samples that sampling
+misses, and on good plans it is at most every distance read and close to a dense brute-force
+reading (both cells)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import verify_support as vs
+
+import drakedeburr.verify.certificate as mut
+from drakedeburr.plan.types import JointTrajectory
+from drakedeburr.verify.checks_distance import clearance, clearance_certificate
+from drakedeburr.verify.distances import DistanceProbe
+from drakedeburr.verify.sampling import sample_plan
+
+
+def _clearance(probe, q) -> float:
+    return probe.measure(q).clearance
+
+
+def _split_and_bump(traj, ta: float, tb: float, bump: np.ndarray) -> JointTrajectory:
+    """The same trajectory with knots added at ``ta``/``tb`` and ``bump`` (6,) [rad] added on
+    [ta, tb] as 16 s^2 (1 - s)^2 (zero value and slope at both ends, ``bump`` at the
+    middle): a C1 change confined to one new piece."""
+    t = np.unique(np.concatenate([traj.t, [ta, tb]]))
+    deg = max(np.asarray(traj.c).shape[0] - 1, 4)
+    c = np.zeros((deg + 1, len(t) - 1, 6))
+    for n in range(deg + 1):  # Taylor coefficients of the old pieces at the new starts
+        c[deg - n] = (traj.derivative(t[:-1], n) if n else traj.value(t[:-1])) / \
+            math.factorial(n)
+    k = int(np.flatnonzero(np.isclose(t, ta))[0])
+    w = tb - ta
+    # 16 s^2 (1 - s)^2 with s = tau / w: coefficients of tau^4, tau^3, tau^2
+    c[deg - 4, k] += 16.0 / w ** 4 * bump
+    c[deg - 3, k] += -32.0 / w ** 3 * bump
+    c[deg - 2, k] += 16.0 / w ** 2 * bump
+    return JointTrajectory(t=t, c=c)
+
+
+#: how far below the limit the graze goes [m]
+GRAZE = 0.1e-3
+
+
+@functools.cache
+def _grazing_case():
+    """The good plan with the tool pushed toward the hub and back between two samples (of the
+    coarse smoke-test sampling: one every 2 mm of tool travel), until the burr shank comes
+    GRAZE closer than the limit: the tool travels ~1 mm there, the sampler sees nothing."""
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    cell, hub = vs.cell_and_hub()
+    plan = vs.good_plan()
+    config = vs.config(**vs.COARSE)
+    probe = DistanceProbe(cell, 0.02)
+    # 1 ms after the last sample before the good plan's closest approach: the next one comes
+    # ~1.9 mm of tool travel later
+    t_s = sample_plan(plan, config, cell=cell, hub_model=hub,
+                      expected_windows=list(vs.WINDOWS)).samples.t
+    t_near = vs.good_report().item("clearance").time
+    ta = float(t_s[t_s <= t_near][-1]) + 1e-3
+    tb = ta + 3e-3
+    q_c = plan.trajectory.value(0.5 * (ta + tb))
+    ctx = cell.plant.CreateDefaultContext()
+    cell.plant.SetPositions(ctx, q_c)
+    J = cell.plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kQDot, cell.tool_frame,
+                                               np.zeros(3), cell.hub_frame, cell.hub_frame)
+    J_inv = np.linalg.pinv(J)
+    # the tool-point direction (of 26) that brings the shank nearest the hub, orientation kept
+    grid = np.array([u for u in np.ndindex(3, 3, 3) if u != (1, 1, 1)], float) - 1.0
+    grid /= np.linalg.norm(grid, axis=1, keepdims=True)
+    steps = [J_inv @ np.concatenate([np.zeros(3), 0.3e-3 * u]) / 0.3e-3 for u in grid]
+    dq = steps[int(np.argmin([_clearance(probe, q_c + 0.3e-3 * d) for d in steps]))]
+    target = config.tolerances.min_clearance - GRAZE
+    lo, hi = 0.0, 2e-3
+    for _ in range(40):  # how far along it [m of tool travel]
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _clearance(probe, q_c + mid * dq) > target else (lo, mid)
+    bumped = replace(plan, trajectory=_split_and_bump(plan.trajectory, ta, tb, hi * dq))
+    sp = sample_plan(bumped, config, cell=cell, hub_model=hub, expected_windows=list(vs.WINDOWS))
+    return sp, config, (ta, tb), probe
+
+
+def test_certificate_catches_a_graze_between_two_samples():
+    sp, config, (ta, tb), probe = _grazing_case()
+    t = sp.samples.t
+    # the premise: no sample inside the bumped piece, and it really grazes the hub
+    assert not np.any((t > ta + 1e-12) & (t < tb - 1e-12))
+    assert np.any(np.isclose(t, ta)) and np.any(np.isclose(t, tb))
+    dense = [_clearance(probe, sp.plan.trajectory.value(x)) for x in np.linspace(ta, tb, 41)]
+    limit = config.tolerances.min_clearance
+    assert min(dense) < limit - 0.5 * GRAZE
+    # sampling alone misses it ...
+    sampled = clearance(sp, config)
+    assert sampled.passed and sampled.value >= config.tolerances.min_clearance
+    # ... the certificate catches it, with a reading between the two samples
+    item = clearance_certificate(sp, config)
+    cert = sp.distances.certificate.clearance
+    assert not item.passed and item.value < config.tolerances.min_clearance
+    assert ta < cert.observed_time < tb and cert.observed < limit - 0.5 * GRAZE
+    assert cert.certified <= min(dense) + 1e-12
+    assert "between the samples" in item.detail and "burr_shank" in item.detail
+
+
+@functools.cache
+def _good_case(scenario: str = vs.SCENARIO):
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub.model import load_hub
+    from drakedeburr.verify.synthetic import reference_plan
+
+    if scenario == vs.SCENARIO:
+        cell, hub = vs.cell_and_hub()
+        plan, windows, sampling = vs.good_plan(), list(vs.WINDOWS), {}
+    else:
+        cell, hub = load_cell(scenario, vs.HUB), load_hub(vs.HUB)
+        windows = [0]
+        plan = reference_plan(scenario, vs.HUB, windows, params=vs.PARAMS)
+        sampling = vs.COARSE
+    config = replace(vs.config(**sampling), scenario=scenario)
+    sp = sample_plan(plan, config, cell=cell, hub_model=hub, expected_windows=windows)
+    return sp, config, cell
+
+
+@pytest.mark.parametrize("scenario", [vs.SCENARIO, "workpiece_in_hand"])
+def test_certificate_is_sound_and_tight_on_a_good_plan(scenario):
+    sp, config, cell = _good_case(scenario)
+    tol = config.tolerances
+    cert = sp.distances.certificate
+    probe = DistanceProbe(cell, tol.query_distance)
+    traj = sp.plan.trajectory
+    for k, series, limit in ((cert.clearance, sp.distances.clearance, tol.min_clearance),
+                             (cert.self_distance, sp.distances.self_distance, 0.0)):
+        # at most every distance read
+        assert k.certified <= np.min(series) and k.certified <= k.observed <= k.sampled
+        assert k.certified > limit, "the good plan is certified"
+        assert k.unresolved == 0
+    # dense brute force around the smallest clearance read and around the interval holding
+    # the certified bound: never below the certificate; the certificate within its
+    # resolution of the smallest
+    c = cert.clearance
+    res = max(tol.certificate_gap, tol.certificate_share * (c.observed - tol.min_clearance))
+    brute = {}
+    for name, t_mid in (("observed", c.observed_time), ("certified", 0.5 * sum(c.interval))):
+        times = np.linspace(max(t_mid - 0.01, 0.0), min(t_mid + 0.01, traj.duration), 801)
+        brute[name] = min(_clearance(probe, traj.value(x)) for x in times)
+        assert c.certified <= brute[name] + 1e-12, name
+    assert brute["observed"] - c.certified <= res + 2e-6, (brute, c.certified, res)
+    # and never below it anywhere on the trajectory (random times)
+    rng = np.random.default_rng(3)
+    for x in rng.uniform(0.0, traj.duration, 300):
+        d = probe.measure(traj.value(x))
+        assert d.clearance >= c.certified - 1e-12 and d.self_distance >= \
+            cert.self_distance.certified - 1e-12
+    item = clearance_certificate(sp, config)
+    assert item.passed and item.value == c.certified and item.pair == c.pair
+
+
+def test_method_is_reported():
+    assert "h^2/8" in mut.METHOD and "bisection" in mut.METHOD
+
+
+def test_registered_right_after_clearance_as_required():
+    from drakedeburr.verify.registry import CHECKS
+
+    names = [c.name for c in CHECKS]
+    k = names.index("clearance_certificate")
+    assert names[k - 1] == "clearance" and CHECKS[k].purpose == "required"
