@@ -185,7 +185,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
     if not (np.all(ok) and np.all(jumps <= ctx.options.max_joint_jump)):
         return None
     dn = d.copy()
-    dn[st] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in qn[st]]
+    dn[st] = ctx.checker.min_distances_along(qn[st], ctx.min_clearance + 1e-3)
     if np.any(dn[st] < np.minimum(d[st], ctx.min_clearance) - DISTANCE_SLACK):
         log.debug("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
                  "as it was", window, 1e3 * s_c)

@@ -48,7 +48,7 @@ def _approach_and_retract(ctx: PlanContext, wt, ex: ExecutedCut, failures: list)
                                           reason=f"{name} unreachable on the window's "
                                                  "configuration"))
             return None
-        dd = min(ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0] for q in path.q[1:])
+        dd = float(np.min(ctx.checker.min_distances_along(path.q[1:], ctx.min_clearance + 1e-3)))
         if dd < ctx.min_clearance - DISTANCE_SLACK:
             failures.append(FailureRecord(window=wt.window_index, kind=name, value=float(dd),
                                           limit=ctx.min_clearance, unit="m",

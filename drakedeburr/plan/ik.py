@@ -342,7 +342,7 @@ def _solve_with(run: _WindowRun, tg: _Target, solver, anchor, q_seed, with_dista
     args = (run.cell, run.checker, tg.p_HT, tg.cone_retract_H, run.half, tg.pref_retract_H, anchor)
     _, q = _solve_point(*args, q_seed, with_distance, solver, opts, run.lift)
     good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts, run.lift)
-    dist = run.checker.min_distance(q, run.reach)[0]
+    dist = run.checker.distance(q, run.reach)
     if good and dist < opts.min_distance - 1e-5 and not with_distance:
         # lazy collision constraint: re-solve with it from this solution
         with_distance = True
@@ -350,7 +350,7 @@ def _solve_with(run: _WindowRun, tg: _Target, solver, anchor, q_seed, with_dista
         _, q = _solve_point(*args, q, True, solver, opts, run.lift)
         good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts,
                                      run.lift)
-        dist = run.checker.min_distance(q, run.reach)[0]
+        dist = run.checker.distance(q, run.reach)
     return (q, X, dist, err, ang), good and dist >= opts.min_distance - 1e-5, with_distance
 
 

@@ -167,7 +167,7 @@ def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: 
                  "keeping the smooth cut", window, int(on.sum()))
         return cp, cut, dist
     d_new = dist.copy()
-    d_new[ch] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in q[ch]]
+    d_new[ch] = ctx.checker.min_distances_along(q[ch], ctx.min_clearance + 1e-3)
     floor = np.minimum(dist[ch], ctx.min_clearance) - DISTANCE_SLACK
     if np.any(d_new[ch] < floor):
         log.debug("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "
