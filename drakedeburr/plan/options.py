@@ -73,6 +73,9 @@ class PlanOptions:
             the cell's mount puts it, starts ranked from the previous window.
         relax: plan a window the recipe cannot cut again with a milder tilt box, the
             deviation recorded (:mod:`drakedeburr.plan.relax`).
+        workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
+            the cores this process may use, 1: one after the other here). The plan is the
+            same whatever the number (it is not recorded in the plan).
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -98,6 +101,7 @@ class PlanOptions:
     fillets: FilletOptions | None = None
     placement: bool = True
     relax: bool = True
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):
