@@ -228,10 +228,15 @@ def _scaled(A, b):
     return sps.diags(sc) @ A, b * sc
 
 
-def _program(lay, A_eq, b_eq, A_in, ub, R, cone, half, opt: FeedProgramOptions):
-    """One convex step: (w (nf, 3), sigma (ns)) or None."""
+def _program(lay, A_eq, b_eq, A_in, ub, R, cone, half, opt: FeedProgramOptions,
+             m_scale: float = 1.0):
+    """One convex step: (w (nf, 3), sigma (ns)) or None. The spline's second derivatives are
+    solved for in units of ``m_scale`` (their bound's size; w is ~0.01 rad)."""
     from pydrake.solvers import ClarabelSolver, MathematicalProgram, SolverOptions
 
+    col = np.ones(lay.n)
+    col[lay.nw:lay.nw + 6 * (lay.ns - 2)] = m_scale
+    A_eq, A_in = A_eq @ sps.diags(col), A_in @ sps.diags(col)
     prog = MathematicalProgram()
     x = prog.NewContinuousVariables(lay.n, "x")
     w = x[:lay.nw].reshape(lay.nf, 3)
@@ -310,7 +315,8 @@ def hold_feed(kin, s: np.ndarray, X_HT: np.ndarray, q: np.ndarray, cone: np.ndar
         M_end = CubicSpline(s, q_full, axis=0)(s[[a0, a1]], 2)
         A_eq, b_eq = _spline_rows(lay, h, qs, G, free_of, M_end)
         A_in, ub = _limit_rows(lay, h, qs, G, free_of, M_end, v_sub, dv_sub, acc_lim, vel_lim)
-        step = _program(lay, A_eq, b_eq, A_in, ub, R, cone[free], half_angle, opt)
+        step = _program(lay, A_eq, b_eq, A_in, ub, R, cone[free], half_angle, opt,
+                        m_scale=float(np.max(acc_lim) / np.min(v_sub) ** 2))
         if step is None:
             break
         w, sig = step
