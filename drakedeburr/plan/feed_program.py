@@ -187,39 +187,46 @@ def _limit_rows(lay: _Layout, h, qs, G, free_of, M_end, v, dv, acc_max, vel_max)
     sigma_k)`` and speeds ``|v_k q'_kj| <= vel_max_j (1 + sigma_k)``, q' the spline's first
     derivative ``(Q_{k+1} - Q_k) / h_k - h_k (2 M_k + M_{k+1}) / 6``."""
     ns = lay.ns
+    k = np.arange(1, ns - 1)
+    n = len(k)
     rows, cols, vals, ub = [], [], [], []
+    n_row = 0
 
-    def q_of(k, j):
-        m = free_of[k]
-        terms = [(lay.w(m, e), G[m, j, e]) for e in range(3)] if m >= 0 else []
-        return terms, qs[k, j]
+    def family(j):
+        """The joint's q' and q'' at every k: lists of (row index into k, column, coefficient)
+        and their constant parts."""
+        dq_terms, dq_c = [], np.zeros(n)
+        for kk, cf in ((k + 1, 1.0 / h[k]), (k, -1.0 / h[k])):
+            dq_c += cf * qs[kk, j]
+            m = free_of[kk]
+            on = np.flatnonzero(m >= 0)
+            dq_terms += [(on, lay.w(m[on], e), cf[on] * G[m[on], j, e]) for e in range(3)]
+        for kk, cf in ((k, -h[k] / 3.0), (k + 1, -h[k] / 6.0)):
+            inner = kk < ns - 1
+            dq_terms.append((np.flatnonzero(inner), lay.M(kk[inner], j), cf[inner]))
+            dq_c[~inner] += cf[~inner] * M_end[1, j]
+        return dq_terms, dq_c
 
-    def m_of(k, j):
-        if 0 < k < ns - 1:
-            return [(lay.M(k, j), 1.0)], 0.0
-        return [], M_end[0 if k == 0 else 1, j]
-
-    def add(terms, const, bound, k):
+    def add(terms, const, bound):
+        nonlocal n_row
         for sgn in (1.0, -1.0):
-            r = len(ub)
-            for c, x in terms:
-                rows.append(r), cols.append(c), vals.append(sgn * x)
-            rows.append(r), cols.append(lay.sigma(k)), vals.append(-bound)
+            for idx, cc, vv in terms:
+                rows.append(n_row + idx), cols.append(cc), vals.append(sgn * vv)
+            rows.append(n_row + np.arange(n)), cols.append(lay.sigma(k))
+            vals.append(np.full(n, -bound))
             ub.append(bound - sgn * const)
+            n_row += n
 
-    for k in range(1, ns - 1):
-        for j in range(6):
-            (t1, c1), (t0, c0) = q_of(k + 1, j), q_of(k, j)
-            (u0, m0), (u1, m1) = m_of(k, j), m_of(k + 1, j)
-            dq = ([(c, x / h[k]) for c, x in t1] + [(c, -x / h[k]) for c, x in t0]
-                  + [(c, -x * h[k] / 3) for c, x in u0] + [(c, -x * h[k] / 6) for c, x in u1])
-            dq_c = (c1 - c0) / h[k] - h[k] * (2 * m0 + m1) / 6
-            acc = ([(c, x * v[k] ** 2) for c, x in u0]
-                   + [(c, x * v[k] * dv[k]) for c, x in dq])
-            add(acc, m0 * v[k] ** 2 + dq_c * v[k] * dv[k], acc_max[j], k)
-            add([(c, x * v[k]) for c, x in dq], dq_c * v[k], vel_max[j], k)
-    A = sps.csr_matrix((vals, (rows, cols)), shape=(len(ub), lay.n))
-    return A, np.asarray(ub)
+    every = np.arange(n)
+    vk, ak = v[k], v[k] * dv[k]
+    for j in range(6):
+        dq_terms, dq_c = family(j)
+        acc = [(every, lay.M(k, j), vk ** 2)] + [(i, c, x * ak[i]) for i, c, x in dq_terms]
+        add(acc, ak * dq_c, acc_max[j])
+        add([(i, c, x * vk[i]) for i, c, x in dq_terms], vk * dq_c, vel_max[j])
+    A = sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(n_row, lay.n))
+    return A, np.concatenate(ub)
 
 
 def _scaled(A, b):
