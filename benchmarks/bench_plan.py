@@ -1,21 +1,20 @@
-"""Benchmark of the planning stage (issue 5): a whole hub end to end vs the naive alternative.
+"""Benchmark of the planning stage: planning time per bundled hub and per stage, against the
+previous implementation in the same run (issue 19), and the extras of issue 5.
 
-1. A whole hub (all windows) planned in the tool-in-hand cell: each stage's share, IK time per
-   CL point, cycle time vs the physical limit (edge length / 150 mm/s + the same transitions).
-2. The naive alternative a Drake user writes first: one KinematicTrajectoryOptimization per
-   window with position + cone + minimum-distance constraints at every CL point, timed on the
-   same window (or its first ``--naive-points`` points) with its accuracy at the CL points.
-3. Timing cross-check: Drake's TOPP-RA (AddFrameTranslationalSpeedLimit) on the same cut path
-   vs the planner's own passes: duration and the speed overshoot between grid points.
-4. ``--accel-sweep``: how the speed band and the cut time depend on the robot model's
-   acceleration limits, which are assumed values (``PlanOptions.acceleration_scale`` on the
-   joint accelerations and the TCP path acceleration cap), on windows 0-1 of the hub; the
-   x1 row is the baseline of the same run.
-5. ``--fillets``: the same hub planned again with the fillet repair (``PlanOptions.fillets``):
-   cut time, share in band and planning time per window against the run of item 1.
+1. Speed (default): every bundled hub in both cells planned by the previous implementation
+   (``--baseline REF``: that commit's tree, extracted by ``git archive`` into a temporary folder
+   and imported through PYTHONPATH) and by this tree, one process (``--workers 1``) and the
+   default (windows on all cores), interleaved per hub so that both see the same machine load;
+   each run in its own subprocess (benchmarks/plan_run.py). Prints wall and CPU time (worker
+   processes included), the share of each cut in the feed band (and the planner's bound), and
+   per stage the wall/CPU time of the one-process runs (exclusive: nested stages apart).
+2. ``--naive``: one KinematicTrajectoryOptimization per window with position + cone +
+   minimum-distance constraints at every CL point (what a Drake user writes first).
+3. ``--toppra``: Drake's TOPP-RA on window 0's cut path vs the planner's own timing.
+4. ``--accel-sweep``: share in band and cut time vs the robot model's acceleration limits.
 
-Run:  PYTHONPATH=. python benchmarks/bench_plan.py [--quick] [--hub NAME] [--accel-sweep]
-      [--fillets]
+Run:  PYTHONPATH=. python benchmarks/bench_plan.py [--quick] [--hubs A,B] [--cells tool,workpiece]
+      [--baseline REF] [--naive] [--toppra] [--accel-sweep]
 """
 
 from __future__ import annotations
@@ -157,132 +156,136 @@ def accel_sweep(cell, wts, hub_name: str, scales=(1.0, 2.0, 4.0, 10.0, 20.0)) ->
                   "vs x1", "failures", "plan s"])
 
 
-def fillet_compare(cell, wts, hub_name: str, plan, t_plan: float) -> None:
-    """Plan the same windows with the fillet repair; print each window's cut time and share in
-    band without/with it and the planning times (the run without is item 1's)."""
-    from drakedeburr.plan.fillets import FilletOptions
-    from drakedeburr.plan.planner import PlanOptions, plan_windows
+def _baseline_tree(ref: str) -> str:
+    """The tree of commit ``ref`` in a temporary folder (git archive); its path."""
+    import subprocess
+    import tempfile
+    from pathlib import Path
 
-    t0 = time.perf_counter()
-    fixed = plan_windows(cell, wts, load_config("tool_in_hand", hub_name),
-                         options=PlanOptions(fillets=FilletOptions()))
-    t_fixed = time.perf_counter() - t0
-    rows = []
-    for a, b in zip(plan.meta["windows"], fixed.meta["windows"], strict=True):
-        rows.append([a["window"], f"{a['cut_seconds']:.2f}", f"{b['cut_seconds']:.2f}",
-                     f"{b['cut_seconds'] / a['cut_seconds']:.2f}",
-                     f"{100 * a['speed_in_band_fraction']:.0f} %",
-                     f"{100 * b['speed_in_band_fraction']:.0f} %"])
-    print("\nfillet repair (PlanOptions.fillets), same windows:\n")
-    _table(rows, ["win", "cut s without", "cut s with", "ratio", "in band without",
-                  "in band with"])
-    m0, m1 = plan.meta, fixed.meta
-    print(f"\ncycle {m0['cycle_seconds']:.2f} s -> {m1['cycle_seconds']:.2f} s "
-          f"({m1['cycle_seconds'] / m0['cycle_seconds']:.3f}x); planning {t_plan:.1f} s -> "
-          f"{t_fixed:.1f} s ({t_fixed / t_plan:.1f}x); failure records {len(fixed.failures)}")
+    root = Path(__file__).resolve().parent.parent
+    out = Path(tempfile.mkdtemp(prefix="bench_plan_base_"))
+    data = subprocess.run(["git", "-C", str(root), "archive", ref], check=True,
+                          capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(out)], input=data, check=True)
+    return str(out)
+
+
+def _run(tree: str, scenario: str, hub: str, workers: int | None) -> dict:
+    """One planning run of the tree at ``tree`` in a subprocess (benchmarks/plan_run.py)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parent / "plan_run.py"
+    cmd = [sys.executable, str(script), scenario, hub]
+    if workers is not None:
+        cmd += ["--workers", str(workers)]
+    env = {**os.environ, "PYTHONPATH": tree}
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tree)
+    lines = [x for x in out.stdout.splitlines() if x.startswith("{")]
+    if out.returncode or not lines:
+        raise RuntimeError(f"{tree}: {scenario} {hub} failed:\n{out.stderr[-2000:]}")
+    return json.loads(lines[-1])
+
+
+def _band(r: dict) -> str:
+    return "/".join(f"{100 * w['in_band']:.0f}" for w in r["windows"])
+
+
+def speed(hubs, cells, baseline: str) -> None:
+    """Item 1 (module docstring)."""
+    import os
+    from pathlib import Path
+
+    here = str(Path(__file__).resolve().parent.parent)
+    base = _baseline_tree(baseline)
+    load = os.getloadavg()[0]
+    print(f"## planning time: previous implementation ({baseline}) vs this tree, same run "
+          f"(load average {load:.1f} at the start, {os.cpu_count()} cores)\n")
+    rows, stages = [], {}
+    for cell in cells:
+        for hub in hubs:
+            b = _run(base, cell, hub, None)
+            n1 = _run(here, cell, hub, 1)
+            n = _run(here, cell, hub, None)
+            stages[(cell, hub)] = (b, n1)
+            bounds = [w["bound"] for w in n["windows"] if w["bound"] is not None]
+            rows.append([hub, cell.split("_")[0], f"{b['wall']:.1f}", f"{n1['wall']:.1f}",
+                         f"{n['wall']:.1f}", f"{b['wall'] / n['wall']:.2f}",
+                         f"{b['cpu'] + b['cpu_children']:.1f}",
+                         f"{n['cpu'] + n['cpu_children']:.1f}",
+                         f"{b['failures']}/{n['failures']}",
+                         "yes" if n1["digest"] == n["digest"] else "NO",
+                         _band(b), _band(n),
+                         f"{100 * min(bounds):.0f}" if bounds else "-"])
+            print("  ".join(rows[-1]), flush=True)
+    print()
+    _table(rows, ["hub", "cell", "before s", "now 1 proc s", "now s", "speed-up", "before CPU s",
+                  "now CPU s", "failures", "same plan 1/N proc", "in band % before",
+                  "in band % now", "least bound %"])
+    for (cell, hub), (b, n1) in stages.items():
+        names = list(dict.fromkeys(list(b["stages_wall"]) + list(n1["stages_wall"])))
+        srows = []
+        for name in names:
+            bw, nw = b["stages_wall"].get(name, 0.0), n1["stages_wall"].get(name, 0.0)
+            srows.append([name, f"{bw:.2f}", f"{b['stages_cpu'].get(name, 0.0):.2f}",
+                          f"{nw:.2f}", f"{n1['stages_cpu'].get(name, 0.0):.2f}"])
+        rest_b = b["wall"] - sum(b["stages_wall"].values())
+        rest_n = n1["wall"] - sum(n1["stages_wall"].values())
+        srows.append(["other", f"{rest_b:.2f}", "", f"{rest_n:.2f}", ""])
+        srows.append(["total", f"{b['wall']:.2f}", f"{b['cpu']:.2f}", f"{n1['wall']:.2f}",
+                      f"{n1['cpu']:.2f}"])
+        print(f"\n### stages, {hub}, {cell} (one process; seconds, exclusive)\n")
+        _table(srows, ["stage", "before wall", "before CPU", "now wall", "now CPU"])
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="two windows, 40-point naive KTO")
-    ap.add_argument("--hub", default=None)
-    ap.add_argument("--source", default="auto", choices=("auto", "toolpath", "edges"))
+    ap.add_argument("--quick", action="store_true", help="h5_straight, tool in hand only")
+    ap.add_argument("--hubs", default=None, help="comma-separated hubs (default all bundled)")
+    ap.add_argument("--cells", default="tool_in_hand,workpiece_in_hand")
+    ap.add_argument("--baseline", default="6f7875c",
+                    help="commit of the previous implementation (default: main before issue 19)")
+    ap.add_argument("--no-speed", action="store_true", help="skip item 1")
+    ap.add_argument("--naive", action="store_true", help="item 2 on the default hub")
     ap.add_argument("--naive-points", type=int, default=None)
-    ap.add_argument("--fillets", action="store_true",
-                    help="also plan the hub with the fillet repair (same run, vs without)")
+    ap.add_argument("--toppra", action="store_true", help="item 3 on the default hub")
     ap.add_argument("--accel-sweep", action="store_true",
-                    help="also plan windows 0-1 with the acceleration limits x1, x2, x4, x10, x20")
+                    help="item 4: windows 0-1 with the acceleration limits x1, x2, x4, x10, x20")
     args = ap.parse_args()
 
+    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.resources import hub_names
+
+    hubs = (["h5_straight"] if args.quick else
+            args.hubs.split(",") if args.hubs else sorted(hub_names()))
+    cells = ["tool_in_hand"] if args.quick else args.cells.split(",")
+    if not args.no_speed:
+        speed(hubs, cells, args.baseline)
+    if not (args.naive or args.toppra or args.accel_sweep):
+        return
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.hub import DEFAULT_HUB, load_hub
+    from drakedeburr.hub import load_hub
     from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
 
-    hub_name = args.hub or DEFAULT_HUB
-    t0 = time.perf_counter()
-    cell = load_cell("tool_in_hand", hub_name)
-    t_cell = time.perf_counter() - t0
-    hub = load_hub(hub_name)
-    t0 = time.perf_counter()
-    wts = window_targets_for_hub(hub, source=args.source,
-                                 windows=(0, 1) if args.quick else None)
-    t_targets = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    plan = plan_windows(cell, wts, load_config("tool_in_hand", hub_name))
-    t_plan = time.perf_counter() - t0
-    m = plan.meta
-    ws = m["windows"]
-    ik = sum(w["ik_seconds"] for w in ws)
-    dense = sum(w["dense_seconds"] for w in ws)
-    timing = sum(w["timing_seconds"] for w in ws)
-    trans = m["timings"]["transition_seconds"]
-    total = t_cell + t_targets + t_plan
-    points = sum(w["ik"]["points"] for w in ws)
-    print(f"## plan: hub {hub_name}, {len(ws)} windows, {points} CL targets, "
-          f"{len(plan.failures)} failure records\n")
-    rows = [["load cell", f"{t_cell:.1f}", f"{100 * t_cell / total:.0f} %"],
-            ["targets (CL + orientation)", f"{t_targets:.1f}", f"{100 * t_targets / total:.0f} %"],
-            ["IK at CL targets", f"{ik:.1f}", f"{100 * ik / total:.0f} %"],
-            ["executed motion + clearance", f"{dense:.1f}", f"{100 * dense / total:.0f} %"],
-            ["timing", f"{timing:.2f}", f"{100 * timing / total:.1f} %"],
-            ["transitions", f"{trans:.1f}", f"{100 * trans / total:.0f} %"],
-            ["total", f"{total:.1f}", "100 %"]]
-    _table(rows, ["stage", "seconds", "share"])
-    print(f"\nIK per CL point: {1e3 * ik / points:.1f} ms (mean over the hub)")
-    wrows = [[w["window"], w["kind"], w["cl_points"], f"{1e3 * w['ik']['seconds_per_point']:.0f}",
-              w["ik"]["distance_resolves"], w["ik"]["failed"],
-              f"{w['j4_range_deg']:.1f}", f"{w['j5_range_deg']:.1f}", f"{w['j6_range_deg']:.1f}",
-              f"{w['min_clearance_m'] * 1e3:.2f}", f"{100 * w['speed_in_band_fraction']:.0f} %",
-              f"{w['cut_seconds']:.2f}", f"{w['tool_travel_m'] / 0.15:.2f}"] for w in ws]
-    print()
-    _table(wrows, ["win", "kind", "CL", "ms/pt", "dist", "fail", "J4 deg", "J5 deg", "J6 deg",
-                   "clear mm", "in band", "cut s", "limit s"])
-    seg = m["segment_seconds"]
-    moves = sum(v for k, v in seg.items() if k != "cut")
-    limit = m["physical_cut_seconds"] + moves
-    print(f"\ncycle {m['cycle_seconds']:.2f} s = cut {seg.get('cut', 0):.2f} s + other moves "
-          f"{moves:.2f} s; physical limit {m['physical_cut_seconds']:.2f} s + {moves:.2f} s = "
-          f"{limit:.2f} s -> ratio {m['cycle_seconds'] / limit:.2f} (target <= 1.05); cut time "
-          f"ratio {m['cut_time_ratio']:.2f}")
-
-    n_naive = args.naive_points or (40 if args.quick else len(wts[0]))
-    ours_window = ws[0]["ik_seconds"] + ws[0]["dense_seconds"] + ws[0]["timing_seconds"]
-    # the naive program with growing iteration budgets: its time to an accurate window (the
-    # tolerance of the plan's dense check, 0.05 mm at the CL points), or the largest budget's
-    caps = (300,) if args.quick else (300, 1000, 3000)
-    nrows, needed = [], None
-    for cap in caps:
-        sec, err, ok, npts = naive_kto(cell, wts[0], n_naive, iterations=cap)
-        nrows.append([cap, npts, f"{sec:.1f}", ok, f"{err * 1e3:.3f}"])
-        if ok.startswith("True") and err <= 0.05e-3:
-            needed = sec
-            break
-    print(f"\nnaive KTO on window {wts[0].window_index} (one KTO, constraints at every CL "
-          "point, home warm start):\n")
-    _table(nrows, ["SNOPT major iterations", "CL points", "seconds", "success",
-                   "max error at CL points mm"])
-    if needed is None:
-        verdict = (f"the naive program reached no accurate window within {caps[-1]} "
-                   f"iterations ({float(nrows[-1][2]):.1f} s)")
-        ref = float(nrows[-1][2])
-    else:
-        verdict = f"the naive program needed {needed:.1f} s for one accurate window"
-        ref = needed
-    print(f"\nours, same window (all {ws[0]['cl_points']} points): {ours_window:.1f} s, position "
-          f"error <= 1e-3 mm at targets; whole hub {t_plan:.1f} s = {t_plan / ref:.2f} x "
-          f"{'that' if needed is not None else 'its largest budget'}; {verdict}")
-    ts, dur, vmax = toppra_check(cell, plan)
-    if dur is None:
-        print(f"\nTOPP-RA: no solution ({ts * 1e3:.0f} ms)")
-    else:
-        print(f"\nTOPP-RA on window {ws[0]['window']}'s cut: {ts * 1e3:.0f} ms, duration "
-              f"{dur:.2f} s vs ours {ws[0]['cut_seconds']:.2f} s; max dense TCP speed "
-              f"{vmax * 1e3:.1f} mm/s (limit 150)")
-    if args.fillets:
-        fillet_compare(cell, wts, hub_name, plan, t_plan)
+    cell = load_cell("tool_in_hand", DEFAULT_HUB)
+    wts = window_targets_for_hub(load_hub(DEFAULT_HUB), windows=(0, 1))
+    if args.naive:
+        n = args.naive_points or len(wts[0])
+        sec, err, ok, npts = naive_kto(cell, wts[0], n, iterations=300)
+        print(f"\nnaive KTO on window {wts[0].window_index}: {npts} CL points, {sec:.1f} s, "
+              f"{ok}, max error at the CL points {err * 1e3:.3f} mm")
+    if args.toppra:
+        plan = plan_windows(cell, wts[:1], load_config("tool_in_hand", DEFAULT_HUB))
+        ts, dur, vmax = toppra_check(cell, plan)
+        ours = plan.meta["windows"][0]["cut_seconds"]
+        print(f"\nTOPP-RA on window 0's cut: {ts * 1e3:.0f} ms, duration "
+              f"{'-' if dur is None else f'{dur:.2f}'} s vs ours {ours:.2f} s; max dense TCP "
+              f"speed {'-' if vmax is None else f'{vmax * 1e3:.1f}'} mm/s (limit 150)")
     if args.accel_sweep:
-        accel_sweep(cell, wts[:2], hub_name, scales=(1.0, 4.0) if args.quick else
-                    (1.0, 2.0, 4.0, 10.0, 20.0))
+        accel_sweep(cell, wts, DEFAULT_HUB)
 
 
 if __name__ == "__main__":

@@ -459,6 +459,10 @@ def load_cell(
                 cell.a_upper, cell.q_home):
         arr.setflags(write=False)
     _check_payload(cell)
+    # how to build this cell again (a planner's worker process builds the same one)
+    cell._cache["load_args"] = dict(scenario=scenario, hub=hub, robot=robot, time_step=time_step,
+                                    hub_pose=None if hub_pose is None else np.array(hub_pose,
+                                                                                    float))
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
               hub_sdf, arm.name)
     return cell

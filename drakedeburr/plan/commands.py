@@ -65,10 +65,10 @@ def _run_plan(args: argparse.Namespace) -> int:
     hub = args.hub or DEFAULT_HUB
     windows, out = _check_plan_args(args, scenario, hub)
     options = replace(PlanOptions(), windows=windows)
-    if args.fillets:
-        from drakedeburr.plan.fillets import FilletOptions
-
-        options = replace(options, fillets=FilletOptions())
+    if args.fillets == "off":
+        options = replace(options, fillets=None)
+    elif args.fillets == "kto":
+        options = replace(options, fillets=replace(options.fillets, method="kto"))
     config = load_config(scenario, hub, robot=args.robot)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
     save_plan(plan, out)
@@ -169,9 +169,11 @@ def register(subparsers) -> None:
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
-    p.add_argument("--fillets", action="store_true",
-                   help="re-plan the tool orientation by a KTO where a cut slows at a fillet "
-                        "(faster cut, several times the planning time; docs/plan.md)")
+    p.add_argument("--fillets", choices=("program", "kto", "off"), default="program",
+                   help="where a cut slows below the feed band at a fillet, re-plan the tool "
+                        "orientation so the feed holds where it can: by the feed program "
+                        "(default), by a KinematicTrajectoryOptimization (several times the "
+                        "planning time), or not (docs/plan.md)")
     p.set_defaults(_run=_run_plan)
 
     e = subparsers.add_parser(

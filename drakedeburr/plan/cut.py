@@ -180,8 +180,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
                 spin_mode = "ik"
                 continue
             break
-        dist = np.array([ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0]
-                         for q in cut.q])
+        dist = ctx.checker.min_distances_along(cut.q, ctx.min_clearance + 1e-3)
         low = dist < ctx.min_clearance - DISTANCE_SLACK
         if not low.any():
             break
@@ -200,8 +199,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
         dist = np.full(len(cut.s), np.nan)
     else:
         if dist is None:  # left the loop before measuring this cut (joint jumps)
-            dist = np.array([ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0]
-                             for q in cut.q])
+            dist = ctx.checker.min_distances_along(cut.q, ctx.min_clearance + 1e-3)
         records += clearance_records(w, ctx.checker, cut, dist,
                                      ctx.min_clearance - DISTANCE_SLACK)
     return _Try(cp=cp, cut=cut, dist=dist, spin_mode=spin_mode)

@@ -1,26 +1,32 @@
-"""Fillet repair: a joint-space optimisation of the tool orientation where the cut slows down.
+"""Fillet repair: the tool orientation re-planned where the timed cut slows below the feed band.
 
 The cut's orientation program (smoothest axis in the cones, spin by dynamic programming) is
-chosen before timing; at some fillets another orientation lets the robot hold the feed. Around
-each stretch where the timed cut falls below the speed band, one Drake
-KinematicTrajectoryOptimization over the joints finds such a path: tool point on the executed
-path (+-``position_tolerance`` every ``constraint_step``), tool axis inside its cone, clearance,
-joint speed/acceleration bounds at a prescribed constant speed, the cut's joints and path
-velocity at both ends. Its tool *orientation* is then taken at every dense sample of the
-stretch (the positions stay exactly on the executed path; the analytic IK re-solves the joints)
-and the change is kept only if the whole cut then times faster, stays inside the cones, as clear
-of the hub as before and on one configuration.
+chosen before timing; at some fillets another orientation lets the robot hold the feed. For
+each stretch where the timed cut falls below the band (:func:`slow_stretches`), with
+``method="program"`` (the default) the feed program (:mod:`drakedeburr.plan.feed_program`:
+sequential convex programs over the stretch's frames, the analytic IK, the timing's own spline)
+asks whether any orientation in the cones lets the joints follow the stretch at a constant feed
+inside the band, and if so, which; with ``method="kto"`` one Drake
+KinematicTrajectoryOptimization over the joints does (tool point on the executed path
++-``position_tolerance`` every ``constraint_step``, axis in its cone, clearance, joint bounds at
+a prescribed constant speed, the cut's joints and path velocity at both ends; 3-25 s a fillet).
+The stretch takes the new orientation (the positions stay exactly on the executed path; the
+analytic IK re-solves the joints) only if the whole cut then has more of its travel in the band
+and is no slower, stays inside the cones, as clear of the hub as before and on one
+configuration. Each stretch is reported (:func:`repair_fillets`): where it was, whether the
+feed can be held there, whether the change was kept.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from drakedeburr.frames.vectors import angle_between
+from drakedeburr.plan.feed_program import FeedProgramOptions, hold_feed
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +48,9 @@ class FilletOptions:
         cone_margin: the KTO keeps the axis this far inside its cone [rad].
         iterations: SNOPT major iterations.
         minor_iterations: SNOPT's total minor iterations (an infeasible stretch spends them).
+        method: "program" (the feed program) or "kto".
+        margin: the program's stretch reaches this far either side of a slow run [m].
+        program: the feed program's settings.
     """
 
     speed_share: float = 0.96
@@ -54,6 +63,16 @@ class FilletOptions:
     iterations: int = 300
     minor_iterations: int = 200000
     clearance_in_kto: bool = True
+    method: str = "program"
+    margin: float = 0.02
+    program: FeedProgramOptions = field(default_factory=FeedProgramOptions)
+
+    def __post_init__(self) -> None:
+        if self.method not in ("program", "kto"):
+            from drakedeburr.errors import InputError
+
+            raise InputError(f"FilletOptions.method must be 'program' or 'kto', got "
+                             f"{self.method!r}")
 
 
 def slow_stretches(s: np.ndarray, v: np.ndarray, v_band: float, keep_off: float = 0.02,
@@ -185,7 +204,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
     if not (np.all(ok) and np.all(jumps <= ctx.options.max_joint_jump)):
         return None
     dn = d.copy()
-    dn[st] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in qn[st]]
+    dn[st] = ctx.checker.min_distances_along(qn[st], ctx.min_clearance + 1e-3)
     if np.any(dn[st] < np.minimum(d[st], ctx.min_clearance) - DISTANCE_SLACK):
         log.debug("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
                  "as it was", window, 1e3 * s_c)
@@ -193,45 +212,81 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
     return Xn, qn, dn
 
 
+def _in_band(v: np.ndarray, v_g: float, band: float) -> float:
+    """Share of a timed cut's inner samples within ``band`` of the feed (as the stats read it)."""
+    v_cut = v[1:-1]
+    return float(np.mean(np.abs(v_cut - v_g) <= band * v_g)) if len(v_cut) else 0.0
+
+
+def _stretch_frames(ctx, s, X, q, cone, half_angle, run, lim, fo):
+    """New frames for one slow run ``(a, b, slowest)`` of the timed cut: (R (n, 3, 3) over the
+    samples ``lo..hi`` or None, lo, hi, held)."""
+    a, b, c = run
+    v_g = ctx.process.grinding_speed
+    if fo.method == "program":
+        lo = int(np.searchsorted(s, max(s[a] - fo.margin, 0.01)))
+        hi = int(np.searchsorted(s, min(s[b] + fo.margin, s[-1] - 0.01)))
+        if hi - lo < 2 * fo.program.fixed + 8:
+            return None, lo, hi, False
+        fr = np.asarray(lim.acceleration_fraction) * np.asarray(lim.a_max)
+        vr = np.asarray(lim.velocity_fraction) * np.asarray(lim.v_max)
+        res = hold_feed(ctx.kin, s, X, q, cone, half_angle, lo, hi, fo.speed_share * v_g, fr,
+                        vr, fo.program)
+        return (res.R if res.held else None), lo, hi, res.held
+    lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
+    hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
+    if hi - lo < 20:
+        return None, lo, hi, False
+    st = slice(lo, hi + 1)
+    R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, s[st], q[st], X[st, :3, 3],
+                           cone[st], half_angle, fo.speed_share * v_g,
+                           np.asarray(lim.a_max), np.asarray(lim.v_max), fo)
+    return R, lo, hi, R is not None
+
+
 def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
-    """The cut with the KTO's orientation (:func:`orientation_by_kto`) on each stretch around a
-    fillet where the timed cut falls below the speed band, each kept only if the whole cut then
-    times faster, the axis stays 1 mrad inside its cone, the joints track on the same
-    configuration without jumps and no sample loses clearance (below the bound). ``ctx`` is the
-    planner's :class:`drakedeburr.plan.options.PlanContext`. Returns (CutPath, DensePath,
-    distances), changed or not."""
+    """The cut with a new orientation (:func:`_stretch_frames`) on each stretch around a fillet
+    where the timed cut falls below the speed band, each kept only if the whole cut then has
+    more travel in the band and is no slower, the axis stays 1 mrad inside its cone, the joints
+    track on the same configuration without jumps and no sample loses clearance (below the
+    bound). ``ctx`` is the planner's :class:`drakedeburr.plan.options.PlanContext`. Returns
+    (CutPath, DensePath, distances, report): the report lists each slow stretch
+    ``{"from_m", "to_m", "slowest_mps", "held", "kept"}`` (travel along the cut; ``held``: the
+    feed can be held there, by the method's own reading)."""
     from dataclasses import replace
 
     from drakedeburr.plan.timing import time_path
 
     fo = ctx.options.fillets
     v_g = ctx.process.grinding_speed
+    tol_band = ctx.config.tolerances.speed_band
     lim = ctx.limits(v_g)
     s = cut.s
     base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim, fk=ctx.kin.p_HT)
-    X, q, d, best = cut.X_HT, cut.q, dist, float(base.t[-1])
-    band = (1 - ctx.config.tolerances.speed_band) * v_g
-    for _a, _b, c in slow_stretches(s, base.v_tcp, band):
-        lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
-        hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
-        if hi - lo < 20:
-            continue
-        st = slice(lo, hi + 1)
-        R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, s[st], q[st], X[st, :3, 3],
-                               cone[st], half_angle, fo.speed_share * v_g,
-                               np.asarray(lim.a_max), np.asarray(lim.v_max), fo)
+    X, q, d = cut.X_HT, cut.q, dist
+    best_t, best_share = float(base.t[-1]), _in_band(base.v_tcp, v_g, tol_band)
+    report = []
+    for run in slow_stretches(s, base.v_tcp, (1 - tol_band) * v_g):
+        R, lo, hi, held = _stretch_frames(ctx, s, X, q, cone, half_angle, run, lim, fo)
+        entry = dict(from_m=float(s[run[0]]), to_m=float(s[run[1]]),
+                     slowest_mps=float(base.v_tcp[run[2]]), held=bool(held), kept=False)
+        report.append(entry)
         if R is None:
             continue
-        new = _repair_one(ctx, cp, X, q, d, cone, half_angle, st, R, window, s[c])
+        new = _repair_one(ctx, cp, X, q, d, cone, half_angle, slice(lo, hi + 1), R, window,
+                          s[run[2]])
         if new is None:
             continue
-        t_new = float(time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT).t[-1])
-        log.debug("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s", window,
-                 1e3 * s[c], 1e3 * base.v_tcp[c], best, t_new)
-        if t_new < best - 1e-3:
-            (X, q, d), best = new, t_new
+        timed = time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT)
+        t_new, share = float(timed.t[-1]), _in_band(timed.v_tcp, v_g, tol_band)
+        log.debug("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s, in band "
+                  "%.3f -> %.3f", window, 1e3 * s[run[2]], 1e3 * base.v_tcp[run[2]], best_t,
+                  t_new, best_share, share)
+        if share > best_share + 1e-9 and t_new <= best_t + 1e-3:
+            (X, q, d), best_t, best_share = new, t_new, share
+            entry["kept"] = True
     if X is cut.X_HT:
-        return cp, cut, dist
+        return cp, cut, dist, report
     X_tg = cp.X_target.copy()
     X_tg[:, :3, :3] = X[cp.target_index, :3, :3]
-    return replace(cp, X_HT=X, X_target=X_tg), replace(cut, X_HT=X, q=q), d
+    return replace(cp, X_HT=X, X_target=X_tg), replace(cut, X_HT=X, q=q), d, report

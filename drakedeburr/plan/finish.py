@@ -48,7 +48,7 @@ def _approach_and_retract(ctx: PlanContext, wt, ex: ExecutedCut, failures: list)
                                           reason=f"{name} unreachable on the window's "
                                                  "configuration"))
             return None
-        dd = min(ctx.checker.min_distance(q, ctx.min_clearance + 1e-3)[0] for q in path.q[1:])
+        dd = float(np.min(ctx.checker.min_distances_along(path.q[1:], ctx.min_clearance + 1e-3)))
         if dd < ctx.min_clearance - DISTANCE_SLACK:
             failures.append(FailureRecord(window=wt.window_index, kind=name, value=float(dd),
                                           limit=ctx.min_clearance, unit="m",
@@ -134,7 +134,25 @@ def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_
         least_axis_acceleration_radps2=v_g ** 2 * least_axis_curvature(
             wt.p_HC, wt.cone_retract_H, wt.cone_half_angle, closed=wt.closed),
         q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=ex.q_targets[cl_rows].tolist(),
-        cl_order=[int(i) for i in order], spin_rule=ctx.options.ik.seed_spin)
+        cl_order=[int(i) for i in order], spin_rule=ctx.options.ik.seed_spin,
+        speed_in_band_bound=_band_bound(ctx, ex, timed_cut),
+        fillets=[dict(f) for f in ex.fillets])
+
+
+def _band_bound(ctx: PlanContext, ex: ExecutedCut, timed_cut) -> float | None:
+    """The planner's figure of the share of the cut that could be in the feed band: the share
+    in band, plus the samples below it that lie on a stretch where the fillet repair found the
+    feed can be held (cut at the feed there). None without the repair."""
+    if ctx.options.fillets is None:
+        return None
+    v_g = ctx.process.grinding_speed
+    v = timed_cut.v_tcp[1:-1]
+    s = ex.cut.s[1:-1]
+    ok = np.abs(v - v_g) <= ctx.config.tolerances.speed_band * v_g
+    for f in ex.fillets:
+        if f["held"]:
+            ok |= (s >= f["from_m"]) & (s <= f["to_m"])
+    return float(np.mean(ok)) if len(v) else 0.0
 
 
 def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,

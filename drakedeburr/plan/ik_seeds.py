@@ -76,7 +76,7 @@ def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np
     for j in ranked[:max(12, 6 * count)]:
         if any(np.max(np.abs(cands[j][[3, 5]] - p[[3, 5]])) < 0.5 for p in picked):
             continue
-        d = np.inf if checker is None else checker.min_distance(cands[j], options.min_distance)[0]
+        d = np.inf if checker is None else checker.distance(cands[j], options.min_distance)
         if d >= options.min_distance:
             picked.append(cands[j])
             if len(picked) >= count:
@@ -145,7 +145,7 @@ def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.nd
         q = analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
         if q is q_prev:
             continue
-        d = checker.min_distance(q, reach)[0]
+        d = checker.distance(q, reach)
         if d > best_d:
             best, best_d = q, d
     return best
@@ -165,10 +165,35 @@ def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarra
     good, _, _, X = recheck(kin, q, p_HT, cone_retract_H, half, options, lift)
     if not good:
         return None
-    dist = checker.min_distance(q, reach)[0]
+    dist = checker.distance(q, reach)
     if dist < options.min_distance:
         return None
     return X, dist
+
+
+def _probe_candidates(kin: CellKinematics, p_HQ: np.ndarray, axes: list, t_H: np.ndarray,
+                      q_ref: np.ndarray, lift: float, spins: int, min_wrist: float,
+                      per_axis: int) -> list[np.ndarray]:
+    """Per axis: the analytic IK's admissible joints over ``spins`` spins and every branch (the
+    reference configuration's branch first; J4/J6 turned into the limits where a turn fits,
+    |J5| >= ``min_wrist``), thinned to about ``per_axis`` (one batched IK for all axes)."""
+    psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
+    A = np.repeat(np.asarray(axes, float), spins, axis=0)
+    X = X_HT_from_axis(p_HQ[None] + lift * A, A, np.repeat(t_H[None], len(A), 0),
+                       np.tile(psi, len(axes)))
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+    b_ref = kin.branch_of(q_ref)
+    order = np.argsort([0 if np.all(b == b_ref) else 1 for b in branches], kind="stable")
+    out = []
+    for k in range(len(axes)):
+        q = q_all[k * spins:(k + 1) * spins][:, order].transpose(1, 0, 2).reshape(-1, 6)
+        q = q[~np.any(np.isnan(q), axis=1)]
+        for j in (3, 5):
+            q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
+            q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
+        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
+        out.append(q[:: max(1, len(q) // per_axis)])
+    return out
 
 
 def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
@@ -182,7 +207,11 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings``
     x half-angle; for each, ``spins`` spins about it and every analytic IK branch (J4/J6 turned
     into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis`` of them
-    queried for signed distance. Stops at the first pose with ``bound`` clearance.
+    queried for signed distance. Stops at the first pose with ``bound`` clearance. The axes are
+    searched best first: one pose of each is queried (in the order above), then the remaining
+    poses axis by axis in the order of that first clearance (the burr shank's clearance, which
+    the spin does not change, mostly decides: a clear pose is usually found on the first axes
+    searched, where the axes in their listed order found it only near the rim).
 
     Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
     clears the cell: the tool or the theta box has to change) from a solver failure (a pose
@@ -198,29 +227,32 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     for ring in rings:
         if ring > 0:
             axes += cone_ring(c, ring * half_angle, ring_axes)
-    psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
+    cands = _probe_candidates(kin, p_HQ, axes, t_H, q_ref, lift, spins, min_wrist, per_axis)
     best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
-    b_ref = kin.branch_of(q_ref)
-    for a in axes:
-        X = X_HT_from_axis(np.repeat((p_HQ + lift * a)[None], spins, 0),
-                           np.repeat(a[None], spins, 0), np.repeat(t_H[None], spins, 0), psi)
-        q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
-        # the reference configuration's branch first, then the others
-        order = np.argsort([0 if np.all(b == b_ref) else 1 for b in branches], kind="stable")
-        q = q_all[:, order].transpose(1, 0, 2).reshape(-1, 6)
-        q = q[~np.any(np.isnan(q), axis=1)]
-        for j in (3, 5):
-            q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
-            q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
-        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
-        for qq in q[:: max(1, len(q) // per_axis)]:
-            d, pair = checker.min_distance(qq, bound + 1e-3)
-            best["queries"] += 1
-            if d > best["best_clearance"]:
-                best.update(best_clearance=float(d), pair=pair, q=qq.copy())
-            if d >= bound:
-                best["feasible"] = True
-                return best
+
+    def query(qq: np.ndarray) -> float:
+        d = checker.distance(qq, bound + 1e-3)
+        best["queries"] += 1
+        if d > best["best_clearance"]:
+            best.update(best_clearance=float(d), q=qq.copy())
+        best["feasible"] = best["feasible"] or d >= bound
+        return d
+
+    first = np.full(len(axes), -np.inf)
+    for k, q in enumerate(cands):
+        if len(q):
+            first[k] = query(q[0])
+            if best["feasible"]:
+                break
+    if not best["feasible"]:
+        for k in np.argsort(-first, kind="stable"):
+            for qq in cands[k][1:]:
+                if query(qq) >= bound:
+                    break
+            if best["feasible"]:
+                break
+    if best["q"] is not None:
+        best["pair"] = checker.min_distance(best["q"], bound + 1e-3)[1]
     return best
 
 

@@ -210,12 +210,35 @@ class ClearanceChecker:
                     GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
         self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
 
+    def query_at(self, q: np.ndarray):
+        """The scene graph's ``QueryObject`` with the robot at ``q`` (valid until the next
+        call on this checker)."""
+        self.cell.plant.SetPositions(self.plant_context, np.asarray(q, float))
+        return self.cell.scene_graph.get_query_output_port().Eval(self._sg_context)
+
+    def pairs_within(self, q: np.ndarray, max_distance: float) -> list:
+        """Every unfiltered pair within ``max_distance`` [m] at ``q`` (Drake's
+        ``SignedDistancePair`` results)."""
+        return self.query_at(q).ComputeSignedDistancePairwiseClosestPoints(max_distance)
+
+    def distance(self, q: np.ndarray, max_distance: float = 0.01) -> float:
+        """Smallest signed distance [m] at ``q``, capped at ``max_distance`` (no pair names)."""
+        best = float(max_distance)
+        for d in self.pairs_within(q, max_distance):
+            best = min(best, float(d.distance))
+        return best
+
+    def min_distances_along(self, q: np.ndarray, max_distance: float) -> np.ndarray:
+        """(N,) :meth:`distance` at each row of a dense path ``q`` (N, 6), equal to it row by
+        row, with far fewer queries (:func:`drakedeburr.plan.clearance.distances_along`)."""
+        from drakedeburr.plan.clearance import distances_along
+
+        return distances_along(self, q, max_distance)[0]
+
     def min_distance(self, q: np.ndarray,
                      max_distance: float = 0.01) -> tuple[float, tuple[str, str]]:
         """Smallest signed distance [m] at ``q`` (capped at ``max_distance``) and its pair."""
-        c = self.cell
-        c.plant.SetPositions(self.plant_context, np.asarray(q, float))
-        query = c.scene_graph.get_query_output_port().Eval(self._sg_context)
+        query = self.query_at(q)
         best, pair = float(max_distance), ("", "")
         for d in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
             if d.distance < best:
@@ -244,4 +267,4 @@ class ClearanceChecker:
 
     def min_distances(self, q: np.ndarray, max_distance: float = 0.01) -> np.ndarray:
         """(N,) smallest signed distance [m] for each row of ``q`` (N, 6), capped."""
-        return np.array([self.min_distance(row, max_distance)[0] for row in np.atleast_2d(q)])
+        return np.array([self.distance(row, max_distance) for row in np.atleast_2d(q)])

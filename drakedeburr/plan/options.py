@@ -65,14 +65,17 @@ class PlanOptions:
             model's own limits, so a plan made with a factor above 1 fails its acceleration
             check: to plan for a robot whose real accelerations are known, put them in the
             model instead.
-        fillets: fillet repair (:mod:`drakedeburr.plan.fillets`): where the timed cut falls
-            below the speed band, a KTO over the joints may find a tool orientation that holds
-            the feed; None: off.
+        fillets: fillet repair (:mod:`drakedeburr.plan.fillets`, on by default): where the
+            timed cut falls below the speed band, the feed program finds a tool orientation
+            that holds the feed where one exists; None: off.
         placement: choose the hub's pose on its mount and each window's arm branch by a
             search before planning (:mod:`drakedeburr.plan.placement`); False: the hub where
             the cell's mount puts it, starts ranked from the previous window.
         relax: plan a window the recipe cannot cut again with a milder tilt box, the
             deviation recorded (:mod:`drakedeburr.plan.relax`).
+        workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
+            the cores this process may use, 1: one after the other here). The plan is the
+            same whatever the number (it is not recorded in the plan).
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -95,9 +98,10 @@ class PlanOptions:
     conform_program: bool = True
     retry_in_band: float = 0.5
     acceleration_scale: float = 1.0
-    fillets: FilletOptions | None = None
+    fillets: FilletOptions | None = field(default_factory=FilletOptions)
     placement: bool = True
     relax: bool = True
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):

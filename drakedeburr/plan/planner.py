@@ -35,11 +35,11 @@ from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
+from drakedeburr.plan.parallel import plan_all_windows
 from drakedeburr.plan.results import PlanStats, Stretch
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
-from drakedeburr.plan.window import plan_window
 from drakedeburr.plan.window_targets import WindowTargets
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
@@ -95,10 +95,8 @@ def plan_windows(
     home = make_target(kin, q_cur, -1, "home", -1, process.home_speed, "joint")
     n = len(windows)
     t_transitions = 0.0
-    for k, wt in enumerate(windows):
-        if progress is not None:
-            progress(k, n, f"window {wt.window_index}")
-        res = plan_window(ctx, wt, q_cur)
+    results = plan_all_windows(ctx, windows, options.workers, progress)
+    for wt, res in zip(windows, results, strict=True):
         failures += res.failures
         if not res.status.planned:
             log.warning("window %d not planned (%s): %s", wt.window_index, res.status.value,
@@ -192,7 +190,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         cutting_seconds=cut_time,
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
-        options=jsonable(asdict(ctx.options)),
+        options=jsonable({k: v for k, v in asdict(ctx.options).items() if k != "workers"}),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None

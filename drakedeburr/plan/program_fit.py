@@ -36,11 +36,12 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
     ``WindowStatus.PROGRAM_FAILED`` (a program target is unreachable; recorded)."""
     w, kin, tol = wt.window_index, ctx.kin, ctx.config.tolerances
     cp, cut, dist = tr.cp, tr.cut, tr.dist
+    fillets: list = []
     if ctx.options.fillets is not None:
         from drakedeburr.plan.fillets import repair_fillets
 
-        cp, cut, dist = repair_fillets(ctx, cp, cut, dist, cone_of_cut(wt, order, cp),
-                                       wt.cone_half_angle, w)
+        cp, cut, dist, fillets = repair_fillets(ctx, cp, cut, dist, cone_of_cut(wt, order, cp),
+                                                wt.cone_half_angle, w)
     cp, via = add_vias(cp, ctx.program_orientation, ctx.options.via_rounds, w)
     cut = replace(cut, target_index=cp.target_index)
     if ctx.options.conform_program:
@@ -69,7 +70,8 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
             tried=(f"{int(via.sum())} via targets", "orientation pulled onto the program"),
             reason=f"program orientation strays {1e3 * stray[k]:.1f} mrad from the executed cut "
                    f"(via targets: {int(via.sum())})"))
-    return ExecutedCut(cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via)
+    return ExecutedCut(cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via,
+                       fillets=tuple(fillets))
 
 
 def via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
@@ -167,7 +169,7 @@ def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: 
                  "keeping the smooth cut", window, int(on.sum()))
         return cp, cut, dist
     d_new = dist.copy()
-    d_new[ch] = [ctx.checker.min_distance(qi, ctx.min_clearance + 1e-3)[0] for qi in q[ch]]
+    d_new[ch] = ctx.checker.min_distances_along(q[ch], ctx.min_clearance + 1e-3)
     floor = np.minimum(dist[ch], ctx.min_clearance) - DISTANCE_SLACK
     if np.any(d_new[ch] < floor):
         log.debug("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "

@@ -56,6 +56,8 @@ class ExecutedCut:
         dist: (N,) clearance of every dense sample [m].
         q_targets: (T, 6) joints at the program's targets [rad].
         via: (T,) True where a target is a via (on the executed path, between CL targets).
+        fillets: the fillet repair's report of each slow stretch
+            (:func:`drakedeburr.plan.fillets.repair_fillets`).
     """
 
     cp: object
@@ -63,6 +65,7 @@ class ExecutedCut:
     dist: np.ndarray
     q_targets: np.ndarray
     via: np.ndarray
+    fillets: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -71,6 +74,10 @@ class WindowStats:
     function of the inputs (the run's timings are in ``plan.run``, not here).
 
     Lengths [m], angles [deg] where the name says so, else SI; ``ik``: the IK's counters.
+    ``speed_in_band_bound``: the planner's figure of the share of the cut that could be in the
+    feed band (the fillet repair's: the share with every slow stretch where the feed can be
+    held cut at the feed, the others as timed; None without the repair); ``fillets``: the
+    repair's report of each slow stretch.
     """
 
     window: int
@@ -99,6 +106,8 @@ class WindowStats:
     cl_order: list
     transition_method: str = ""
     spin_rule: str = ""
+    speed_in_band_bound: float | None = None
+    fillets: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

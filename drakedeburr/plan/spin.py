@@ -65,16 +65,22 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
     sel = np.unique(np.concatenate([np.arange(0, N, stride), [N - 1]]))
     n = len(sel)
     psi = np.arange(n_spin) * (2.0 * np.pi / n_spin)
-    R0 = X_HT[sel, :3, :3]
-    X = np.repeat(X_HT[sel][:, None], n_spin, axis=1)  # (n, M, 4, 4)
-    for m in range(n_spin):
-        X[:, m, :3, :3] = spin_frames(R0, np.full(n, psi[m]))
-    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X.reshape(-1, 4, 4)))
+    # the states to solve: every spin, or those within ``band`` of the reference (the others
+    # are excluded anyway; the analytic IK is elementwise, so this only saves work)
+    live = np.ones((n, n_spin), bool)
+    if psi_ref is not None and band < np.pi:
+        ref = np.asarray(psi_ref, float)[sel]
+        live = np.abs(_wrap(psi[None, :] - ref[:, None])) <= band
+    k_of, m_of = np.nonzero(live)
+    X = X_HT[sel][k_of]
+    X[:, :3, :3] = spin_frames(X[:, :3, :3], psi[m_of])
+    q_live, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
     b0 = kin.branch_of(np.asarray(q_branch, float))
     match = np.flatnonzero(np.all(branches == b0[None], axis=1))
     if match.size == 0:
         return X_HT, {"ok": False, "reason": "branch not found"}
-    q = q_all[:, match[0]].reshape(n, n_spin, 6)
+    q = np.full((n, n_spin, 6), np.nan)
+    q[k_of, m_of] = q_live[:, match[0]]
     bad = np.any(~np.isfinite(q), axis=2)
     qq = np.where(np.isfinite(q), q, 0.0)
     # the turning joints J4/J6 taken within half a turn of the start (a cut turns the wrist by
@@ -84,26 +90,24 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         qq[..., j] = qb[j] + _wrap(qq[..., j] - qb[j])
     bad |= np.any((qq < kin.q_lower) | (qq > kin.q_upper), axis=2)
     bad |= np.abs(qq[..., 4]) < wrist_margin
-    if psi_ref is not None and band < np.pi:
-        ref = np.asarray(psi_ref, float)[sel]
-        bad |= np.abs(_wrap(psi[None, :] - ref[:, None])) > band
     w = 1.0 / np.asarray(kin.v_max, float)
-    INF = np.inf
-    cost = np.where(bad[0], INF, 0.0)
+    # state m at sample k comes from state P[m, i] = m - shift_i (mod n_spin) at k - 1; the
+    # step costs of every transition at once: (n - 1, n_spin, shifts) weighted squared motion
+    shifts = np.arange(-max_step, max_step + 1)
+    P = (np.arange(n_spin)[:, None] - shifts[None, :]) % n_spin
+    step = np.empty((n - 1, n_spin, len(shifts)))
+    for i in range(len(shifts)):  # J4/J6 may not jump a turn
+        dq = (qq[1:] - qq[:-1, P[:, i]]) * w
+        step[:, :, i] = np.sum(dq * dq, axis=2)
+    cost = np.where(bad[0], np.inf, 0.0)
     back = np.zeros((n, n_spin), int)
-    shifts = range(-max_step, max_step + 1)
+    rows = np.arange(n_spin)
     for k in range(1, n):
-        best = np.full(n_spin, INF)
-        arg = np.zeros(n_spin, int)
-        for d in shifts:
-            prev = np.roll(np.arange(n_spin), d)  # state m at k comes from prev[m] at k-1
-            dq = (qq[k] - qq[k - 1, prev]) * w[None]  # J4/J6 may not jump a turn
-            c = cost[prev] + np.sum(dq * dq, axis=1)
-            better = c < best
-            best = np.where(better, c, best)
-            arg = np.where(better, prev, arg)
-        best[bad[k]] = INF
-        cost, back[k] = best, arg
+        c = cost[P] + step[k - 1]
+        arg = np.argmin(c, axis=1)  # the first of equal costs, as a scan in shift order
+        best = c[rows, arg]
+        best[bad[k]] = np.inf
+        cost, back[k] = best, P[rows, arg]
     if not np.isfinite(cost).any():
         return X_HT, {"ok": False, "reason": "no feasible spin path"}
     m = int(np.argmin(cost))

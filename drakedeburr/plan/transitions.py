@@ -66,7 +66,7 @@ def _clear_share(checker: ClearanceChecker, q: np.ndarray, bound: float) -> tupl
     the share of the samples before that one)."""
     best = np.inf
     for k, row in enumerate(q):
-        d = checker.min_distance(row, bound + 1e-3)[0]
+        d = checker.distance(row, bound + 1e-3)
         best = min(best, d)
         if d < bound:
             return float(best), k / len(q)

@@ -36,8 +36,18 @@ def _other_rule(ctx: PlanContext) -> tuple[str, PlanContext]:
     return other, replace(ctx, options=options)
 
 
-def plan_window(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
+def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
+    """(6,) the configuration a window's start configurations are ranked from: the branch the
+    placement search chose for it (:mod:`drakedeburr.plan.placement`), else home. Not the
+    previous window's end: each window is planned on its own (in any order, in parallel, the
+    same plan), and the joint moves between windows go anywhere."""
+    q_ref = ctx.q_refs.get(wt.window_index)
+    return ctx.kin.q_home.copy() if q_ref is None else np.asarray(q_ref, float)
+
+
+def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring)."""
+    q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from)
     other, ctx2 = _other_rule(ctx)
     if first.status.planned and not first.failures:
@@ -87,14 +97,10 @@ def rewound_start(kin, trial, q_first: np.ndarray | None,
 
 
 def _seeds(ctx: PlanContext, wt: WindowTargets, p_HT0: np.ndarray, q_from: np.ndarray) -> list:
-    """Start configurations to try: the best few distinct ones ranked from the window's branch
-    reference (:mod:`drakedeburr.plan.placement`, when there is one), from ``q_from``, then
-    from home (the previous window's end may hold the arm in a configuration from which this
-    loop cannot be closed; the joint move goes anywhere)."""
+    """Start configurations to try: the best few distinct ones ranked from the window's
+    reference ``q_from`` (:func:`window_reference`), then from home."""
     kin, opt = ctx.kin, ctx.options
-    refs = [q_from, kin.q_home]
-    if wt.window_index in ctx.q_refs:  # the branch the placement chose for this window first
-        refs.insert(0, np.asarray(ctx.q_refs[wt.window_index], float))
+    refs = [q_from] + ([] if np.array_equal(q_from, kin.q_home) else [kin.q_home])
     seeds: list = []
     for q_ref in refs:
         more = seed_by_spin(kin, ctx.checker, p_HT0, wt.retract_H[0], wt.t_H[0], q_ref, opt.ik,

@@ -1,0 +1,244 @@
+"""Windows planned at once on the machine's cores, each window the same plan whichever process
+plans it and in whatever order.
+
+A window's plan is a function of the cell, its targets, the options and its branch reference
+(:func:`drakedeburr.plan.window.window_reference`), not of the windows planned before it, so the
+windows are independent tasks. This process plans windows from the front of the list while
+``workers - 1`` worker processes (:mod:`drakedeburr.plan.worker`: started with the interpreter,
+not forked - Drake is not fork-safe - and not through ``multiprocessing``, which would run the
+caller's main script again in each) take them from the back. Each worker builds the same cell
+from the arguments it was loaded with (``cell._cache["load_args"]``, recorded by
+:func:`drakedeburr.cell.load_cell`) once and keeps it, and the workers stay up for later runs;
+the log records a worker emits while planning a window are handed back and emitted here.
+
+Why hand-written: a process pool that never imports the caller's main module, where the
+calling process works too (a worker's start-up, ~2 s of imports and model building, is hidden
+behind the first windows), with each window's log replayed here.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Sequence
+
+__all__ = ["plan_all_windows", "worker_count", "shutdown_pool"]
+
+log = logging.getLogger(__name__)
+
+_POOL: dict = {}  # {"workers": [_Worker]}
+_WORKER: dict = {}  # in a worker: recipe key -> PlanContext
+
+
+def worker_count(requested: int | None, n_windows: int) -> int:
+    """Processes to plan ``n_windows`` with: ``requested`` (None: the cores this process may
+    use), at most one per window."""
+    if requested is None:
+        try:
+            requested = len(os.sched_getaffinity(0))
+        except AttributeError:  # not on Linux
+            requested = os.cpu_count() or 1
+    return max(1, min(int(requested), n_windows))
+
+
+def _recipe(ctx) -> dict | None:
+    args = ctx.cell._cache.get("load_args")
+    return None if args is None else dict(args)
+
+
+def _worker_context(recipe: dict, config, options, q_refs):
+    """The worker's :class:`PlanContext` for a recipe (built once per cell and options)."""
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
+    from drakedeburr.plan.options import PlanContext
+
+    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
+    cell_ctx = _WORKER.get(key)
+    if cell_ctx is None:
+        _WORKER.clear()  # one cell at a time
+        cell = load_cell(**recipe)
+        cell_ctx = _WORKER[key] = (cell, cell_kinematics(cell), ClearanceChecker(cell),
+                                   ClearanceChecker(cell, filter_burr_contact=False))
+    cell, kin, checker, free = cell_ctx
+    return PlanContext(cell=cell, kin=kin, checker=checker, free_checker=free, config=config,
+                       options=options, q_refs=dict(q_refs))
+
+
+class _Records(logging.Handler):
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        record.msg, record.args = record.getMessage(), None  # picklable, formatted here
+        record.exc_info = None
+        self.records.append(record)
+
+
+def _plan_in_worker(recipe: dict, config, options, q_refs, wt, level: int):
+    """Task of a worker: (WindowPlan, the log records emitted while planning it)."""
+    from drakedeburr.plan.window import plan_window
+
+    ctx = _worker_context(recipe, config, options, q_refs)
+    root = logging.getLogger()
+    handler = _Records()
+    handler.setLevel(level)
+    old_level = root.level
+    root.addHandler(handler)
+    root.setLevel(level)
+    try:
+        return plan_window(ctx, wt), handler.records
+    finally:
+        root.removeHandler(handler)
+        root.setLevel(old_level)
+
+
+class _Worker:
+    """One worker process (:mod:`drakedeburr.plan.worker`) and its pipes."""
+
+    def __init__(self) -> None:
+        import subprocess
+        import sys
+        from pathlib import Path
+
+        import drakedeburr
+
+        env = dict(os.environ)
+        here = str(Path(drakedeburr.__file__).resolve().parent.parent)  # this drakedeburr
+        env["PYTHONPATH"] = os.pathsep.join([here] + [p for p in [env.get("PYTHONPATH")] if p])
+        self.proc = subprocess.Popen([sys.executable, "-m", "drakedeburr.plan.worker"],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        self.task: int | None = None
+
+    def send(self, fn, args: tuple, task: int) -> None:
+        import pickle
+
+        pickle.dump((fn, args), self.proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+        self.proc.stdin.flush()
+        self.task = task
+
+    def receive(self):
+        """("ok", result) or ("error", message); raises EOFError when the process died."""
+        import pickle
+
+        self.task = None
+        return pickle.load(self.proc.stdout)
+
+    def close(self, kill: bool = False) -> None:
+        try:
+            if kill:
+                self.proc.kill()
+            else:
+                self.proc.stdin.close()
+            self.proc.wait(timeout=None if not kill else 10)
+        except (OSError, ValueError):
+            pass
+
+
+def _pool(size: int) -> list[_Worker]:
+    """``size`` worker processes (started once, kept for later runs)."""
+    import atexit
+
+    workers = _POOL.setdefault("workers", [])
+    workers[:] = [w for w in workers if w.proc.poll() is None]
+    while len(workers) < size:
+        workers.append(_Worker())
+    if not _POOL.get("atexit"):
+        atexit.register(shutdown_pool)
+        _POOL["atexit"] = True
+    return workers[:size]
+
+
+def shutdown_pool(kill: bool = False) -> None:
+    """Stop the worker processes (started again when needed)."""
+    for w in _POOL.pop("workers", []):
+        w.close(kill=kill)
+
+
+def _replay(records: list) -> None:
+    for rec in records:
+        logger = logging.getLogger(rec.name)
+        if logger.isEnabledFor(rec.levelno):
+            logger.handle(rec)
+
+
+def plan_all_windows(ctx, windows: Sequence, workers: int | None,
+                     progress: Callable[[int, int, str], None] | None = None) -> list:
+    """Every window planned (:func:`drakedeburr.plan.window.plan_window`), in their order.
+
+    Args:
+        ctx: the run's :class:`drakedeburr.plan.options.PlanContext`.
+        windows: the windows' targets.
+        workers: processes to use (see :func:`worker_count`); 1 plans them here, in order.
+        progress: optional callback (done, total, label) as windows finish.
+
+    Returns:
+        One :class:`drakedeburr.plan.results.WindowPlan` per window, in the given order.
+    """
+    from drakedeburr.plan.window import plan_window
+
+    n = len(windows)
+    size = worker_count(workers, n) - 1
+    recipe = _recipe(ctx)
+    if size == 0 or recipe is None:
+        out = []
+        for k, wt in enumerate(windows):
+            if progress is not None:
+                progress(k, n, f"window {wt.window_index}")
+            out.append(plan_window(ctx, wt))
+        return out
+    import select
+
+    workers = _pool(size)
+    level = logging.getLogger().getEffectiveLevel()
+    results: dict[int, object] = {}
+    todo = list(range(n))
+    done = 0
+
+    def finished(k: int, res) -> None:
+        nonlocal done
+        results[k] = res
+        done += 1
+        if progress is not None:
+            progress(done, n, f"window {windows[k].window_index}")
+
+    def submit() -> None:
+        for w in workers:
+            if w.task is None and todo and w.proc.poll() is None:
+                k = todo.pop()  # workers from the back
+                w.send(_plan_in_worker, (recipe, ctx.config, ctx.options, ctx.q_refs,
+                                         windows[k], level), k)
+
+    def collect(timeout: float | None) -> None:
+        busy = {w.proc.stdout.fileno(): w for w in workers if w.task is not None}
+        if not busy:
+            return
+        ready, _, _ = select.select(list(busy), [], [], timeout)
+        for fd in ready:
+            w = busy[fd]
+            k = w.task
+            try:
+                status, value = w.receive()
+            except (EOFError, OSError) as exc:
+                status, value = "error", f"the worker process ended ({exc})"
+            if status == "ok":
+                _replay(value[1])
+                finished(k, value[0])
+            else:  # plan that window here: the same plan
+                log.warning("window %d: worker failed (%s); planning it here",
+                            windows[k].window_index, value)
+                finished(k, plan_window(ctx, windows[k]))
+
+    try:
+        submit()
+        while todo:
+            k = todo.pop(0)  # this process from the front
+            finished(k, plan_window(ctx, windows[k]))
+            collect(0.0)
+            submit()
+        while any(w.task is not None for w in workers):
+            collect(None)
+    except BaseException:
+        shutdown_pool(kill=True)  # the workers may be busy with windows nobody waits for
+        raise
+    return [results[k] for k in range(n)]
