@@ -38,20 +38,43 @@ def burr_contact(sp, cfg) -> CheckItem:
     tol, d, s = cfg.tolerances, sp.distances, sp.samples
     contact_kinds = np.isin(s.kind, [KIND_CODE[k] for k in LINEAR_KINDS])
     depth = np.array([sp.depth_of_cut(w) for w in s.window])
-    # the collision pieces are convex hulls that may reach past the true surface (the hub
-    # generator splits a piece that reaches > 0.5 mm into an opening); the burr's true
-    # engagement is checked against the true edge (burr_engagement)
-    lim = np.where(contact_kinds, -(depth + tol.edge_deviation + tol.collision_model_excess),
-                   tol.min_clearance)
-    i = int(np.argmin(d.burr - lim))
-    v = d.burr[i]
+    # against the collision pieces: convex hulls that may stand proud of the true surface
+    # (a generated hub's by at most collision_model_excess); the true edge's engagement is
+    # checked by burr_engagement
+    true_lim = np.where(contact_kinds, -(depth + tol.edge_deviation), tol.min_clearance)
+    lim = np.where(contact_kinds, true_lim - tol.collision_model_excess, tol.min_clearance)
+    value, limit = np.array(d.burr, float), lim.copy()
+    # where the pieces' reading fails, the samples are read against the hub's triangle mesh
+    # (verify.true_surface), the excess allowance dropped: the pieces may reach further than
+    # it on an imported mesh
+    bad = np.flatnonzero(value < lim)
+    note = ""
+    if len(bad):
+        reach = np.where(contact_kinds[bad], 0.0, tol.min_clearance)
+        reading = sp.memo("burr_true_surface", lambda: _true_surface(
+            sp, bad, reach))
+        ok = ~reading.engulfed
+        idx = reading.index[ok]
+        value[idx], limit[idx] = reading.value[ok], true_lim[idx]
+        note = (f"; {len(bad)} sample(s) where the pieces' reading failed re-read against the "
+                f"true surface ({int(ok.sum())} read, {int((~ok).sum())} with the burr's "
+                f"in-centre inside a piece kept; bounds within {reading.resolution * 1e3:.3f} mm, "
+                f"{reading.points} triangle reads)")
+    i = int(np.argmin(value - limit))
+    v = value[i]
     return CheckItem(
-        "burr_contact", bool(v >= lim[i]), float(v), float(lim[i]), "m", ">=",
+        "burr_contact", bool(v >= limit[i]), float(v), float(limit[i]), "m", ">=",
         pair=d.burr_pair[i] if np.isfinite(v) else None, **sp.where(i),
         detail=f"burr head vs hub collision pieces: penetration at most the depth of cut + "
                f"edge tolerance + {tol.collision_model_excess * 1e3:.2f} mm collision-model "
                f"excess on approach/cut/retract (burr_engagement checks the true edge), full "
-               f"clearance elsewhere")
+               f"clearance elsewhere" + note)
+
+
+def _true_surface(sp, index, reach):
+    from drakedeburr.verify.true_surface import true_surface_distances
+
+    return true_surface_distances(sp.hub_model, sp.samples.X_HT, index, reach=reach)
 
 
 def clearance_certificate(sp, cfg) -> CheckItem:

@@ -1,0 +1,244 @@
+"""The burr head against the hub's true surface, where its collision pieces over-state contact.
+
+The scene graph measures the burr head against the hub's convex collision pieces. The pieces
+contain the part's material but may stand proud of its surface: a generated hub's pieces by
+at most ``Tolerances.collision_model_excess`` (0.5 mm), an imported CAD mesh's by up to
+``ImportOptions.window_reach`` into an opening and ``front_reach`` above the face (1 and 3 mm),
+where a finer decomposition would cost minutes. Where the pieces' reading fails
+``burr_contact``, this module reads the same samples against the triangle mesh itself
+(``HubModel.vertices_H`` / ``faces``).
+
+Written here because no library at hand measures it: Drake's signed distance needs convex
+shapes (or a watertight mesh for a hydroelastic volume), open3d's signed distance and
+occupancy need a watertight mesh, and CAD exports are often neither.
+
+The measure. The burr head is a solid cone (base at ``z_b``, apex at ``z_a`` on +Z_T, half
+angle alpha; :class:`drakedeburr.cell.tools.BurrGeometry`), so a point's signed distance to
+it is the 2-D distance in the point's meridian half-plane (z, rho) to the triangle
+(z_b, 0), (z_b, r_b), (z_a, 0) (negative inside: minus the distance to the base or the flank;
+the axis is no boundary). How deep the material reaches into the cone is the largest depth
+of a material point. Depth is a concave function on the cone, so its largest value over a
+region lies on the region's boundary (here: the hub's surface) unless the region holds the
+cone's deepest point, its in-centre (depth = in-radius): a sample whose in-centre lies inside
+a collision piece (which contains the material) keeps the pieces' reading. The largest
+depth over the surface is found by branch and bound over its triangles
+(:func:`true_surface_distances`); the reading is the bound's upper end, a lower bound of the
+signed distance within ``tolerance`` of it.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import ConvexHull, cKDTree
+
+__all__ = ["BurrCone", "TrueSurfaceReading", "burr_cone", "cone_signed_distance",
+           "true_surface_distances"]
+
+
+@dataclass(frozen=True)
+class BurrCone:
+    """The burr head's solid cone in the tool frame T [m]: base plane z = z_base (radius
+    r_base), apex at z = z_apex on the axis, half angle ``alpha`` [rad]."""
+
+    z_base: float
+    z_apex: float
+    r_base: float
+    alpha: float
+
+    @property
+    def inradius(self) -> float:
+        """Radius of the largest ball inside the cone (touching base and flank)."""
+        s = math.sin(self.alpha)
+        return (self.z_apex - self.z_base) * s / (1 + s)
+
+    @property
+    def incentre_T(self) -> np.ndarray:
+        return np.array([0.0, 0.0, self.z_base + self.inradius])
+
+    @property
+    def centre_T(self) -> np.ndarray:
+        """Centre of the bounding ball used for the queries (mid-height on the axis)."""
+        return np.array([0.0, 0.0, 0.5 * (self.z_base + self.z_apex)])
+
+    @property
+    def bounding_radius(self) -> float:
+        half = 0.5 * (self.z_apex - self.z_base)
+        return math.hypot(self.r_base, half)
+
+
+def burr_cone() -> BurrCone:
+    """The verifier's burr (:data:`drakedeburr.cell.tools.BURR`) as a cone in T."""
+    from drakedeburr.cell.tools import BURR
+
+    z_apex = BURR.apex_offset
+    return BurrCone(z_base=z_apex - BURR.head_length, z_apex=z_apex, r_base=BURR.head_radius,
+                    alpha=BURR.cone_half_angle)
+
+
+def _segment_distance(z, r, a, b) -> np.ndarray:
+    """2-D distance of points (z, r) to the segment a-b."""
+    d = np.asarray(b, float) - np.asarray(a, float)
+    pz, pr = z - a[0], r - a[1]
+    u = np.clip((pz * d[0] + pr * d[1]) / (d @ d), 0.0, 1.0)
+    return np.hypot(pz - u * d[0], pr - u * d[1])
+
+
+def cone_signed_distance(cone: BurrCone, p_T: np.ndarray) -> np.ndarray:
+    """(n,) signed distance of points in T to the solid cone [m]: negative inside (minus the
+    depth below the base or the flank), positive outside."""
+    z, r = p_T[:, 2], np.hypot(p_T[:, 0], p_T[:, 1])
+    base = _segment_distance(z, r, (cone.z_base, 0.0), (cone.z_base, cone.r_base))
+    flank = _segment_distance(z, r, (cone.z_base, cone.r_base), (cone.z_apex, 0.0))
+    inside = (z >= cone.z_base) & (z <= cone.z_apex) & (
+        r <= (cone.z_apex - z) * math.tan(cone.alpha))
+    return np.where(inside, -np.minimum(base, flank), np.minimum(base, flank))
+
+
+@dataclass(frozen=True)
+class TrueSurfaceReading:
+    """Samples read against the true surface.
+
+    Attributes:
+        index: (k,) sample indices read; value: (k,) lower bound of the burr head's signed
+            distance to the surface [m] (the reading less ``resolution``); engulfed: (k,) the
+            cone's in-centre lies inside a collision piece (the pieces' reading stands).
+        resolution: [m] the largest gap left between the bounds of a sample.
+        points: how many (sample, triangle) bounds were read.
+    """
+
+    index: np.ndarray
+    value: np.ndarray
+    engulfed: np.ndarray
+    resolution: float
+    points: int
+
+
+def _initial_pairs(tri: np.ndarray, centres: np.ndarray, radii: np.ndarray):
+    """(sample, triangle) pairs whose bounding balls meet: the sample's query ball
+    (``centres``, ``radii``) and the triangle's (centroid, farthest vertex)."""
+    c = tri.mean(axis=1)
+    rad = np.linalg.norm(tri - c[:, None], axis=2).max(axis=1)
+    tree = cKDTree(c)
+    small = rad <= 5e-3
+    ks, ts = [], []
+    for k, near in enumerate(tree.query_ball_point(centres, radii + 5e-3)):
+        near = np.asarray(near, int)
+        near = near[small[near]]
+        near = near[np.linalg.norm(c[near] - centres[k], axis=1) <= radii[k] + rad[near]]
+        ks.append(np.full(len(near), k))
+        ts.append(near)
+    large = np.flatnonzero(~small)  # few: CAD faces; against every sample
+    if len(large):
+        d = np.linalg.norm(c[large][None] - centres[:, None], axis=2)
+        k, j = np.nonzero(d <= radii[:, None] + rad[large][None])
+        ks.append(k)
+        ts.append(large[j])
+    return np.concatenate(ks).astype(int), np.concatenate(ts).astype(int)
+
+
+def _split(tri: np.ndarray) -> np.ndarray:
+    """Each triangle into four by its edge midpoints: (4P, 3, 3), children of triangle i at
+    rows i, P + i, 2P + i, 3P + i."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+    return np.concatenate([np.stack(t, axis=1) for t in
+                           ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+
+
+@functools.lru_cache(maxsize=4)
+def _piece_planes(paths: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Half-space equations of every collision piece's hull: (P, 4) stacked rows and (n+1,)
+    offsets of each piece's rows."""
+    import trimesh
+
+    rows, offsets = [], [0]
+    for path in paths:
+        mesh = trimesh.load(str(path), force="mesh", process=False)
+        eq = ConvexHull(np.asarray(mesh.vertices, float)).equations
+        rows.append(eq)
+        offsets.append(offsets[-1] + len(eq))
+    return np.concatenate(rows), np.array(offsets)
+
+
+def _inside_a_piece(planes, offsets, p_H: np.ndarray) -> np.ndarray:
+    """(n,) whether each point lies inside (or on) some collision piece."""
+    out = np.zeros(len(p_H), bool)
+    for a in range(0, len(p_H), 64):  # (64, P) at a time: P is ~10^4-10^5 rows
+        s = p_H[a:a + 64] @ planes[:, :3].T + planes[:, 3]
+        worst = np.maximum.reduceat(s, offsets[:-1], axis=1)  # per piece: largest excess
+        out[a:a + 64] = (worst <= 0.0).any(axis=1)
+    return out
+
+
+def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
+                           reach: np.ndarray | float, tolerance: float = 2e-6,
+                           max_levels: int = 24, cone: BurrCone | None = None
+                           ) -> TrueSurfaceReading:
+    """The burr head's signed distance to the hub's triangle mesh at samples ``index``.
+
+    Branch and bound over the mesh's triangles, per sample: a triangle's vertices give a
+    lower bound of the largest depth (minus signed distance) of the surface in the cone, and
+    its vertices' largest depth + longest edge / sqrt(3) (every point of a triangle lies that
+    close to a vertex; depth is 1-Lipschitz) an upper bound; triangles whose upper bound
+    cannot beat the sample's lower bound are dropped, the others split in four, until the
+    bounds meet within ``tolerance``.
+
+    Args:
+        hub_model: :class:`drakedeburr.hub.HubModel` (its mesh and collision pieces, in H).
+        X_HT: (N, 4, 4) the samples' tool poses in H.
+        index: the samples to read.
+        reach: (per sample or one) distances beyond this are not resolved (read as
+            ``reach``) [m]; 0 where only a penetration matters.
+        tolerance: [m] the bounds' gap at which a sample is settled.
+        max_levels: splits at most; a sample still open then keeps its upper bound.
+        cone: the burr head (default :func:`burr_cone`).
+    """
+    cone = cone or burr_cone()
+    index = np.asarray(index, int)
+    n = len(index)
+    X = X_HT[index]
+    R, p = X[:, :3, :3], X[:, :3, 3]
+    centres = p + R @ cone.centre_T
+    reach = np.broadcast_to(np.maximum(np.asarray(reach, float), 0.0), (n,)).copy()
+    V, F = np.asarray(hub_model.vertices_H, float), np.asarray(hub_model.faces, int)
+    k, t = _initial_pairs(V[F], centres, cone.bounding_radius + reach)
+    tri = V[F][t]
+    lower = -reach  # depth: anything farther than reach reads as reach
+    upper = np.full(n, -np.inf)
+    settled = np.zeros(n, bool)
+    top = np.full(n, -np.inf)
+    pairs = 0
+    for _level in range(max_levels + 1):
+        pairs += len(k)
+        if not len(k):
+            break
+        p_T = np.einsum("pvj,pji->pvi", tri - p[k][:, None], R[k])
+        sd = cone_signed_distance(cone, p_T.reshape(-1, 3)).reshape(-1, 3)
+        depth = (-sd).max(axis=1)  # the deepest vertex of each triangle
+        np.maximum.at(lower, k, depth)
+        edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+        ub = depth + edge / math.sqrt(3.0)
+        live = ub > lower[k]
+        k, tri, ub = k[live], tri[live], ub[live]
+        top = np.full(n, -np.inf)
+        np.maximum.at(top, k, ub)
+        done = ~settled & (top - lower <= tolerance)
+        upper[done] = np.maximum(lower[done], top[done])
+        settled |= done
+        keep = ~settled[k]
+        k, tri = k[keep], tri[keep]
+        tri = _split(tri)
+        k = np.tile(k, 4)
+    open_ = ~settled  # still open after max_levels (or nothing within reach): the last bound
+    upper[open_] = np.maximum(lower[open_], top[open_])
+    gap = float(np.max(upper - lower)) if n else 0.0
+    engulfed = np.zeros(n, bool)
+    if hub_model.collision_paths:
+        planes, offsets = _piece_planes(tuple(str(q) for q in hub_model.collision_paths))
+        engulfed = _inside_a_piece(planes, offsets, p + R @ cone.incentre_T)
+    return TrueSurfaceReading(index=index, value=np.minimum(-upper, reach), engulfed=engulfed,
+                              resolution=max(gap, tolerance), points=pairs)
