@@ -11,8 +11,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from drakedeburr.verify.true_surface import (BurrCone, burr_cone, cone_signed_distance,
-                                             true_surface_distances)
+from drakedeburr.verify.true_surface import (
+    burr_cone,
+    cone_signed_distance,
+    true_surface_distances,
+)
 
 CONE = burr_cone()
 
