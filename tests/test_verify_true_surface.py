@@ -20,9 +20,10 @@ from drakedeburr.verify.true_surface import (
 CONE = burr_cone()
 
 
-def _pose(R=np.eye(3), p=np.zeros(3)) -> np.ndarray:
+def _pose(R=None, p=None) -> np.ndarray:
     X = np.eye(4)
-    X[:3, :3], X[:3, 3] = R, p
+    X[:3, :3] = np.eye(3) if R is None else R
+    X[:3, 3] = np.zeros(3) if p is None else p
     return X
 
 
