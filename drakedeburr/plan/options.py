@@ -70,7 +70,7 @@ class PlanOptions:
             that holds the feed where one exists; None: off.
         placement: choose the hub's pose on its mount and each window's arm branch by a
             search before planning (:mod:`drakedeburr.plan.placement`); False: the hub where
-            the cell's mount puts it, starts ranked from the previous window.
+            the cell's mount puts it, each window's starts ranked from home.
         relax: plan a window the recipe cannot cut again with a milder tilt box, the
             deviation recorded (:mod:`drakedeburr.plan.relax`).
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:

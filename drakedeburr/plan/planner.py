@@ -224,17 +224,17 @@ def _relax(cell, hub_model, wts, config, options, plan, q_refs, progress) -> Pla
             in_vain.append(FailureRecord(
                 window=w, kind="relaxation", tried=tuple(t for t, _ in tried),
                 reason="milder recipes failed too: " + "; ".join(f"{t}: {r}" for t, r in tried)))
-    if in_vain:
+    if deviations:
+        relaxed = plan_windows(cell, wts, config, options=options, progress=progress,
+                               q_refs=q_refs)
+        if len(relaxed.failures) < len(plan.failures):  # both without the in-vain records
+            relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
+            log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
+                        "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
+            plan = relaxed
+    if in_vain:  # said with the failures of whichever plan is kept
         plan = replace(plan, failures=(*plan.failures, *in_vain))
-    if not deviations:
-        return plan
-    relaxed = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
-    if len(relaxed.failures) >= len(plan.failures):
-        return plan
-    relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
-    log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
-                "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
-    return relaxed
+    return plan
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",

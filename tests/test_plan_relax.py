@@ -1,0 +1,117 @@
+"""Recipe relaxation (plan.relax, planner._relax): milder tilt boxes in order, the first that
+plans clean kept with its deviation recorded; what was tried recorded where none does; the
+hub re-planned with the relaxed window kept only when it leaves fewer failure records, and
+the records of windows relaxed in vain said with whichever plan is kept."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from drakedeburr.config import OrientationBounds, ProcessParameters
+from drakedeburr.plan import planner
+from drakedeburr.plan.relax import TILT_STEPS, relaxed_targets
+from drakedeburr.plan.types import FailureRecord
+
+
+@functools.cache
+def _edge(kind: str = "large"):
+    from drakedeburr.hub import load_hub
+
+    hub = load_hub("h5_split")
+    return next(w for w in hub.windows if w.kind == kind)
+
+
+@dataclass
+class _Plan:
+    """What _relax reads of a plan."""
+
+    failures: tuple
+    meta: dict = field(default_factory=dict)
+
+
+def _plan(failures=()):
+    return _Plan(tuple(failures))
+
+
+def test_the_first_milder_box_that_plans_clean_is_kept_and_recorded():
+    edge = _edge("large")
+    params = ProcessParameters()
+    seen = []
+
+    def plan_one(wt):
+        seen.append(wt)
+        return _plan([FailureRecord(edge.index, "ik", "unreachable")] if len(seen) == 1 else [])
+
+    wt, dev, tried = relaxed_targets(edge, params, "ik: unreachable", plan_one)
+    assert len(seen) == 2 and wt is seen[1]
+    assert dev.window == edge.index and dev.item == "tool tilt"
+    assert dev.used == "theta box 0.00-0.15 rad"
+    assert dev.default == (f"theta box {params.bounds_large.theta_min:.2f}-"
+                           f"{params.bounds_large.theta_max:.2f} rad")
+    assert "ik: unreachable" in dev.reason
+    assert [t for t, _ in tried] == ["theta box 0.09-0.26 rad"]
+    # the kept targets really come from the milder box: its bounds, both angles inside
+    tp, first = wt.tool_path, seen[0].tool_path
+    assert (tp.bounds.theta_min, tp.bounds.theta_max) == (0.0, 0.15)
+    assert (first.bounds.theta_min, first.bounds.theta_max) == (0.09, 0.26)
+    for th in (tp.theta_A, tp.theta_B):
+        assert np.all(th >= -1e-6) and np.all(th <= 0.15 + 1e-6)
+    assert np.allclose(tp.p_HC, first.p_HC)  # the same CL points
+
+
+def test_nothing_milder_helps_and_every_try_is_said():
+    edge = _edge("large")
+    wt, dev, tried = relaxed_targets(
+        edge, ProcessParameters(), "why",
+        lambda wt: _plan([FailureRecord(edge.index, "dense", "too close to the hub")]))
+    assert wt is None and dev is None
+    assert [t for t, _ in tried] == [f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"
+                                     for b in TILT_STEPS]
+    assert all("too close to the hub" in r for _, r in tried)
+
+
+def test_a_box_not_milder_than_the_recipes_is_skipped():
+    edge = _edge("large")
+    params = replace(ProcessParameters(), bounds_large=OrientationBounds(0.05, 0.20))
+    calls = []
+    relaxed_targets(edge, params, "why", lambda wt: calls.append(wt) or _plan(["x"]))
+    assert len(calls) == 1  # 0.09-0.26 is not milder than 0.05-0.20; 0-0.15 is
+
+
+@pytest.mark.parametrize("relaxed_failures, kept", [(1, "relaxed"), (2, "default"), (3, "default")])
+def test_the_hub_is_planned_again_and_kept_only_with_fewer_failures(monkeypatch,
+                                                                    relaxed_failures, kept):
+    """Window 0 relaxes, window 1 does not: the re-plan is kept with fewer records than the
+    default plan (2), and window 1's relaxation record is added to whichever plan is kept."""
+    wts = [SimpleNamespace(window_index=0), SimpleNamespace(window_index=1)]
+    default = _plan([FailureRecord(0, "ik", "a"), FailureRecord(1, "ik", "b")])
+    relaxed = _plan([FailureRecord(1, "ik", "b")] * max(relaxed_failures, 1))
+    from drakedeburr.plan import relax
+
+    dev = relax.Deviation(0, "tool tilt", "theta box 0.26-0.44 rad", "theta box 0.09-0.26 rad",
+                          "r")
+
+    def fake_relaxed(edge, params, reason, plan_one):
+        if edge.index == 0:
+            return SimpleNamespace(window_index=0, relaxed=True), dev, []
+        return None, None, [("theta box 0.09-0.26 rad", "ik: b")]
+
+    monkeypatch.setattr(relax, "relaxed_targets", fake_relaxed)
+    monkeypatch.setattr(planner, "plan_windows", lambda cell, w, config, **kw: relaxed)
+    hub = SimpleNamespace(windows=[SimpleNamespace(index=0), SimpleNamespace(index=1)])
+    config = SimpleNamespace(process=ProcessParameters())
+    out = planner._relax(None, hub, wts, config, None, default, {}, None)
+    base = relaxed if kept == "relaxed" else default
+    assert out.failures[:len(base.failures)] == base.failures
+    extra = out.failures[len(base.failures):]
+    assert len(extra) == 1 and extra[0].kind == "relaxation" and extra[0].window == 1
+    assert extra[0].tried == ("theta box 0.09-0.26 rad",)
+    if kept == "relaxed":
+        assert out.meta["recipe_deviations"] == [dev.record()]
+    else:
+        assert "recipe_deviations" not in out.meta
