@@ -557,3 +557,43 @@ def test_no_user_output_is_made_by_mkdtemp_or_mkstemp():
             if isinstance(node, ast.Attribute) and node.attr in ("mkdtemp", "mkstemp"):
                 found.append(f"{f.relative_to(root)}:{node.lineno}")
     assert not found, found
+
+
+_SWALLOWING_SOLVER = '''
+import ctypes, os, signal, sys, time
+from drakedeburr.cli import _sigint_taken_by_a_thread
+libc = ctypes.CDLL(None)
+libc.signal.restype = ctypes.c_void_p
+libc.signal.argtypes = [ctypes.c_int, ctypes.c_void_p]
+do_nothing = ctypes.cast(libc.getpid, ctypes.c_void_p).value
+
+def solve_while_interrupted():  # a solver's own C handler in place, as OSQP and SCS do
+    libc.signal(signal.SIGINT, do_nothing)
+    os.kill(os.getpid(), signal.SIGINT)
+    t0 = time.time()
+    while time.time() - t0 < 3:
+        time.sleep(0.01)
+
+try:
+    if sys.argv[1] == "guarded":
+        with _sigint_taken_by_a_thread():
+            solve_while_interrupted()
+    else:
+        solve_while_interrupted()
+    print("swallowed")
+except KeyboardInterrupt:
+    print("interrupted")
+'''
+
+
+@pytest.mark.parametrize("how, outcome", [("bare", "swallowed"), ("guarded", "interrupted")])
+def test_ctrl_c_during_a_solver_that_takes_sigint_still_interrupts(tmp_path, how, outcome):
+    """Ctrl-C while a solver's C-level SIGINT handler is in place (OSQP, SCS install one
+    during a solve and stop quietly): bare, the signal is swallowed and the command runs on
+    (a plan interrupted this way exited 0 under load); the CLI's guard (SIGINT blocked, taken
+    by a watcher thread with sigwait) interrupts the main thread all the same."""
+    script = tmp_path / "solver.py"
+    script.write_text(_SWALLOWING_SOLVER)
+    out = subprocess.run([sys.executable, str(script), how], capture_output=True, text=True,
+                         timeout=60)
+    assert out.stdout.strip() == outcome, out.stderr
