@@ -93,6 +93,10 @@ def test_certified_acceleration_bound_holds_under_the_verifiers_certificate():
         vals, _, rem = spline_extremes(JointTrajectory(t=tp.t, c=tp.c))["qdd"]
         ratio = (np.abs(vals) + rem[:, None]) / np.asarray(A_MAX)
         assert ratio.max() <= 1.0, ratio.max()
+        # and the stretch is slowed by what the excess asks, not more (accelerations scale
+        # as sdot^2: dividing sdot^2 by the excess squared left 0.92-0.97 of the limit here,
+        # and 60-68 % on a KR 6 cut, failing slowdowns_justified)
+        assert ratio.max() >= 0.95, ratio.max()
 
 
 def test_tcp_speed_is_the_speed_of_the_path_the_robot_runs():

@@ -309,7 +309,7 @@ def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimi
             break
         bad = np.flatnonzero(over > 1.0)
         for k in (bad, bad + 1):
-            v_curve[k] = np.minimum(v_curve[k], sdot[k] ** 2) / over[bad] ** 2
+            v_curve[k] = np.minimum(v_curve[k], sdot[k] ** 2) / over[bad]
     else:  # not settled locally: slow the whole stretch (every acceleration scales as sdot^2)
         sdot = sdot / np.sqrt(over.max())
         dt = 2.0 * ds / np.maximum(sdot[:-1] + sdot[1:], 1e-12)
