@@ -166,43 +166,9 @@ def _sigterm_as_interrupt():
 
     previous = signal.signal(signal.SIGTERM, interrupt)
     try:
-        with _sigint_taken_by_a_thread():
-            yield
+        yield
     finally:
         signal.signal(signal.SIGTERM, previous)
-
-
-@contextlib.contextmanager
-def _sigint_taken_by_a_thread():
-    """Ctrl-C (SIGINT) blocked in this process's threads and taken by a watcher thread
-    (``sigwait``) that interrupts the main thread: some solvers Drake runs (OSQP, SCS) put
-    their own SIGINT handler in place during a solve and swallow the signal (the solve stops
-    early, the command runs on and exits 0). Threads and processes started meanwhile inherit
-    the block (the planner's workers then leave Ctrl-C to this process, which stops them)."""
-    if not hasattr(signal, "pthread_sigmask"):  # not POSIX: Python's own handling
-        yield
-        return
-    import _thread
-
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    stop = threading.Event()
-
-    def watch() -> None:
-        while True:
-            signal.sigwait({signal.SIGINT})
-            if stop.is_set():
-                return
-            _thread.interrupt_main(signal.SIGINT)
-
-    watcher = threading.Thread(target=watch, name="sigint-watcher", daemon=True)
-    watcher.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        signal.pthread_kill(watcher.ident, signal.SIGINT)
-        watcher.join(timeout=5)
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _run(args: argparse.Namespace) -> int:
