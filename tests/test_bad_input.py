@@ -484,8 +484,12 @@ def _cli(*args: str) -> list[str]:
 def test_interrupted_plan_exits_130_and_keeps_the_old_plan(ws, sig):
     """A signal during planning: exit 130, one line, the previous plan folder untouched."""
     before = tree(ws)
+    # the child with Ctrl-C at its default: a shell's background job (``cmd &`` without job
+    # control) runs with SIGINT ignored, which its children inherit, and Python then leaves
+    # it ignored
     proc = subprocess.Popen(_cli("plan", "--windows", "0", "--source", "edges", "-o", "plan"),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ws)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ws,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     # the first log line comes once the command runs (its handlers are installed)
     first = proc.stderr.readline()
     assert first, proc.communicate()
