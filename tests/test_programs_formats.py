@@ -226,6 +226,28 @@ def test_krl_turn_ambiguity_is_flagged():
     assert "WARNING: S/T cannot tell the planned turn of A4/A6 at move(s) 1" in src
 
 
+def test_krl_turn_check_reads_back_only_what_s_and_t_may_not_pin_down(monkeypatch):
+    """With every limit inside +-360 deg only a move on a branch boundary can be ambiguous:
+    the fast path finds what reading back every move finds (KR 6 programs, and one move put
+    on the A5 = 0 boundary, which is read back)."""
+    from drakedeburr.programs import krl
+
+    for seed in range(4):
+        prog = random_program("kr6_r700", seed=seed)
+        fast = krl._ambiguous_turns(prog)
+        with monkeypatch.context() as mp:
+            mp.setattr(krl, "_turn_suspects", lambda p: range(len(p.moves)))
+            assert krl._ambiguous_turns(prog) == fast
+    q = prog.moves[0].q.copy()
+    q[4] = 0.0
+    from drakedeburr.robots import fk_opw
+
+    spec = get_robot("kr6_r700")
+    first = replace(prog.moves[0], q=q, X_WT=fk_opw(spec.opw, q) @ prog.X_FT)
+    prog = replace(prog, moves=(first, *prog.moves[1:]))
+    assert 0 in list(krl._turn_suspects(prog))
+
+
 def test_inconsistent_program_refused():
     prog = random_program("irb1600", n=3)
     bad = replace(prog, moves=(replace(prog.moves[0], q=prog.moves[1].q),))

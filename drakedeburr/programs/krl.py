@@ -33,6 +33,7 @@ from drakedeburr.programs.common import (
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number, split_top_level
 from drakedeburr.robots import joints_from_configuration, kuka_status_turn
+from drakedeburr.robots.opw_ik import arm_branches
 from drakedeburr.units import mm_from_m
 
 __all__ = ["format_krl", "read_krl", "read_krl_dat", "frame_text"]
@@ -61,13 +62,31 @@ def _load(p: RobotProgram) -> str:
 def _ambiguous_turns(p: RobotProgram) -> list[int]:
     """Moves whose planned joints are not the ones S/T select (turns beyond +-360 deg)."""
     out = []
-    for i, m in enumerate(p.moves):
+    for i in _turn_suspects(p):
+        m = p.moves[i]
         X_BF = m.X_WT @ np.linalg.inv(p.X_FT)
         q_back = joints_from_configuration(p.kinematics, X_BF, "kuka",
                                            kuka_status_turn(p.kinematics, m.q))
         if np.abs(q_back - m.q).max() > 1e-6:
             out.append(i + 1)
     return out
+
+
+def _turn_suspects(p: RobotProgram):
+    """The moves S/T might not pin down. T holds every joint's sign and a 2*pi turn flips it,
+    so with every limit inside +-360 deg no other turn has the same T; S holds the branch
+    signs (shoulder, elbow, A5), so only a move exactly on a branch boundary can have a second
+    IK solution with the same S. Anything else is read back in full (IK for every move: ~5 s
+    for 7 500 moves, most of a KRL post)."""
+    kin = p.kinematics
+    if not p.moves:
+        return []
+    lower, upper = np.asarray(kin.limits.lower), np.asarray(kin.limits.upper)
+    if np.any(lower <= -2 * np.pi) or np.any(upper >= 2 * np.pi):
+        return range(len(p.moves))
+    Q = np.array([m.q for m in p.moves], float)
+    on_boundary = (arm_branches(kin.opw, Q) == 0).any(axis=1) | (np.abs(Q[:, 4]) < 1e-9)
+    return np.flatnonzero(on_boundary)
 
 
 def _motion_lines(p: RobotProgram) -> list[str]:
