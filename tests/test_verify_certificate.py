@@ -130,7 +130,7 @@ def test_certificate_is_sound_and_tight_on_a_good_plan(scenario):
     sp, config, cell = _good_case(scenario)
     tol = config.tolerances
     cert = sp.distances.certificate
-    probe = DistanceProbe(cell, tol.query_distance)
+    probe = DistanceProbe(cell, tol.query_distance, tol)
     traj = sp.plan.trajectory
     for k, series, limit in ((cert.clearance, sp.distances.clearance, tol.min_clearance),
                              (cert.self_distance, sp.distances.self_distance, 0.0)):

@@ -9,10 +9,10 @@ import pytest
 import verify_support as vs
 
 import drakedeburr.verify.distances as mut
+from drakedeburr.cell.chain import KinematicTree
 from drakedeburr.resources import add_package_to, resolve_package_url
 from drakedeburr.robots import get_robot, robot_names
 from drakedeburr.verify import motion_bounds as mb
-from drakedeburr.verify.chain import KinematicTree
 from drakedeburr.verify.pair_scene import shape_points
 from drakedeburr.verify.sweep import sweep
 
@@ -28,13 +28,18 @@ def _samples(plan, n_max=None):
 
 def test_tracked_sweep_reads_the_dense_minima():
     """Per sample and class, the tracked sweep's minimum and pair equal the cell's own
-    ComputeSignedDistancePairwiseClosestPoints (the dense reference) bit for bit."""
+    ComputeSignedDistancePairwiseClosestPoints (the dense reference, each reading certified
+    the same way) bit for bit wherever that minimum is within ``narrowphase_resolve`` of the
+    class's limit (every reading there is exact, verify.narrowphase). Above it a reading whose
+    narrow phase overestimated is kept as its separating-plane bound, which the dense
+    reference reads at every pair: the sweep, reading only the pairs that can matter, is then
+    at least the dense minimum (never below what it read)."""
     cell, _ = vs.cell_and_hub()
     plan = vs.good_plan()
     s = _samples(plan)
     tol = vs.config().tolerances
     sw = sweep(mut.pair_scene_of(cell), plan.trajectory, s.t, s.q, tol)
-    probe = mut.DistanceProbe(cell, tol.query_distance)
+    probe = mut.DistanceProbe(cell, tol.query_distance, tol)
     names = mut.pair_scene_of(cell).pair_names
     mismatch = []
     for i in range(len(s)):
@@ -45,7 +50,10 @@ def test_tracked_sweep_reads_the_dense_minima():
             got_pair = names(sw.best_pair[c, i]) if sw.best_pair[c, i] >= 0 else ("", "")
             if not (got == v or (np.isinf(got) and np.isinf(v))) or got_pair != pair:
                 mismatch.append((i, c, got, v))
-    assert not mismatch, mismatch[:5]
+    level = [tol.min_clearance + tol.narrowphase_resolve, tol.narrowphase_resolve, -np.inf]
+    below = [m for m in mismatch if m[3] < level[m[1]] or m[1] == 2 or m[2] < m[3]]
+    assert not below, below[:5]
+    assert len(mismatch) <= 0.01 * len(s), mismatch[:5]
     # and it reads far fewer pairs than there are pairs x samples
     assert len(sw.rec_pair) < 0.02 * len(s) * len(mut.pair_scene_of(cell).a)
 

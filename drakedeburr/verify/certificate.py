@@ -294,6 +294,7 @@ def certify(scene, traj, sweep, tol) -> ClearanceCertificate:
             observed_pair=scene.pair_names(p_obs) if p_obs >= 0 else ("", ""),
             unresolved=tally.unresolved[c], unresolved_below_limit=tally.below[c])
     return ClearanceCertificate(clearance=out[CLEARANCE], self_distance=out[SELF],
-                                method=METHOD, gap=ref.gap, share=ref.share, floor=ref.floor,
+                                method=f"{METHOD}; {scene.tally.summary()}", gap=ref.gap,
+                                share=ref.share, floor=ref.floor,
                                 sweep_readings=len(sweep.rec_pair), samples_posed=sweep.posed,
                                 refined=refined, refine_readings=ref.readings, depth=depth)

@@ -51,9 +51,12 @@ class DistanceProbe:
 
     Args:
         cell: the cell. query_distance: pairs farther apart are not reported [m].
+        tolerances: how readings are certified (default: the default tolerances).
     """
 
-    def __init__(self, cell, query_distance: float) -> None:
+    def __init__(self, cell, query_distance: float, tolerances=None) -> None:
+        from drakedeburr.config import default_tolerances
+
         self.cell = cell
         self.query_distance = float(query_distance)
         self.context = cell.diagram.CreateDefaultContext()
@@ -61,6 +64,7 @@ class DistanceProbe:
         self.sg_context = cell.scene_graph.GetMyContextFromRoot(self.context)
         self.port = cell.scene_graph.get_query_output_port()
         self.scene = pair_scene_of(cell)
+        self.scene.use_tolerances(tolerances or default_tolerances())
         self._index = {g.get_value(): n for n, g in enumerate(self.scene.ids)}
         self._pair_of = {(int(a), int(b)): p
                          for p, (a, b) in enumerate(zip(self.scene.a, self.scene.b, strict=True))}
@@ -76,8 +80,15 @@ class DistanceProbe:
             if p is None:
                 continue  # filtered in the cell (fixed-fixed pairs are filtered there too)
             c = int(self.scene.cls[p])
-            if r.distance < best[c][0]:
-                best[c] = (float(r.distance), p)
+            d = float(r.distance)
+            if c != BURR and d > 0.0:  # held to a rigorous bound, as the tracked sweep's
+                X_A, X_B = (query.GetPoseInWorld(g).GetAsMatrix4() for g in (r.id_A, r.id_B))
+                n_BA = np.asarray(r.nhat_BA_W)
+                if ia != self.scene.a[p]:  # the scene's pair is (b, a) here
+                    X_A, X_B, n_BA = X_B, X_A, -n_BA
+                d = self.scene.certify(p, d, n_BA, X_A, X_B)
+            if d < best[c][0]:
+                best[c] = (d, p)
 
         def named(c):
             d, p = best[c]
@@ -128,7 +139,7 @@ def _measure_dense(cell, samples, tol, progress=None):
 
     from drakedeburr.verify.sampling import Distances
 
-    probe = DistanceProbe(cell, tol.query_distance)
+    probe = DistanceProbe(cell, tol.query_distance, tol)
     plant, pc = cell.plant, probe.plant_context
     n = len(samples)
     out = {k: np.full(n, np.inf) for k in ("clearance", "self_distance", "burr")}

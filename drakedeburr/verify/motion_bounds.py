@@ -16,7 +16,7 @@ piece of the trajectory, length ``h``) and any ``t`` between them at share ``s``
   the point's distance from axis j and ``W_j`` the sum of the rates of the joints between R
   and axis j (differentiate ``v = sum_j qd_j a_j x (p - o_j)``; ``|a_j'| <= W_j``). The
   rates are bounded exactly by the Taylor expansion of each polynomial piece at ``t_a``;
-  ``r_j`` by the link reach (:meth:`drakedeburr.verify.chain.KinematicTree.reach`).
+  ``r_j`` by the link reach (:meth:`drakedeburr.cell.chain.KinematicTree.reach`).
 
 Hence ``|p(t) - p(t_a)| <= s delta + e`` and ``|p(t) - p(t_b)| <= (1 - s) delta + e`` with
 ``e = h^2 / 8 * A``, and from distances ``d_a``, ``d_b`` at the ends the distance over the
@@ -31,7 +31,7 @@ from math import factorial
 
 import numpy as np
 
-from drakedeburr.verify.chain import rotation_angle
+from drakedeburr.cell.chain import rotation_angle
 
 __all__ = ["Tracks", "relative_pose", "chord_bound", "rate_bounds", "accel_weights",
            "accel_bound",

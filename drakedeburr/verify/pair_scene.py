@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drakedeburr.verify.chain import KinematicTree
+from drakedeburr.cell.chain import KinematicTree
 from drakedeburr.verify.motion_bounds import Tracks
 
 __all__ = ["PairScene", "shape_points", "CLEARANCE", "SELF", "BURR"]
@@ -66,7 +66,7 @@ class PairScene:
 
     Args:
         cell: a :class:`drakedeburr.cell.Cell`.
-        tree: its :class:`~drakedeburr.verify.chain.KinematicTree` (default: built here).
+        tree: its :class:`~drakedeburr.cell.chain.KinematicTree` (default: built here).
 
     Attributes:
         names: per geometry ``model::body/geometry``; moving: (G,) bool.
@@ -220,6 +220,11 @@ class PairScene:
         self._A = [self.scene_ids[i] for i in self.a]
         self._B = [self.scene_ids[i] for i in self.b]
         self._query = None
+        self._supports: dict = {}
+        self.resolve_below = np.full(3, np.inf)  # until use_tolerances: always solved
+        from drakedeburr.verify.narrowphase import ReadingTally
+
+        self.tally = ReadingTally()
 
     def set_configuration(self, q: np.ndarray, bodies=None) -> None:
         """Pose the moving bodies at joints ``q`` (nq,) [rad] through the Drake plant (its
@@ -233,9 +238,48 @@ class PairScene:
         self._pose_port.FixValue(self._ctx, self._poses)
         self._query = self._query_port.Eval(self._ctx)
 
+    def use_tolerances(self, tol) -> None:
+        """Set how readings are certified (:mod:`drakedeburr.verify.narrowphase`) and start a
+        new tally: a clearance/self reading whose separating-plane bound falls below its
+        class's limit + ``Tolerances.narrowphase_resolve`` is solved exactly."""
+        from drakedeburr.verify.narrowphase import ReadingTally
+
+        self.resolve_below = np.array([tol.min_clearance, 0.0, -np.inf]) + float(
+            tol.narrowphase_resolve)
+        self.tally = ReadingTally()
+
     def distance(self, p: int) -> float:
-        """Signed distance of pair ``p`` at the current configuration [m]."""
-        return self._query.ComputeSignedDistancePairClosestPoints(self._A[p], self._B[p]).distance
+        """Signed distance of pair ``p`` at the current configuration [m]: Drake's reading,
+        held to a rigorous lower bound for the clearance and self classes
+        (:meth:`certify`)."""
+        r = self._query.ComputeSignedDistancePairClosestPoints(self._A[p], self._B[p])
+        if not r.distance > 0.0 or self.cls[p] == BURR:
+            return r.distance
+        q = self._query
+        return self.certify(p, r.distance, np.asarray(r.nhat_BA_W),
+                            q.GetPoseInWorld(self._A[p]).GetAsMatrix4(),
+                            q.GetPoseInWorld(self._B[p]).GetAsMatrix4())
+
+    def certify(self, p: int, d: float, n_BA: np.ndarray, X_WA: np.ndarray,
+                X_WB: np.ndarray) -> float:
+        """Drake's reading ``d`` [m] of pair ``p`` (normal ``n_BA`` from its ``b`` toward its
+        ``a`` geometry, posed at ``X_WA``, ``X_WB``) as a certified reading
+        (:func:`~drakedeburr.verify.narrowphase.certified_distance`), tallied."""
+        from drakedeburr.verify.narrowphase import certified_distance
+
+        value, how = certified_distance(d, n_BA, self._support(int(self.a[p])), X_WA,
+                                        self._support(int(self.b[p])), X_WB,
+                                        solve_below=float(self.resolve_below[self.cls[p]]))
+        self.tally.add(d, value, how)
+        return value
+
+    def _support(self, i: int):
+        from drakedeburr.verify.narrowphase import ShapeSupport
+
+        s = self._supports.get(i)
+        if s is None:
+            s = self._supports[i] = ShapeSupport(self._inspector.GetShape(self.ids[i]))
+        return s
 
     def pair_names(self, p: int) -> tuple[str, str]:
         return self.names[self.a[p]], self.names[self.b[p]]
