@@ -111,14 +111,14 @@ def _same_figures(old, new) -> str:
 
 
 def bench_hub(hub: str, plans: Path, quick: bool, baseline) -> None:
-    from drakedeburr.cell.station import load_cell
+    from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.hub.model import load_hub
 
     plan, folder = _plan(hub, plans, quick)
     config = config_for_plan(plan)
     clock = Clock()
     w, c = time.perf_counter(), time.process_time()
-    cell = load_cell(plan.scenario, plan.hub, robot=(plan.meta or {}).get("robot"))
+    cell = load_plan_cell(plan)  # the cell the plan was made in (placement search's hub pose)
     hub_model = load_hub(plan.hub)
     clock.t["load cell + hub"] = (time.perf_counter() - w, time.process_time() - c)
     clock.wrap(sampling, "_samples", "samples")
@@ -148,7 +148,31 @@ def bench_hub(hub: str, plans: Path, quick: bool, baseline) -> None:
     print(f"  readings: sweep {cert.sweep_readings} pair readings at {cert.samples_posed} "
           f"samples; refinement {cert.refined} intervals, {cert.refine_readings} readings, "
           f"{cert.depth} levels")
+    print(f"  {cert.method.split('; ')[-1]}")
+    _uncertified(cell, sp, config, clock.t["distances (tracked + certificate)"])
     return folder
+
+
+def _uncertified(cell, sp, config, certified: tuple[float, float]) -> None:
+    """The distance stage again with Drake's readings taken as they are (what the verifier
+    did before verify.narrowphase): its cost and the clearance it would have certified."""
+    from drakedeburr.verify.pair_scene import PairScene
+
+    keep = PairScene.certify
+    PairScene.certify = lambda self, p, d, *a: d
+    try:
+        w, c = time.perf_counter(), time.process_time()
+        raw = distances.measure_samples(cell, sp.samples, config.tolerances,
+                                        trajectory=sp.plan.trajectory)
+        dt = (time.perf_counter() - w, time.process_time() - c)
+    finally:
+        PairScene.certify = keep
+    k, k0 = sp.distances.certificate.clearance, raw.certificate.clearance
+    print(f"  Drake's readings as they are: distances {dt[0]:.2f} s wall / {dt[1]:.2f} s cpu "
+          f"(certified readings: {certified[0]:.2f} / {certified[1]:.2f}, "
+          f"{certified[1] / max(dt[1], 1e-9):.2f}x cpu); clearance certified "
+          f"{k0.certified * 1e3:.4f} mm, sampled {k0.sampled * 1e3:.4f} mm (certified readings: "
+          f"{k.certified * 1e3:.4f} / {k.sampled * 1e3:.4f} mm)")
 
 
 def bench_cli(folder: Path) -> None:

@@ -29,9 +29,12 @@ moved by robot joints ``1..b`` is displaced by a joint change ``dq`` by at most
 ``sum_j |dq_j| R_j``, ``R_j`` a configuration-independent bound on its distance from joint
 ``j``'s axis: for ``j = b`` the distance of the geometry's points from that axis (fixed in link
 ``b``), for ``j < b`` the chain ``|o_{j+1} - o_j| + ... + |o'_b - o_{b-1}| + max |p - o'_b|``
-of points ``o`` on the axes (each term fixed in one link's frame). Geometries riding the flange
-get the tighter rigid-motion bound of the flange poses (``|dp_c| + theta * r``). The verifier's
-clearance certificate has its own bound (drakedeburr/verify); the two are to be unified.
+of points ``o`` on the axes (each term fixed in one link's frame). Every moving geometry also
+gets the rigid-motion bound of its body's poses (``|dp_c| + theta * r``, the plant's numpy
+kinematic tree, :mod:`drakedeburr.cell.chain`), the smaller of the two is used: the joint-reach
+bound of the wrist links summed ~3 m over a window where they move ~0.3 m, and every anchor
+query it forced costs a broad phase over the whole cell. The verifier's clearance certificate
+has its own bound (drakedeburr/verify); the two are to be unified.
 
 Why hand-written: Drake's collision checkers query every configuration in full; skipping by a
 motion bound along a given path is not offered for capped signed distances.
@@ -60,17 +63,19 @@ class MotionBound:
         level: (G,) the last robot joint (1..6) that moves the geometry; 0 fixed in the world.
         reach: (G, 6) ``R[g, j]`` bound on the distance of the geometry's points from joint
             ``j+1``'s axis over every configuration [m] (0 for joints that do not move it).
-        flange: (G,) the geometry rides the flange (welded to the last link).
-        c_F: (G, 3) its centre in the flange frame [m]; radius: (G,) the largest distance of its
-            points from that centre [m] (flange riders).
+        body: (G,) the plant body each geometry is fixed to (``tree`` numbering).
+        c_B: (G, 3) its centre in that body's frame [m]; radius: (G,) the largest distance of
+            its points from that centre [m] (moving geometries).
+        tree: the plant's :class:`~drakedeburr.cell.chain.KinematicTree` (body poses).
     """
 
     row: dict
     level: np.ndarray
     reach: np.ndarray
-    flange: np.ndarray
-    c_F: np.ndarray
+    body: np.ndarray
+    c_B: np.ndarray
     radius: np.ndarray
+    tree: object
 
 
 def _support(shape) -> tuple[np.ndarray, float]:
@@ -149,51 +154,57 @@ def motion_bound(cell) -> MotionBound:
         X = jt.frame_on_child().CalcPoseInWorld(ctx)
         u = X.rotation().matrix() @ np.asarray(jt.revolute_axis(), float)
         axes.append((X.translation(), u / np.linalg.norm(u)))
-    X_FW = np.linalg.inv(cell.flange_frame.CalcPoseInWorld(ctx).GetAsMatrix4())
+    from drakedeburr.cell.chain import KinematicTree
+
     gids = list(inspector.GetAllGeometryIds(Role.kProximity))
     G = len(gids)
-    level = np.zeros(G, int)
+    level, body_of = np.zeros(G, int), np.zeros(G, int)
     support: list = [None] * G
+    X_WB: dict = {}
     for i, gid in enumerate(gids):
         body = plant.GetBodyFromFrameId(inspector.GetFrameId(gid))
-        level[i] = level_of_body.get(int(body.index()), 0)
+        body_of[i] = int(body.index())
+        level[i] = level_of_body.get(body_of[i], 0)
         if level[i] == 0:
             continue
-        X_WG = (plant.EvalBodyPoseInWorld(ctx, body).GetAsMatrix4()
-                @ inspector.GetPoseInFrame(gid).GetAsMatrix4())
+        X_WB[i] = plant.EvalBodyPoseInWorld(ctx, body).GetAsMatrix4()
+        X_WG = X_WB[i] @ inspector.GetPoseInFrame(gid).GetAsMatrix4()
         P, rho = _support(inspector.GetShape(gid))
         support[i] = (P @ X_WG[:3, :3].T + X_WG[:3, 3], rho)
     riders = [s[0] for s, lv in zip(support, level, strict=True) if lv == 6]
     o = _chain_points(axes, np.vstack(riders).mean(axis=0) if riders else axes[-1][0])
-    reach, c_F, radius = np.zeros((G, 6)), np.zeros((G, 3)), np.zeros(G)
+    reach, c_B, radius = np.zeros((G, 6)), np.zeros((G, 3)), np.zeros(G)
     for i in np.flatnonzero(level > 0):
         P, rho = support[i]
         reach[i] = _reach_row(P, rho, int(level[i]), axes, o)
         c = P.mean(axis=0)
         radius[i] = float(np.max(np.linalg.norm(P - c, axis=1))) + rho
-        c_F[i] = X_FW[:3, :3] @ c + X_FW[:3, 3]
+        X_BW = np.linalg.inv(X_WB[i])
+        c_B[i] = X_BW[:3, :3] @ c + X_BW[:3, 3]
     out = MotionBound(row={gid: i for i, gid in enumerate(gids)}, level=level, reach=reach,
-                      flange=level == 6, c_F=c_F, radius=radius)
+                      body=body_of, c_B=c_B, radius=radius, tree=KinematicTree(plant))
     cell._cache["motion_bound"] = out
     return out
 
 
-def step_displacements(mb: MotionBound, q: np.ndarray, X_WF: np.ndarray) -> np.ndarray:
+def step_displacements(mb: MotionBound, q: np.ndarray) -> np.ndarray:
     """(N-1, G) bound on how far each geometry's points move [m] from sample k to k+1 of a
-    path (joints ``q`` (N, 6), flange poses ``X_WF`` (N, 4, 4)): the joint-reach bound, and for
-    flange riders the smaller rigid-motion bound ``|dp_c| + theta r`` of the flange poses."""
+    path (joints ``q`` (N, 6)): the smaller of the joint-reach bound and the rigid-motion
+    bound ``|dp_c| + theta r`` of the geometry's body poses (numpy kinematic tree)."""
     dq = np.abs(np.diff(q, axis=0))
     D = dq @ mb.reach.T
-    fl = np.flatnonzero(mb.flange)
-    if len(fl) and len(q) > 1:
-        R, p = X_WF[:, :3, :3], X_WF[:, :3, 3]
-        c_W = np.einsum("nij,gj->ngi", R, mb.c_F[fl]) + p[:, None]  # (N, Gf, 3)
+    mv = np.flatnonzero(mb.level > 0)
+    if len(mv) and len(q) > 1:
+        bodies, inv = np.unique(mb.body[mv], return_inverse=True)
+        X = mb.tree.body_poses(q)[:, bodies]  # (N, B, 4, 4)
+        R, p = X[..., :3, :3], X[..., :3, 3]
+        c_W = np.einsum("ngij,gj->ngi", R[:, inv], mb.c_B[mv]) + p[:, inv]  # (N, Gm, 3)
         dc = np.linalg.norm(np.diff(c_W, axis=0), axis=2)
-        cos_t = 0.5 * (np.einsum("nij,nij->n", R[:-1], R[1:]) - 1.0)
+        cos_t = 0.5 * (np.einsum("nbij,nbij->nb", R[:-1], R[1:]) - 1.0)
         theta = np.arccos(np.clip(cos_t, -1.0, 1.0))
         # acos loses ~1e-8 rad near 0: never below the chord of the rotation's columns
-        theta = np.maximum(theta, np.max(np.linalg.norm(R[1:] - R[:-1], axis=1), axis=1))
-        D[:, fl] = np.minimum(D[:, fl], dc + theta[:, None] * mb.radius[fl][None])
+        theta = np.maximum(theta, np.max(np.linalg.norm(R[1:] - R[:-1], axis=2), axis=2))
+        D[:, mv] = np.minimum(D[:, mv], dc + theta[:, inv] * mb.radius[mv][None])
     return D
 
 
@@ -206,8 +217,7 @@ def _top2(x: np.ndarray) -> float:
 
 
 def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
-                    slack: float = QUERY_SLACK,
-                    X_WF: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
+                    slack: float = QUERY_SLACK) -> tuple[np.ndarray, dict]:
     """The capped minimum signed distance at every configuration of a path (module docstring).
 
     Args:
@@ -216,7 +226,6 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
         q: (N, 6) joints [rad] along a path (consecutive rows close together).
         cap: the distances are capped at this [m] (``max_distance`` of the full query).
         reach: extra radius of the anchor queries [m]; slack: see :data:`QUERY_SLACK`.
-        X_WF: (N, 4, 4) flange poses at ``q`` (default: the cell's analytic FK).
 
     Returns:
         (N,) distances [m], equal to ``checker.distance(q[i], cap)`` at every row, and counts
@@ -229,11 +238,9 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
     if n == 0:
         return out, stats
     mb = motion_bound(checker.cell)
-    if X_WF is None:
-        X_WF = _kinematics(checker.cell).fk_flange(q)
     # C[k, g]: bound on the travel of geometry g's points from sample 0 to sample k
     C = np.vstack([np.zeros((1, len(mb.level))),
-                   np.cumsum(step_displacements(mb, q, X_WF), axis=0)])
+                   np.cumsum(step_displacements(mb, q), axis=0)])
     anchor = -1
     ia = ib = at = np.zeros(0, int)
     d = np.zeros(0)
@@ -265,13 +272,3 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
         at[due] = k
         out[k] = min(out[k], float(d[due].min()))
     return out, stats
-
-
-def _kinematics(cell):
-    """The planner's :class:`CellKinematics` of a cell (cached on it)."""
-    kin = cell._cache.get("plan_kinematics")
-    if kin is None:
-        from drakedeburr.plan.kinematics import cell_kinematics
-
-        kin = cell._cache.setdefault("plan_kinematics", cell_kinematics(cell))
-    return kin

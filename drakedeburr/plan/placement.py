@@ -47,6 +47,8 @@ class Placement:
         clearance: least clearance of the sampled targets' solutions [m].
         q_refs: window -> (6,) a configuration on the window's chosen branch [rad].
         candidates: (turn, offset, windows reached, margin) of every candidate tried.
+        cell: the cell built with the chosen hub pose (the search built it to check its
+            clearance; the planner plans in it), or None.
     """
 
     hub_pose: np.ndarray
@@ -58,6 +60,7 @@ class Placement:
     clearance: float
     q_refs: dict = field(default_factory=dict)
     candidates: tuple = ()
+    cell: object = field(default=None, repr=False, compare=False)
 
     def record(self) -> dict:
         """JSON-ready record for ``plan.meta["placement"]``."""
@@ -228,8 +231,8 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
                                     config.tolerances.min_clearance)
         key = (n, round(share, 2), margin)
         if best_key is None or key > best_key:
-            best, best_key = (X, per, turn, off, n, margin, least), key
-    X, per, turn, off, n, margin, least = best
+            best, best_key = (X, per, turn, off, n, margin, least, placed), key
+    X, per, turn, off, n, margin, least, placed = best
     refs = branch_sequence(per, kin0.q_home, np.array([1.0, 1.0, 1.0, 0.3, 0.3, 0.3]))
     log.info("hub placement: turn %.1f deg, offset %.0f mm, seat %.1f mm: %d of %d windows "
              "reachable on one branch (joint margin %.2f rad)", np.degrees(turn), 1e3 * off,
@@ -238,4 +241,4 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
                      windows_reached=int(n), margin=float(margin), clearance=float(least),
                      q_refs={int(wts[i].window_index): q for i, q in refs.items()},
                      candidates=tuple((float(c[6]), float(c[7]), int(c[0]), float(c[1]))
-                                      for c in cands))
+                                      for c in cands), cell=placed)

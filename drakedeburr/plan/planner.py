@@ -338,8 +338,8 @@ def plan_hub(
     if options.placement and wts:
         t1 = time.perf_counter()
         placement = place_hub(cell, hub_model, wts, config, options)
-        cell = load_cell(config.scenario, config.hub, robot=config.robot,
-                         hub_pose=placement.hub_pose)
+        cell = placement.cell if placement.cell is not None else load_cell(
+            config.scenario, config.hub, robot=config.robot, hub_pose=placement.hub_pose)
         t_place = time.perf_counter() - t1
     q_refs = placement.q_refs if placement else None
     plan = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
