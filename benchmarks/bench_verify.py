@@ -155,7 +155,7 @@ def bench_hub(hub: str, plans: Path, quick: bool, baseline) -> None:
 
 def _uncertified(cell, sp, config, certified: tuple[float, float]) -> None:
     """The distance stage again with Drake's readings taken as they are (what the verifier
-    did before verify.narrowphase): its cost and the clearance it would have certified."""
+    did before cell.narrowphase): its cost and the clearance it would have certified."""
     from drakedeburr.verify.pair_scene import PairScene
 
     keep = PairScene.certify

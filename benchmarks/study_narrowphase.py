@@ -16,12 +16,12 @@ import argparse
 
 import numpy as np
 
+from drakedeburr.cell.narrowphase import ShapeSupport, exact_distance
 from drakedeburr.cell.station import load_plan_cell
 from drakedeburr.plan.io import load_plan
 from drakedeburr.verify.checks import config_for_plan
 from drakedeburr.verify.distances import pair_scene_of
 from drakedeburr.verify.kinematics import VerifyKinematics
-from drakedeburr.verify.narrowphase import ShapeSupport, exact_distance
 from drakedeburr.verify.sampling import _samples
 from drakedeburr.verify.sweep import sweep
 
@@ -105,7 +105,7 @@ def main() -> None:
                                   X_b)
         print(f"  sample {i} {scene.pair_names(p)}: Drake {d * 1e3:.4f} mm, independent "
               f"{independent(sa, X_a, V) * 1e3:.4f} mm (SLSQP), {exact * 1e3:.4f} mm "
-              f"(verify.narrowphase SOCP bound; gap to the bound {gap * 1e6:.1f} um)")
+              f"(cell.narrowphase SOCP bound; gap to the bound {gap * 1e6:.1f} um)")
 
 
 if __name__ == "__main__":

@@ -161,7 +161,7 @@ class Tolerances:
     # [m] Drake's narrow phase can read a distance too large (the burr shank's cylinder vs a
     # hub piece: 1.3 mm seen); every clearance/self reading is held to a separating-plane lower
     # bound, and solved exactly where that bound is within this of the class's limit
-    # (verify.narrowphase)
+    # (cell.narrowphase)
     narrowphase_resolve: float = 0.1e-3
     # [m] how far a hub's convex collision pieces may reach past its true surface (the hub
     # generator splits any piece reaching > 0.5 mm into a window opening); allowed on top of

@@ -30,7 +30,7 @@ def test_tracked_sweep_reads_the_dense_minima():
     """Per sample and class, the tracked sweep's minimum and pair equal the cell's own
     ComputeSignedDistancePairwiseClosestPoints (the dense reference, each reading certified
     the same way) bit for bit wherever that minimum is within ``narrowphase_resolve`` of the
-    class's limit (every reading there is exact, verify.narrowphase). Above it a reading whose
+    class's limit (every reading there is exact, cell.narrowphase). Above it a reading whose
     narrow phase overestimated is kept as its separating-plane bound, which the dense
     reference reads at every pair: the sweep, reading only the pairs that can matter, is then
     at least the dense minimum (never below what it read)."""

@@ -222,7 +222,7 @@ class PairScene:
         self._query = None
         self._supports: dict = {}
         self.resolve_below = np.full(3, np.inf)  # until use_tolerances: always solved
-        from drakedeburr.verify.narrowphase import ReadingTally
+        from drakedeburr.cell.narrowphase import ReadingTally
 
         self.tally = ReadingTally()
 
@@ -239,10 +239,10 @@ class PairScene:
         self._query = self._query_port.Eval(self._ctx)
 
     def use_tolerances(self, tol) -> None:
-        """Set how readings are certified (:mod:`drakedeburr.verify.narrowphase`) and start a
+        """Set how readings are certified (:mod:`drakedeburr.cell.narrowphase`) and start a
         new tally: a clearance/self reading whose separating-plane bound falls below its
         class's limit + ``Tolerances.narrowphase_resolve`` is solved exactly."""
-        from drakedeburr.verify.narrowphase import ReadingTally
+        from drakedeburr.cell.narrowphase import ReadingTally
 
         self.resolve_below = np.array([tol.min_clearance, 0.0, -np.inf]) + float(
             tol.narrowphase_resolve)
@@ -264,8 +264,8 @@ class PairScene:
                 X_WB: np.ndarray) -> float:
         """Drake's reading ``d`` [m] of pair ``p`` (normal ``n_BA`` from its ``b`` toward its
         ``a`` geometry, posed at ``X_WA``, ``X_WB``) as a certified reading
-        (:func:`~drakedeburr.verify.narrowphase.certified_distance`), tallied."""
-        from drakedeburr.verify.narrowphase import certified_distance
+        (:func:`~drakedeburr.cell.narrowphase.certified_distance`), tallied."""
+        from drakedeburr.cell.narrowphase import certified_distance
 
         value, how = certified_distance(d, n_BA, self._support(int(self.a[p])), X_WA,
                                         self._support(int(self.b[p])), X_WB,
@@ -274,7 +274,7 @@ class PairScene:
         return value
 
     def _support(self, i: int):
-        from drakedeburr.verify.narrowphase import ShapeSupport
+        from drakedeburr.cell.narrowphase import ShapeSupport
 
         s = self._supports.get(i)
         if s is None:

@@ -318,7 +318,7 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
         samples on it. tol: the tolerances. progress: optional callback (done, total).
     """
     tracks, n, T = scene.tracks, len(t), len(scene.tracks)
-    scene.use_tolerances(tol)  # readings held to rigorous bounds (verify.narrowphase)
+    scene.use_tolerances(tol)  # readings held to rigorous bounds (cell.narrowphase)
     X = scene.tree.body_poses(q)
     delta, e = track_motion(scene, traj, t, X)
     C = np.zeros((T, n))

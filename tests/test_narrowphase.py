@@ -1,4 +1,4 @@
-"""Certified pair distances (verify.narrowphase): the support functions and the exact solve
+"""Certified pair distances (cell.narrowphase): the support functions and the exact solve
 against analytic distances, the separating-plane bound never above the distance, a brute-force
 reading of random convex pairs as a second implementation, and Drake's recorded overestimates
 on the default hub's plan held to the exact distance."""
@@ -13,7 +13,7 @@ import pytest
 from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Sphere
 from scipy.spatial.transform import Rotation
 
-import drakedeburr.verify.narrowphase as mut
+import drakedeburr.cell.narrowphase as mut
 
 DATA = Path(__file__).parent / "data" / "narrowphase_overestimates.json"
 
