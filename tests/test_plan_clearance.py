@@ -76,3 +76,37 @@ def test_distances_along_equal_the_full_query(cell_path):
     assert stats["anchors"] < len(q) / 2
     # near the hub: some samples under the cap, so the comparison is not trivially "all cap"
     assert np.any(full < cap)
+
+
+def test_readings_are_held_to_a_rigorous_bound(cell_path):
+    """The checker's readings never exceed the separating-plane bound by more than the reading
+    gap: a reading Drake gets 1 mm too far (its distance raised, its normal tilted, as FCL's
+    GJK was measured to do on this hub) comes back at the shapes' distance where it matters
+    (below the solve level) and at a lower bound elsewhere; a pair Drake reads up to
+    NARROWPHASE_SLACK beyond the cap is still found."""
+    from types import SimpleNamespace
+
+    from drakedeburr.cell.narrowphase import READING_GAP, ShapeSupport, exact_distance
+    from drakedeburr.plan.kinematics import NARROWPHASE_SLACK
+
+    cell, kin, checker, q = cell_path
+    k = int(np.argmin([checker.distance(qi, 3e-3) for qi in q]))
+    query = checker.query_at(q[k])
+    pairs = [r for r in query.ComputeSignedDistancePairwiseClosestPoints(0.01) if r.distance > 0]
+    assert pairs
+    inspector = query.inspector()
+    for r in pairs[:6]:
+        X_A, X_B = (query.GetPoseInWorld(g).GetAsMatrix4() for g in (r.id_A, r.id_B))
+        A, B = (ShapeSupport(inspector.GetShape(g)) for g in (r.id_A, r.id_B))
+        exact, _ = exact_distance(A, X_A, B, X_B)
+        assert checker.reading(query, r) <= exact + READING_GAP
+        tilt = np.asarray(r.nhat_BA_W) + 0.2 * np.cross(r.nhat_BA_W, [0.0, 0.0, 1.0])
+        wrong = SimpleNamespace(distance=r.distance + 1e-3, nhat_BA_W=tilt / np.linalg.norm(tilt),
+                                id_A=r.id_A, id_B=r.id_B)
+        got = checker.reading(query, wrong)
+        assert got <= exact + READING_GAP
+        if exact < checker.resolve_below - 1e-4:  # solved: the distance itself
+            assert got >= exact - 1e-6
+    assert NARROWPHASE_SLACK >= 1.5e-3  # above the largest overestimate measured (1.32 mm)
+    # the capped query reports what it certifies, each pair at most the cap
+    assert all(d <= 3e-3 for _, d in checker.pairs_within(q[k], 3e-3))

@@ -19,10 +19,13 @@ are a fraction of a millimetre apart, and the pairs that come within the query's
   queried before the motion since the anchor could bring one within ``cap + slack``.
 
 Every pair whose distance at a sample is below ``cap`` is therefore measured exactly there, so
-the result equals the full query's capped minimum at every sample. ``slack`` covers the
-distance query's own inconsistency between neighbouring configurations: Drake's (FCL/libccd)
-cylinder-vs-convex distances were measured up to 0.55 mm above an exact second-order-cone
-solution at isolated samples of a cut, so a skip never leans on a margin thinner than that.
+the result equals the full query's capped minimum at every sample. Every reading is the
+checker's certified one (:meth:`ClearanceChecker.reading`: Drake's (FCL/libccd)
+cylinder-vs-convex distances were measured up to 1.3 mm too large, so each is held to a
+separating-plane lower bound and solved exactly near the clearance bound); ``slack`` covers
+what is left of the readings' inconsistency between neighbouring configurations (a reading far
+from the bound may be a loose lower bound at one sample and exact at the next), so a skip
+never leans on a thinner margin.
 
 :class:`MotionBound` is the motion bound (joint motion x link reach): a point of a geometry
 moved by robot joints ``1..b`` is displaced by a joint change ``dq`` by at most
@@ -250,10 +253,10 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
             anchor = k
             stats["anchors"] += 1
             res = checker.pairs_within(q[k], cap + reach)
-            ids = [(r.id_A, r.id_B) for r in res]
+            ids = [p for p, _ in res]
             ia = np.array([mb.row[a] for a, _ in ids], int)
             ib = np.array([mb.row[b] for _, b in ids], int)
-            d = np.array([r.distance for r in res], float)
+            d = np.array([r for _, r in res], float)
             at = np.full(len(ids), k)
             if len(d):
                 out[k] = min(out[k], float(d.min()))
@@ -268,7 +271,7 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
         stats["samples_queried"] += 1
         stats["pair_queries"] += len(due)
         for j in due:
-            d[j] = query.ComputeSignedDistancePairClosestPoints(*ids[j]).distance
+            d[j] = checker.reading(query, query.ComputeSignedDistancePairClosestPoints(*ids[j]))
         at[due] = k
         out[k] = min(out[k], float(d[due].min()))
     return out, stats

@@ -21,11 +21,16 @@ import numpy as np
 
 from drakedeburr.frames.vectors import inverse_transform
 
-__all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "DISTANCE_SLACK"]
+__all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_level",
+           "DISTANCE_SLACK", "NARROWPHASE_SLACK"]
 
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
 # few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
 DISTANCE_SLACK = 1e-6
+
+#: how much farther than asked the cell's distance query looks [m], so that a pair Drake's
+#: narrow phase reads too far (1.3 mm seen on the default hub's plan) is still certified
+NARROWPHASE_SLACK = 2e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,6 +186,12 @@ def cell_kinematics(cell) -> CellKinematics:
         q_home=q.copy(), X_WB=cell.X_WB().GetAsMatrix4())
 
 
+def resolve_level(tolerances) -> float:
+    """Where a clearance reading is solved exactly (:meth:`ClearanceChecker.reading`): the
+    clearance bound plus ``Tolerances.narrowphase_resolve`` [m]."""
+    return float(tolerances.min_clearance + tolerances.narrowphase_resolve)
+
+
 @dataclass(eq=False)
 class ClearanceChecker:
     """Signed distances of a cell with the burr-head/hub (process contact) pair filtered.
@@ -189,11 +200,15 @@ class ClearanceChecker:
     the hub (``SceneGraph.collision_filter_manager(context)``); every other pair counts. Used
     by the IK (its plant context carries the filter into MinimumDistanceLowerBoundConstraint)
     and by the dense checks. ``filter_burr_contact=False`` counts the burr head too: moves
-    that do not cut (transitions, home) must keep it clear of the hub as well.
+    that do not cut (transitions, home) must keep it clear of the hub as well. Its readings are
+    certified as the verifier's are (:meth:`reading`, ``resolve_below`` [m]: default the
+    default tolerances' :func:`resolve_level`), so the planner and the verifier see the same
+    distances.
     """
 
     cell: object
     filter_burr_contact: bool = True
+    resolve_below: float | None = None
     context: object = field(init=False)
     plant_context: object = field(init=False)
     _sg_context: object = field(init=False)
@@ -209,6 +224,11 @@ class ClearanceChecker:
                 CollisionFilterDeclaration().ExcludeBetween(
                     GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
         self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
+        if self.resolve_below is None:
+            from drakedeburr.config import default_tolerances
+
+            self.resolve_below = resolve_level(default_tolerances())
+        self._supports: dict = {}
 
     def query_at(self, q: np.ndarray):
         """The scene graph's ``QueryObject`` with the robot at ``q`` (valid until the next
@@ -216,16 +236,48 @@ class ClearanceChecker:
         self.cell.plant.SetPositions(self.plant_context, np.asarray(q, float))
         return self.cell.scene_graph.get_query_output_port().Eval(self._sg_context)
 
+    def reading(self, query, r) -> float:
+        """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a
+        rigorous lower bound (:func:`drakedeburr.cell.narrowphase.certified_distance`:
+        Drake's narrow phase can read a distance over 1 mm too large), solved exactly where
+        that bound falls below ``resolve_below`` [m]; contact (<= 0) as read."""
+        d = float(r.distance)
+        if not d > 0.0:
+            return d
+        from drakedeburr.cell.narrowphase import certified_distance
+
+        return certified_distance(
+            d, np.asarray(r.nhat_BA_W), self._support(query, r.id_A),
+            query.GetPoseInWorld(r.id_A).GetAsMatrix4(), self._support(query, r.id_B),
+            query.GetPoseInWorld(r.id_B).GetAsMatrix4(), solve_below=self.resolve_below)[0]
+
+    def _support(self, query, gid):
+        s = self._supports.get(gid)
+        if s is None:
+            from drakedeburr.cell.narrowphase import ShapeSupport
+
+            s = self._supports[gid] = ShapeSupport(query.inspector().GetShape(gid))
+        return s
+
     def pairs_within(self, q: np.ndarray, max_distance: float) -> list:
-        """Every unfiltered pair within ``max_distance`` [m] at ``q`` (Drake's
-        ``SignedDistancePair`` results)."""
-        return self.query_at(q).ComputeSignedDistancePairwiseClosestPoints(max_distance)
+        """(pair ids, certified reading [m]) of every unfiltered pair whose certified reading
+        is within ``max_distance`` [m] at ``q``; Drake is asked ``NARROWPHASE_SLACK`` farther
+        so that a pair its narrow phase reads too far is still found."""
+        query = self.query_at(q)
+        out = []
+        for r in query.ComputeSignedDistancePairwiseClosestPoints(
+                max_distance + NARROWPHASE_SLACK):
+            d = self.reading(query, r)
+            if d <= max_distance:
+                out.append(((r.id_A, r.id_B), d))
+        return out
 
     def distance(self, q: np.ndarray, max_distance: float = 0.01) -> float:
-        """Smallest signed distance [m] at ``q``, capped at ``max_distance`` (no pair names)."""
+        """Smallest certified signed distance [m] at ``q``, capped at ``max_distance`` (no
+        pair names)."""
         best = float(max_distance)
-        for d in self.pairs_within(q, max_distance):
-            best = min(best, float(d.distance))
+        for _, d in self.pairs_within(q, max_distance):
+            best = min(best, d)
         return best
 
     def min_distances_along(self, q: np.ndarray, max_distance: float) -> np.ndarray:
@@ -238,14 +290,13 @@ class ClearanceChecker:
     def min_distance(self, q: np.ndarray,
                      max_distance: float = 0.01) -> tuple[float, tuple[str, str]]:
         """Smallest signed distance [m] at ``q`` (capped at ``max_distance``) and its pair."""
-        query = self.query_at(q)
         best, pair = float(max_distance), ("", "")
-        for d in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
-            if d.distance < best:
-                best, pair = float(d.distance), (d.id_A, d.id_B)
+        for ids, d in self.pairs_within(q, max_distance):
+            if d < best:
+                best, pair = d, ids
         if pair[0] == "":
             return best, pair
-        inspector = query.inspector()
+        inspector = self.query_at(q).inspector()
         return best, (self._label(inspector, pair[0]), self._label(inspector, pair[1]))
 
     def _label(self, inspector, gid) -> str:

@@ -49,16 +49,19 @@ def _recipe(ctx) -> dict | None:
 def _worker_context(recipe: dict, config, options, q_refs):
     """The worker's :class:`PlanContext` for a recipe (built once per cell and options)."""
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
+    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics, resolve_level
     from drakedeburr.plan.options import PlanContext
 
-    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
+    level = resolve_level(config.tolerances)
+    key = repr(sorted((k, repr(v)) for k, v in recipe.items())) + repr(level)
     cell_ctx = _WORKER.get(key)
     if cell_ctx is None:
         _WORKER.clear()  # one cell at a time
         cell = load_cell(**recipe)
-        cell_ctx = _WORKER[key] = (cell, cell_kinematics(cell), ClearanceChecker(cell),
-                                   ClearanceChecker(cell, filter_burr_contact=False))
+        cell_ctx = _WORKER[key] = (cell, cell_kinematics(cell),
+                                   ClearanceChecker(cell, resolve_below=level),
+                                   ClearanceChecker(cell, filter_burr_contact=False,
+                                                    resolve_below=level))
     cell, kin, checker, free = cell_ctx
     return PlanContext(cell=cell, kin=kin, checker=checker, free_checker=free, config=config,
                        options=options, q_refs=dict(q_refs))

@@ -26,7 +26,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
+from drakedeburr.plan.kinematics import (
+    CellKinematics,
+    ClearanceChecker,
+    cell_kinematics,
+    resolve_level,
+)
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
 
 __all__ = ["Placement", "place_hub", "seat_offset"]
@@ -174,10 +179,12 @@ def branch_sequence(per: list, q_home: np.ndarray, weights: np.ndarray) -> dict[
     return {i: per[i][2][b] for i, b in zip(order, chosen, strict=True)}
 
 
-def _clear_share(cell, kin: CellKinematics, samples, per, bound: float) -> tuple[float, float]:
+def _clear_share(cell, kin: CellKinematics, samples, per, tol) -> tuple[float, float]:
     """Share of the sampled targets whose best reference solution clears the cell by
-    ``bound``, and the least clearance found (the cell built with the candidate's hub pose)."""
-    checker = ClearanceChecker(cell)
+    ``tol.min_clearance``, and the least clearance found (the cell built with the candidate's
+    hub pose)."""
+    bound = float(tol.min_clearance)
+    checker = ClearanceChecker(cell, resolve_below=resolve_level(tol))
     n_ok, n, least = 0, 0, np.inf
     for X, (reach, _, _) in zip(samples, per, strict=True):
         if not reach.any():
@@ -227,8 +234,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
     best, best_key = None, None
     for n, margin, _, _, X, per, turn, off in cands[:checked]:
         placed = load_cell(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name, hub_pose=X)
-        share, least = _clear_share(placed, _moved(kin0, X), samples, per,
-                                    config.tolerances.min_clearance)
+        share, least = _clear_share(placed, _moved(kin0, X), samples, per, config.tolerances)
         key = (n, round(share, 2), margin)
         if best_key is None or key > best_key:
             best, best_key = (X, per, turn, off, n, margin, least, placed), key
