@@ -29,8 +29,10 @@ __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_lev
 DISTANCE_SLACK = 1e-6
 
 #: how much farther than asked the cell's distance query looks [m], so that a pair Drake's
-#: narrow phase reads too far (1.3 mm seen on the default hub's plan) is still certified
-NARROWPHASE_SLACK = 2e-3
+#: narrow phase reads too far is still certified: 1.3 mm seen on the default hub's plan, 3.9 mm
+#: on an unseen random hub. No margin bounds FCL's error; the verifier, which reads pairs
+#: without a cap, decides (docs/verify.md)
+NARROWPHASE_SLACK = 5e-3
 
 
 @dataclass(frozen=True, eq=False)
