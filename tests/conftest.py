@@ -39,3 +39,11 @@ def _collect_cycles_on_main_thread():
     from drakedeburr.viz.scene import collect_here
 
     collect_here()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked slow run first (a stable sort: the rest keep their order). On several
+    workers (``pytest -n auto``) the longest tests then start together at the beginning instead
+    of one of them ending the run alone (measured: the last whole-hub plan, 185 s, ran by itself
+    for the last ~10 min of a 16 min run)."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)

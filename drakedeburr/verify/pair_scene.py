@@ -256,8 +256,8 @@ class PairScene:
         if not r.distance > 0.0 or self.cls[p] == BURR:
             return r.distance
         q = self._query
-        return self.certify(p, r.distance, np.asarray(r.nhat_BA_W),
-                            q.GetPoseInWorld(self._A[p]).GetAsMatrix4(),
+        n_BA = np.asarray(r.nhat_BA_W) * (1.0 if r.id_A == self._A[p] else -1.0)
+        return self.certify(p, r.distance, n_BA, q.GetPoseInWorld(self._A[p]).GetAsMatrix4(),
                             q.GetPoseInWorld(self._B[p]).GetAsMatrix4())
 
     def certify(self, p: int, d: float, n_BA: np.ndarray, X_WA: np.ndarray,
