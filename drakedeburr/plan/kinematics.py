@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drakedeburr.cell.narrowphase import ShapeSupport, certified_distance
 from drakedeburr.frames.vectors import inverse_transform
 
 __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_level",
@@ -246,8 +247,6 @@ class ClearanceChecker:
         d = float(r.distance)
         if not d > 0.0:
             return d
-        from drakedeburr.cell.narrowphase import certified_distance
-
         return certified_distance(
             d, np.asarray(r.nhat_BA_W), self._support(query, r.id_A),
             query.GetPoseInWorld(r.id_A).GetAsMatrix4(), self._support(query, r.id_B),
@@ -256,8 +255,6 @@ class ClearanceChecker:
     def _support(self, query, gid):
         s = self._supports.get(gid)
         if s is None:
-            from drakedeburr.cell.narrowphase import ShapeSupport
-
             s = self._supports[gid] = ShapeSupport(query.inspector().GetShape(gid))
         return s
 

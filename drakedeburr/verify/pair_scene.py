@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from drakedeburr.cell.chain import KinematicTree
+from drakedeburr.cell.narrowphase import ReadingTally, ShapeSupport, certified_distance
 from drakedeburr.verify.motion_bounds import Tracks
 
 __all__ = ["PairScene", "shape_points", "CLEARANCE", "SELF", "BURR"]
@@ -222,8 +223,6 @@ class PairScene:
         self._query = None
         self._supports: dict = {}
         self.resolve_below = np.full(3, np.inf)  # until use_tolerances: always solved
-        from drakedeburr.cell.narrowphase import ReadingTally
-
         self.tally = ReadingTally()
 
     def set_configuration(self, q: np.ndarray, bodies=None) -> None:
@@ -242,8 +241,6 @@ class PairScene:
         """Set how readings are certified (:mod:`drakedeburr.cell.narrowphase`) and start a
         new tally: a clearance/self reading whose separating-plane bound falls below its
         class's limit + ``Tolerances.narrowphase_resolve`` is solved exactly."""
-        from drakedeburr.cell.narrowphase import ReadingTally
-
         self.resolve_below = np.array([tol.min_clearance, 0.0, -np.inf]) + float(
             tol.narrowphase_resolve)
         self.tally = ReadingTally()
@@ -265,8 +262,6 @@ class PairScene:
         """Drake's reading ``d`` [m] of pair ``p`` (normal ``n_BA`` from its ``b`` toward its
         ``a`` geometry, posed at ``X_WA``, ``X_WB``) as a certified reading
         (:func:`~drakedeburr.cell.narrowphase.certified_distance`), tallied."""
-        from drakedeburr.cell.narrowphase import certified_distance
-
         value, how = certified_distance(d, n_BA, self._support(int(self.a[p])), X_WA,
                                         self._support(int(self.b[p])), X_WB,
                                         solve_below=float(self.resolve_below[self.cls[p]]))
@@ -274,8 +269,6 @@ class PairScene:
         return value
 
     def _support(self, i: int):
-        from drakedeburr.cell.narrowphase import ShapeSupport
-
         s = self._supports.get(i)
         if s is None:
             s = self._supports[i] = ShapeSupport(self._inspector.GetShape(self.ids[i]))
