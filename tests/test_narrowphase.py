@@ -146,6 +146,10 @@ def test_accurate_readings_are_kept_bit_for_bit_and_far_ones_bounded():
     assert value == mut.separation(SA, X_WA, SB, X_WB, tilted)
     value, how = mut.certified_distance(0.006, tilted, SA, X_WA, SB, X_WB, solve_below=0.01)
     assert how == "solved" and value == pytest.approx(0.005, abs=1e-7) and value <= 0.005
+    # a reading already below the limit it is checked against is not solved: its bound
+    value, how = mut.certified_distance(0.006, tilted, SA, X_WA, SB, X_WB, solve_below=0.01,
+                                        solve_from=0.007)
+    assert how == "bound" and value == mut.separation(SA, X_WA, SB, X_WB, tilted)
     # contact readings are the process's business: kept
     assert mut.certified_distance(-0.001, n, SA, X_WA, SB, X_WB) == (-0.001, "kept")
 

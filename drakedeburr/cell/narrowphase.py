@@ -155,6 +155,7 @@ def exact_distance(A: ShapeSupport, X_WA: np.ndarray, B: ShapeSupport,
 
 def certified_distance(d: float, n_BA: np.ndarray, A: ShapeSupport, X_WA: np.ndarray,
                        B: ShapeSupport, X_WB: np.ndarray, *, solve_below: float = np.inf,
+                       solve_from: float = -np.inf,
                        gap: float = READING_GAP) -> tuple[float, str]:
     """Drake's reading ``d`` [m] with its normal ``n_BA`` (from B toward A), held to the
     separating-plane bound (module docstring).
@@ -163,14 +164,16 @@ def certified_distance(d: float, n_BA: np.ndarray, A: ShapeSupport, X_WA: np.nda
     the distance; ``"bound"`` the bound along Drake's normal, which is at least
     ``solve_below`` (rigorous; it may understate a distance that is far from mattering);
     ``"solved"`` the bound along the exactly solved direction (or Drake's reading when that
-    bound confirms it within ``gap``). Readings at or below zero (contact) are kept.
+    bound confirms it within ``gap``). Readings at or below zero (contact) are kept. A reading
+    below ``solve_from`` (a limit it already fails, whatever the error) is not solved: its
+    bound is returned (the planner's probes read thousands of blocked poses).
     """
     if not d > 0.0:
         return d, "kept"
     sep = separation(A, X_WA, B, X_WB, np.asarray(n_BA, float))
     if sep >= d - gap:
         return d, "kept"
-    if sep >= solve_below:
+    if sep >= solve_below or d < solve_from:
         return sep, "bound"
     bound, _ = exact_distance(A, X_WA, B, X_WB)
     if bound >= d - gap:  # Drake's distance was right, its normal was not

@@ -204,14 +204,13 @@ class ClearanceChecker:
     by the IK (its plant context carries the filter into MinimumDistanceLowerBoundConstraint)
     and by the dense checks. ``filter_burr_contact=False`` counts the burr head too: moves
     that do not cut (transitions, home) must keep it clear of the hub as well. Its readings are
-    certified as the verifier's are (:meth:`reading`, ``resolve_below`` [m]: default the
-    default tolerances' :func:`resolve_level`), so the planner and the verifier see the same
-    distances.
+    certified as the verifier's are (:meth:`reading`; ``tolerances``: the run's, default the
+    default tolerances), so the planner and the verifier see the same distances.
     """
 
     cell: object
     filter_burr_contact: bool = True
-    resolve_below: float | None = None
+    tolerances: object = None
     context: object = field(init=False)
     plant_context: object = field(init=False)
     _sg_context: object = field(init=False)
@@ -227,10 +226,12 @@ class ClearanceChecker:
                 CollisionFilterDeclaration().ExcludeBetween(
                     GeometrySet(list(c.burr_head_ids)), GeometrySet(list(c.hub_ids))))
         self.plant_context = c.plant.GetMyMutableContextFromRoot(self.context)
-        if self.resolve_below is None:
+        if self.tolerances is None:
             from drakedeburr.config import default_tolerances
 
-            self.resolve_below = resolve_level(default_tolerances())
+            self.tolerances = default_tolerances()
+        self.resolve_below = resolve_level(self.tolerances)
+        self.solve_from = float(self.tolerances.min_clearance)
         self._supports: dict = {}
 
     def query_at(self, q: np.ndarray):
@@ -243,14 +244,17 @@ class ClearanceChecker:
         """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a
         rigorous lower bound (:func:`drakedeburr.cell.narrowphase.certified_distance`:
         Drake's narrow phase can read a distance over 1 mm too large), solved exactly where
-        that bound falls below ``resolve_below`` [m]; contact (<= 0) as read."""
+        that bound falls below ``resolve_below`` [m] (:func:`resolve_level`) unless Drake's
+        reading itself is below the clearance bound (the pose fails whatever the error: its
+        bound is kept); contact (<= 0) as read."""
         d = float(r.distance)
         if not d > 0.0:
             return d
         return certified_distance(
             d, np.asarray(r.nhat_BA_W), self._support(query, r.id_A),
             query.GetPoseInWorld(r.id_A).GetAsMatrix4(), self._support(query, r.id_B),
-            query.GetPoseInWorld(r.id_B).GetAsMatrix4(), solve_below=self.resolve_below)[0]
+            query.GetPoseInWorld(r.id_B).GetAsMatrix4(), solve_below=self.resolve_below,
+            solve_from=self.solve_from)[0]
 
     def _support(self, query, gid):
         s = self._supports.get(gid)

@@ -52,16 +52,16 @@ def _worker_context(recipe: dict, config, options, q_refs):
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics, resolve_level
     from drakedeburr.plan.options import PlanContext
 
-    level = resolve_level(config.tolerances)
+    level = resolve_level(config.tolerances), config.tolerances.min_clearance
     key = repr(sorted((k, repr(v)) for k, v in recipe.items())) + repr(level)
     cell_ctx = _WORKER.get(key)
     if cell_ctx is None:
         _WORKER.clear()  # one cell at a time
         cell = load_cell(**recipe)
         cell_ctx = _WORKER[key] = (cell, cell_kinematics(cell),
-                                   ClearanceChecker(cell, resolve_below=level),
+                                   ClearanceChecker(cell, tolerances=config.tolerances),
                                    ClearanceChecker(cell, filter_burr_contact=False,
-                                                    resolve_below=level))
+                                                    tolerances=config.tolerances))
     cell, kin, checker, free = cell_ctx
     return PlanContext(cell=cell, kin=kin, checker=checker, free_checker=free, config=config,
                        options=options, q_refs=dict(q_refs))

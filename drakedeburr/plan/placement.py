@@ -30,7 +30,6 @@ from drakedeburr.plan.kinematics import (
     CellKinematics,
     ClearanceChecker,
     cell_kinematics,
-    resolve_level,
 )
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
 
@@ -184,7 +183,7 @@ def _clear_share(cell, kin: CellKinematics, samples, per, tol) -> tuple[float, f
     ``tol.min_clearance``, and the least clearance found (the cell built with the candidate's
     hub pose)."""
     bound = float(tol.min_clearance)
-    checker = ClearanceChecker(cell, resolve_below=resolve_level(tol))
+    checker = ClearanceChecker(cell, tolerances=tol)
     n_ok, n, least = 0, 0, np.inf
     for X, (reach, _, _) in zip(samples, per, strict=True):
         if not reach.any():

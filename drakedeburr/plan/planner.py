@@ -33,7 +33,7 @@ import numpy as np
 from drakedeburr.config import Config, ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
-from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics, resolve_level
+from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
 from drakedeburr.plan.parallel import plan_all_windows
 from drakedeburr.plan.results import PlanStats, Stretch
@@ -86,10 +86,10 @@ def plan_windows(
     options = options or PlanOptions()
     kin = cell_kinematics(cell)
     # moves that do not cut keep the burr head clear of the hub too
-    level = resolve_level(config.tolerances)
-    ctx = PlanContext(cell=cell, kin=kin, checker=ClearanceChecker(cell, resolve_below=level),
+    tol = config.tolerances
+    ctx = PlanContext(cell=cell, kin=kin, checker=ClearanceChecker(cell, tolerances=tol),
                       free_checker=ClearanceChecker(cell, filter_burr_contact=False,
-                                                    resolve_below=level),
+                                                    tolerances=tol),
                       config=config, options=options, q_refs=dict(q_refs or {}))
     process = config.process
     failures, stretches, window_stats, window_seconds = [], [], [], []
