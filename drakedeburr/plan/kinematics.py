@@ -299,7 +299,7 @@ class ClearanceChecker:
                 best, pair = d, ids
         if pair[0] == "":
             return best, pair
-        inspector = self.query_at(q).inspector()
+        inspector = self.cell.scene_graph.model_inspector()  # names do not depend on q
         return best, (self._label(inspector, pair[0]), self._label(inspector, pair[1]))
 
     def _label(self, inspector, gid) -> str:

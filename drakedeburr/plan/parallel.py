@@ -49,11 +49,12 @@ def _recipe(ctx) -> dict | None:
 def _worker_context(recipe: dict, config, options, q_refs):
     """The worker's :class:`PlanContext` for a recipe (built once per cell and options)."""
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics, resolve_level
+    from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.options import PlanContext
 
-    level = resolve_level(config.tolerances), config.tolerances.min_clearance
-    key = repr(sorted((k, repr(v)) for k, v in recipe.items())) + repr(level)
+    tol = config.tolerances  # the checkers' certification depends on these two
+    key = repr(sorted((k, repr(v)) for k, v in recipe.items())) + repr(
+        (tol.min_clearance, tol.narrowphase_resolve))
     cell_ctx = _WORKER.get(key)
     if cell_ctx is None:
         _WORKER.clear()  # one cell at a time

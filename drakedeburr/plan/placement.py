@@ -26,11 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drakedeburr.plan.kinematics import (
-    CellKinematics,
-    ClearanceChecker,
-    cell_kinematics,
-)
+from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
 
 __all__ = ["Placement", "place_hub", "seat_offset"]
