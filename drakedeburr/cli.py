@@ -30,7 +30,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 
-from drakedeburr.errors import InputError
+from drakedeburr.errors import InputError, NoCuttableWindow
 
 __all__ = ["main", "tqdm_progress", "STAGES", "EXIT_CODES"]
 
@@ -44,7 +44,8 @@ log = logging.getLogger("drakedeburr")
 
 EXIT_CODES = """exit codes:
   0    done / passed
-  1    ran, but the result failed (verification failed, points unreachable, export refused):
+  1    ran, but the result failed (verification failed, points unreachable, export refused,
+       a hub mesh none of whose openings is a window the burr can cut):
        the report or the messages say why; also an internal error (a bug), reported in one
        line "internal error: ..." (-vv prints the traceback)
   2    bad input or usage: one line on stderr naming the file or argument, what is wrong and
@@ -191,6 +192,9 @@ def _run(args: argparse.Namespace) -> int:
         say("", f"interrupted{how}: outputs written before are untouched, nothing "
                 "half-written left")
         return 130
+    except NoCuttableWindow as exc:  # a readable hub with nothing to cut: a result, not bad input
+        say("", f"no window can be cut: {exc}")
+        return 1
     except InputError as exc:
         say("error: ", str(exc))
         return 2

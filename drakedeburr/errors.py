@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["DrakeDeburrError", "InputError", "VerificationFailed"]
+__all__ = ["DrakeDeburrError", "InputError", "NoCuttableWindow", "VerificationFailed"]
 
 
 class DrakeDeburrError(Exception):
@@ -11,6 +11,27 @@ class DrakeDeburrError(Exception):
 
 class InputError(DrakeDeburrError, ValueError):
     """Bad user input: a file, an argument or an item in a file. Exit code 2 in the CLI."""
+
+
+class NoCuttableWindow(InputError):
+    """A readable hub mesh whose through-openings are none of them a window the burr can cut
+    (too narrow, an edge that leaves the face, ...). Not bad input in the CLI: the hub was
+    read and the result is that nothing can be cut, so exit 1 with the reasons (``verify``
+    writes them as a report). Subclasses InputError for library callers that refuse it.
+
+    Attributes:
+        source: the mesh file (or label). axis: the hub axis looked along (file frame).
+        openings: one dict per opening not taken (``kind``, ``reason``, ``radius_mm``, ...).
+        rejected: one dict per closed outline rejected as a window edge (``center_xy_mm``,
+            ``reason``).
+    """
+
+    def __init__(self, message: str, *, source: str, axis, openings: list, rejected: list):
+        super().__init__(message)
+        self.source = source
+        self.axis = [float(x) for x in axis]
+        self.openings = list(openings)
+        self.rejected = list(rejected)
 
 
 class VerificationFailed(DrakeDeburrError):

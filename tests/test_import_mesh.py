@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import drakedeburr.hub.import_mesh as mut
-from drakedeburr.errors import InputError
+from drakedeburr.errors import InputError, NoCuttableWindow
 
 
 def _rigid(rng) -> np.ndarray:
@@ -119,17 +119,22 @@ def test_absurd_sizes_are_input_errors(tmp_path):
 
 def test_no_windows_and_the_audibot_rim_refused_with_reasons(tmp_path, extdata):
     holed = _box_stl(tmp_path / "holed.stl", (0.4, 0.4, 0.1), holes=True)
-    with pytest.raises(InputError, match=r"holed\.stl: no window found.*0 through-openings"):
+    with pytest.raises(InputError, match=r"holed\.stl: no window found.*0 through-openings") as e:
         mut.import_mesh(holed, tmp_path / "out")
+    assert not isinstance(e.value, NoCuttableWindow)  # no opening at all: not a hub (exit 2)
     disc = _box_stl(tmp_path / "disc.stl", (0.4, 0.4, 0.1))
     with pytest.raises(InputError, match=r"disc\.stl: no window found"):
         mut.import_mesh(disc, tmp_path / "out")
     # a real-world low-poly rim (not watertight, spokes and rim unstitched): refused with
     # every opening's reason, not a bad model (tests/test_extract.py checks the reasons)
     rim = extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl"
-    with pytest.raises(InputError, match=r"audibot__wheel_rim_only_DERIVED_m\.stl: no window "
-                                         r"found.*slot 27\.\d mm wide.*the edge jumps"):
+    with pytest.raises(NoCuttableWindow, match=r"audibot__wheel_rim_only_DERIVED_m\.stl: no "
+                                              r"window found.*slot 27\.\d mm wide.*the edge jumps"
+                       ) as e:
         mut.import_mesh(rim, tmp_path / "out")
+    # openings, none a window: a result (exit 1 with a report), with every reason attached
+    assert len(e.value.openings) == 5 and len(e.value.rejected) == 5
+    assert all(o["kind"] == "too narrow" for o in e.value.openings)
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 

@@ -41,3 +41,28 @@ def test_verify_bad_input_exits_2(tmp_path):
 def test_verify_all_bad_input_exits_2(tmp_path):
     assert main(["-q", "verify-all", str(tmp_path / "no_catalogue")]) == 2
     assert main(["-q", "verify-all", str(tmp_path)]) == 2  # a folder without hubs
+
+
+def test_a_readable_rim_with_nothing_to_cut_is_a_report_and_exit_1(tmp_path, extdata, capsys):
+    """The audibot rim (a real low-poly game mesh): its five slots are ~27.5 mm, narrower than
+    the 30 mm the 12 mm burr needs, and its five windows' edges leave the face. A readable mesh
+    with nothing to cut is a result: exit 1 with a report naming every opening and why, not
+    bad input (issue 16); the report-only folder is ours to replace on the next run."""
+    rim = extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl"
+    out, js = tmp_path / "out", tmp_path / "r.json"
+    args = ["-q", "verify", str(rim), "-o", str(out), "--hub-cache", str(tmp_path / "hubs")]
+    assert main([*args, "--json", str(js)]) == 1
+    doc = json.loads((out / "report.json").read_text())
+    assert doc == json.loads(js.read_text())
+    assert doc["passed"] is False and doc["summary"]["failed"] == ["windows"]
+    (item,) = doc["items"]
+    assert item["name"] == "windows" and item["value"] == 0 and item["required"]
+    assert item["detail"].count("too narrow at r = 18") == 5 and "slot 27." in item["detail"]
+    assert item["detail"].count("the edge jumps") == 5
+    openings = doc["plan"]["openings"]
+    assert len(openings) == 5 and all(27.0 < o["width_mm"] < 28.5 for o in openings)
+    assert len(doc["plan"]["rejected_outlines"]) == 5
+    assert (out / "report.html").read_text().startswith("<!DOCTYPE html>")
+    assert "no window can be cut" in capsys.readouterr().out
+    assert main(args) == 1  # the same folder again: replaced, not refused
+    assert not (out / "plan.json").exists()

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drakedeburr.errors import InputError
+from drakedeburr.errors import InputError, NoCuttableWindow
 from drakedeburr.hub.front import FrontDecision, decide_front, front_from_user
 from drakedeburr.hub.openings import (
     DEFAULT_BURR_DIAMETER,
@@ -279,11 +279,14 @@ def extract_window_edges(
                         for o in notes["not_windows"][:6])
         why += "".join(f"; rejected edge at {r['center_xy_mm']} mm: {r['reason']}"
                        for r in rejected[:6])
-        raise InputError(
-            f"{source}: no window found looking along the hub axis "
-            f"{np.round(frame.X_MH[:3, 2], 4)} (estimated={frame.estimated}); "
-            f"{len(scan.openings)} through-openings: {why or 'none'}; pass the axis or "
-            f"--front if they are wrong")
+        msg = (f"{source}: no window found looking along the hub axis "
+               f"{np.round(frame.X_MH[:3, 2], 4)} (estimated={frame.estimated}); "
+               f"{len(scan.openings)} through-openings: {why or 'none'}; pass the axis or "
+               f"--front if they are wrong")
+        if not scan.openings:  # no through-opening at all: not a hub with windows
+            raise InputError(msg)
+        raise NoCuttableWindow(msg, source=str(source), axis=frame.X_MH[:3, 2],
+                               openings=notes["not_windows"], rejected=rejected)
     if expected_windows is not None and len(kept) != expected_windows:
         raise InputError(f"{source}: found {len(kept)} windows, expected {expected_windows}"
                          + "".join(f"; {o['kind']}: {o['reason']}"

@@ -125,15 +125,16 @@ def is_plan_folder(folder: Path) -> bool:
         return False
 
 
-def save_plan(plan: Plan, path: str | Path) -> Path:
+def save_plan(plan: Plan, path: str | Path, *, is_ours=is_plan_folder) -> Path:
     """Write a plan folder as one transaction (:func:`drakedeburr._io.atomic_folder`):
     ``plan.json``, ``arrays.npz``, ``joints.csv`` and ``run.json`` (the run's timings, not part
-    of the plan's content). An existing plan folder there is replaced whole (with its old
-    report); any other existing folder is refused. Returns the folder."""
+    of the plan's content). An existing plan folder there (or any folder ``is_ours`` accepts)
+    is replaced whole (with its old report); any other existing folder is refused. Returns the
+    folder."""
     doc, arrays = _content(plan)
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
-    with atomic_folder(path, is_ours=is_plan_folder) as tmp:
+    with atomic_folder(path, is_ours=is_ours) as tmp:
         (tmp / "arrays.npz").write_bytes(buf.getvalue())
         write_joint_csv(plan, tmp / "joints.csv")
         (tmp / "run.json").write_text(json.dumps(jsonable(plan.run), indent=1, sort_keys=True))

@@ -17,6 +17,7 @@ from __future__ import annotations
 import logging
 import time as _time
 from collections.abc import Callable
+from pathlib import Path
 
 from drakedeburr.config import Config
 from drakedeburr.verify.gate import plan_identity
@@ -24,7 +25,8 @@ from drakedeburr.verify.registry import CHECKS, run_checks
 from drakedeburr.verify.report import VerificationReport
 from drakedeburr.verify.sampling import KIND_CODE, SampledPlan, sample_plan
 
-__all__ = ["verify_plan", "verify_sampled", "config_for_plan", "QUICK_SAMPLING"]
+__all__ = ["verify_plan", "verify_sampled", "config_for_plan", "no_window_report",
+           "QUICK_SAMPLING"]
 
 log = logging.getLogger(__name__)
 
@@ -140,6 +142,34 @@ def _nothing_planned(plan, config: Config, hub_model, expected_windows) -> Verif
         settings={"tolerances": {k: getattr(config.tolerances, k)
                                  for k in config.tolerances.__dataclass_fields__},
                   "samples": 0, "grinding_speed": config.process.grinding_speed},
+        run={"elapsed_s": 0.0})
+
+
+def no_window_report(exc, scenario: str, tolerances) -> VerificationReport:
+    """The report of a hub mesh none of whose openings is a window the burr can cut
+    (:class:`drakedeburr.errors.NoCuttableWindow`): one failed required item ``windows``
+    naming every opening and outline and why it was not taken; ``plan_info["openings"]`` and
+    ``plan_info["rejected_outlines"]`` hold them whole (for --json readers)."""
+    from drakedeburr.verify.report import CheckItem
+
+    reasons = [f"{o.get('kind', 'opening')} at r = {o.get('radius_mm', float('nan')):.0f} mm: "
+               f"{o.get('reason', '')}" for o in exc.openings]
+    reasons += [f"outline at {r.get('center_xy_mm')} mm: {r.get('reason', '')}"
+                for r in exc.rejected]
+    detail = (f"no window of {Path(exc.source).name} can be cut: {len(exc.openings)} openings "
+              f"too small or not windows, {len(exc.rejected)} outlines rejected: "
+              + "; ".join(reasons))
+    items = (CheckItem("windows", False, 0.0, 1.0, "count", ">=", detail=detail),)
+    return VerificationReport(
+        passed=False, items=items,
+        plan_info={"scenario": str(scenario), "hub": str(exc.source), "mode": None,
+                   "expected_windows": [], "windows": [], "targets": 0, "segments": 0,
+                   "knots": 0, "duration_s": 0.0, "planner": "", "robot": None,
+                   "hub_axis_file": exc.axis, "openings": exc.openings,
+                   "rejected_outlines": exc.rejected},
+        settings={"tolerances": {k: getattr(tolerances, k)
+                                 for k in tolerances.__dataclass_fields__},
+                  "samples": 0, "grinding_speed": None},
         run={"elapsed_s": 0.0})
 
 

@@ -36,11 +36,18 @@ _PLAN_BYTES_PER_WINDOW = 400_000
 _HTML_BYTES = 4_000_000
 
 
+def _is_output_folder(folder: Path) -> bool:
+    """-o/--out holds our plan, or our report of a mesh with nothing to cut."""
+    from drakedeburr.plan.io import is_plan_folder
+    from drakedeburr.verify.report import is_report_folder
+
+    return is_plan_folder(folder) or is_report_folder(folder)
+
+
 def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
     """Output paths and the program file, before any work."""
     from drakedeburr import argcheck
     from drakedeburr.errors import InputError
-    from drakedeburr.plan.io import is_plan_folder
 
     argcheck.output_file(args.json, "--json")
     argcheck.output_file(args.html, "--html")
@@ -52,7 +59,7 @@ def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
                              f"of the plan {target} goes into its folder")
         argcheck.output_folder(target, "the plan folder (its report is written into it)")
     else:
-        argcheck.output_folder(args.out, "-o/--out", is_ours=is_plan_folder)
+        argcheck.output_folder(args.out, "-o/--out", is_ours=_is_output_folder)
         if args.out:
             argcheck.free_space(args.out, _PLAN_BYTES_PER_WINDOW + _HTML_BYTES, "-o/--out")
         argcheck.output_folder(args.hub_cache, "--hub-cache")
@@ -196,7 +203,7 @@ def _print_report(report) -> None:
             f", t={it.time:.3f} s" if it.time is not None else "") + "]"
         pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
         print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
-        if it.name == "program_file" and not it.passed:
+        if it.name in ("program_file", "windows") and not it.passed and it.detail:
             print(f"      {it.detail}")
     print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
 
@@ -232,12 +239,17 @@ def _run_verify(args: argparse.Namespace) -> int:
     program = _read_program_file(args.program)
     if kind != "plan":
         if Path(hub).suffix.lower() in _MESH_SUFFIXES:
-            hub = _import_mesh(hub, args)
+            from drakedeburr.errors import NoCuttableWindow
+
+            try:
+                hub = _import_mesh(hub, args)
+            except NoCuttableWindow as exc:
+                return _no_window(args, exc, scenario)
         check_windows(windows, hub_windows(hub), Path(hub).name)
         config = _config(args, scenario, hub)
         plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
         if args.out:
-            folder = save_plan(plan, args.out)
+            folder = save_plan(plan, args.out, is_ours=_is_output_folder)
     report = verify_plan(plan, config, expected_windows=windows,
                          progress=tqdm_progress("verify"))
     if program is not None:
@@ -256,6 +268,32 @@ def _run_verify(args: argparse.Namespace) -> int:
                           replay_html=None if args.no_replay else meshcat_replay_html(plan))
     _print_report(report)
     return 0 if report.passed else 1
+
+
+def _no_window(args: argparse.Namespace, exc, scenario: str) -> int:
+    """A readable mesh with nothing to cut: the report says why (every opening and outline
+    with its reason) into -o (a report-only folder, written whole), --json and --html;
+    exit 1."""
+    from drakedeburr._io import atomic_folder
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.verify.checks import no_window_report
+    from drakedeburr.verify.report import write_report_files, write_report_json
+
+    report = no_window_report(exc, scenario, _tolerances(args) or default_tolerances())
+    if args.out:
+        with atomic_folder(args.out, is_ours=_is_output_folder) as tmp:
+            write_report_files(report, tmp)
+        log.info("wrote the report into %s", args.out)
+    if args.json:
+        write_report_json(report, args.json)
+    if args.html:
+        from drakedeburr.verify.html import write_report_html
+
+        write_report_html(report, args.html)
+    _print_report(report)
+    print(f"{exc.source}: no window can be cut (pass --front if the face taken is the wrong "
+          "one)")
+    return 1
 
 
 def _run_verify_all(args: argparse.Namespace) -> int:

@@ -31,7 +31,7 @@ import numpy as np
 from drakedeburr._io import atomic_write_text
 
 __all__ = ["SCHEMA", "CheckItem", "VerificationReport", "report_json", "write_report_json",
-           "write_report_files"]
+           "write_report_files", "is_report_folder"]
 
 SCHEMA = "drakedeburr.verify/1"
 
@@ -187,3 +187,17 @@ def write_report_files(report: VerificationReport, folder: str | Path, *, plan=N
     written = atomic_write_files({folder / REPORT_HTML: html,
                                   folder / REPORT_FILE: report_json(report)})
     return written[1], written[0]
+
+
+def is_report_folder(folder: str | Path) -> bool:
+    """Does ``folder`` hold only a report of ours (``report.json`` of this schema, no plan)?
+    ``verify MESH -o DIR`` writes one when no window of the mesh can be cut."""
+    import json
+
+    from drakedeburr.verify.gate import REPORT_FILE
+
+    try:
+        doc = json.loads((Path(folder) / REPORT_FILE).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("schema") == SCHEMA
