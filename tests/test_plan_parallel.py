@@ -46,3 +46,19 @@ def test_same_plan_with_one_or_two_processes_and_in_any_company():
 
     (s1, q1), (s2, q2) = window(one, 3), window(alone, 3)
     assert s1 == s2 and np.array_equal(q1, q2)
+
+
+def test_worker_count_reads_the_environment(monkeypatch):
+    """$DRAKEDEBURR_WORKERS sets the default pool (a batch or a test suite that already fills
+    the cores); an explicit request wins; at most one process per window; nonsense refused."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.parallel import worker_count
+
+    monkeypatch.setenv("DRAKEDEBURR_WORKERS", "3")
+    assert worker_count(None, 5) == 3 and worker_count(None, 2) == 2
+    assert worker_count(1, 5) == 1
+    monkeypatch.setenv("DRAKEDEBURR_WORKERS", "0")
+    with pytest.raises(InputError, match="DRAKEDEBURR_WORKERS='0'"):
+        worker_count(None, 5)
+    monkeypatch.delenv("DRAKEDEBURR_WORKERS")
+    assert worker_count(None, 64) >= 1

@@ -31,14 +31,30 @@ _WORKER: dict = {}  # in a worker: recipe key -> PlanContext
 
 
 def worker_count(requested: int | None, n_windows: int) -> int:
-    """Processes to plan ``n_windows`` with: ``requested`` (None: the cores this process may
-    use), at most one per window."""
+    """Processes to plan ``n_windows`` with: ``requested`` (None: ``$DRAKEDEBURR_WORKERS`` if
+    set, else the cores this process may use), at most one per window. The variable is for
+    runs that already fill the cores with processes of their own (a batch of hubs, a test
+    suite on every core): a worker pool there only adds its own cell build (~4 s CPU a hub)."""
+    if requested is None and os.environ.get("DRAKEDEBURR_WORKERS"):
+        requested = _env_workers(os.environ["DRAKEDEBURR_WORKERS"])
     if requested is None:
         try:
             requested = len(os.sched_getaffinity(0))
         except AttributeError:  # not on Linux
             requested = os.cpu_count() or 1
     return max(1, min(int(requested), n_windows))
+
+
+def _env_workers(text: str) -> int:
+    from drakedeburr.errors import InputError
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise InputError(f"DRAKEDEBURR_WORKERS={text!r}: a whole number >= 1 is needed")
+    return n
 
 
 def _recipe(ctx) -> dict | None:

@@ -189,10 +189,11 @@ def verify_all(
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = multiprocessing.get_context("spawn")
-        # one BLAS/OpenMP thread per worker: the workers are the parallelism (nested threads
-        # oversubscribe the cores); spawned children inherit the environment at start
-        saved = {v: os.environ.get(v) for v in _THREAD_VARS}
-        os.environ.update({v: "1" for v in _THREAD_VARS})
+        # one BLAS/OpenMP thread and one window planner per worker: the workers are the
+        # parallelism (nested threads or window pools oversubscribe the cores); spawned
+        # children inherit the environment at start
+        saved = {v: os.environ.get(v) for v in (*_THREAD_VARS, "DRAKEDEBURR_WORKERS")}
+        os.environ.update({v: "1" for v in saved})
         try:
             with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                 for fut in as_completed([pool.submit(run_job, j) for j in jobs]):
