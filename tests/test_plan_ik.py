@@ -111,10 +111,10 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
     bound = IkOptions().min_distance_floor
 
-    def probe(wt, i):
+    def probe(wt, i, ch=checker):
         p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
         return p_HQ[i], cone_clearance_probe(
-            kin, checker, p_HQ[i], wt.cone_retract_H[i], wt.cone_half_angle, wt.retract_H[i],
+            kin, ch, p_HQ[i], wt.cone_retract_H[i], wt.cone_half_angle, wt.retract_H[i],
             wt.t_H[i], cell.q_home, lift=lift, bound=bound)
 
     def assert_admissible(wt, i, p_HQ, res):
@@ -148,3 +148,15 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     recipe = window_targets_for_hub(hub, source="toolpath", windows=[4])[0]
     assert np.allclose(recipe.p_HC, source_box.p_HC)
     assert_admissible(recipe, i_blocked, *probe(recipe, i_blocked))
+    # poses in contact are rejected by Drake's contact test alone; reading every pose's
+    # distances instead gives the same verdicts and, where a pose with positive clearance
+    # exists, the same best pose
+    slow = ClearanceChecker(cell)
+    slow.collides = lambda q: False
+    for wt, i in ((source_box, i_blocked), (source_box, 0), (recipe, i_blocked)):
+        fast, full = probe(wt, i)[1], probe(wt, i, slow)[1]
+        assert fast["feasible"] == full["feasible"]
+        if full["best_clearance"] > 0:
+            assert np.array_equal(fast["q"], full["q"])
+            assert fast["best_clearance"] == full["best_clearance"]
+        assert fast["queries"] == full["queries"]

@@ -211,7 +211,12 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     searched best first: one pose of each is queried (in the order above), then the remaining
     poses axis by axis in the order of that first clearance (the burr shank's clearance, which
     the spin does not change, mostly decides: a clear pose is usually found on the first axes
-    searched, where the axes in their listed order found it only near the rim).
+    searched, where the axes in their listed order found it only near the rim). After the
+    first pose of each axis, a pose in contact is rejected by Drake's contact test alone
+    (~10x cheaper than its distances; 85 % of the poses of a blocked target on a deep-dish
+    hub): every pose with positive clearance is still read, so the best pose and the verdict
+    are the same; only the best clearance of a target where every pose collides may be that
+    of the first poses.
 
     Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
     clears the cell: the tool or the theta box has to change) from a solver failure (a pose
@@ -247,6 +252,9 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     if not best["feasible"]:
         for k in np.argsort(-first, kind="stable"):
             for qq in cands[k][1:]:
+                if checker.collides(qq):  # fails the bound; most poses of a blocked target
+                    best["queries"] += 1
+                    continue
                 if query(qq) >= bound:
                     break
             if best["feasible"]:
