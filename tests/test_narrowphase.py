@@ -162,3 +162,25 @@ def test_tally_reports_what_was_done():
     assert t.counts == {"kept": 1, "bound": 1, "solved": 1} and t.lowered == 2
     assert t.overestimate == pytest.approx(0.001)
     assert "3 positive readings" in t.summary() and "1.000 mm" in t.summary()
+
+
+def test_bounding_and_box_points_contain_each_shape():
+    """bounding_points (points + padding) and box_points hold every shape: its support along
+    random directions never exceeds theirs, and equals it where conv(P) + ball(rho) is the
+    shape itself (box, capsule, sphere)."""
+    from pydrake.geometry import Box, Capsule, Cylinder, Ellipsoid, Sphere
+
+    from drakedeburr.cell.narrowphase import ShapeSupport, bounding_points, box_points
+
+    rng = np.random.default_rng(5)
+    n = rng.normal(size=(200, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    I = np.eye(4)
+    for shape in (Box(0.1, 0.2, 0.3), Cylinder(0.05, 0.2), Capsule(0.03, 0.1), Sphere(0.04),
+                  Ellipsoid(0.1, 0.05, 0.02)):
+        s = np.array([ShapeSupport(shape).support(I, v) for v in n])
+        P, rho = bounding_points(shape)
+        assert np.all((P @ n.T).max(0) + rho >= s - 1e-12)
+        assert np.all((box_points(shape) @ n.T).max(0) >= s - 1e-12)
+        if isinstance(shape, (Box, Capsule, Sphere)):  # exact: conv(P) + ball(rho) is the shape
+            assert np.isclose(((P @ n.T).max(0) + rho - s).min(), 0.0, atol=1e-12)

@@ -40,11 +40,13 @@ def test_motion_bound_covers_every_moving_point(cell_path):
     poses, not our kinematics) stay within the bound, also for joint steps 100x the path's."""
     from pydrake.geometry import Role
 
+    from drakedeburr.cell.narrowphase import bounding_points
+
     cell, kin, checker, q = cell_path
     mb = mut.motion_bound(cell)
     inspector = cell.scene_graph.model_inspector()
     gids = [g for g in inspector.GetAllGeometryIds(Role.kProximity) if mb.level[mb.row[g]] > 0]
-    support = {g: mut._support(inspector.GetShape(g)) for g in gids}
+    support = {g: bounding_points(inspector.GetShape(g)) for g in gids}
 
     def points(qi):
         query = checker.query_at(qi)

@@ -26,10 +26,51 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["ShapeSupport", "separation", "certified_distance", "exact_distance", "ReadingTally",
-           "READING_GAP"]
+           "READING_GAP", "hull_vertices", "bounding_points", "box_points"]
 
 #: a reading within this of the separating-plane bound along its own normal is kept [m]
 READING_GAP = 1e-6
+
+
+_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+
+
+def hull_vertices(shape) -> np.ndarray:
+    """(k, 3) vertices of the convex hull Drake's proximity engine uses for a Convex or Mesh
+    shape, in its frame [m]."""
+    hull = shape.GetConvexHull()
+    return np.array([hull.vertex(i) for i in range(hull.num_vertices())], float)
+
+
+def bounding_points(shape) -> tuple[np.ndarray, float]:
+    """Points P (k, 3) in the shape's frame and a padding rho [m] with the shape inside
+    conv(P) + ball(rho): every convex function of the points (a distance from a point or a
+    line) is at most its largest value over P plus rho."""
+    from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Mesh, Sphere
+
+    if isinstance(shape, (Convex, Mesh)):
+        return hull_vertices(shape), 0.0
+    if isinstance(shape, Box):
+        return _CORNERS * 0.5 * np.array([shape.width(), shape.depth(), shape.height()]), 0.0
+    if isinstance(shape, Cylinder):
+        r = shape.radius()
+        return _CORNERS * np.array([r, r, 0.5 * shape.length()]), 0.0
+    if isinstance(shape, Ellipsoid):
+        return _CORNERS * np.array([shape.a(), shape.b(), shape.c()]), 0.0
+    if isinstance(shape, Sphere):
+        return np.zeros((1, 3)), float(shape.radius())
+    if isinstance(shape, Capsule):
+        return np.array([[0, 0, -0.5], [0, 0, 0.5]]) * shape.length(), float(shape.radius())
+    raise TypeError(f"unsupported collision shape {type(shape).__name__}")
+
+
+def box_points(shape) -> np.ndarray:
+    """Points whose convex hull contains the shape, in its frame [m]: the
+    :func:`bounding_points` with each padded point replaced by the corners of its box."""
+    P, rho = bounding_points(shape)
+    if rho == 0.0:
+        return P
+    return (P[:, None, :] + rho * _CORNERS[None]).reshape(-1, 3)
 
 
 class ShapeSupport:
@@ -46,8 +87,7 @@ class ShapeSupport:
         self.kind = type(shape).__name__
         self.V = None
         if isinstance(shape, (Convex, Mesh)):
-            hull = shape.GetConvexHull()
-            self.V = np.array([hull.vertex(k) for k in range(hull.num_vertices())], float)
+            self.V = hull_vertices(shape)
             self.kind = "Convex"
         elif isinstance(shape, Box):
             self.half = np.array([shape.width(), shape.depth(), shape.height()], float) / 2

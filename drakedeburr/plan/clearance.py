@@ -49,6 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drakedeburr.cell.narrowphase import bounding_points
+
 __all__ = ["MotionBound", "motion_bound", "step_displacements", "distances_along",
            "QUERY_SLACK"]
 
@@ -79,30 +81,6 @@ class MotionBound:
     c_B: np.ndarray
     radius: np.ndarray
     tree: object
-
-
-def _support(shape) -> tuple[np.ndarray, float]:
-    """Points P (k, 3) in the shape's frame and a padding rho with shape in conv(P) + ball(rho)
-    [m]: every convex function of the points (a distance from a point or a line) is at most its
-    largest value over P plus rho."""
-    from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Mesh, Sphere
-
-    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-    if isinstance(shape, Box):
-        return corners * 0.5 * np.array([shape.width(), shape.depth(), shape.height()]), 0.0
-    if isinstance(shape, Cylinder):
-        r = shape.radius()
-        return corners * np.array([r, r, 0.5 * shape.length()]), 0.0
-    if isinstance(shape, Ellipsoid):
-        return corners * np.array([shape.a(), shape.b(), shape.c()]), 0.0
-    if isinstance(shape, Sphere):
-        return np.zeros((1, 3)), float(shape.radius())
-    if isinstance(shape, Capsule):
-        return np.array([[0, 0, -0.5], [0, 0, 0.5]]) * shape.length(), float(shape.radius())
-    if isinstance(shape, (Convex, Mesh)):
-        hull = shape.GetConvexHull()
-        return np.array([hull.vertex(i) for i in range(hull.num_vertices())]), 0.0
-    raise ValueError(f"motion bound: no support points for a moving {type(shape).__name__}")
 
 
 def _foot(p: np.ndarray, axis) -> np.ndarray:
@@ -172,7 +150,7 @@ def motion_bound(cell) -> MotionBound:
             continue
         X_WB[i] = plant.EvalBodyPoseInWorld(ctx, body).GetAsMatrix4()
         X_WG = X_WB[i] @ inspector.GetPoseInFrame(gid).GetAsMatrix4()
-        P, rho = _support(inspector.GetShape(gid))
+        P, rho = bounding_points(inspector.GetShape(gid))
         support[i] = (P @ X_WG[:3, :3].T + X_WG[:3, 3], rho)
     riders = [s[0] for s, lv in zip(support, level, strict=True) if lv == 6]
     o = _chain_points(axes, np.vstack(riders).mean(axis=0) if riders else axes[-1][0])

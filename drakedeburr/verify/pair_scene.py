@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from drakedeburr.cell.chain import KinematicTree
-from drakedeburr.cell.narrowphase import ReadingTally, ShapeSupport, certified_distance
+from drakedeburr.cell.narrowphase import ReadingTally, ShapeSupport, box_points, certified_distance
 from drakedeburr.verify.motion_bounds import Tracks
 
 __all__ = ["PairScene", "shape_points", "CLEARANCE", "SELF", "BURR"]
@@ -35,26 +35,9 @@ CLEARANCE, SELF, BURR = 0, 1, 2
 
 
 def shape_points(shape) -> np.ndarray:
-    """Points whose hull contains the shape, in the geometry frame [m]."""
-    from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Mesh, Sphere
-
-    if isinstance(shape, (Convex, Mesh)):
-        hull = shape.GetConvexHull()
-        return np.array([hull.vertex(i) for i in range(hull.num_vertices())])
-    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-    if isinstance(shape, Box):
-        return corners * np.array([shape.width(), shape.depth(), shape.height()]) / 2
-    if isinstance(shape, Cylinder):
-        r = shape.radius()
-        return corners * np.array([r, r, shape.length() / 2])
-    if isinstance(shape, Capsule):
-        r = shape.radius()
-        return corners * np.array([r, r, shape.length() / 2 + r])
-    if isinstance(shape, Sphere):
-        return corners * shape.radius()
-    if isinstance(shape, Ellipsoid):
-        return corners * np.array([shape.a(), shape.b(), shape.c()])
-    raise TypeError(f"unsupported collision shape {type(shape).__name__}")
+    """Points whose hull contains the shape, in the geometry frame [m]
+    (:func:`drakedeburr.cell.narrowphase.box_points`)."""
+    return box_points(shape)
 
 
 def _ball(points: np.ndarray) -> tuple[np.ndarray, float]:
