@@ -14,7 +14,9 @@ import pytest
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.plan import planner
+from drakedeburr.plan.options import PlanContext, PlanOptions
 from drakedeburr.plan.relax import TILT_STEPS, relaxed_targets
+from drakedeburr.plan.results import WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
 
@@ -84,10 +86,12 @@ def test_a_box_not_milder_than_the_recipes_is_skipped():
 
 
 @pytest.mark.parametrize("relaxed_failures, kept", [(1, "relaxed"), (2, "default"), (3, "default")])
-def test_the_hub_is_planned_again_and_kept_only_with_fewer_failures(monkeypatch,
-                                                                    relaxed_failures, kept):
-    """Window 0 relaxes, window 1 does not: the re-plan is kept with fewer records than the
-    default plan (2), and window 1's relaxation record is added to whichever plan is kept."""
+def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatch,
+                                                                      relaxed_failures, kept):
+    """Window 0 relaxes, window 1 does not: the hub is assembled again from window 0's relaxed
+    plan and window 1's first-pass plan (not planned again), kept with fewer records than
+    the default plan (2), and window 1's relaxation record is added to whichever plan is
+    kept."""
     wts = [SimpleNamespace(window_index=0), SimpleNamespace(window_index=1)]
     default = _plan([FailureRecord(0, "ik", "a"), FailureRecord(1, "ik", "b")])
     relaxed = _plan([FailureRecord(1, "ik", "b")] * max(relaxed_failures, 1))
@@ -95,17 +99,32 @@ def test_the_hub_is_planned_again_and_kept_only_with_fewer_failures(monkeypatch,
 
     dev = relax.Deviation(0, "tool tilt", "theta box 0.26-0.44 rad", "theta box 0.09-0.26 rad",
                           "r")
+    wt0 = SimpleNamespace(window_index=0, relaxed=True)
+    seen = {}
 
-    def fake_relaxed(edge, params, reason, plan_one):
-        if edge.index == 0:
-            return SimpleNamespace(window_index=0, relaxed=True), dev, []
-        return None, None, [("theta box 0.09-0.26 rad", "ik: b")]
+    def fake_relax_windows(edges, params, reasons, plan_many):
+        seen["edges"], seen["reasons"] = [e.index for e in edges], reasons
+        return {0: (wt0, "window 0 relaxed", dev)}, {0: [], 1: [("theta box 0.09-0.26 rad",
+                                                                 "ik: b")]}
 
-    monkeypatch.setattr(relax, "relaxed_targets", fake_relaxed)
-    monkeypatch.setattr(planner, "plan_windows", lambda cell, w, config, **kw: relaxed)
+    def fake_assemble(ctx, windows, results, progress, t_start):
+        if windows[0] is wt0:
+            seen["windows"], seen["results"] = list(windows), list(results)
+            return relaxed
+        return default
+
+    monkeypatch.setattr(relax, "relax_windows", fake_relax_windows)
+    monkeypatch.setattr(planner, "_assemble_windows", fake_assemble)
     hub = SimpleNamespace(windows=[SimpleNamespace(index=0), SimpleNamespace(index=1)])
-    config = SimpleNamespace(process=ProcessParameters())
-    out = planner._relax(None, hub, wts, config, None, default, {}, None)
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
+                      config=SimpleNamespace(process=ProcessParameters()),
+                      options=PlanOptions(workers=1))
+    first = [SimpleNamespace(status=WindowStatus.DEGRADED, name=f"window {k} first")
+             for k in (0, 1)]
+    out = planner._relax(ctx, hub, wts, first, default, None, 0.0)
+    assert seen["edges"] == [0, 1] and seen["reasons"][1].startswith("window 1")
+    assert seen["windows"] == [wt0, wts[1]]
+    assert seen["results"] == ["window 0 relaxed", first[1]]
     base = relaxed if kept == "relaxed" else default
     assert out.failures[:len(base.failures)] == base.failures
     extra = out.failures[len(base.failures):]
@@ -115,3 +134,58 @@ def test_the_hub_is_planned_again_and_kept_only_with_fewer_failures(monkeypatch,
         assert out.meta["recipe_deviations"] == [dev.record()]
     else:
         assert "recipe_deviations" not in out.meta
+
+
+def test_every_failing_window_is_relaxed_in_one_batch_per_step():
+    """The variants of all failing windows go to the planner together, one batch per tilt
+    step: a window that plans clean drops out, the others go on to the next step."""
+    from drakedeburr.hub import load_hub
+    from drakedeburr.plan.relax import relax_windows
+
+    large = [w for w in load_hub("h5_split").windows if w.kind == "large"][:2]
+    batches = []
+
+    def plan_many(wts):
+        batches.append([wt.window_index for wt in wts])
+        # the first window plans clean at the first step, the second never
+        return [_plan([] if wt.window_index == large[0].index else
+                      [FailureRecord(wt.window_index, "ik", "x")]) for wt in wts]
+
+    accepted, tried = relax_windows(large, ProcessParameters(), {}, plan_many)
+    assert batches == [[large[0].index, large[1].index], [large[1].index]]
+    assert list(accepted) == [large[0].index] and accepted[large[0].index][1].failures == ()
+    assert accepted[large[0].index][2].used == "theta box 0.09-0.26 rad"
+    assert [t for t, _ in tried[large[1].index]] == [
+        f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad" for b in TILT_STEPS]
+
+
+def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch):
+    """The first pass abandons window 0 at an unreachable target (with relaxation on); no
+    milder box helps: it is planned in full (abandoning off) before the plan is assembled, so
+    the plan holds it as a plan without relaxation would, with the relaxation record."""
+    from drakedeburr.plan import relax
+
+    wts = [SimpleNamespace(window_index=0)]
+    abandoned = SimpleNamespace(status=WindowStatus.UNREACHABLE,
+                                failures=[FailureRecord(0, "ik", "unreachable")])
+    in_full = SimpleNamespace(status=WindowStatus.DEGRADED, failures=abandoned.failures * 3)
+    calls = []
+
+    def fake_plan_all(ctx, windows, workers, progress):
+        calls.append((ctx.options.abandon_unreachable, [w.window_index for w in windows]))
+        return [in_full for _ in windows]
+
+    assembled = []
+    monkeypatch.setattr(relax, "relax_windows", lambda *a: ({}, {0: [("box", "ik: x")]}))
+    monkeypatch.setattr(planner, "plan_all_windows", fake_plan_all)
+    monkeypatch.setattr(planner, "_assemble_windows",
+                        lambda ctx, w, results, p, t: assembled.append(list(results))
+                        or _plan(f for r in results for f in r.failures))
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
+                      config=SimpleNamespace(process=ProcessParameters()),
+                      options=PlanOptions(workers=1))
+    hub = SimpleNamespace(windows=[SimpleNamespace(index=0)])
+    out = planner._relax(ctx, hub, wts, [abandoned], _plan(abandoned.failures), None, 0.0)
+    assert calls == [(False, [0])]
+    assert assembled == [[in_full]]
+    assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"

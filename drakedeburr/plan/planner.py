@@ -36,7 +36,7 @@ from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
 from drakedeburr.plan.parallel import plan_all_windows
-from drakedeburr.plan.results import PlanStats, Stretch
+from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
@@ -83,23 +83,37 @@ def plan_windows(
         Plan; ``failures`` lists every point/move that failed (empty when all planned).
     """
     t_start = time.perf_counter()
-    options = options or PlanOptions()
-    kin = cell_kinematics(cell)
+    ctx = _context(cell, config, options or PlanOptions(), q_refs)
+    results = plan_all_windows(ctx, windows, ctx.options.workers, progress)
+    return _assemble_windows(ctx, windows, results, progress, t_start)
+
+
+def _context(cell, config: Config, options: PlanOptions, q_refs: dict | None) -> PlanContext:
     # moves that do not cut keep the burr head clear of the hub too
     tol = config.tolerances
-    ctx = PlanContext(cell=cell, kin=kin, checker=ClearanceChecker(cell, tolerances=tol),
-                      free_checker=ClearanceChecker(cell, filter_burr_contact=False,
-                                                    tolerances=tol),
-                      config=config, options=options, q_refs=dict(q_refs or {}))
-    process = config.process
+    return PlanContext(cell=cell, kin=cell_kinematics(cell),
+                       checker=ClearanceChecker(cell, tolerances=tol),
+                       free_checker=ClearanceChecker(cell, filter_burr_contact=False,
+                                                     tolerances=tol),
+                       config=config, options=options, q_refs=dict(q_refs or {}))
+
+
+def _assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], results: list,
+                      progress: Progress, t_start: float) -> Plan:
+    """The plan of independently planned windows (one result per window, in execution
+    order): from home through every planned window and back, with its transitions."""
+    kin, process = ctx.kin, ctx.config.process
     failures, stretches, window_stats, window_seconds = [], [], [], []
     q_cur = kin.q_home.copy()
     home = make_target(kin, q_cur, -1, "home", -1, process.home_speed, "joint")
     n = len(windows)
     t_transitions = 0.0
-    results = plan_all_windows(ctx, windows, options.workers, progress)
     for wt, res in zip(windows, results, strict=True):
         failures += res.failures
+        if res.status is WindowStatus.UNREACHABLE:  # abandoned for relaxation (_relax)
+            log.debug("window %d: a target no tool axis in the cone reaches under the recipe",
+                      wt.window_index)
+            continue
         if not res.status.planned:
             log.warning("window %d not planned (%s): %s", wt.window_index, res.status.value,
                         res.failures[-1].reason if res.failures else "")
@@ -192,7 +206,8 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         cutting_seconds=cut_time,
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
-        options=jsonable({k: v for k, v in asdict(ctx.options).items() if k != "workers"}),
+        options=jsonable({k: v for k, v in asdict(ctx.options).items()
+                          if k not in ("workers", "abandon_unreachable")}),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
@@ -201,42 +216,72 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
                 trajectory=traj, tool_path=tool_paths, failures=tuple(failures), meta=meta)
 
 
-def _relax(cell, hub_model, wts, config, options, plan, q_refs, progress) -> Plan:
-    """The hub planned again with a milder recipe for each window the default could not cut
-    (:mod:`drakedeburr.plan.relax`), kept when it leaves fewer failure records; every
-    deviation recorded in ``plan.meta["recipe_deviations"]``."""
-    from drakedeburr.plan.relax import relaxed_targets
+def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress,
+           t_start: float) -> Plan:
+    """The hub with a milder recipe for each window the default could not cut
+    (:func:`drakedeburr.plan.relax.relax_windows`: the variants of all those windows planned
+    together), kept when it leaves fewer failure records; every deviation recorded in
+    ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass plans (windows
+    are planned independently); the hub's plan is assembled anew from them.
+
+    ``results`` may hold windows the first pass abandoned at an unreachable target
+    (``WindowStatus.UNREACHABLE``, ``PlanOptions.abandon_unreachable``): those not replaced by
+    a kept relaxation are planned in full here, so the plan returned holds every window as a
+    plan without relaxation would (its failure records say where it failed)."""
+    from drakedeburr.plan import relax
 
     edges = {e.index: e for e in hub_model.windows}
     first = {}
     for f in plan.failures:
         first.setdefault(f.window, str(f))
-    wts = list(wts)
-    deviations, in_vain = [], []
-    for k, wt in enumerate(wts):
-        w = wt.window_index
-        if w not in first or w not in edges:
-            continue
-        new, dev, tried = relaxed_targets(edges[w], config.process, first[w],
-                                          lambda x: plan_windows(cell, [x], config,
-                                                                 options=options, q_refs=q_refs))
-        if new is not None:
-            wts[k], deviations = new, deviations + [dev]
-        elif tried:  # say what was tried: the report shows it with the window's failures
-            in_vain.append(FailureRecord(
-                window=w, kind="relaxation", tried=tuple(t for t, _ in tried),
-                reason="milder recipes failed too: " + "; ".join(f"{t}: {r}" for t, r in tried)))
-    if deviations:
-        relaxed = plan_windows(cell, wts, config, options=options, progress=progress,
-                               q_refs=q_refs)
-        if len(relaxed.failures) < len(plan.failures):  # both without the in-vain records
+    failing = [wt.window_index for wt in wts if wt.window_index in first
+               and wt.window_index in edges]
+    abandoned = [k for k, r in enumerate(results) if r.status is WindowStatus.UNREACHABLE]
+    full = _opts(ctx, abandon_unreachable=False)
+    results = list(results)
+
+    def complete(ks) -> None:  # abandoned windows planned in full
+        ks = [k for k in ks if results[k].status is WindowStatus.UNREACHABLE]
+        if ks:
+            done = plan_all_windows(full, [wts[k] for k in ks], ctx.options.workers, None)
+            for k, r in zip(ks, done, strict=True):
+                results[k] = r
+
+    accepted, tried = ({}, {}) if not failing else relax.relax_windows(
+        [edges[w] for w in failing], ctx.config.process, first,
+        lambda x: plan_all_windows(_opts(ctx, abandon_unreachable=True), x,
+                                   ctx.options.workers, None))
+    in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),
+                             reason="milder recipes failed too: " + "; ".join(
+                                 f"{t}: {r}" for t, r in tried[w]))
+               for w in failing if w not in accepted and tried[w]]
+    complete([k for k in abandoned if wts[k].window_index not in accepted])
+    plan = _assemble_windows(full, wts, results, progress, t_start)
+    if accepted:
+        wts2 = [accepted[wt.window_index][0] if wt.window_index in accepted else wt
+                for wt in wts]
+        res2 = [accepted[wt.window_index][1] if wt.window_index in accepted else r
+                for wt, r in zip(wts, results, strict=True)]
+        relaxed = _assemble_windows(full, wts2, res2, progress, t_start)
+        # against the default's records (an abandoned window's: its IK records only, never
+        # more than in full); both without the in-vain records
+        if len(relaxed.failures) < len(plan.failures):
+            deviations = [accepted[w][2] for w in failing if w in accepted]
             relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
             log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
                         "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
             plan = relaxed
+        elif abandoned:  # the default is kept: every window of it in full
+            complete(abandoned)
+            plan = _assemble_windows(full, wts, results, progress, t_start)
     if in_vain:  # said with the failures of whichever plan is kept
         plan = replace(plan, failures=(*plan.failures, *in_vain))
     return plan
+
+
+def _opts(ctx: PlanContext, **changes) -> PlanContext:
+    """``ctx`` with its planner options changed."""
+    return replace(ctx, options=replace(ctx.options, **changes))
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",
@@ -344,9 +389,16 @@ def plan_hub(
             config.scenario, config.hub, robot=config.robot, hub_pose=placement.hub_pose)
         t_place = time.perf_counter() - t1
     q_refs = placement.q_refs if placement else None
-    plan = plan_windows(cell, wts, config, options=options, progress=progress, q_refs=q_refs)
+    t_windows = time.perf_counter()
+    ctx = _context(cell, config, options, q_refs)
+    # with relaxation on, a window with a target no axis in the cone reaches is abandoned
+    # there (it fails under this recipe whatever the rest does) and relaxed; _relax plans it
+    # in full if no relaxation is kept
+    results = plan_all_windows(_opts(ctx, abandon_unreachable=options.relax), wts,
+                               options.workers, progress)
+    plan = _assemble_windows(ctx, wts, results, progress, t_windows)
     if options.relax and any(f.window >= 0 for f in plan.failures):
-        plan = _relax(cell, hub_model, wts, config, options, plan, q_refs, progress)
+        plan = _relax(ctx, hub_model, wts, results, plan, progress, t_windows)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets

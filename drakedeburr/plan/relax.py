@@ -11,8 +11,11 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    timing already slows wherever a limit binds), and the cell has one burr model (a smaller
    burr would need its tool model and depth of cut). Both stay the recipe's to change.
 
-Each variant is planned for the window alone; the first that plans without a failure record
-is kept and the hub is planned again with it.
+The variants of all failing windows are planned together, one round per tilt step (in
+parallel where the planner has workers); a window keeps the first variant that plans without
+a failure record. Windows are planned independently (the same plan whichever process plans
+them), so the hub is not planned again: its plan is assembled anew (transitions, timing) from
+the first pass's windows and the relaxed ones.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from dataclasses import dataclass, replace
 
 from drakedeburr.config import OrientationBounds
 
-__all__ = ["Deviation", "TILT_STEPS", "relaxed_targets"]
+__all__ = ["Deviation", "TILT_STEPS", "relax_windows", "relaxed_targets"]
 
 log = logging.getLogger(__name__)
 
@@ -49,31 +52,58 @@ def _box(b: OrientationBounds) -> str:
     return f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"
 
 
-def relaxed_targets(edge, params, failed_reason: str, plan_one):
-    """A window's targets under the first milder recipe that ``plan_one(wt)`` (a plan of the
-    window alone) plans without failure records, and the deviation ((None, None) when none
-    does), and what was tried: (recipe item, the first failure it left) per variant.
+def relax_windows(edges, params, failed_reasons: dict, plan_many):
+    """Milder recipes for several windows, one round per tilt step: each round plans the
+    variant of every window still failing at once (``plan_many(list of WindowTargets)`` ->
+    one result with ``failures`` per window, e.g. in parallel); a window keeps the first
+    variant that plans without a failure record.
 
     Args:
-        edge: the hub's WindowEdge. params: the recipe's ProcessParameters.
-        failed_reason: why the default failed (for the record).
-        plan_one: callable WindowTargets -> Plan.
+        edges: the failing windows' WindowEdges. params: the recipe's ProcessParameters.
+        failed_reasons: window -> why the default failed (for the record).
+        plan_many: callable planning windows' targets.
+
+    Returns:
+        (accepted: window -> (WindowTargets, result, Deviation), tried: window -> [(recipe
+        item, the first failure it left)] per variant that failed).
     """
     from drakedeburr.plan.planner import _tool_path
     from drakedeburr.plan.window_targets import WindowTargets
 
-    default = params.bounds(edge.kind)
-    tried = []
+    pending = list(edges)
+    accepted, tried = {}, {e.index: [] for e in edges}
     for box in TILT_STEPS:
-        if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
-            continue  # not milder than the recipe's own box
-        p = replace(params, bounds_large=box, bounds_small=box)
-        wt = WindowTargets.from_tool_path(_tool_path(edge, p))
-        trial = plan_one(wt)
-        log.info("window %d: relaxed to %s: %d failure records", edge.index, _box(box),
-                 len(trial.failures))
-        if not trial.failures:
-            return wt, Deviation(edge.index, "tool tilt", _box(default), _box(box),
-                                 f"the recipe's box failed: {failed_reason}"), tried
-        tried.append((_box(box), str(trial.failures[0])))
-    return None, None, tried
+        batch = []
+        for edge in pending:
+            default = params.bounds(edge.kind)
+            if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
+                continue  # not milder than the recipe's own box
+            p = replace(params, bounds_large=box, bounds_small=box)
+            batch.append((edge, WindowTargets.from_tool_path(_tool_path(edge, p))))
+        if not batch:
+            continue
+        results = plan_many([wt for _, wt in batch])
+        for (edge, wt), res in zip(batch, results, strict=True):
+            log.info("window %d: relaxed to %s: %d failure records", edge.index, _box(box),
+                     len(res.failures))
+            if not res.failures:
+                accepted[edge.index] = (wt, res, Deviation(
+                    edge.index, "tool tilt", _box(params.bounds(edge.kind)), _box(box),
+                    f"the recipe's box failed: {failed_reasons.get(edge.index, '')}"))
+                pending.remove(edge)
+            else:
+                tried[edge.index].append((_box(box), str(res.failures[0])))
+    return accepted, tried
+
+
+def relaxed_targets(edge, params, failed_reason: str, plan_one):
+    """One window's targets under the first milder recipe that ``plan_one(wt)`` (a plan of
+    the window alone) plans without failure records, and the deviation ((None, None) when
+    none does), and what was tried: (recipe item, the first failure it left) per variant
+    (:func:`relax_windows` for one window)."""
+    accepted, tried = relax_windows([edge], params, {edge.index: failed_reason},
+                                    lambda wts: [plan_one(wt) for wt in wts])
+    if edge.index in accepted:
+        wt, _, dev = accepted[edge.index]
+        return wt, dev, tried[edge.index]
+    return None, None, tried[edge.index]

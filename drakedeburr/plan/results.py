@@ -29,6 +29,8 @@ class WindowStatus(enum.Enum):
     MOTION_FAILED = "motion_failed"  # the executed cut leaves the configuration: skipped
     PROGRAM_FAILED = "program_failed"  # a program target unreachable: skipped
     APPROACH_FAILED = "approach_failed"  # approach or retract unreachable: skipped
+    # a target no tool axis in the cone reaches, the rest not planned (relaxation comes next)
+    UNREACHABLE = "unreachable"
 
     @property
     def planned(self) -> bool:

@@ -49,6 +49,8 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring)."""
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from)
+    if first.status is WindowStatus.UNREACHABLE:
+        return first  # no spin rule reaches what no axis in the cone clears
     other, ctx2 = _other_rule(ctx)
     if first.status.planned and not first.failures:
         band = first.stats.speed_in_band_fraction
@@ -167,6 +169,9 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
     wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
     t_ik = time.perf_counter() - t0
     failures = [replace(rec, point=int(loop[rec.point])) for rec in wik.failures]
+    if ctx.options.abandon_unreachable and any("cone_best_clearance" in f.where
+                                               for f in failures):
+        return WindowPlan.skipped(wt.window_index, WindowStatus.UNREACHABLE, failures)
     # only the targets that met every constraint (a failed point's row holds its best attempt)
     good = np.flatnonzero(wik.ok)
     if len(good) < (m + 1) // 2 or 0 not in good:
