@@ -148,15 +148,29 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     recipe = window_targets_for_hub(hub, source="toolpath", windows=[4])[0]
     assert np.allclose(recipe.p_HC, source_box.p_HC)
     assert_admissible(recipe, i_blocked, *probe(recipe, i_blocked))
-    # poses in contact are rejected by Drake's contact test alone; reading every pose's
-    # distances instead gives the same verdicts and, where a pose with positive clearance
-    # exists, the same best pose
+    # poses in contact are ranked by their penetration and rejected by Drake's contact test,
+    # not read by the signed distances: reading every pose's distances instead gives the same
+    # verdicts, and a clear pose found either way is admissible
     slow = ClearanceChecker(cell)
     slow.collides = lambda q: False
+    slow.ranked_distance = lambda q, cap: ClearanceChecker.distance(slow, q, cap)
     for wt, i in ((source_box, i_blocked), (source_box, 0), (recipe, i_blocked)):
-        fast, full = probe(wt, i)[1], probe(wt, i, slow)[1]
+        p_HQ, fast = probe(wt, i)
+        full = probe(wt, i, slow)[1]
         assert fast["feasible"] == full["feasible"]
-        if full["best_clearance"] > 0:
-            assert np.array_equal(fast["q"], full["q"])
-            assert fast["best_clearance"] == full["best_clearance"]
-        assert fast["queries"] == full["queries"]
+        if fast["feasible"]:
+            assert_admissible(wt, i, p_HQ, fast)
+    # the ranking value: the certified distance of a clear pose, minus the depth in contact
+    assert checker.ranked_distance(cell.q_home, 0.01) == checker.distance(cell.q_home, 0.01) > 0
+    from drakedeburr.plan.ik_seeds import _probe_candidates
+
+    p_HQ = tool_point_H(source_box.p_HC, source_box.n_H, source_box.retract_H,
+                        source_box.depth_of_cut, r_c, 0.0)[i_blocked]
+    poses = np.concatenate(_probe_candidates(
+        kin, p_HQ, [source_box.cone_retract_H[i_blocked]], source_box.t_H[i_blocked],
+        cell.q_home, lift, 24, 0.25, 24))
+    hits = [q for q in poses if checker.collides(q)]
+    assert hits, "expected poses of the blocked target in contact"
+    for q in hits[:5]:
+        ranked, signed = checker.ranked_distance(q, 0.01), checker.distance(q, 0.01)
+        assert ranked < 0 and signed <= 0

@@ -246,6 +246,20 @@ class ClearanceChecker:
         bound, whatever its depth)."""
         return bool(self.query_at(q).HasCollisions())
 
+    def ranked_distance(self, q: np.ndarray, max_distance: float) -> float:
+        """:meth:`distance` where the pose is clear of contact; in contact, minus the deepest
+        penetration (Drake's contact query, ~0.7 ms with the contact test against 2-3 ms for
+        the signed distances of a posed hub cell). For ranking poses: a pose in contact fails
+        any clearance bound, and its depth says by how much."""
+        query = self.query_at(q)
+        if not query.HasCollisions():
+            return self.distance(q, max_distance)
+        try:
+            depth = max(p.depth for p in query.ComputePointPairPenetration())
+        except RuntimeError:  # a shape pair without a penetration query: signed distances
+            return self.distance(q, max_distance)
+        return -float(depth)
+
     def reading(self, query, r) -> float:
         """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a
         rigorous lower bound (:func:`drakedeburr.cell.narrowphase.certified_distance`:
