@@ -166,13 +166,13 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
     from drakedeburr.plan import relax
 
     wts = [SimpleNamespace(window_index=0)]
-    abandoned = SimpleNamespace(status=WindowStatus.UNREACHABLE,
+    abandoned = SimpleNamespace(status=WindowStatus.ABANDONED,
                                 failures=[FailureRecord(0, "ik", "unreachable")])
     in_full = SimpleNamespace(status=WindowStatus.DEGRADED, failures=abandoned.failures * 3)
     calls = []
 
     def fake_plan_all(ctx, windows, workers, progress):
-        calls.append((ctx.options.abandon_unreachable, [w.window_index for w in windows]))
+        calls.append((ctx.options.fail_fast, [w.window_index for w in windows]))
         return [in_full for _ in windows]
 
     assembled = []

@@ -220,6 +220,7 @@ def solve_window_ik(
     progress: Callable[[int, int, str], None] | None = None,
     q_first: np.ndarray | None = None,
     lift: float = 0.0,
+    stop_at_failure: bool = False,
 ) -> WindowIk:
     """IK at every CL target of one window, warm-started along the path.
 
@@ -239,6 +240,9 @@ def solve_window_ik(
             where it belongs when the IK tilts the axis inside the cone (T would carry the
             cutting circle off by ``lift * tilt``), and tilting about it swings the shank away
             from the face more per radian.
+        stop_at_failure: stop at the first target that fails (the later ones are left
+            unsolved, ``ok`` False, without records): for a pass that only asks whether the
+            window can be cut cleanly (``PlanOptions.fail_fast``).
 
     Returns:
         WindowIk; failures are listed per point (:class:`FailureRecord`), never raised.
@@ -286,6 +290,8 @@ def solve_window_ik(
             q_prev, i_prev = q_out[i], i
         else:
             failures.append(_failure(run, window_index, i, best, probe))
+            if stop_at_failure:
+                break
         if progress is not None:
             progress(i + 1, m, f"window {window_index} IK")
     dt = time.perf_counter() - t0

@@ -76,11 +76,12 @@ class PlanOptions:
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
             the cores this process may use, 1: one after the other here). The plan is the
             same whatever the number (it is not recorded in the plan).
-        abandon_unreachable: stop a window as soon as its IK finds a target no tool axis in
-            the cone reaches (status ``UNREACHABLE``) instead of planning the rest of it. Set by
-            ``plan_hub`` for its first pass when ``relax`` is on (such a window fails under
-            the recipe whatever the rest does, and is relaxed; it is planned in full only if no
-            relaxation is kept). Not recorded in the plan.
+        fail_fast: stop a window's IK pass at its first failed target (the window fails
+            under the recipe whatever the rest does: status ``ABANDONED``) instead of planning
+            the rest of it; the other start seeds and spin rule are still tried, each stopping
+            at its first failure. Set by ``plan_hub`` for its first pass when ``relax`` is on:
+            a window that fails is relaxed, and planned in full only if no relaxation is kept.
+            Not recorded in the plan.
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -107,7 +108,7 @@ class PlanOptions:
     placement: bool = True
     relax: bool = True
     workers: int | None = None
-    abandon_unreachable: bool = False
+    fail_fast: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):

@@ -110,9 +110,8 @@ def _assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], result
     t_transitions = 0.0
     for wt, res in zip(windows, results, strict=True):
         failures += res.failures
-        if res.status is WindowStatus.UNREACHABLE:  # abandoned for relaxation (_relax)
-            log.debug("window %d: a target no tool axis in the cone reaches under the recipe",
-                      wt.window_index)
+        if res.status is WindowStatus.ABANDONED:  # abandoned for relaxation (_relax)
+            log.debug("window %d: an IK target failed under the recipe", wt.window_index)
             continue
         if not res.status.planned:
             log.warning("window %d not planned (%s): %s", wt.window_index, res.status.value,
@@ -207,7 +206,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
         options=jsonable({k: v for k, v in asdict(ctx.options).items()
-                          if k not in ("workers", "abandon_unreachable")}),
+                          if k not in ("workers", "fail_fast")}),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
@@ -224,9 +223,9 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress
     ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass plans (windows
     are planned independently); the hub's plan is assembled anew from them.
 
-    ``results`` may hold windows the first pass abandoned at an unreachable target
-    (``WindowStatus.UNREACHABLE``, ``PlanOptions.abandon_unreachable``): those not replaced by
-    a kept relaxation are planned in full here, so the plan returned holds every window as a
+    ``results`` may hold windows the first pass abandoned at their first failed IK target
+    (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): those not replaced by a kept
+    relaxation are planned in full here, so the plan returned holds every window as a
     plan without relaxation would (its failure records say where it failed)."""
     from drakedeburr.plan import relax
 
@@ -236,12 +235,12 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress
         first.setdefault(f.window, str(f))
     failing = [wt.window_index for wt in wts if wt.window_index in first
                and wt.window_index in edges]
-    abandoned = [k for k, r in enumerate(results) if r.status is WindowStatus.UNREACHABLE]
-    full = _opts(ctx, abandon_unreachable=False)
+    abandoned = [k for k, r in enumerate(results) if r.status is WindowStatus.ABANDONED]
+    full = _opts(ctx, fail_fast=False)
     results = list(results)
 
     def complete(ks) -> None:  # abandoned windows planned in full
-        ks = [k for k in ks if results[k].status is WindowStatus.UNREACHABLE]
+        ks = [k for k in ks if results[k].status is WindowStatus.ABANDONED]
         if ks:
             done = plan_all_windows(full, [wts[k] for k in ks], ctx.options.workers, None)
             for k, r in zip(ks, done, strict=True):
@@ -249,7 +248,7 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress
 
     accepted, tried = ({}, {}) if not failing else relax.relax_windows(
         [edges[w] for w in failing], ctx.config.process, first,
-        lambda x: plan_all_windows(_opts(ctx, abandon_unreachable=True), x,
+        lambda x: plan_all_windows(_opts(ctx, fail_fast=True), x,
                                    ctx.options.workers, None))
     in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),
                              reason="milder recipes failed too: " + "; ".join(
@@ -391,10 +390,10 @@ def plan_hub(
     q_refs = placement.q_refs if placement else None
     t_windows = time.perf_counter()
     ctx = _context(cell, config, options, q_refs)
-    # with relaxation on, a window with a target no axis in the cone reaches is abandoned
-    # there (it fails under this recipe whatever the rest does) and relaxed; _relax plans it
-    # in full if no relaxation is kept
-    results = plan_all_windows(_opts(ctx, abandon_unreachable=options.relax), wts,
+    # with relaxation on, a window is abandoned at its first failed IK target (it fails under
+    # this recipe whatever the rest does) and relaxed; _relax plans it in full if no
+    # relaxation is kept
+    results = plan_all_windows(_opts(ctx, fail_fast=options.relax), wts,
                                options.workers, progress)
     plan = _assemble_windows(ctx, wts, results, progress, t_windows)
     if options.relax and any(f.window >= 0 for f in plan.failures):

@@ -49,9 +49,10 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring)."""
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from)
-    if first.status is WindowStatus.UNREACHABLE:
-        return first  # no spin rule reaches what no axis in the cone clears
     other, ctx2 = _other_rule(ctx)
+    if first.status is WindowStatus.ABANDONED:  # fail-fast pass: is the other rule clean?
+        second = _plan_window_once(ctx2, wt, q_from)
+        return second if second.status.planned and not second.failures else first
     if first.status.planned and not first.failures:
         band = first.stats.speed_in_band_fraction
         if band >= ctx.options.retry_in_band:
@@ -128,7 +129,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
                                 wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=opt.ik,
-                                q_first=q_first, lift=lift)
+                                q_first=q_first, lift=lift, stop_at_failure=opt.fail_fast)
         reached = np.flatnonzero(trial.ok)
         dense_ok = bool(len(reached) > 1 and np.all(track_poses(
             kin, trial.X_HT[reached], trial.q[reached[0]], opt.dense_step).ok))
@@ -140,9 +141,10 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         # targets no pose in the cone can reach (the IK's probe): no other start fixes those
         unreachable = sum(1 for f in trial.failures if "cone_best_clearance" in f.where)
         if score == unreachable and trial is wik:
-            log.warning("window %d: %d targets unreachable with %.1f mm clearance by any tool "
-                        "axis in the cone; reported", wt.window_index, unreachable,
-                        1e3 * opt.ik.min_distance_floor)
+            say = log.debug if opt.fail_fast else log.warning  # fail-fast: relaxation next
+            say("window %d: %d targets unreachable with %.1f mm clearance by any tool axis in "
+                "the cone; reported", wt.window_index, unreachable,
+                1e3 * opt.ik.min_distance_floor)
             break
         log.debug("window %d: start seed %d left %d IK failures (executed motion %s); trying "
                  "another", wt.window_index, attempt, len(trial.failures),
@@ -169,9 +171,8 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
     wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
     t_ik = time.perf_counter() - t0
     failures = [replace(rec, point=int(loop[rec.point])) for rec in wik.failures]
-    if ctx.options.abandon_unreachable and any("cone_best_clearance" in f.where
-                                               for f in failures):
-        return WindowPlan.skipped(wt.window_index, WindowStatus.UNREACHABLE, failures)
+    if ctx.options.fail_fast and failures:
+        return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED, failures)
     # only the targets that met every constraint (a failed point's row holds its best attempt)
     good = np.flatnonzero(wik.ok)
     if len(good) < (m + 1) // 2 or 0 not in good:
