@@ -189,3 +189,36 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
     assert calls == [(False, [0])]
     assert assembled == [[in_full]]
     assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"
+
+
+@pytest.mark.parametrize(("first", "second", "kept"), [
+    ("abandoned", "ok", "second"),  # the other spin rule cuts it cleanly: as before
+    ("abandoned", "degraded", "abandoned"),  # fails either way: relaxed, or planned in full
+    ("degraded", "abandoned", "abandoned"),  # which rule fails less needs the full passes
+    ("degraded", "degraded-fewer", "second"),  # both in full: the one with fewer records
+])
+def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first, second, kept):
+    """plan_window with fail_fast: it returns a window plan only where planning in full would
+    return the same one; otherwise ABANDONED (relaxed, or planned in full by _relax)."""
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.results import WindowPlan
+
+    rec = FailureRecord(0, "ik", "x")
+    make = {"abandoned": lambda: WindowPlan.skipped(0, WindowStatus.ABANDONED, [rec]),
+            "ok": lambda: WindowPlan(0, WindowStatus.OK,
+                                     stats=SimpleNamespace(speed_in_band_fraction=0.9)),
+            "degraded": lambda: WindowPlan(0, WindowStatus.DEGRADED, failures=[rec, rec]),
+            "degraded-fewer": lambda: WindowPlan(0, WindowStatus.DEGRADED, failures=[rec])}
+    made = iter([make[first](), make[second]()])
+    plans = []
+    monkeypatch.setattr(mut, "_plan_window_once",
+                        lambda ctx, wt, q: plans.append(next(made)) or plans[-1])
+    monkeypatch.setattr(mut, "window_reference", lambda ctx, wt: None)
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None, config=None,
+                      options=PlanOptions(fail_fast=True))
+    out = mut.plan_window(ctx, SimpleNamespace(window_index=0))
+    assert len(plans) == 2
+    if kept == "second":
+        assert out is plans[1]
+    else:
+        assert out.status is WindowStatus.ABANDONED and out.failures

@@ -68,6 +68,10 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     log.debug("window %d: %d failure records; planning it again with the %r warm-start spin",
              wt.window_index, len(first.failures), other)
     second = _plan_window_once(ctx2, wt, q_from)
+    if second.status is WindowStatus.ABANDONED:
+        # fail-fast: the window fails either way; which rule fails less is decided by
+        # planning it in full, if no relaxation is kept (planner._relax)
+        return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED, first.failures)
     if second.status.planned and (not first.status.planned
                                   or len(second.failures) < len(first.failures)):
         return second
