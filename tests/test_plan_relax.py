@@ -15,7 +15,7 @@ import pytest
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.plan import planner
 from drakedeburr.plan.options import PlanContext, PlanOptions
-from drakedeburr.plan.relax import TILT_STEPS, relaxed_targets
+from drakedeburr.plan.relax import TILT_STEPS, relax_windows
 from drakedeburr.plan.results import WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
@@ -26,6 +26,14 @@ def _edge(kind: str = "large"):
 
     hub = load_hub("h5_split")
     return next(w for w in hub.windows if w.kind == kind)
+
+
+def relaxed_targets(edge, params, reason, plan_one):
+    """One window through relax_windows: (targets or None, deviation or None, tried)."""
+    accepted, tried = relax_windows([edge], params, {edge.index: reason},
+                                    lambda wts: [plan_one(wt) for wt in wts])
+    wt, _, dev = accepted.get(edge.index, (None, None, None))
+    return wt, dev, tried[edge.index]
 
 
 @dataclass
@@ -140,7 +148,6 @@ def test_every_failing_window_is_relaxed_in_one_batch_per_step():
     """The variants of all failing windows go to the planner together, one batch per tilt
     step: a window that plans clean drops out, the others go on to the next step."""
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan.relax import relax_windows
 
     large = [w for w in load_hub("h5_split").windows if w.kind == "large"][:2]
     batches = []

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 from drakedeburr.config import OrientationBounds
 
-__all__ = ["Deviation", "TILT_STEPS", "relax_windows", "relaxed_targets"]
+__all__ = ["Deviation", "TILT_STEPS", "relax_windows"]
 
 log = logging.getLogger(__name__)
 
@@ -94,16 +94,3 @@ def relax_windows(edges, params, failed_reasons: dict, plan_many):
             else:
                 tried[edge.index].append((_box(box), str(res.failures[0])))
     return accepted, tried
-
-
-def relaxed_targets(edge, params, failed_reason: str, plan_one):
-    """One window's targets under the first milder recipe that ``plan_one(wt)`` (a plan of
-    the window alone) plans without failure records, and the deviation ((None, None) when
-    none does), and what was tried: (recipe item, the first failure it left) per variant
-    (:func:`relax_windows` for one window)."""
-    accepted, tried = relax_windows([edge], params, {edge.index: failed_reason},
-                                    lambda wts: [plan_one(wt) for wt in wts])
-    if edge.index in accepted:
-        wt, _, dev = accepted[edge.index]
-        return wt, dev, tried[edge.index]
-    return None, None, tried[edge.index]
