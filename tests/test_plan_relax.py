@@ -127,9 +127,9 @@ def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatc
     ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
                       config=SimpleNamespace(process=ProcessParameters()),
                       options=PlanOptions(workers=1))
-    first = [SimpleNamespace(status=WindowStatus.DEGRADED, name=f"window {k} first")
-             for k in (0, 1)]
-    out = planner._relax(ctx, hub, wts, first, default, None, 0.0)
+    first = [SimpleNamespace(status=WindowStatus.DEGRADED, failures=[f])
+             for f in default.failures]
+    out = planner._relax(ctx, hub, wts, first, None, 0.0)
     assert seen["edges"] == [0, 1] and seen["reasons"][1].startswith("window 1")
     assert seen["windows"] == [wt0, wts[1]]
     assert seen["results"] == ["window 0 relaxed", first[1]]
@@ -192,7 +192,7 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
                       config=SimpleNamespace(process=ProcessParameters()),
                       options=PlanOptions(workers=1))
     hub = SimpleNamespace(windows=[SimpleNamespace(index=0)])
-    out = planner._relax(ctx, hub, wts, [abandoned], _plan(abandoned.failures), None, 0.0)
+    out = planner._relax(ctx, hub, wts, [abandoned], None, 0.0)
     assert calls == [(False, [0])]
     assert assembled == [[in_full]]
     assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"

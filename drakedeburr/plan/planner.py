@@ -215,27 +215,26 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
                 trajectory=traj, tool_path=tool_paths, failures=tuple(failures), meta=meta)
 
 
-def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress,
-           t_start: float) -> Plan:
+def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: float) -> Plan:
     """The hub with a milder recipe for each window the default could not cut
     (:func:`drakedeburr.plan.relax.relax_windows`: the variants of all those windows planned
-    together), kept when it leaves fewer failure records; every deviation recorded in
-    ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass plans (windows
-    are planned independently); the hub's plan is assembled anew from them.
+    together), kept when it leaves fewer failure records than the default; every deviation
+    recorded in ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass
+    plans (windows are planned independently); the hub's plan is assembled from them.
 
-    ``results`` may hold windows the first pass abandoned at their first failed IK target
-    (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): those not replaced by a kept
-    relaxation are planned in full here, so the plan returned holds every window as a
-    plan without relaxation would (its failure records say where it failed)."""
+    ``results`` (the first pass, one per window) may hold windows abandoned at their first
+    failed IK target (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): those not
+    replaced by a kept relaxation are planned in full here, so the plan returned holds every
+    window as a plan without relaxation would (its failure records say where it failed)."""
     from drakedeburr.plan import relax
 
     edges = {e.index: e for e in hub_model.windows}
     first = {}
-    for f in plan.failures:
-        first.setdefault(f.window, str(f))
+    for r in results:
+        for f in r.failures:
+            first.setdefault(f.window, str(f))
     failing = [wt.window_index for wt in wts if wt.window_index in first
                and wt.window_index in edges]
-    abandoned = [k for k, r in enumerate(results) if r.status is WindowStatus.ABANDONED]
     full = _opts(ctx, fail_fast=False)
     results = list(results)
 
@@ -254,25 +253,29 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, plan: Plan, progress
                              reason="milder recipes failed too: " + "; ".join(
                                  f"{t}: {r}" for t, r in tried[w]))
                for w in failing if w not in accepted and tried[w]]
-    complete([k for k in abandoned if wts[k].window_index not in accepted])
-    plan = _assemble_windows(full, wts, results, progress, t_start)
+    complete([k for k, wt in enumerate(wts) if wt.window_index not in accepted])
+    plan = None
     if accepted:
         wts2 = [accepted[wt.window_index][0] if wt.window_index in accepted else wt
                 for wt in wts]
         res2 = [accepted[wt.window_index][1] if wt.window_index in accepted else r
                 for wt, r in zip(wts, results, strict=True)]
         relaxed = _assemble_windows(full, wts2, res2, progress, t_start)
-        # against the default's records (an abandoned window's: its IK records only, never
-        # more than in full); both without the in-vain records
-        if len(relaxed.failures) < len(plan.failures):
+        # the default's windows' records (an abandoned window's: its first ones) bound its
+        # count from below: fewer than that is fewer than the default; else assemble it
+        kept = len(relaxed.failures) < sum(len(r.failures) for r in results)
+        if not kept:
+            complete(range(len(wts)))
+            plan = _assemble_windows(full, wts, results, progress, t_start)
+            kept = len(relaxed.failures) < len(plan.failures)  # both without in-vain records
+        if kept:
             deviations = [accepted[w][2] for w in failing if w in accepted]
             relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
             log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
                         "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
             plan = relaxed
-        elif abandoned:  # the default is kept: every window of it in full
-            complete(abandoned)
-            plan = _assemble_windows(full, wts, results, progress, t_start)
+    if plan is None:
+        plan = _assemble_windows(full, wts, results, progress, t_start)
     if in_vain:  # said with the failures of whichever plan is kept
         plan = replace(plan, failures=(*plan.failures, *in_vain))
     return plan
@@ -395,9 +398,10 @@ def plan_hub(
     # relaxation is kept
     results = plan_all_windows(_opts(ctx, fail_fast=options.relax), wts,
                                options.workers, progress)
-    plan = _assemble_windows(ctx, wts, results, progress, t_windows)
-    if options.relax and any(f.window >= 0 for f in plan.failures):
-        plan = _relax(ctx, hub_model, wts, results, plan, progress, t_windows)
+    if options.relax and any(r.failures for r in results):
+        plan = _relax(ctx, hub_model, wts, results, progress, t_windows)
+    else:
+        plan = _assemble_windows(ctx, wts, results, progress, t_windows)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets
