@@ -169,3 +169,32 @@ def test_registered_right_after_clearance_as_required():
     names = [c.name for c in CHECKS]
     k = names.index("clearance_certificate")
     assert names[k - 1] == "clearance" and CHECKS[k].purpose == "required"
+
+
+def test_a_plan_just_above_the_limit_is_refined_until_the_limit_is_proven():
+    """The good plan with the clearance limit put 2 um under its smallest distance (the dense
+    brute-force minimum there): inside the certificate's 10 um resolution. The certificate
+    must still prove the limit (refined until every bound reaches it), not stop 10 um short
+    and fail a plan that meets it; and stay a lower bound of the brute force."""
+    from drakedeburr.verify.sweep import resolution_target
+
+    sp, config, cell = _good_case()
+    tol = config.tolerances
+    c = sp.distances.certificate.clearance
+    probe = DistanceProbe(cell, tol.query_distance, tol)
+    traj = sp.plan.trajectory
+    times = np.linspace(max(c.observed_time - 0.01, 0.0),
+                        min(c.observed_time + 0.01, traj.duration), 801)
+    brute = min(_clearance(probe, traj.value(x)) for x in times)
+    limit = brute - 2e-6
+    config2 = replace(config, tolerances=replace(tol, min_clearance=limit))
+    cell, hub = vs.cell_and_hub()
+    sp2 = sample_plan(sp.plan, config2, cell=cell, hub_model=hub,
+                      expected_windows=list(vs.WINDOWS))
+    cert = sp2.distances.certificate.clearance
+    assert limit <= cert.certified <= brute + 1e-12
+    item = clearance_certificate(sp2, config2)
+    assert item.passed and item.value == cert.certified
+    # the target: the limit while the smallest reading is within the gap above it
+    assert resolution_target(c.observed, limit, config2.tolerances) == limit
+    assert resolution_target(limit - 1e-6, limit, config2.tolerances) < limit - 1e-5

@@ -13,7 +13,8 @@ could come within ``level + delta + 2 e`` of their track, ``level`` the target f
 smallest distance read so far, so every pair it leaves unread is certified above the target
 without more work. Where a bound falls
 below the *target* (the smallest distance read, at most the query distance, less the larger
-of ``Tolerances.certificate_gap`` and ``certificate_share`` of its margin above the limit),
+of ``Tolerances.certificate_gap`` and ``certificate_share`` of its margin above the limit, but
+not below the limit while that reading is above it: :func:`resolution_target`),
 the interval is refined: the pairs read at its ends are read at its
 midpoint (the trajectory evaluated there), and each half is bounded again, until every pair
 is above the target or the interval is shorter than ``Tolerances.certificate_floor``

@@ -54,10 +54,14 @@ def class_limits(tol) -> dict[int, float]:
 def resolution_target(level: float, limit: float, tol) -> float:
     """What the certificate's bounds must reach when ``level`` [m] is the smallest distance
     read (at most the query distance): ``level`` less the larger of
-    ``Tolerances.certificate_gap`` and ``certificate_share`` of its margin above ``limit``.
-    Increasing in ``level``."""
-    return level - max(float(tol.certificate_gap),
-                       float(tol.certificate_share) * (level - limit))
+    ``Tolerances.certificate_gap`` and ``certificate_share`` of its margin above ``limit``,
+    but never below ``limit`` while ``level`` is at or above it: a plan whose smallest
+    reading lies within the gap above the limit is refined until its bound reaches the limit
+    (else a clearance read at 2.0001 mm was certified at 2.0001 - 0.01 mm and failed the
+    2 mm check it meets: an unseen hub, session 9). Non-decreasing in ``level``."""
+    target = level - max(float(tol.certificate_gap),
+                         float(tol.certificate_share) * (level - limit))
+    return max(target, float(limit)) if level >= limit else target
 
 
 @dataclass(frozen=True, eq=False)
