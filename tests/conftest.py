@@ -7,10 +7,6 @@ import pytest
 
 matplotlib.use("Agg")
 os.environ.setdefault("DRAKEDEBURR_TEST_MODE", "1")
-if os.environ.get("PYTEST_XDIST_WORKER"):
-    # every core already runs a test process: a window worker pool per test would only add
-    # its own cell build (~4 s CPU a whole-hub plan); the pool is tested with explicit workers
-    os.environ.setdefault("DRAKEDEBURR_WORKERS", "1")
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -240,9 +240,8 @@ def solve_window_ik(
             where it belongs when the IK tilts the axis inside the cone (T would carry the
             cutting circle off by ``lift * tilt``), and tilting about it swings the shank away
             from the face more per radian.
-        stop_at_failure: stop at the first target that fails (the later ones are left
-            unsolved, ``ok`` False, without records): for a pass that only asks whether the
-            window can be cut cleanly (``PlanOptions.fail_fast``).
+        stop_at_failure: stop at the first failed target, the later ones left unsolved
+            without records (``PlanOptions.fail_fast``).
 
     Returns:
         WindowIk; failures are listed per point (:class:`FailureRecord`), never raised.
