@@ -252,13 +252,12 @@ class ClearanceChecker:
         the signed distances of a posed hub cell). For ranking poses: a pose in contact fails
         any clearance bound, and its depth says by how much."""
         query = self.query_at(q)
-        if not query.HasCollisions():
-            return self.distance(q, max_distance)
-        try:
-            depth = max(p.depth for p in query.ComputePointPairPenetration())
-        except RuntimeError:  # a shape pair without a penetration query: signed distances
-            return self.distance(q, max_distance)
-        return -float(depth)
+        if query.HasCollisions():
+            try:
+                return -float(max(p.depth for p in query.ComputePointPairPenetration()))
+            except RuntimeError:  # a shape pair without a penetration query: signed distances
+                pass
+        return min((d for _, d in self._pairs(query, max_distance)), default=float(max_distance))
 
     def reading(self, query, r) -> float:
         """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a
@@ -286,7 +285,10 @@ class ClearanceChecker:
         """(pair ids, certified reading [m]) of every unfiltered pair whose certified reading
         is within ``max_distance`` [m] at ``q``; Drake is asked ``NARROWPHASE_SLACK`` farther
         so that a pair its narrow phase reads too far is still found."""
-        query = self.query_at(q)
+        return self._pairs(self.query_at(q), max_distance)
+
+    def _pairs(self, query, max_distance: float) -> list:
+        """:meth:`pairs_within` on a posed ``query``."""
         out = []
         for r in query.ComputeSignedDistancePairwiseClosestPoints(
                 max_distance + NARROWPHASE_SLACK):

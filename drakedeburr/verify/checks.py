@@ -62,7 +62,7 @@ def verify_sampled(sp: SampledPlan, config: Config, *, elapsed: float = 0.0,
                  "robot": (plan.meta or {}).get("robot"),
                  "identity": plan_identity(plan)}
     tol = config.tolerances
-    settings = {"tolerances": {k: getattr(tol, k) for k in tol.__dataclass_fields__},
+    settings = {"tolerances": _tolerance_record(tol),
                 "samples": len(sp.samples), "grinding_speed": config.process.grinding_speed,
                 "cut_samples": int((sp.samples.kind == KIND_CODE["cut"]).sum())}
     import datetime as _dt
@@ -76,6 +76,11 @@ def verify_sampled(sp: SampledPlan, config: Config, *, elapsed: float = 0.0,
              len(sp.samples))
     return VerificationReport(passed=passed, items=items, plan_info=plan_info,
                               settings=settings, series=_series(sp), run=run)
+
+
+def _tolerance_record(tol) -> dict:
+    """The report's record of the tolerances a run used (every field)."""
+    return {k: getattr(tol, k) for k in tol.__dataclass_fields__}
 
 
 def verify_plan(
@@ -139,8 +144,7 @@ def _nothing_planned(plan, config: Config, hub_model, expected_windows) -> Verif
                    "segments": len(plan.segments), "knots": len(plan.trajectory.t),
                    "duration_s": 0.0, "planner": str(plan.meta.get("planner", "")),
                    "robot": (plan.meta or {}).get("robot"), "identity": plan_identity(plan)},
-        settings={"tolerances": {k: getattr(config.tolerances, k)
-                                 for k in config.tolerances.__dataclass_fields__},
+        settings={"tolerances": _tolerance_record(config.tolerances),
                   "samples": 0, "grinding_speed": config.process.grinding_speed},
         run={"elapsed_s": 0.0})
 
@@ -167,8 +171,7 @@ def no_window_report(exc, scenario: str, tolerances) -> VerificationReport:
                    "knots": 0, "duration_s": 0.0, "planner": "", "robot": None,
                    "hub_axis_file": exc.axis, "openings": exc.openings,
                    "rejected_outlines": exc.rejected},
-        settings={"tolerances": {k: getattr(tolerances, k)
-                                 for k in tolerances.__dataclass_fields__},
+        settings={"tolerances": _tolerance_record(tolerances),
                   "samples": 0, "grinding_speed": None},
         run={"elapsed_s": 0.0})
 
