@@ -169,6 +169,16 @@ def _pose(value, file: str, line: int, what: str) -> np.ndarray:
                                  ) from exc
 
 
+def _confdata(value, file: str, line: int) -> tuple[int, ...]:
+    """A robtarget's confdata [cf1,cf4,cf6,cfx] as integers."""
+    try:
+        cf = value[2]
+        return tuple(int(round(float(v))) for v in cf)
+    except (TypeError, ValueError, IndexError) as exc:
+        raise ProgramFormatError(f"{file}:{line}: robtarget: confdata expected as "
+                                 f"[cf1,cf4,cf6,cfx] numbers") from exc
+
+
 def _declaration(stmt: str, file: str, line: int, data: dict) -> None:
     words = stmt.split(None, 1)
     if words and words[0] in ("LOCAL", "TASK"):
@@ -347,7 +357,7 @@ def read_rapid(path: str | Path) -> ReadProgram:
     for k, instr, target, speed, zone, _, _ in moves_raw:
         value, tline = _get(data, target, "robtarget", file, k)
         X = _pose(value[:2], file, tline, "robtarget")
-        cf = tuple(int(round(v)) for v in value[2])
+        cf = _confdata(value, file, tline)
         v, vline = _speed(speed, data, file, k)
         z, zline = _zone(zone, data, file, k)
         moves.append(ReadMove(
