@@ -99,6 +99,7 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     from drakedeburr.config import ProcessParameters
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.ik import IkOptions, cone_clearance_probe
+    from drakedeburr.plan.ik_seeds import unreachable
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
     from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -140,7 +141,8 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
             i_blocked = i
             break
     assert not r["feasible"], "expected targets no axis in the cone can reach"
-    assert r["best_clearance"] < bound and r["queries"] > 100
+    # every axis of the cone read (2 + 3 rings x 16), the blocked ones no further
+    assert r["best_clearance"] < bound and r["queries"] >= 50
     assert any("spindle" in name for name in r["pair"]) and any("hub" in n for n in r["pair"])
     assert_admissible(source_box, 0, *probe(source_box, 0))
     # the hub's recipe: same CL points (the path stage does not depend on the box), other cone
@@ -151,15 +153,40 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     # poses in contact are ranked by their penetration and rejected by Drake's contact test,
     # not read by the signed distances: reading every pose's distances instead gives the same
     # verdicts, and a clear pose found either way is admissible
+    # (and axes blocked by a spin-invariant pair are not searched past their first pose)
     slow = ClearanceChecker(cell)
     slow.collides = lambda q: False
-    slow.ranked_distance = lambda q, cap: ClearanceChecker.distance(slow, q, cap)
+    slow.axis_reading = lambda q, cap: (ClearanceChecker.distance(slow, q, cap), np.inf)
     for wt, i in ((source_box, i_blocked), (source_box, 0), (recipe, i_blocked)):
         p_HQ, fast = probe(wt, i)
         full = probe(wt, i, slow)[1]
         assert fast["feasible"] == full["feasible"]
+        assert unreachable(fast, IkOptions()) == unreachable(full, IkOptions())
+        assert fast["queries"] <= full["queries"]
         if fast["feasible"]:
             assert_admissible(wt, i, p_HQ, fast)
+    # the memo: the same target probed again (another start on the same branch) is answered
+    # without a query, with what a fresh checker's search returns; another branch is searched
+    calls = []
+    counted = ClearanceChecker(cell)
+    read = counted.axis_reading
+    counted.axis_reading = lambda q, cap: calls.append(1) or read(q, cap)
+    p_HQ, first = probe(source_box, i_blocked, counted)
+    n_first = len(calls)
+    again = probe(source_box, i_blocked, counted)[1]
+    assert n_first > 0 and len(calls) == n_first
+    fresh = probe(source_box, i_blocked, ClearanceChecker(cell))[1]
+    for res in (again, fresh):
+        assert res["feasible"] == first["feasible"] and res["pair"] == first["pair"]
+        assert res["best_clearance"] == first["best_clearance"]
+        assert np.array_equal(res["q"], first["q"]) and res["q"] is not first["q"]
+    q_other = cell.q_home.copy()
+    q_other[4] = -q_other[4]  # the other wrist branch
+    assert not np.array_equal(kin.branch_of(q_other), kin.branch_of(cell.q_home))
+    cone_clearance_probe(kin, counted, p_HQ, source_box.cone_retract_H[i_blocked],
+                         source_box.cone_half_angle, source_box.retract_H[i_blocked],
+                         source_box.t_H[i_blocked], q_other, lift=lift, bound=bound)
+    assert len(calls) > n_first
     # the ranking value: the certified distance of a clear pose, minus the depth in contact
     assert checker.ranked_distance(cell.q_home, 0.01) == checker.distance(cell.q_home, 0.01) > 0
     from drakedeburr.plan.ik_seeds import _probe_candidates
@@ -174,3 +201,46 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     for q in hits[:5]:
         ranked, signed = checker.ranked_distance(q, 0.01), checker.distance(q, 0.01)
         assert ranked < 0 and signed <= 0
+    # spin invariance (geometric truth): every pose of one axis at a target (other spins,
+    # other branches) puts each spin-invariant tool geometry at the same pose relative to each
+    # geometry rigidly attached to the hub, up to a turn about its own axis (the third row of
+    # the relative transform and the Gram matrix of its first two rows are unchanged); the
+    # spindle bracket, not symmetric about the burr axis, is not invariant and moves
+    invariant = checker.spin_invariant()
+    inspector = cell.scene_graph.model_inspector()
+    ids = [g for g in inspector.GetAllGeometryIds() if inspector.GetProximityProperties(g)]
+    named = {inspector.GetName(g): g for g in ids}
+    sym = {g for g in ids if any(invariant(g, h) for h in cell.hub_ids)}
+    assert {inspector.GetName(g) for g in sym} >= {"spindle::spindle_body", "spindle::collet",
+                                                   "spindle::burr_shank"}
+    assert named["spindle::bracket"] not in sym and named["spindle::burr_head"] not in sym
+    hub_some = sorted(cell.hub_ids, key=lambda g: g.get_value())[::40]
+
+    def relative(q, g, h):
+        query = checker.query_at(q)
+        X = np.linalg.inv(query.GetPoseInWorld(g).GetAsMatrix4()) @ query.GetPoseInWorld(
+            h).GetAsMatrix4()
+        return X[2], X[:2].T @ X[:2]
+
+    spun = poses[:: max(1, len(poses) // 6)]
+    assert len(spun) >= 4
+    for g in (*sym, named["spindle::bracket"]):
+        for h in hub_some:
+            ref = relative(spun[0], g, h)
+            same = all(np.allclose(a, b, atol=1e-9) for q in spun[1:]
+                       for a, b in zip(ref, relative(q, g, h), strict=True))
+            assert same == (g in sym), inspector.GetName(g)
+    # the figure the probe prunes with: an invariant pair in contact at one pose is in
+    # contact at all; clear, its Drake reading bounds every pose's clearance from above
+    upper = checker.axis_reading(spun[0], 0.01)[1]
+    assert upper < 0
+    assert all(checker.collides(q) for q in spun)
+    p_HQ2 = tool_point_H(recipe.p_HC, recipe.n_H, recipe.retract_H, recipe.depth_of_cut, r_c,
+                         0.0)[i_blocked]
+    clear = np.concatenate(_probe_candidates(
+        kin, p_HQ2, [recipe.cone_retract_H[i_blocked]], recipe.t_H[i_blocked], cell.q_home,
+        lift, 24, 0.25, 24))
+    upper = checker.axis_reading(clear[0], 0.01)[1]
+    assert 0 < upper < 0.01
+    for q in clear[:: max(1, len(clear) // 6)]:
+        assert checker.ranked_distance(q, 0.01) <= upper + 1e-9

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from drakedeburr.cell.narrowphase import READING_GAP
 from drakedeburr.frames.vectors import angle_between, perpendicular_basis
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 from drakedeburr.plan.targets import X_HT_from_axis
@@ -196,6 +197,13 @@ def _probe_candidates(kin: CellKinematics, p_HQ: np.ndarray, axes: list, t_H: np
     return out
 
 
+#: a probe's best pose at most this short of the bound is a near miss, not unreachable [m]
+NEAR_MISS = 0.2e-3
+
+#: probe results kept per checker (:func:`cone_clearance_probe`), at most this many
+PROBE_MEMO_SIZE = 4096
+
+
 def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
                          cone_retract_H: np.ndarray, half_angle: float, pref_retract_H: np.ndarray,
                          t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
@@ -216,7 +224,15 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     signed distances (2-3 ms): the first pose of each axis is ranked by its deepest
     penetration (:meth:`ClearanceChecker.ranked_distance`), later poses are rejected by the
     contact test alone (0.2 ms). Every pose with positive clearance is read in full, so the
-    verdict and, where a clear pose exists, the best pose are the same.
+    verdict and, where a clear pose exists, the best pose are the same. An axis whose first
+    pose puts a spin-invariant pair (the spindle body, collet or shank against the hub:
+    :meth:`ClearanceChecker.spin_invariant`) more than ``NEAR_MISS`` short of the bound is not
+    searched further: that pair is as short at each of its poses (the tool and hub keep their
+    relative pose up to a turn about the burr axis), so no pose of it meets the bound or
+    decides between a near miss and an unreachable target. The verdict, and the best pose
+    whenever it is a near miss or clear, are those of the full search; an unreachable target's
+    best clearance is the best of the axes searched (on a blocked deep-dish target, ~95 % of
+    the poses are on such axes).
 
     Used when the IK fails at a target, to tell an unreachable target (no axis in the cone
     clears the cell: the tool or the theta box has to change) from a solver failure (a pose
@@ -224,9 +240,38 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     than 0.2 mm short of the bound ends the target's retries and labels it unreachable; nearer
     misses go on to the distance-constrained retries, which can still find the bound.
 
+    The result depends on ``q_ref`` only through its analytic branch (searched first), so it
+    is kept per checker under the target, that branch, the cell's frames and the search's
+    settings: the same target probed again (another start seed, the other spin rule, the full
+    pass after a fail-fast one) is answered from the memo with the identical result.
+
     Returns:
         ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
     """
+    args = (p_HQ, cone_retract_H, half_angle, pref_retract_H, t_H, lift, bound, min_wrist,
+            rings, ring_axes, spins, per_axis)
+    key = _probe_key(kin, q_ref, *args)
+    memo = checker.__dict__.setdefault("_cone_probes", {})
+    if key not in memo:
+        if len(memo) >= PROBE_MEMO_SIZE:
+            del memo[next(iter(memo))]  # the oldest
+        memo[key] = _probe(kin, checker, q_ref, *args)
+    out = dict(memo[key])
+    out["q"] = None if out["q"] is None else out["q"].copy()
+    return out
+
+
+def _probe_key(kin: CellKinematics, q_ref: np.ndarray, *args) -> bytes:
+    """What :func:`cone_clearance_probe`'s result depends on, as bytes."""
+    arrays = (kin.branch_of(q_ref), kin.X_FT, kin.X_WH, kin.X_FH, kin.X_WT, kin.X_WB,
+              kin.q_lower, kin.q_upper, *args[:5])
+    return b"".join(np.asarray(a, float).tobytes() for a in arrays) + repr(args[5:]).encode()
+
+
+def _probe(kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray, p_HQ, cone_retract_H,
+           half_angle, pref_retract_H, t_H, lift, bound, min_wrist, rings, ring_axes, spins,
+           per_axis) -> dict:
+    """:func:`cone_clearance_probe`, searched."""
     c = cone_retract_H / np.linalg.norm(cone_retract_H)
     axes = [pref_retract_H / np.linalg.norm(pref_retract_H), c]
     for ring in rings:
@@ -235,27 +280,33 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     cands = _probe_candidates(kin, p_HQ, axes, t_H, q_ref, lift, spins, min_wrist, per_axis)
     best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
 
-    def query(qq: np.ndarray) -> float:
-        d = checker.ranked_distance(qq, bound + 1e-3)
+    def query(qq: np.ndarray) -> tuple[float, float]:
+        d, upper = checker.axis_reading(qq, bound + 1e-3)
         best["queries"] += 1
         if d > best["best_clearance"]:
             best.update(best_clearance=float(d), q=qq.copy())
         best["feasible"] = best["feasible"] or d >= bound
-        return d
+        return d, upper
 
-    first = np.full(len(axes), -np.inf)
+    first, dead = np.full(len(axes), -np.inf), np.zeros(len(axes), bool)
     for k, q in enumerate(cands):
         if len(q):
-            first[k] = query(q[0])
+            first[k], upper = query(q[0])
+            # a spin-invariant pair (ClearanceChecker.spin_invariant) short of the near-miss
+            # line at the first pose is as short at every pose of the axis: none can meet the
+            # bound nor make the best a near miss, so the axis is not searched further
+            dead[k] = upper < bound - NEAR_MISS - READING_GAP
             if best["feasible"]:
                 break
     if not best["feasible"]:
         for k in np.argsort(-first, kind="stable"):
+            if dead[k]:
+                continue
             for qq in cands[k][1:]:
                 if checker.collides(qq):  # fails the bound; most poses of a blocked target
                     best["queries"] += 1
                     continue
-                if query(qq) >= bound:
+                if query(qq)[0] >= bound:
                     break
             if best["feasible"]:
                 break
@@ -265,9 +316,10 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
 
 
 def unreachable(probe: dict, options: IkOptions) -> bool:
-    """The probe's best pose is more than 0.2 mm short of the bound (the sampled search may
-    miss a pose within that; the retries may still find it)."""
-    return not probe["feasible"] and probe["best_clearance"] < options.min_distance_floor - 0.2e-3
+    """The probe's best pose is more than ``NEAR_MISS`` short of the bound (the sampled search
+    may miss a pose within that; the retries may still find it)."""
+    return (not probe["feasible"]
+            and probe["best_clearance"] < options.min_distance_floor - NEAR_MISS)
 
 
 def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray,

@@ -195,6 +195,33 @@ def resolve_level(tolerances) -> float:
     return float(tolerances.min_clearance + tolerances.narrowphase_resolve)
 
 
+def _spin_invariant_ids(checker: ClearanceChecker, tol: float = 1e-9) -> tuple[frozenset,
+                                                                                frozenset]:
+    """(tool geometries rotationally symmetric about the burr axis, geometries rigidly attached
+    to the hub) of the checker's cell (:meth:`ClearanceChecker.spin_invariant`)."""
+    from pydrake.geometry import Capsule, Cylinder, Sphere
+
+    cell = checker.cell
+    plant, query = cell.plant, checker.query_at(cell.q_home)
+
+    def welded_ids(frame) -> set:
+        return {g for b in plant.GetBodiesWeldedTo(frame.body())
+                for g in plant.GetCollisionGeometriesForBody(b)}
+
+    X_WT = cell.tool_frame.CalcPoseInWorld(checker.plant_context).GetAsMatrix4()
+    o, z = X_WT[:3, 3], X_WT[:3, 2]
+    sym = set()
+    for g in welded_ids(cell.tool_frame):
+        shape, X = query.inspector().GetShape(g), query.GetPoseInWorld(g).GetAsMatrix4()
+        c = X[:3, 3] - o
+        on_axis = bool(np.linalg.norm(c - (c @ z) * z) <= tol)
+        coaxial = on_axis and bool(np.linalg.norm(np.cross(X[:3, 2], z)) <= tol)
+        if (isinstance(shape, Sphere) and on_axis
+                or isinstance(shape, (Cylinder, Capsule)) and coaxial):
+            sym.add(g)
+    return frozenset(sym), frozenset(welded_ids(cell.hub_frame))
+
+
 @dataclass(eq=False)
 class ClearanceChecker:
     """Signed distances of a cell with the burr-head/hub (process contact) pair filtered.
@@ -251,13 +278,46 @@ class ClearanceChecker:
         penetration (Drake's contact query, ~0.7 ms with the contact test against 2-3 ms for
         the signed distances of a posed hub cell). For ranking poses: a pose in contact fails
         any clearance bound, and its depth says by how much."""
+        return self.axis_reading(q, max_distance)[0]
+
+    def axis_reading(self, q: np.ndarray, max_distance: float) -> tuple[float, float]:
+        """(:meth:`ranked_distance`, an upper bound [m] on the spin-invariant pairs' true
+        distance at ``q``: inf where none is within ``max_distance``). The second figure holds
+        for every pose with the tool axis and tool point of ``q`` (:meth:`spin_invariant`):
+        minus a penetration depth where such a pair is in contact, else Drake's own reading
+        (the distance of witness points on the two shapes, never below the true distance; the
+        certified reading is a lower bound and cannot serve here)."""
+        invariant = self.spin_invariant()  # first: finding it poses the context
         query = self.query_at(q)
         if query.HasCollisions():
             try:
-                return -float(max(p.depth for p in query.ComputePointPairPenetration()))
+                pen = query.ComputePointPairPenetration()
+                return (-float(max(p.depth for p in pen)),
+                        min((-float(p.depth) for p in pen
+                             if invariant(p.id_A, p.id_B)), default=np.inf))
             except RuntimeError:  # a shape pair without a penetration query: signed distances
                 pass
-        return min((d for _, d in self._pairs(query, max_distance)), default=float(max_distance))
+        best, upper = float(max_distance), np.inf
+        for r in query.ComputeSignedDistancePairwiseClosestPoints(
+                max_distance + NARROWPHASE_SLACK):
+            if invariant(r.id_A, r.id_B):
+                upper = min(upper, float(r.distance))
+            best = min(best, self.reading(query, r))
+        return best, upper
+
+    def spin_invariant(self):
+        """Predicate on a geometry pair: does its distance stay the same for every pose that
+        puts the tool point and tool axis at the same place on the hub (every spin about the
+        axis, every arm branch)? True for a geometry of the tool that is rotationally symmetric
+        about the burr axis (a sphere centred on it; a cylinder or capsule coaxial with it:
+        collet, shank, a coaxial spindle body) against any geometry rigidly attached to the
+        hub (the hub, its fixture or gripper): the tool and the hub then keep their relative
+        pose up to a turn about that axis. Found from the cell's geometry once."""
+        if "_spin_invariant" not in self.__dict__:
+            sym, rigid = _spin_invariant_ids(self)
+            self.__dict__["_spin_invariant"] = (
+                lambda a, b: (a in sym and b in rigid) or (b in sym and a in rigid))
+        return self.__dict__["_spin_invariant"]
 
     def reading(self, query, r) -> float:
         """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a
