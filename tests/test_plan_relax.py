@@ -167,9 +167,10 @@ def test_every_failing_window_is_relaxed_in_one_batch_per_step():
 
 
 def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch):
-    """The first pass abandons window 0 at an unreachable target (with relaxation on); no
-    milder box helps: it is planned in full (abandoning off) before the plan is assembled, so
-    the plan holds it as a plan without relaxation would, with the relaxation record."""
+    """The first pass abandons window 0 at an unreachable target (with relaxation on): every
+    start and both spin rules failed there. No milder box helps: it is planned in full once,
+    for its report (abandoning off, report_only: the first start, every target), before the
+    plan is assembled; the relaxation record says what was tried."""
     from drakedeburr.plan import relax
 
     wts = [SimpleNamespace(window_index=0)]
@@ -179,7 +180,8 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
     calls = []
 
     def fake_plan_all(ctx, windows, workers, progress):
-        calls.append((ctx.options.fail_fast, [w.window_index for w in windows]))
+        calls.append((ctx.options.fail_fast, ctx.options.report_only,
+                      [w.window_index for w in windows]))
         return [in_full for _ in windows]
 
     assembled = []
@@ -193,9 +195,51 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
                       options=PlanOptions(workers=1))
     hub = SimpleNamespace(windows=[SimpleNamespace(index=0)])
     out = planner._relax(ctx, hub, wts, [abandoned], None, 0.0)
-    assert calls == [(False, [0])]
+    assert calls == [(False, True, [0])]
     assert assembled == [[in_full]]
     assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"
+    assert "every start configuration with both spin rules" in out.failures[-1].reason
+
+
+def test_a_report_only_window_is_planned_once(monkeypatch):
+    """report_only: one pass (no second spin rule), from the first start configuration only
+    (no further seeds, no rewound start), whatever its failures."""
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.results import WindowPlan
+
+    rec = FailureRecord(0, "ik", "x")
+    plans = []
+    monkeypatch.setattr(mut, "_plan_window_once", lambda ctx, wt, q: plans.append(
+        WindowPlan(0, WindowStatus.DEGRADED, failures=[rec])) or plans[-1])
+    monkeypatch.setattr(mut, "window_reference", lambda ctx, wt: None)
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None, config=None,
+                      options=PlanOptions(report_only=True))
+    assert mut.plan_window(ctx, SimpleNamespace(window_index=0)) is plans[0]
+    assert len(plans) == 1
+    # the IK from the first of the window's start configurations only
+    starts = []
+    failed = SimpleNamespace(ok=np.array([True, False]), failures=[rec],
+                             q=np.zeros((2, 6)), X_HT=np.tile(np.eye(4), (2, 1, 1)))
+    monkeypatch.setattr(mut, "_seeds", lambda *a: [np.zeros(6), np.ones(6)])
+    monkeypatch.setattr(mut, "solve_window_ik",
+                        lambda *a, q_first, **k: starts.append(q_first) or failed)
+    monkeypatch.setattr(mut, "rewound_start", lambda *a: np.full(6, 2.0))
+    monkeypatch.setattr(mut, "track_poses", lambda *a: SimpleNamespace(ok=np.array([True])))
+    wt = _Window(window_index=0, retract_H=np.zeros((1, 3)), t_H=np.zeros((1, 3)),
+                 cone_retract_H=np.zeros((1, 3)), cone_half_angle=0.1)
+    for report_only, n in ((True, 1), (False, 3)):  # not report_only: both seeds, rewound one
+        starts.clear()
+        ctx = PlanContext(cell=None, kin=SimpleNamespace(), checker=None, free_checker=None,
+                          config=None, options=PlanOptions(report_only=report_only))
+        mut._solve_ik(ctx, wt, np.zeros(6), np.array([0, 0]), np.zeros((2, 3)), 0.0)
+        assert len(starts) == n, report_only
+
+
+class _Window(SimpleNamespace):
+    """A one-target window for _solve_ik."""
+
+    def __len__(self):
+        return 1
 
 
 @pytest.mark.parametrize(("first", "second", "kept"), [

@@ -82,6 +82,11 @@ class PlanOptions:
             at its first failure. Set by ``plan_hub`` for its first pass when ``relax`` is on:
             a window that fails is relaxed, and planned in full only if no relaxation is kept.
             Not recorded in the plan.
+        report_only: plan a window once, for its report: the first start configuration and
+            the IK's own spin rule, every target tried. Set by ``plan_hub`` for a window the
+            fail-fast pass abandoned (every start and both rules failed) and no relaxation cut:
+            the window fails whichever start fails least, so the search for that start is not
+            made. Not recorded in the plan.
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -109,6 +114,7 @@ class PlanOptions:
     relax: bool = True
     workers: int | None = None
     fail_fast: bool = False
+    report_only: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):

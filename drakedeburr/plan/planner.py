@@ -206,7 +206,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
         options=jsonable({k: v for k, v in asdict(ctx.options).items()
-                          if k not in ("workers", "fail_fast")}),
+                          if k not in ("workers", "fail_fast", "report_only")}),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
@@ -223,9 +223,11 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     plans (windows are planned independently); the hub's plan is assembled from them.
 
     ``results`` (the first pass, one per window) may hold windows abandoned at their first
-    failed IK target (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): those not
-    replaced by a kept relaxation are planned in full here, so the plan returned holds every
-    window as a plan without relaxation would (its failure records say where it failed)."""
+    failed IK target (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): every start
+    configuration and both spin rules failed there. Those not replaced by a kept relaxation
+    are planned in full here, once, for the report (``PlanOptions.report_only``: the first
+    start, the IK's own rule; its failure records say where the window fails and by how
+    much)."""
     from drakedeburr.plan import relax
 
     edges = {e.index: e for e in hub_model.windows}
@@ -238,10 +240,11 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     full = _opts(ctx, fail_fast=False)
     results = list(results)
 
-    def complete(ks) -> None:  # abandoned windows planned in full
+    def complete(ks) -> None:  # abandoned windows planned in full, once, for their report
         ks = [k for k in ks if results[k].status is WindowStatus.ABANDONED]
         if ks:
-            done = plan_all_windows(full, [wts[k] for k in ks], ctx.options.workers, None)
+            done = plan_all_windows(_opts(full, report_only=True), [wts[k] for k in ks],
+                                    ctx.options.workers, None)
             for k, r in zip(ks, done, strict=True):
                 results[k] = r
 
@@ -249,9 +252,14 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
         [edges[w] for w in failing], ctx.config.process, first,
         lambda x: plan_all_windows(_opts(ctx, fail_fast=True), x,
                                    ctx.options.workers, None))
+    abandoned = {wt.window_index for wt, r in zip(wts, results, strict=True)
+                 if r.status is WindowStatus.ABANDONED}
     in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),
                              reason="milder recipes failed too: " + "; ".join(
-                                 f"{t}: {r}" for t, r in tried[w]))
+                                 f"{t}: {r}" for t, r in tried[w]) + (
+                                 "; the recipe failed from every start configuration with both"
+                                 " spin rules, the records are the first start's"
+                                 if w in abandoned else ""))
                for w in failing if w not in accepted and tried[w]]
     complete([k for k, wt in enumerate(wts) if wt.window_index not in accepted])
     plan = None

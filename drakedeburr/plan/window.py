@@ -49,6 +49,8 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring)."""
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from)
+    if ctx.options.report_only:
+        return first
     other, ctx2 = _other_rule(ctx)
     if first.status is WindowStatus.ABANDONED:  # fail-fast pass: is the other rule clean?
         second = _plan_window_once(ctx2, wt, q_from)
@@ -128,6 +130,8 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
     kin, opt = ctx.kin, ctx.options
     m = len(wt)
     seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.retract_H[0], q_from)
+    if opt.report_only:
+        seeds = seeds[:1]
     wik, best_score = None, 0
     for attempt, q_first in enumerate(seeds):
         trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
@@ -155,7 +159,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
                  "ok" if dense_ok else "leaves the limits")
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
         wound = rewound_start(kin, trial, q_first)
-        if wound is not None and not _known(wound, seeds):
+        if wound is not None and not _known(wound, seeds) and not opt.report_only:
             seeds.insert(attempt + 1, wound)
     return wik, len(seeds)
 
