@@ -19,7 +19,6 @@ import numpy as np
 
 from drakedeburr.plan.cut_path import axes_interp, cut_path
 from drakedeburr.plan.interpolate import DensePath
-from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import program_orientation_error
 from drakedeburr.plan.results import WindowPlan, WindowStatus
@@ -44,8 +43,9 @@ class _Try:
 
 def clearance_records(window: int, checker, cut, dist: np.ndarray,
                       bound: float) -> list[FailureRecord]:
-    """One failure record per stretch of the executed cut under the clearance bound: where it
-    starts and ends (sample index and tool travel), its least clearance and the closest pair."""
+    """One failure record per stretch of the executed cut under the clearance bound
+    (:attr:`PlanContext.cut_clearance`): where it starts and ends (sample index and tool
+    travel), its least clearance and the closest pair."""
     low = dist < bound
     out = []
     k = 0
@@ -65,7 +65,8 @@ def clearance_records(window: int, checker, cut, dist: np.ndarray,
                        pair=list(pair)),
             reason=f"clearance {d * 1e3:.3f} mm on the executed motion over "
                    f"{cut.s[k] * 1e3:.1f}-{cut.s[end] * 1e3:.1f} mm of the cut "
-                   f"({end - k + 1} samples; {pair[0]} vs {pair[1]})"))
+                   f"({end - k + 1} samples; {pair[0]} vs {pair[1]}), under the planning "
+                   f"bound {bound * 1e3:.4f} mm"))
         k = end + 1
     return out
 
@@ -181,7 +182,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
                 continue
             break
         dist = ctx.checker.min_distances_along(cut.q, ctx.min_clearance + 1e-3)
-        low = dist < ctx.min_clearance - DISTANCE_SLACK
+        low = dist < ctx.cut_clearance
         if not low.any():
             break
         if dist.min() < ctx.min_clearance - 0.5e-3 and spin_mode != "ik":
@@ -200,8 +201,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
     else:
         if dist is None:  # left the loop before measuring this cut (joint jumps)
             dist = ctx.checker.min_distances_along(cut.q, ctx.min_clearance + 1e-3)
-        records += clearance_records(w, ctx.checker, cut, dist,
-                                     ctx.min_clearance - DISTANCE_SLACK)
+        records += clearance_records(w, ctx.checker, cut, dist, ctx.cut_clearance)
     return _Try(cp=cp, cut=cut, dist=dist, spin_mode=spin_mode)
 
 

@@ -205,7 +205,7 @@ def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s
         return None
     dn = d.copy()
     dn[st] = ctx.checker.min_distances_along(qn[st], ctx.min_clearance + 1e-3)
-    if np.any(dn[st] < np.minimum(d[st], ctx.min_clearance) - DISTANCE_SLACK):
+    if np.any(dn[st] < np.minimum(d[st] - DISTANCE_SLACK, ctx.cut_clearance)):
         log.debug("window %d: fillet at %.0f mm: the KTO's orientation costs clearance; kept "
                  "as it was", window, 1e3 * s_c)
         return None

@@ -9,7 +9,6 @@ import numpy as np
 
 from drakedeburr.plan.cut_path import least_axis_curvature
 from drakedeburr.plan.interpolate import track_poses
-from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import rot_angle
 from drakedeburr.plan.results import ExecutedCut, Stretch, WindowPlan, WindowStats, WindowStatus
@@ -49,9 +48,9 @@ def _approach_and_retract(ctx: PlanContext, wt, ex: ExecutedCut, failures: list)
                                                  "configuration"))
             return None
         dd = float(np.min(ctx.checker.min_distances_along(path.q[1:], ctx.min_clearance + 1e-3)))
-        if dd < ctx.min_clearance - DISTANCE_SLACK:
+        if dd < ctx.cut_clearance:
             failures.append(FailureRecord(window=wt.window_index, kind=name, value=float(dd),
-                                          limit=ctx.min_clearance, unit="m",
+                                          limit=ctx.cut_clearance, unit="m",
                                           reason=f"{name} clearance {dd * 1e3:.2f} mm"))
         out.append(path)
     return out

@@ -147,6 +147,21 @@ class PlanContext:
         return self.config.tolerances.min_clearance
 
     @property
+    def cut_clearance(self) -> float:
+        """Least clearance [m] the planner keeps at a dense sample of a move that cuts or
+        approaches: the verifier's limit plus what can hide between two samples. The tool
+        travels ``dense_step`` between samples, and a point passing a hub edge or vertex at
+        distance d dips up to step^2 / (8 d) below the chord of its two samples' readings (the
+        distance along the pass is sqrt(d^2 + s^2)): 3.9 um at 0.25 mm and 2 mm; plus the
+        readings' numerical slack. At the limit itself, a plan passed the planner's samples and
+        failed the verifier's by 0.1 um (unseen hub r112726_000); the verifier still proves the
+        clearance over the whole trajectory (``clearance_certificate``)."""
+        from drakedeburr.plan.kinematics import DISTANCE_SLACK
+
+        d = self.min_clearance
+        return d + self.options.dense_step ** 2 / (8 * d) + DISTANCE_SLACK
+
+    @property
     def program_orientation(self) -> float:
         """Largest program-vs-executed orientation the planner leaves [rad]."""
         return self.options.program_orientation_share * self.config.tolerances.orientation_match

@@ -170,7 +170,7 @@ def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: 
         return cp, cut, dist
     d_new = dist.copy()
     d_new[ch] = ctx.checker.min_distances_along(q[ch], ctx.min_clearance + 1e-3)
-    floor = np.minimum(dist[ch], ctx.min_clearance) - DISTANCE_SLACK
+    floor = np.minimum(dist[ch] - DISTANCE_SLACK, ctx.cut_clearance)
     if np.any(d_new[ch] < floor):
         log.debug("window %d: the program's orientation at %d samples costs clearance (%.2f mm); "
                  "keeping the smooth cut", window, int(on.sum()), 1e3 * d_new[ch].min())
