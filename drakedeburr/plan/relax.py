@@ -6,7 +6,12 @@ What is relaxed, in order, for a window whose plan leaves failure records:
 1. the tool tilt: the large windows' (theta_A, theta_B) box of the source (0.26-0.44 rad) is
    meant for a flat face; on a dished or rising face the spindle body leans into the face
    beyond the opening (the bundled deep-dish hub needed exactly this, by hand). The window is
-   oriented again with the small windows' box (0.09-0.26 rad), then with 0-0.15 rad;
+   oriented again with the small windows' box (0.09-0.26 rad), then with 0-0.15 rad, then with
+   0-0.44 rad: every tilt of the source's two boxes and the milder ones, whose cone (about
+   twice as wide) lets the IK lean the spindle where a narrow cone around any one tilt meets
+   the dish (on an unseen 15 in hub with an 84 mm dish, no axis of the 0-0.15 rad cone kept
+   the 80 mm spindle body 2 mm off the dish wall at some targets of every window; the whole
+   range cut window 0 without a failure record);
 2. nothing else is tried automatically: a slower feed does not make a motion feasible (the
    timing already slows wherever a limit binds), and the cell has one burr model (a smaller
    burr would need its tool model and depth of cut). Both stay the recipe's to change.
@@ -30,7 +35,8 @@ __all__ = ["Deviation", "TILT_STEPS", "relax_windows"]
 log = logging.getLogger(__name__)
 
 #: tilt boxes tried in turn, milder each step [rad]
-TILT_STEPS = (OrientationBounds(0.09, 0.26), OrientationBounds(0.0, 0.15))
+TILT_STEPS = (OrientationBounds(0.09, 0.26), OrientationBounds(0.0, 0.15),
+              OrientationBounds(0.0, 0.44))
 
 
 @dataclass(frozen=True)
