@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 SEED, INDEX = 20261127, 7
 
 
+@pytest.mark.slow
 def test_a_random_catalogue_hub_is_planned_and_verified(tmp_path):
     from drakedeburr.cli import main
     from drakedeburr.hub.randomhub import random_catalogue, random_spec
