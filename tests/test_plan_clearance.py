@@ -116,3 +116,32 @@ def test_readings_are_held_to_a_rigorous_bound(cell_path):
     wide = [r for r in query.ComputeSignedDistancePairwiseClosestPoints(3e-3 + NARROWPHASE_SLACK)
             if checker.reading(query, r) <= 3e-3]
     assert sorted(p for p, _ in got) == sorted((r.id_A, r.id_B) for r in wide)
+
+
+def test_the_planning_bound_covers_what_hides_between_two_samples():
+    """PlanContext.cut_clearance: the limit plus the dip of a point passing a hub edge or
+    vertex between two samples (the distance along the pass is sqrt(d^2 + s^2)), for any
+    phase of the samples along the pass, never below the verifier's limit; the fillet repair
+    and the program fit (program_fit.conform_to_program) hold new samples to it."""
+    from types import SimpleNamespace
+
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.plan.options import PlanContext, PlanOptions
+
+    tol = default_tolerances()
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
+                      config=SimpleNamespace(tolerances=tol), options=PlanOptions())
+    d, step = tol.min_clearance, PlanOptions().dense_step
+    margin = ctx.cut_clearance - d
+    assert 0 < margin < 10e-6
+    # the worst dip over every phase of the two samples against the pass's closest point,
+    # samples at both ends reading at least the bound: the minimum between them stays >= d
+    s = np.linspace(-step, step, 4001)
+    dist = np.sqrt(d ** 2 + s ** 2)
+    worst = 0.0
+    for phase in np.linspace(0.0, step, 101):
+        inside = (s >= phase - step) & (s <= phase)
+        ends = np.sqrt(d ** 2 + np.array([phase - step, phase]) ** 2)
+        worst = max(worst, ends.min() - dist[inside].min())
+    assert worst <= margin
+    assert ctx.cut_clearance - worst >= d
