@@ -80,7 +80,8 @@ class PlanOptions:
             under the recipe whatever the rest does: status ``ABANDONED``) instead of planning
             the rest of it; the other start seeds and spin rule are still tried, each stopping
             at its first failure. Set by ``plan_hub`` for its first pass when ``relax`` is on:
-            a window that fails is relaxed, and planned in full only if no relaxation is kept.
+            a window that fails is relaxed, and planned once for its report
+            (``report_only``) if no relaxation is kept.
             Not recorded in the plan.
         report_only: plan a window once, for its report: the first start configuration and
             the IK's own spin rule, every target tried. Set by ``plan_hub`` for a window the
