@@ -128,3 +128,22 @@ def test_tool_path_reference_survives_save_load(tmp_path):
     (tmp_path / "p" / "arrays.npz").write_bytes(buf.getvalue())
     with pytest.raises(InputError, match="window 0 lacks R_HL"):
         mut.load_plan(tmp_path / "p")
+
+
+def test_the_burr_of_a_plan_survives_save_load_and_builds_its_cell(tmp_path):
+    import json
+
+    from drakedeburr.cell.station import load_plan_cell
+
+    plan = _plan()
+    plan.meta["tool"] = "long_reach"
+    mut.save_plan(plan, tmp_path / "p")
+    back = mut.load_plan(tmp_path / "p")
+    assert back.meta["tool"] == "long_reach"
+    cell = load_plan_cell(back)
+    assert cell.tool == "long_reach" and load_plan_cell(_plan()).tool == "standard"
+    doc = json.loads((tmp_path / "p" / "plan.json").read_text())
+    doc["meta"]["tool"] = "diamond"
+    (tmp_path / "p" / "plan.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="'diamond' is not a known burr"):
+        mut.load_plan(tmp_path / "p")

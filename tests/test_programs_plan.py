@@ -112,3 +112,18 @@ def test_empty_or_odd_plans_are_refused():
         mut.program_from_plan(replace(_plan(), targets=()))
     with pytest.raises(InputError, match="neither 'tool' nor 'workpiece'"):
         mut.program_from_plan(replace(_plan(), mode="both"))
+
+
+def test_a_plan_made_with_another_burr_says_so_in_the_program(tmp_path):
+    """The long-reach burr's plan: the header asks for that burr; the TCP is the plan's."""
+    plan = _plan()
+    plain = mut.program_from_plan(plan, "hub1")
+    assert not any("burr" in n for n in plain.notes)
+    lr = replace(plan, meta={**plan.meta, "tool": "long_reach",
+                             "tool_title": "long-reach burr (75 mm stick-out)"})
+    prog = mut.program_from_plan(lr, "hub1")
+    assert [n for n in prog.notes if n.startswith("burr")] == [
+        "burr: long-reach burr (75 mm stick-out): mount it before running"]
+    out = write_program(prog, tmp_path / "hub1.mod", "rapid")
+    assert "long-reach burr" in out[0].read_text()
+    assert np.allclose(prog.X_FT, plan.meta["X_FT"])

@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+from drakedeburr.cell.tools import DEFAULT_TOOL
 from drakedeburr.resources import models_dir, resolve_hub_dir, scenario_path
 
 __all__ = ["cell_fingerprint"]
@@ -19,9 +20,11 @@ def _files(folder: Path) -> list[Path]:
     return sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
 
 
-def cell_fingerprint(scenario: str | Path, hub: str | Path, robot: str | None) -> str:
+def cell_fingerprint(scenario: str | Path, hub: str | Path, robot: str | None,
+                     tool: str | None = None) -> str:
     """SHA-256 (hex) of the scenario file, the arm/tool/fixture models, the hub folder's files
-    (its own ``summary.json`` aside: statistics, not geometry) and the arm's name."""
+    (its own ``summary.json`` aside: statistics, not geometry), the arm's name and the burr
+    variant's (None and the standard burr's name hash alike: the same cell)."""
     h = hashlib.sha256()
 
     def add(name: str, path: Path) -> None:
@@ -39,4 +42,6 @@ def cell_fingerprint(scenario: str | Path, hub: str | Path, robot: str | None) -
         if f.name != "summary.json":
             add("hub/" + str(f.relative_to(hub_dir)), f)
     h.update(f"robot\0{robot or ''}".encode())
+    if tool not in (None, DEFAULT_TOOL):
+        h.update(f"tool\0{tool}".encode())
     return h.hexdigest()

@@ -34,6 +34,7 @@ from typing import Literal
 
 import numpy as np
 
+from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
 from drakedeburr.resources import (
     add_package_to,
@@ -104,6 +105,8 @@ class Cell:
         moving_model_instances: model instances moving with the robot (robot + tool, or robot +
             gripper + hub): the ``robot_model_instances`` of a SceneGraphCollisionChecker.
         scenario: the scenario file. hub_sdf: the hub model file.
+        tool: the burr variant the bundled spindle carries (``drakedeburr.cell.tools``), or
+            None for a scenario with its own tool model.
     """
 
     diagram: object
@@ -131,6 +134,7 @@ class Cell:
     moving_model_instances: tuple
     scenario: Path
     hub_sdf: Path
+    tool: str | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -370,10 +374,10 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
 
 def load_plan_cell(plan) -> Cell:
     """The cell a plan was made in: its scenario and hub, its arm and its hub placement
-    (``plan.meta["robot"]``, ``plan.meta["hub_pose"]``)."""
+    (``plan.meta["robot"]``, ``["tool"]``, ``["hub_pose"]``)."""
     meta = plan.meta or {}
     pose = meta.get("hub_pose")
-    return load_cell(plan.scenario, plan.hub, robot=meta.get("robot"),
+    return load_cell(plan.scenario, plan.hub, robot=meta.get("robot"), tool=meta.get("tool"),
                      hub_pose=None if pose is None else np.asarray(pose, float))
 
 
@@ -383,6 +387,7 @@ def load_cell(
     *,
     robot: str | RobotSpec | None = None,
     hub_pose: np.ndarray | None = None,
+    tool: str | None = None,
     time_step: float = 0.0,
 ) -> Cell:
     """Build the cell of a scenario with a hub.
@@ -397,6 +402,8 @@ def load_cell(
         hub_pose: (4, 4) pose of the hub frame H in the ``hub_mount`` frame [m] (where a
             placement search put this hub: :mod:`drakedeburr.plan.placement`); ``None``: H on
             the mount frame itself.
+        tool: the burr variant on the scenario's bundled spindle (``TOOL_VARIANTS``); None:
+            the standard burr.
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
 
     Returns:
@@ -422,6 +429,7 @@ def load_cell(
     except RuntimeError as exc:  # Drake reports parse errors as RuntimeError
         raise InputError(f"{scenario_file}: cannot load model directives: {exc}") from exc
     arm = _apply_arm(directives, scenario_file, robot)
+    tool_name = apply_tool(directives, scenario_file, tool)
     try:
         ProcessModelDirectives(directives, plant, parser)
     except RuntimeError as exc:
@@ -453,14 +461,15 @@ def load_cell(
         burr_head_ids=frozenset(sets["burr"]), hub_ids=frozenset(sets["hub"]),
         robot_ids=frozenset(sets["robot"]), environment_ids=frozenset(sets["env"]),
         moving_model_instances=tuple(sorted(moving, key=int)),
-        scenario=scenario_file, hub_sdf=hub_sdf,
+        scenario=scenario_file, hub_sdf=hub_sdf, tool=tool_name,
     )
     for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
                 cell.a_upper, cell.q_home):
         arr.setflags(write=False)
     _check_payload(cell)
     # how to build this cell again (a planner's worker process builds the same one)
-    cell._cache["load_args"] = dict(scenario=scenario, hub=hub, robot=robot, time_step=time_step,
+    cell._cache["load_args"] = dict(scenario=scenario, hub=hub, robot=robot, tool=tool,
+                                    time_step=time_step,
                                     hub_pose=None if hub_pose is None else np.array(hub_pose,
                                                                                     float))
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,

@@ -31,7 +31,7 @@ can centre it. It also keeps the spindle body clear of the wrist.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -46,6 +46,12 @@ __all__ = [
     "FLOATING_SPINDLE",
     "SPINDLE_STAND",
     "X_FS_floating",
+    "ToolVariant",
+    "TOOL_VARIANTS",
+    "DEFAULT_TOOL",
+    "tool_variant",
+    "variant_model_url",
+    "apply_tool",
     "write_tool_models",
     "tool_model_texts",
 ]
@@ -192,6 +198,102 @@ class SpindleStand:
 BURR = BurrGeometry()
 FLOATING_SPINDLE = FloatingSpindle(burr=BURR)
 SPINDLE_STAND = SpindleStand(burr=BURR)
+
+
+@dataclass(frozen=True)
+class ToolVariant:
+    """One burr the cell can carry: the same head on another shank length. SI units.
+
+    Attributes:
+        name: the variant's name (``plan.meta["tool"]``, ``drakedeburr plan --tool``).
+        title: one line for reports and program headers.
+        burr: its geometry; the head is the standard one (the same cut, the same
+            ``burr_head.obj``), only the stick-out differs.
+        suffix: file name suffix of its models (``floating_spindle{suffix}.sdf``).
+    """
+
+    name: str
+    title: str
+    burr: BurrGeometry
+    suffix: str
+
+    @property
+    def spindle(self) -> FloatingSpindle:
+        return replace(FLOATING_SPINDLE, burr=self.burr)
+
+    @property
+    def stand(self) -> SpindleStand:
+        return replace(SPINDLE_STAND, burr=self.burr)
+
+
+#: The long-reach burr: the standard head on a 6 mm shank with 75 mm stick-out (the standard
+#: 25 mm + 50 mm), as carbide burr makers sell them (100-150 mm overall length) for deep
+#: pockets. It keeps the 80 mm spindle body 50 mm further back along the burr axis, which is
+#: what a deep dish needs: tilted 0.44 rad (the source's largest tilt) over the opening, the
+#: standard body's near side is ~16 mm beyond the cutting point towards the rim, ~60 mm above
+#: it, so an 80-90 mm dish wall beside a window meets it. Its cost is stiffness: a carbide
+#: shank (E ~ 600 GPa, d = 6 mm) deflects F L^3 / (3 E I) ~ 0.08 mm at 20 N radial force with
+#: the contact 78 mm out, against ~0.004 mm at 28 mm; the floating spindle's radial stroke
+#: (millimetres) takes both, the chamfer width tolerance (0.5-1.5 mm) the difference.
+#: The planner uses it only for a hub the standard burr cannot cut (docs/cell.md, "Tools").
+TOOL_VARIANTS = {
+    "standard": ToolVariant("standard", "standard burr (25 mm stick-out)", BURR, ""),
+    "long_reach": ToolVariant("long_reach", "long-reach burr (75 mm stick-out)",
+                              replace(BURR, stick_out=75e-3), "_long_reach"),
+}
+DEFAULT_TOOL = "standard"
+
+#: the bundled tool models a variant replaces in a scenario (base file name -> its stem)
+_VARIANT_MODELS = ("floating_spindle", "spindle_stand")
+
+
+def tool_variant(name: str | None) -> ToolVariant:
+    """The variant called ``name`` (None: the standard burr); ValueError for an unknown one."""
+    try:
+        return TOOL_VARIANTS[name or DEFAULT_TOOL]
+    except KeyError:
+        raise ValueError(f"unknown tool {name!r}; known: {', '.join(TOOL_VARIANTS)}") from None
+
+
+def variant_model_url(url: str, name: str | None) -> str | None:
+    """The model URL of tool variant ``name`` for a scenario's tool model ``url``, or None
+    when ``url`` is not one of the bundled tool models (then no variant of it exists)."""
+    prefix = "package://drakedeburr/tools/"
+    if not url.startswith(prefix):
+        return None
+    stem = url[len(prefix):].removesuffix(".sdf")
+    for base in _VARIANT_MODELS:
+        if stem in (base + v.suffix for v in TOOL_VARIANTS.values()):
+            return f"{prefix}{base}{tool_variant(name).suffix}.sdf"
+    return None
+
+
+def apply_tool(directives, scenario_file: Path, name: str | None) -> str | None:
+    """Swap a scenario's bundled tool model (floating spindle or spindle stand) for variant
+    ``name`` in its model directives (in place). Returns the variant's name, or None for a
+    scenario without a bundled tool model when ``name`` asks for none.
+
+    Raises:
+        InputError: ``name`` is unknown, or names a variant for a scenario that carries its own
+            tool model (its variants are the scenario author's to write).
+    """
+    from drakedeburr.errors import InputError
+
+    try:
+        variant = tool_variant(name)
+    except ValueError as exc:
+        raise InputError(f"{scenario_file}: {exc}") from None
+    items = list(directives.directives)  # (the bindings hand out copies: edit, then set back)
+    found = None
+    for d in items:
+        url = None if d.add_model is None else variant_model_url(d.add_model.file, variant.name)
+        if url is not None:
+            d.add_model.file, found = url, variant.name
+    if found is None and name not in (None, DEFAULT_TOOL):
+        raise InputError(f"{scenario_file}: no bundled spindle model to fit the {variant.title} "
+                         "to; a scenario with its own tool model carries its own burr")
+    directives.directives = items
+    return found
 
 
 def X_FS_floating(spindle: FloatingSpindle = FLOATING_SPINDLE) -> np.ndarray:
@@ -369,11 +471,16 @@ def tool_model_texts(
     if spindle.burr != stand.burr:
         raise ValueError("the floating spindle and the stand must carry the same burr "
                          "(burr_head.obj is shared)")
-    return {
-        "burr_head.obj": _cone_obj(spindle.burr),
-        "floating_spindle.sdf": _floating_spindle_sdf(spindle),
-        "spindle_stand.sdf": _spindle_stand_sdf(stand),
-    }
+    texts = {"burr_head.obj": _cone_obj(spindle.burr),
+             "floating_spindle.sdf": _floating_spindle_sdf(spindle),
+             "spindle_stand.sdf": _spindle_stand_sdf(stand)}
+    for v in TOOL_VARIANTS.values():
+        if v.suffix:  # the same head: burr_head.obj serves every variant
+            texts[f"floating_spindle{v.suffix}.sdf"] = _floating_spindle_sdf(
+                replace(spindle, burr=replace(spindle.burr, stick_out=v.burr.stick_out)))
+            texts[f"spindle_stand{v.suffix}.sdf"] = _spindle_stand_sdf(
+                replace(stand, burr=replace(stand.burr, stick_out=v.burr.stick_out)))
+    return texts
 
 
 def write_tool_models(out_dir: str | Path | None = None) -> list[Path]:

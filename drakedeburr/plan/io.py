@@ -343,6 +343,12 @@ def _meta(doc: dict, jw) -> dict:
             if X.shape != (4, 4) or not np.isfinite(X).all():
                 raise _Bad(f"{w}.{key}: expected a 4x4 pose of finite numbers")
     _get(meta, "robot", (str, type(None)), w, None)
+    tool = _get(meta, "tool", (str, type(None)), w, None)
+    if tool is not None:
+        from drakedeburr.cell.tools import TOOL_VARIANTS
+
+        if tool not in TOOL_VARIANTS:
+            raise _Bad(f"{w}.tool: {tool!r} is not a known burr ({', '.join(TOOL_VARIANTS)})")
     _get(meta, "planner", (str, type(None)), w, None)
     _get(meta, "config", (dict, type(None)), w, None)
     for i, row in enumerate(_get(meta, "windows", list, w, [])):

@@ -228,7 +228,8 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
     cands.sort(key=lambda c: c[:4], reverse=True)
     best, best_key = None, None
     for n, margin, _, _, X, per, turn, off in cands[:checked]:
-        placed = load_cell(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name, hub_pose=X)
+        placed = load_cell(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name,
+                           tool=cell.tool, hub_pose=X)
         share, least = _clear_share(placed, _moved(kin0, X), samples, per, config.tolerances)
         key = (n, round(share, 2), margin)
         if best_key is None or key > best_key:

@@ -29,13 +29,12 @@ class Exported:
 def plan_program(plan, name: str, *, flag: str = "", flag_reason: str = "",
                  verified: bool = False, robot: str | None = None):
     """The plan's program with the loads of its cell's tool (and workpiece) models."""
-    from drakedeburr.cell.station import load_cell
+    from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.errors import InputError
-    from drakedeburr.programs import plan_robot, program_from_plan
+    from drakedeburr.programs import program_from_plan
 
-    spec = plan_robot(plan)
-    try:
-        cell = load_cell(plan.scenario, plan.hub, robot=spec.name)
+    try:  # the plan's own cell: its arm, burr and hub pose (the workpiece's centre of mass)
+        cell = load_plan_cell(plan)
     except FileNotFoundError as exc:
         raise InputError(f"the plan's cell ({plan.scenario}, hub {plan.hub}) is needed for the "
                          f"tool's mass and centre of gravity: {exc}") from exc

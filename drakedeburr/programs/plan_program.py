@@ -150,6 +150,9 @@ def program_from_plan(
                      workpiece_cog=tuple(loads.workpiece_cog), load_source=loads.source)
     notes = (f"plan: scenario {plan.scenario}, hub {plan.hub}, mode {plan.mode}",
              f"cycle {plan.trajectory.duration:.2f} s, {len(plan.failures)} failure records")
+    tool = plan.meta.get("tool") if isinstance(plan.meta, dict) else None
+    if tool:  # not the standard burr: the operator mounts this one (the TCP is its)
+        notes += (f"burr: {plan.meta.get('tool_title') or tool}: mount it before running",)
     return RobotProgram(
         name=name, moves=moves, X_FT=X_Fc, X_WO=X_BO, robot=spec,
         stationary_tool=plan.mode == "workpiece", tool_name=tool_name, wobj_name="wobjHub",

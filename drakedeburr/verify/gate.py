@@ -34,9 +34,10 @@ def plan_identity(plan) -> dict:
     from drakedeburr.cell.fingerprint import cell_fingerprint
     from drakedeburr.plan.io import plan_digest
 
-    robot = (plan.meta or {}).get("robot")
+    meta = plan.meta or {}
     return {"plan_digest": plan_digest(plan),
-            "cell_digest": cell_fingerprint(plan.scenario, plan.hub, robot),
+            "cell_digest": cell_fingerprint(plan.scenario, plan.hub, meta.get("robot"),
+                                            meta.get("tool")),
             "verifier_version": getattr(drakedeburr, "__version__", "")}
 
 
