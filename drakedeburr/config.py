@@ -195,6 +195,9 @@ class Config:
         recipe: the part's recipe.
         tolerances: acceptance tolerances and sampling.
         robot: arm name (None: the scenario's own arm).
+        tool: the burr on the bundled spindle (``drakedeburr.cell.tools.TOOL_VARIANTS``); None:
+            the standard burr, and the long-reach one where the standard cannot cut the hub
+            (:func:`drakedeburr.plan.planner.plan_hub`).
     """
 
     scenario: str
@@ -202,6 +205,7 @@ class Config:
     recipe: Recipe
     tolerances: Tolerances
     robot: str | None = None
+    tool: str | None = None
 
     @property
     def process(self) -> ProcessParameters:
@@ -214,6 +218,7 @@ class Config:
     def to_record(self) -> dict:
         """JSON-ready record (what a plan keeps of the configuration it was made with)."""
         return {"scenario": str(self.scenario), "hub": str(self.hub), "robot": self.robot,
+                **({"tool": self.tool} if self.tool else {}),
                 "recipe_source": self.recipe.source,
                 "process": dataclasses.asdict(self.recipe.process),
                 "acceptance": dataclasses.asdict(self.recipe.acceptance),
@@ -309,7 +314,8 @@ def process_parameters(folder: str | Path | None = None, **overrides: Any) -> Pr
 
 
 def load_config(scenario: str, hub: str | Path, *,
-                robot: str | None = None, tolerances: Tolerances | None = None,
+                robot: str | None = None, tool: str | None = None,
+                tolerances: Tolerances | None = None,
                 recipe: Recipe | None = None, **process_overrides: Any) -> Config:
     """Load a run's configuration once: the hub's recipe (``process.yaml`` in its folder, with
     ``process_overrides``, or ``recipe`` as given) and the tolerances.
@@ -318,6 +324,7 @@ def load_config(scenario: str, hub: str | Path, *,
         scenario: bundled scenario name or YAML path.
         hub: bundled hub name or folder.
         robot: arm name (None: the scenario's own).
+        tool: burr variant (None: the standard, long reach where it cannot cut; ``Config``).
         tolerances: replaces the default tolerances (e.g. coarse sampling for a smoke test).
         recipe: use this recipe instead of reading the hub's (e.g. the one a plan recorded).
         process_overrides: ProcessParameters fields over the hub's recipe (None: not given).
@@ -330,7 +337,7 @@ def load_config(scenario: str, hub: str | Path, *,
         recipe = dataclasses.replace(recipe, process=dataclasses.replace(
             recipe.process, **{k: v for k, v in process_overrides.items() if v is not None}))
     return Config(scenario=str(scenario), hub=str(hub), recipe=recipe,
-                  tolerances=tolerances or default_tolerances(), robot=robot)
+                  tolerances=tolerances or default_tolerances(), robot=robot, tool=tool)
 
 
 def recipe_from_record(record: dict, where: str = "plan") -> Recipe:

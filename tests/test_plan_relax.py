@@ -275,3 +275,82 @@ def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first
         assert out is plans[1]
     else:
         assert out.status is WindowStatus.ABANDONED and out.failures
+
+
+# ---------------------------------------------------------------- the burr, for the whole hub
+_BODY = FailureRecord(0, "ik", "unreachable", where={
+    "blocking_pair": ["spindle::spindle/spindle::spindle_body", "hub::hub/hub::piece_7"]})
+_HEAD = FailureRecord(1, "dense", "too close", where={
+    "pair": ["spindle::burr/spindle::burr_head", "hub::hub/hub::piece_2"]})
+
+
+@pytest.mark.parametrize("failures, tool, helps", [
+    ([_BODY], "standard", True), ([_HEAD, _BODY], "standard", True),
+    ([_HEAD], "standard", False), ([FailureRecord(0, "transition", "joint limit")],
+                                   "standard", False),
+    ([_BODY], "long_reach", False), ([_BODY], None, False)])
+def test_the_long_reach_is_tried_where_the_tool_body_blocked(failures, tool, helps):
+    from drakedeburr.plan.relax import reach_may_help
+
+    assert reach_may_help(_plan(failures), SimpleNamespace(tool=tool)) is helps
+
+
+@pytest.mark.parametrize("alt_failures, kept", [
+    ([], "long_reach"), ([FailureRecord(1, "ik", "x")] * 5, "long_reach"),
+    ([FailureRecord(0, "ik", "x"), FailureRecord(1, "ik", "y")], "standard"),
+    ([FailureRecord(2, "ik", "x"), FailureRecord(3, "ik", "y"), FailureRecord(4, "ik", "z")],
+     "standard")])
+def test_the_burr_leaving_fewer_windows_failing_is_kept_and_said(alt_failures, kept):
+    """Standard: windows 0 and 1 fail. The long-reach plan is kept only with fewer failing
+    windows; either way the kept plan says what the other burr did."""
+    from drakedeburr.plan.relax import choose_tool
+
+    std = _Plan((_BODY, _HEAD, FailureRecord(1, "ik", "more")))
+    alt = _Plan(tuple(alt_failures), {"recipe_deviations": [{"window": 3}]})
+    out = choose_tool(std, alt)
+    if kept == "long_reach":
+        assert out is alt and out.failures == tuple(alt_failures)
+        dev = out.meta["recipe_deviations"][-1]
+        assert out.meta["recipe_deviations"][0] == {"window": 3}
+        assert (dev["window"], dev["item"]) == (-1, "burr")
+        assert "75 mm" in dev["used"] and "25 mm" in dev["default"]
+        assert "[0, 1]" in dev["reason"] and "spindle" not in dev["used"]
+    else:
+        assert out.failures[:3] == std.failures
+        notes = out.failures[3:]
+        assert [n.window for n in notes] == [0, 1]
+        assert all(n.kind == "relaxation" and n.tried == ("long-reach burr (75 mm stick-out)",)
+                   for n in notes)
+        assert all(f"{len({f.window for f in alt_failures})} window(s)" in n.reason
+                   for n in notes)
+
+
+@pytest.mark.parametrize("tool, failing, planned", [
+    (None, [_BODY], ["standard", "long_reach"]), (None, [_HEAD], ["standard"]),
+    ("standard", [_BODY], ["standard"]), (None, [], ["standard"])])
+def test_plan_hub_plans_again_with_the_long_reach_only_when_it_may_help(monkeypatch, tool,
+                                                                       failing, planned):
+    """The orchestration: the hub is planned in the standard cell; again in the long-reach
+    cell only when no burr was asked for and the standard's failures name the tool body."""
+    from drakedeburr.config import load_config
+
+    cells = []
+
+    def fake_plan_in_cell(cell, hub_model, wts, config, options, progress):
+        cells.append(cell.tool)
+        return _RunPlan(tuple(failing) if cell.tool == "standard" else ())
+
+    monkeypatch.setattr(planner, "_plan_in_cell", fake_plan_in_cell)
+    monkeypatch.setattr(planner, "window_targets_for_hub", lambda *a, **k: [])
+    out = planner.plan_hub(load_config("tool_in_hand", "h5_straight", tool=tool),
+                           options=PlanOptions(workers=1))
+    assert cells == planned
+    if len(planned) == 2:
+        assert out.meta["recipe_deviations"][-1]["item"] == "burr" and not out.failures
+
+
+@dataclass
+class _RunPlan:
+    failures: tuple
+    meta: dict = field(default_factory=dict)
+    run: dict = field(default_factory=lambda: {"timings": {}})

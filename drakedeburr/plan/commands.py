@@ -50,6 +50,15 @@ def _check_plan_args(args: argparse.Namespace, scenario: str, hub: str) -> tuple
     return windows, out
 
 
+def add_tool_argument(p) -> None:
+    """``--tool``: the burr on the bundled spindle (plan and verify of a hub)."""
+    from drakedeburr.cell.tools import TOOL_VARIANTS
+
+    p.add_argument("--tool", choices=tuple(TOOL_VARIANTS), default=None,
+                   help="burr on the bundled spindle (default: the standard burr, and the "
+                        "long-reach one for a hub the standard cannot cut: docs/cell.md)")
+
+
 def _run_plan(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
@@ -69,7 +78,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         options = replace(options, fillets=None)
     elif args.fillets == "kto":
         options = replace(options, fillets=replace(options.fillets, method="kto"))
-    config = load_config(scenario, hub, robot=args.robot)
+    config = load_config(scenario, hub, robot=args.robot, tool=args.tool)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
     save_plan(plan, out)
     if args.html:
@@ -169,6 +178,7 @@ def register(subparsers) -> None:
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
+    add_tool_argument(p)
     p.add_argument("--fillets", choices=("program", "kto", "off"), default="program",
                    help="where a cut slows below the feed band at a fillet, re-plan the tool "
                         "orientation so the feed holds where it can: by the feed program "

@@ -30,6 +30,7 @@ from dataclasses import asdict, replace
 
 import numpy as np
 
+from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import Config, ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
@@ -207,6 +208,8 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
         options=jsonable({k: v for k, v in asdict(ctx.options).items()
                           if k not in ("workers", "fail_fast", "report_only")}),
+        **({"tool": ctx.cell.tool, "tool_title": tool_variant(ctx.cell.tool).title}
+           if ctx.cell.tool not in (None, DEFAULT_TOOL) else {}),
     )
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
@@ -369,6 +372,12 @@ def plan_hub(
 ) -> Plan:
     """Plan a whole hub end to end: hub -> CL -> orientation -> IK -> timed Plan.
 
+    The hub is planned with ``config.tool`` on the cell's spindle; when that is not given and
+    the standard burr leaves windows failing where the spindle body, clamp, collet or shank
+    meets something (a deep dish), the hub is planned again with the long-reach burr and that
+    plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
+    one burr for the whole hub, no tool change within a program).
+
     Args:
         config: the run's configuration (:func:`drakedeburr.config.load_config`): scenario,
             hub, recipe and tolerances.
@@ -381,22 +390,47 @@ def plan_hub(
     """
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan.placement import place_hub
+    from drakedeburr.plan import relax
 
     options = options or PlanOptions()
-    cell = load_cell(config.scenario, config.hub, robot=config.robot)
+    cell = load_cell(config.scenario, config.hub, robot=config.robot, tool=config.tool)
     hub_model = load_hub(cell.hub_sdf.parent)
     t0 = time.perf_counter()
     skipped: list[FailureRecord] = []
     wts = window_targets_for_hub(hub_model, source=source, params=config.process,
                                  windows=options.windows, skipped=skipped)
     t_targets = time.perf_counter() - t0
+    plan = _plan_in_cell(cell, hub_model, wts, config, options, progress)
+    if options.relax and config.tool is None and relax.reach_may_help(plan, cell):
+        t1 = time.perf_counter()
+        log.warning("the standard burr leaves window(s) %s failing at its spindle body: "
+                    "planning the hub again with the %s", relax.failing_windows(plan),
+                    relax.long_reach().title)
+        alt = _plan_in_cell(load_cell(config.scenario, config.hub, robot=config.robot,
+                                      tool=relax.LONG_REACH),
+                            hub_model, wts, config, options, progress)
+        plan = relax.choose_tool(plan, alt)
+        plan.run["timings"]["other_tool_seconds"] = time.perf_counter() - t1
+    if skipped:  # windows without a tool path are failures of this plan, reported as such
+        plan = replace(plan, failures=(*skipped, *plan.failures))
+    plan.run["timings"]["targets_seconds"] = t_targets
+    return plan
+
+
+def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
+                  progress: Progress) -> Plan:
+    """The hub's plan in one cell: where the hub sits (placement search), the windows, the
+    recipe's relaxation where it fails."""
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.placement import place_hub
+
     placement = None
     if options.placement and wts:
         t1 = time.perf_counter()
         placement = place_hub(cell, hub_model, wts, config, options)
         cell = placement.cell if placement.cell is not None else load_cell(
-            config.scenario, config.hub, robot=config.robot, hub_pose=placement.hub_pose)
+            config.scenario, config.hub, robot=config.robot, tool=cell.tool,
+            hub_pose=placement.hub_pose)
         t_place = time.perf_counter() - t1
     q_refs = placement.q_refs if placement else None
     t_windows = time.perf_counter()
@@ -410,9 +444,6 @@ def plan_hub(
         plan = _relax(ctx, hub_model, wts, results, progress, t_windows)
     else:
         plan = _assemble_windows(ctx, wts, results, progress, t_windows)
-    if skipped:  # windows without a tool path are failures of this plan, reported as such
-        plan = replace(plan, failures=(*skipped, *plan.failures))
-    plan.run["timings"]["targets_seconds"] = t_targets
     if placement is not None:
         plan.meta["hub_pose"] = placement.hub_pose.tolist()
         plan.meta["placement"] = placement.record()

@@ -12,9 +12,16 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    the dish (on an unseen 15 in hub with an 84 mm dish, no axis of the 0-0.15 rad cone kept
    the 80 mm spindle body 2 mm off the dish wall at some targets of every window; the whole
    range cut window 0 without a failure record);
-2. nothing else is tried automatically: a slower feed does not make a motion feasible (the
-   timing already slows wherever a limit binds), and the cell has one burr model (a smaller
-   burr would need its tool model and depth of cut). Both stay the recipe's to change.
+2. the burr, for the whole hub (:func:`choose_tool`, called by
+   :func:`drakedeburr.plan.planner.plan_hub`): where windows still fail with the spindle body,
+   its clamp, the collet or the shank against something (a deep dish: the spindle body meets
+   the dish wall whatever the tilt), the hub is planned again with the long-reach burr (the
+   same head, 50 mm further out: ``drakedeburr.cell.tools.TOOL_VARIANTS``) and that plan kept
+   when fewer windows fail. One burr serves the whole hub (no tool change within a program);
+   the standard burr is stiffer, so it stays the default;
+3. nothing else is tried automatically: a slower feed does not make a motion feasible (the
+   timing already slows wherever a limit binds), and a smaller head would cut another chamfer
+   (a recipe change, the part's to make).
 
 The variants of all failing windows are planned together, one round per tilt step (in
 parallel where the planner has workers); a window keeps the first variant that plans without
@@ -28,9 +35,12 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, replace
 
+from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
+from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["Deviation", "TILT_STEPS", "relax_windows"]
+__all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "reach_may_help",
+           "choose_tool", "failing_windows", "long_reach"]
 
 log = logging.getLogger(__name__)
 
@@ -38,12 +48,18 @@ log = logging.getLogger(__name__)
 TILT_STEPS = (OrientationBounds(0.09, 0.26), OrientationBounds(0.0, 0.15),
               OrientationBounds(0.0, 0.44))
 
+#: the burr tried for a hub the standard one cannot cut
+LONG_REACH = "long_reach"
+#: tool geometries a longer stick-out moves back from the cut (the generated tool models')
+_TOOL_BODY = frozenset({"spindle_body", "clamp", "collet", "burr_shank", "bracket",
+                        "adapter_plate"})
+
 
 @dataclass(frozen=True)
 class Deviation:
     """One departure from the recipe for one window: what, from what to what, and why."""
 
-    window: int
+    window: int  # -1: the whole hub
     item: str
     default: str
     used: str
@@ -100,3 +116,53 @@ def relax_windows(edges, params, failed_reasons: dict, plan_many):
             else:
                 tried[edge.index].append((_box(box), str(res.failures[0])))
     return accepted, tried
+
+
+def long_reach():
+    """The long-reach burr's :class:`~drakedeburr.cell.tools.ToolVariant`."""
+    return tool_variant(LONG_REACH)
+
+
+def failing_windows(plan) -> list[int]:
+    """The windows with failure records (-1: a move between windows or home)."""
+    return sorted({f.window for f in plan.failures})
+
+
+def _pair(f: FailureRecord) -> list[str]:
+    return [str(p) for p in (f.where.get("blocking_pair") or f.where.get("pair") or ())]
+
+
+def reach_may_help(plan, cell) -> bool:
+    """Could a longer burr help: the cell carries the standard burr on a bundled spindle and a
+    failure names a tool-body geometry (spindle body, clamp, collet, shank) in the pair that
+    blocked it. Pair names are ``model::body/model::geometry``."""
+    if cell.tool != DEFAULT_TOOL:
+        return False
+    return any(n.rsplit("::", 1)[-1] in _TOOL_BODY for f in plan.failures for n in _pair(f))
+
+
+def choose_tool(plan, alt):
+    """The standard burr's plan or the long-reach one's (``alt``): the long-reach plan only
+    when it leaves fewer windows failing (a tie keeps the standard burr, the stiffer). The
+    kept plan records the choice: a recipe deviation when it is the long-reach burr, else a
+    failure record per failing window saying what the long-reach burr left failing."""
+    a, b = failing_windows(plan), failing_windows(alt)
+    std, lr = tool_variant(DEFAULT_TOOL), long_reach()
+    if len(b) < len(a):
+        first = plan.failures[0]
+        dev = Deviation(-1, "burr", std.title, lr.title,
+                        f"the standard burr left window(s) {a} failing ({len(plan.failures)} "
+                        f"records; first: window {first.window}, {first.reason})")
+        alt.meta["recipe_deviations"] = [*alt.meta.get("recipe_deviations", []), dev.record()]
+        log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing",
+                    std.title, lr.title, len(a), len(b))
+        return alt
+    notes = []
+    for w in a:
+        own = next((f for f in alt.failures if f.window == w), None)
+        notes.append(FailureRecord(
+            window=w, kind="relaxation", tried=(lr.title,),
+            reason=f"the {lr.title} was tried for the hub and left {len(b)} window(s) "
+                   f"failing {b}" + ("" if own is None else f"; here: {own.reason}")))
+    log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title, b)
+    return replace(plan, failures=(*plan.failures, *notes))

@@ -151,8 +151,8 @@ def recipe_deviations(sp, cfg) -> CheckItem:
     meta = sp.plan.meta or {}
     devs = meta.get("recipe_deviations") or []
     place = meta.get("placement")
-    parts = [f"window {d['window']}: {d['item']} {d['default']} -> {d['used']} ({d['reason']})"
-             for d in devs]
+    parts = [f"{'all windows' if d['window'] < 0 else 'window ' + str(d['window'])}: "
+             f"{d['item']} {d['default']} -> {d['used']} ({d['reason']})" for d in devs]
     if place:
         parts.append(f"hub placed turned {np.degrees(place['turn_rad']):.1f} deg, offset "
                      f"{1e3 * place['offset_m']:.0f} mm, seat {1e3 * place['seat_m']:.1f} mm "
@@ -160,4 +160,4 @@ def recipe_deviations(sp, cfg) -> CheckItem:
     return CheckItem(
         "recipe_deviations", True, float(len(devs)), None, "count", "info",
         detail="; ".join(parts) or "the plan follows the part's recipe",
-        per_window={d["window"]: d for d in devs})
+        per_window={d["window"]: d for d in devs if d["window"] >= 0})

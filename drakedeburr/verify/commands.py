@@ -141,7 +141,7 @@ def _config(args: argparse.Namespace, scenario: str, hub: str):
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
     return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed,
-                       robot=getattr(args, "robot", None))
+                       robot=getattr(args, "robot", None), tool=getattr(args, "tool", None))
 
 
 def _same_robot(plan, robot: str | None) -> None:
@@ -360,6 +360,9 @@ def register(subparsers) -> None:
     p.add_argument("--robot", metavar="NAME", default=None,
                    help="hub or mesh target: the arm to plan for (drakedeburr robots; default "
                         "the scenario's); a plan is verified for the arm it was made for")
+    from drakedeburr.plan.commands import add_tool_argument
+
+    add_tool_argument(p)
     _common(p)
     p.set_defaults(_run=_run_verify)
 
