@@ -120,3 +120,62 @@ def test_least_axis_curvature_matches_the_precessing_cone_analytically():
     k0 = mut.least_axis_curvature(line, np.tile([0.0, 0.3, 1.0], (50, 1)) / np.hypot(0.3, 1.0),
                               0.1, closed=False)
     assert abs(k0) < 1e-3
+
+
+def _tight_corner(half, move=0.5e-3):
+    """A small window's tight corner: moves of 0.5 mm turning 45 deg each; the cone turns
+    0.17 rad between the second target and the third; the IK's axes sit at the rim of their
+    cones."""
+    P = np.zeros((5, 3))
+    for i in range(1, 5):
+        P[i] = P[i - 1] + move * np.array([np.cos(np.pi / 4 * i), np.sin(np.pi / 4 * i), 0])
+
+    def about_y(v, a):
+        return np.array([np.cos(a) * v[0] + np.sin(a) * v[2], v[1],
+                         -np.sin(a) * v[0] + np.cos(a) * v[2]])
+
+    C = np.array([about_y(np.array([0, 0, 1.0]), a) for a in (0.0, 0.0, 0.17, 0.17, 0.17)])
+    X = np.tile(np.eye(4), (len(P), 1, 1))
+    X[:, :3, 3] = P
+    for i, c in enumerate(C):
+        z = -about_y(c, -half + 1e-5)
+        x = np.cross([0, 1.0, 0], z)
+        x /= np.linalg.norm(x)
+        X[i, :3, :3] = np.stack([x, np.cross(z, x), z], 1)
+    return P, C, X
+
+
+def test_the_cut_keeps_its_axis_in_the_cones_as_the_verifier_reads_them(monkeypatch):
+    """The verifier reads the cone on the program's moves (the projection: through a corner
+    zone the corner target's cone); a reading by travel turns on through the zone. At tight
+    corners (0.5 mm moves, the cone turning 0.17 rad) pinned axes at the rim of the travel
+    reading leave the verifier's cone (here by 0.56 mrad); the planner smooths in the
+    verifier's reading, pinned axes PIN_MARGIN inside (an unseen hub's window failed the cone
+    check by 22-34 urad with the travel reading and 0.1 mrad)."""
+    from drakedeburr.plan import program_reading
+
+    half, dev, step = 0.12, 0.03e-3, 0.25e-3
+    P, C, X = _tight_corner(half)
+
+    def worst(cp):
+        a = -cp.X_HT[:, :3, 2]
+        c = program_reading.cone_axes_on_moves(cp.X_HT[:, :3, 3], P, C)
+        return float(np.max(np.arccos(np.clip(np.sum(a * c, 1), -1, 1))) - half)
+
+    kw = dict(deviation=dev, step=step, pin=np.array([[0.0, 1.0]]))
+    assert worst(mut.cut_path(X, C, half, **kw)) <= -mut.PIN_MARGIN + 1e-6  # pinned: the margin
+
+    def travel(p, P_, C_):  # the reading the planner used before
+        bp = mut.blend_corners(P_, dev, step)
+        return mut.axes_interp(bp.target_s, C_, bp.s)
+
+    monkeypatch.setattr(mut, "cone_axes_on_moves", travel)
+    assert worst(mut.cut_path(X, C, half, **kw)) > 1e-4
+
+
+def test_smooth_axes_says_when_no_axis_fits():
+    n = 50
+    s = np.linspace(0, 0.02, n)
+    c = np.tile([0.0, 0.0, 1.0], (n, 1))
+    a_pin = np.tile([np.sin(0.3), 0.0, np.cos(0.3)], (n, 1))  # pinned outside the 0.1 cone
+    assert mut.smooth_axes(s, c, c, 0.1, pin=np.ones(n, bool), pin_axes=a_pin) is None

@@ -5,8 +5,9 @@ programming (:mod:`drakedeburr.plan.spin`), tracked by the analytic IK on the wi
 configuration every ``dense_step`` of travel and checked for clearance and joint jumps.
 
 Where samples come too close to the hub the IK's (clearance-checked) axis is pinned around
-them and the blends tightened; where the program's moves are shorter than the sampling the cut
-is sampled again at half the step (:func:`between_samples_error`).
+them and the blends tightened; where the program's moves are shorter than the sampling, or the
+axis would leave its cone between the samples, the cut is sampled again at half the step
+(:func:`between_samples_error`).
 """
 
 from __future__ import annotations
@@ -17,10 +18,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from drakedeburr.plan.cut_path import axes_interp, cut_path
+from drakedeburr.frames.vectors import angle_between
+from drakedeburr.plan.cut_path import cut_path
 from drakedeburr.plan.interpolate import DensePath
 from drakedeburr.plan.options import PlanContext
-from drakedeburr.plan.program_reading import program_orientation_error
+from drakedeburr.plan.program_reading import cone_axes_on_moves, program_orientation_error
 from drakedeburr.plan.results import WindowPlan, WindowStatus
 from drakedeburr.plan.spin import optimize_spin, spin_frames
 from drakedeburr.plan.timing import joint_spline
@@ -87,19 +89,33 @@ def motion_records(window: int, cut, max_jump: float) -> list[FailureRecord]:
     return out
 
 
-def between_samples_error(kin, cut, cp) -> float:
-    """Largest angle [rad] between the program's orientation and the executed one *between*
-    the dense samples, where the timed trajectory runs on the joint spline through them
-    (:func:`drakedeburr.plan.timing.joint_spline`): read at the quarter points of every
-    interval together with the samples, as the verifier reads the trajectory. Where the
-    program's moves are shorter than the sampling and turn the tool, the spline cannot follow
-    its orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
-    25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm)."""
+def between_samples_error(kin, cut, cp, cone: tuple | None = None) -> tuple[float, float]:
+    """How far the executed cut strays *between* the dense samples, where the timed trajectory
+    runs on the joint spline through them (:func:`drakedeburr.plan.timing.joint_spline`): read
+    at the quarter points of every interval together with the samples, as the verifier reads
+    the trajectory.
+
+    Returns:
+        (largest angle [rad] between the program's orientation and the executed one, largest
+        angle [rad] by which the tool axis leaves its cone there: ``cone`` = (CL target points
+        (K, 3), their cone axes (K, 3) tip -> spindle, half-angle), read on the moves as the
+        verifier does; -inf without ``cone``). Where the program's moves are shorter than the
+        sampling and turn the tool, the spline cannot follow its orientation kinks (measured on
+        h5_split's tight corners: 0.1-0.37 mm moves turning 25-50 mrad read 11 mrad off the
+        program at 0.25 mm sampling, 6.6 mrad at 0.125 mm); where the cone turns fast (0.16
+        rad between two CL points of a small window's corner) an axis the cut keeps 0.1 mrad
+        inside its cone at the samples (a pinned one) read 0.03 mrad outside between them.
+    """
     sp = joint_spline(cut.s, cut.q)
     ds = np.diff(cut.s)
     s_all = np.sort(np.concatenate([cut.s] + [cut.s[:-1] + f * ds for f in (0.25, 0.5, 0.75)]))
     X = kin.X_HT_from_q(sp(s_all))
-    return float(program_orientation_error(X, cp.X_target)[0].max())
+    err = float(program_orientation_error(X, cp.X_target)[0].max())
+    if cone is None:
+        return err, -np.inf
+    P, C, half = cone
+    c = cone_axes_on_moves(X[:, :3, 3], P, C)
+    return err, float(np.max(angle_between(c, -X[:, :3, 2])) - half)
 
 
 def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, t_ik: float,
@@ -122,7 +138,8 @@ def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, 
         if out == "finer":
             step *= 0.5
             log.debug("window %d: between its samples the cut would stray from the program's "
-                     "orientation; sampling it every %.3f mm", wt.window_index, step * 1e3)
+                     "orientation or its cone; sampling it every %.3f mm", wt.window_index,
+                     step * 1e3)
             continue
         if isinstance(out, WindowStatus):
             return WindowPlan.skipped(wt.window_index, out, failures + records)
@@ -220,6 +237,7 @@ def _pin_and_tighten(cp, low: np.ndarray, step: float, pin, dev: np.ndarray, n: 
 
 
 def cone_of_cut(wt, order: np.ndarray, cp, via: np.ndarray | None = None) -> np.ndarray:
-    """The cone axis at every dense sample of the cut (interpolated between the CL targets)."""
-    ti = cp.target_index if via is None else cp.target_index[~via]
-    return axes_interp(cp.s[ti], wt.cone_retract_H[order], cp.s)
+    """The cone axis at every dense sample of the cut, read on the moves between the CL
+    targets as the verifier reads it (:func:`program_reading.cone_axes_on_moves`)."""
+    P = cp.X_target[:, :3, 3] if via is None else cp.X_target[~via, :3, 3]
+    return cone_axes_on_moves(cp.X_HT[:, :3, 3], P, wt.cone_retract_H[order])

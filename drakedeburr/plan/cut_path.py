@@ -34,6 +34,7 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation, Slerp
 
 from drakedeburr.frames.vectors import perpendicular_basis
+from drakedeburr.plan.program_reading import cone_axes_on_moves
 
 log = logging.getLogger(__name__)
 
@@ -163,6 +164,13 @@ def _add_cone(prog, u_i, axis: np.ndarray, cos_a: float) -> None:
     prog.AddLorentzConeConstraint(A, b, u_i)
 
 
+#: a pinned axis keeps this far inside its cone [rad] (:func:`smooth_axes`): at an unseen hub's
+#: small-window corner, where the cone turns 0.16 rad between two CL points, via targets
+#: 0.03 mm off the CL chord moved the verifier's reading of the cone by 0.13 mrad against the
+#: planner's (an axis pinned 0.1 mrad inside read 0.03 mrad outside)
+PIN_MARGIN = 0.5e-3
+
+
 def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_angle: float,
                 *, margin: float = 2e-3, w_pref: float = 1.0, w_rate: float = 1e-4,
                 w_curv: float = 1e-10, pin: np.ndarray | None = None,
@@ -183,7 +191,7 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
             ``a_pref``).
 
     Returns:
-        (N, 3) unit axes. Falls back to the preferred axes if the program fails.
+        (N, 3) unit axes, or None if the program fails (no axis curve in the cones).
     """
     from pydrake.solvers import ClarabelSolver, MathematicalProgram
 
@@ -217,10 +225,12 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     for j in range(2):
         prog.AddQuadraticCost(Qd, -2.0 * w_pref * w_s * u_pref[:, j], u[:, j], is_convex=True)
     # the margin applies where the axis is free; a pinned axis follows the IK's, which may use
-    # the cone up to its rim
+    # the cone up to its rim: it keeps PIN_MARGIN inside, what the cone's reading between the
+    # program's targets may move by where the program changes (via targets) at a corner whose
+    # cone turns fast
     half_i = np.full(N, max(half_angle - margin, 1e-3))
     if pin is not None:
-        half_i[np.asarray(pin, bool)] = max(half_angle - 1e-4, 1e-3)
+        half_i[np.asarray(pin, bool)] = max(half_angle - min(PIN_MARGIN, margin), 1e-3)
     cos_i = np.cos(half_i)
     cl = c @ E  # cone axes in the (e1, e2, z0) basis
     for i in range(N):
@@ -233,9 +243,8 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     prog.SetInitialGuess(u, u_pref)
     res = ClarabelSolver().Solve(prog)
     if not res.is_success():
-        log.warning("axis smoothing program failed (%s); keeping the preferred axes",
-                    res.get_solution_result())
-        return a_pref / np.linalg.norm(a_pref, axis=1, keepdims=True)
+        log.debug("axis smoothing program failed (%s)", res.get_solution_result())
+        return None
     uu = res.GetSolution(u)
     v = np.column_stack([uu, np.ones(N)]) @ E.T
     return v / np.linalg.norm(v, axis=1, keepdims=True)
@@ -370,10 +379,19 @@ def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: floa
         sig = spin_sigma / max(float(np.median(np.diff(bp.s))), 1e-9)
         quat = gaussian_filter1d(quat, sig, axis=0, mode="nearest")
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
-    c_rot = axes_interp(ts, cone_retract_H, bp.s)
-    a = smooth_axes(bp.s, -R[:, :, 2], c_rot, half_angle, margin=axis_margin, w_rate=w_rate,
-                    w_curv=w_curv, pin=_in_intervals(bp.s, pin), pin_axes=a_ik,
-                    pin_angle=pin_angle)
+    # the cone where the verifier reads it (on the program's moves); by travel where that
+    # leaves the smoothing no axis (at a pinned sample of a tight corner)
+    kw = dict(margin=axis_margin, w_rate=w_rate, w_curv=w_curv, pin=_in_intervals(bp.s, pin),
+              pin_axes=a_ik, pin_angle=pin_angle)
+    a = smooth_axes(bp.s, -R[:, :, 2], cone_axes_on_moves(bp.p, X_targets[:, :3, 3],
+                                                          cone_retract_H), half_angle, **kw)
+    if a is None:
+        log.debug("no smooth axis inside the cones read on the moves; reading them by travel")
+        a = smooth_axes(bp.s, -R[:, :, 2], axes_interp(ts, cone_retract_H, bp.s), half_angle,
+                        **kw)
+    if a is None:
+        log.warning("axis smoothing program failed; keeping the preferred axes")
+        a = -R[:, :, 2] / np.linalg.norm(R[:, :, 2], axis=1, keepdims=True)
     R = _rotate_axis_to(R, a)
     R_ik = R.copy()
     if spin == "fixed":

@@ -59,8 +59,12 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
                                             "orientation"))
     if bad.size:
         return WindowStatus.PROGRAM_FAILED
-    if refine and between_samples_error(kin, cut, cp) > 0.8 * tol.orientation_match:
-        return "finer"
+    if refine:
+        err, out_of_cone = between_samples_error(
+            kin, cut, cp, (cp.X_target[~via, :3, 3], wt.cone_retract_H[order],
+                           wt.cone_half_angle))
+        if err > 0.8 * tol.orientation_match or out_of_cone > 0.0:
+            return "finer"
     stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > tol.orientation_match:
         k = int(np.argmax(stray))

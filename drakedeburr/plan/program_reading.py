@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["moves_in_order", "passing_fractions", "rot_angle", "slerp_pairs",
-           "program_orientations", "program_orientation_error"]
+           "program_orientations", "program_orientation_error", "cone_axes_on_moves"]
 
 
 def moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
@@ -58,6 +58,28 @@ def moves_in_order(p: np.ndarray, a: np.ndarray, b: np.ndarray):
         m[i - 1] = back[i, m[i]]
     r = np.arange(n)
     return D[r, m], m, F[r, m]
+
+
+def cone_axes_on_moves(p: np.ndarray, P: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """The cone axis where each executed sample is, read as the verifier reads it
+    (``drakedeburr.verify.cut_geometry``): the sample on its move (:func:`moves_in_order`), at
+    the share of its projection on the move, the targets' cone axes interpolated linearly
+    there and renormalised. Through a corner zone the projection stands still, so the cone
+    stays the corner target's; a reading by travel turns on through the zone and differs by up
+    to the share of the zone times the cone's turn between the targets (mrad where the cone
+    turns 0.17 rad between two CL points of a small window).
+
+    Args:
+        p: (N, 3) executed samples in travel order; P: (K, 3) the targets in order, K >= 2;
+            C: (K, 3) unit cone axes at the targets.
+
+    Returns:
+        (N, 3) unit cone axes.
+    """
+    P, C = np.asarray(P, float), np.asarray(C, float)
+    _, m, f = moves_in_order(np.asarray(p, float), P[:-1], P[1:])
+    c = (1.0 - f)[:, None] * C[m] + f[:, None] * C[m + 1]
+    return c / np.linalg.norm(c, axis=1, keepdims=True)
 
 
 def passing_fractions(p: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
