@@ -403,6 +403,7 @@ def plan_hub(
     plan = _plan_in_cell(cell, hub_model, wts, config, options, progress)
     if options.relax and config.tool is None and relax.reach_may_help(plan, cell):
         t1 = time.perf_counter()
+        t_standard = t1 - t0
         log.warning("the standard burr leaves window(s) %s failing at its spindle body: "
                     "planning the hub again with the %s", relax.failing_windows(plan),
                     relax.long_reach().title)
@@ -410,7 +411,8 @@ def plan_hub(
                                       tool=relax.LONG_REACH),
                             hub_model, wts, config, options, progress)
         plan = relax.choose_tool(plan, alt)
-        plan.run["timings"]["other_tool_seconds"] = time.perf_counter() - t1
+        plan.run["timings"].update(standard_burr_seconds=t_standard,
+                                   long_reach_seconds=time.perf_counter() - t1)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets
