@@ -282,11 +282,16 @@ _BODY = FailureRecord(0, "ik", "unreachable", where={
     "blocking_pair": ["spindle::spindle/spindle::spindle_body", "hub::hub/hub::piece_7"]})
 _HEAD = FailureRecord(1, "dense", "too close", where={
     "pair": ["spindle::burr/spindle::burr_head", "hub::hub/hub::piece_2"]})
+_SHANK = FailureRecord(2, "ik", "unreachable", where={
+    "blocking_pair": ["spindle::burr/spindle::burr_shank", "hub::hub/hub::piece_1"]})
+_STAND = FailureRecord(3, "ik", "unreachable", where={
+    "blocking_pair": ["stand::stand/stand::spindle_body", "hub::hub/hub::piece_48"]})
 
 
 @pytest.mark.parametrize("failures, tool, helps", [
     ([_BODY], "standard", True), ([_HEAD, _BODY], "standard", True),
-    ([_HEAD], "standard", False), ([FailureRecord(0, "transition", "joint limit")],
+    ([_HEAD], "standard", False), ([_SHANK], "standard", False), ([_STAND], "standard", True),
+    ([FailureRecord(0, "transition", "joint limit")],
                                    "standard", False),
     ([_BODY], "long_reach", False), ([_BODY], None, False)])
 def test_the_long_reach_is_tried_where_the_tool_body_blocked(failures, tool, helps):

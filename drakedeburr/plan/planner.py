@@ -373,8 +373,8 @@ def plan_hub(
     """Plan a whole hub end to end: hub -> CL -> orientation -> IK -> timed Plan.
 
     The hub is planned with ``config.tool`` on the cell's spindle; when that is not given and
-    the standard burr leaves windows failing where the spindle body, clamp, collet or shank
-    meets something (a deep dish), the hub is planned again with the long-reach burr and that
+    the standard burr leaves windows failing where the spindle body, clamp or collet meets
+    something (a deep dish), the hub is planned again with the long-reach burr and that
     plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
     one burr for the whole hub, no tool change within a program).
 
@@ -404,8 +404,8 @@ def plan_hub(
     if options.relax and config.tool is None and relax.reach_may_help(plan, cell):
         t1 = time.perf_counter()
         t_standard = t1 - t0
-        log.warning("the standard burr leaves window(s) %s failing at its spindle body: "
-                    "planning the hub again with the %s", relax.failing_windows(plan),
+        log.warning("the standard burr leaves window(s) %s failing where the spindle meets the "
+                    "cell: planning the hub again with the %s", relax.failing_windows(plan),
                     relax.long_reach().title)
         alt = _plan_in_cell(load_cell(config.scenario, config.hub, robot=config.robot,
                                       tool=relax.LONG_REACH),

@@ -14,7 +14,7 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    range cut window 0 without a failure record);
 2. the burr, for the whole hub (:func:`choose_tool`, called by
    :func:`drakedeburr.plan.planner.plan_hub`): where windows still fail with the spindle body,
-   its clamp, the collet or the shank against something (a deep dish: the spindle body meets
+   its clamp or the collet against something (a deep dish: the spindle body meets
    the dish wall whatever the tilt), the hub is planned again with the long-reach burr (the
    same head, 50 mm further out: ``drakedeburr.cell.tools.TOOL_VARIANTS``) and that plan kept
    when fewer windows fail. One burr serves the whole hub (no tool change within a program);
@@ -51,8 +51,8 @@ TILT_STEPS = (OrientationBounds(0.09, 0.26), OrientationBounds(0.0, 0.15),
 #: the burr tried for a hub the standard one cannot cut
 LONG_REACH = "long_reach"
 #: tool geometries a longer stick-out moves back from the cut (the generated tool models')
-_TOOL_BODY = frozenset({"spindle_body", "clamp", "collet", "burr_shank", "bracket",
-                        "adapter_plate"})
+#: (not the shank: a longer one reaches further down, where it met the hub)
+_TOOL_BODY = frozenset({"spindle_body", "clamp", "collet", "bracket", "adapter_plate"})
 
 
 @dataclass(frozen=True)
@@ -134,7 +134,7 @@ def _pair(f: FailureRecord) -> list[str]:
 
 def reach_may_help(plan, cell) -> bool:
     """Could a longer burr help: the cell carries the standard burr on a bundled spindle and a
-    failure names a tool-body geometry (spindle body, clamp, collet, shank) in the pair that
+    failure names a tool-body geometry (spindle body, clamp, collet) in the pair that
     blocked it. Pair names are ``model::body/model::geometry``."""
     if cell.tool != DEFAULT_TOOL:
         return False
