@@ -217,14 +217,6 @@ class ToolVariant:
     burr: BurrGeometry
     suffix: str
 
-    @property
-    def spindle(self) -> FloatingSpindle:
-        return replace(FLOATING_SPINDLE, burr=self.burr)
-
-    @property
-    def stand(self) -> SpindleStand:
-        return replace(SPINDLE_STAND, burr=self.burr)
-
 
 #: The long-reach burr: the standard head on a 6 mm shank with 75 mm stick-out (the standard
 #: 25 mm + 50 mm), as carbide burr makers sell them (100-150 mm overall length) for deep
@@ -243,7 +235,7 @@ TOOL_VARIANTS = {
 }
 DEFAULT_TOOL = "standard"
 
-#: the bundled tool models a variant replaces in a scenario (base file name -> its stem)
+#: the bundled tool models a variant replaces in a scenario (their file names' stems)
 _VARIANT_MODELS = ("floating_spindle", "spindle_stand")
 
 
