@@ -102,9 +102,10 @@ def between_samples_error(kin, cut, cp, cone: tuple | None = None) -> tuple[floa
         verifier does; -inf without ``cone``). Where the program's moves are shorter than the
         sampling and turn the tool, the spline cannot follow its orientation kinks (measured on
         h5_split's tight corners: 0.1-0.37 mm moves turning 25-50 mrad read 11 mrad off the
-        program at 0.25 mm sampling, 6.6 mrad at 0.125 mm); where the cone turns fast (0.16
-        rad between two CL points of a small window's corner) an axis the cut keeps 0.1 mrad
-        inside its cone at the samples (a pinned one) read 0.03 mrad outside between them.
+        program at 0.25 mm sampling, 6.6 mrad at 0.125 mm). The cone reading is a guard: at
+        the corner where an unseen hub's cut left the verifier's cone (0.16 rad of cone turn
+        between two CL points), the spline between the samples stayed inside; the cause was
+        the reading of the cone itself (:data:`drakedeburr.plan.cut_path.PIN_MARGIN`).
     """
     sp = joint_spline(cut.s, cut.q)
     ds = np.diff(cut.s)
