@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from drakedeburr.verify.true_surface import (
+from drakedeburr.cell.true_surface import (
     burr_cone,
     cone_signed_distance,
     true_surface_distances,
@@ -184,3 +184,54 @@ def test_burr_contact_reads_the_true_surface_where_the_pieces_stand_proud(tmp_pa
     # the face normal to the axis: its depth is the apex's depth along the flank normal
     assert -1.0e-3 - 2 * 2e-6 <= ok.value <= -1.0e-3 + 1e-12
     assert not bad.passed and bad.value < bad.limit
+
+
+def _l_block():
+    """An L-shaped block (two 40 x 20 x 20 mm bars, closed and outward oriented) and the
+    convex hull of it, a collision piece that bridges the concave corner: the square
+    x, y in [20, 40] mm is inside the piece and outside the material."""
+    import manifold3d
+
+    bar_x = manifold3d.Manifold.cube([0.04, 0.02, 0.02])
+    bar_y = manifold3d.Manifold.cube([0.02, 0.04, 0.02])
+    mesh = (bar_x + bar_y).to_mesh()
+    return np.asarray(mesh.vert_properties, float)[:, :3], np.asarray(mesh.tri_verts, int)
+
+
+def test_an_in_centre_inside_a_piece_but_outside_a_closed_mesh_is_read(tmp_path):
+    """The in-centre in the corner a piece bridges: with the closed mesh the winding number
+    finds it outside the material and the surface reading stands (nothing within reach);
+    with the mesh opened (inside undefined) or the in-centre in the material, the pieces'
+    reading is kept."""
+    import trimesh
+
+    V, F = _l_block()
+    hull = trimesh.Trimesh(V, F).convex_hull
+    path = tmp_path / "piece.obj"
+    hull.export(path)
+    corner = _pose(p=np.array([0.03, 0.03, 0.01]) - CONE.incentre_T)  # 10 mm from each wall
+    solid = _pose(p=np.array([0.01, 0.01, 0.01]) - CONE.incentre_T)
+    X = np.stack([corner, solid])
+    closed = true_surface_distances(_hub(V, F, [path]), X, [0, 1], reach=2e-3)
+    assert closed.engulfed.tolist() == [False, True]
+    assert closed.value[0] == pytest.approx(2e-3, abs=1e-9)
+    opened = true_surface_distances(_hub(V, F[2:], [path]), X, [0, 1], reach=2e-3)
+    assert opened.engulfed.tolist() == [True, True]
+
+
+def test_the_depth_lies_below_its_tangent_plane_everywhere():
+    """The concave bound the branch and bound settles triangles with: at random points y
+    inside, outside and on the axis, depth(x) <= depth(y) + g(y) . (x - y) for random x, and
+    the depth equals minus the cone's signed distance."""
+    from drakedeburr.cell.true_surface import _depth_supergradient
+
+    rng = np.random.default_rng(11)
+    c = CONE
+    y = rng.uniform([-8e-3, -8e-3, -6e-3], [8e-3, 8e-3, 6e-3], size=(4000, 3))
+    y[:200, :2] = 0.0  # on the axis (the supergradient's ambiguous meridian)
+    x = y + rng.normal(scale=3e-3, size=y.shape)
+    f_y, g_y = _depth_supergradient(c, y)
+    f_x, _ = _depth_supergradient(c, x)
+    assert np.allclose(f_y, -cone_signed_distance(c, y), atol=1e-15)
+    assert np.allclose(np.linalg.norm(g_y, axis=1), 1.0)
+    assert np.all(f_x <= f_y + np.einsum("ni,ni->n", g_y, x - y) + 1e-12)

@@ -45,7 +45,7 @@ def burr_contact(sp, cfg) -> CheckItem:
     lim = np.where(contact_kinds, true_lim - tol.collision_model_excess, tol.min_clearance)
     value, limit = np.array(d.burr, float), lim.copy()
     # where the pieces' reading fails, the samples are read against the hub's triangle mesh
-    # (verify.true_surface), the excess allowance dropped: the pieces may reach further than
+    # (cell.true_surface), the excess allowance dropped: the pieces may reach further than
     # it on an imported mesh
     bad = np.flatnonzero(value < lim)
     note = ""
@@ -72,7 +72,7 @@ def burr_contact(sp, cfg) -> CheckItem:
 
 
 def _true_surface(sp, index, reach):
-    from drakedeburr.verify.true_surface import true_surface_distances
+    from drakedeburr.cell.true_surface import true_surface_distances
 
     return true_surface_distances(sp.hub_model, sp.samples.X_HT, index, reach=reach)
 

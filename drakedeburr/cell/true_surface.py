@@ -20,7 +20,10 @@ the axis is no boundary). How deep the material reaches into the cone is the lar
 of a material point. Depth is a concave function on the cone, so its largest value over a
 region lies on the region's boundary (here: the hub's surface) unless the region holds the
 cone's deepest point, its in-centre (depth = in-radius): a sample whose in-centre lies inside
-a collision piece (which contains the material) keeps the pieces' reading. The largest
+a collision piece (which contains the material) keeps the pieces' reading, unless the hub's
+mesh is closed and consistently oriented and the in-centre lies outside it by the generalised
+winding number (libigl): a convex piece may bridge a concave corner or a fillet by more than
+the model excess (r271128_007: in-centres 1.6 mm outside the material, inside a piece). The largest
 depth over the surface is found by branch and bound over its triangles
 (:func:`true_surface_distances`); the reading is the bound's upper end, a lower bound of the
 signed distance within ``tolerance`` of it.
@@ -34,6 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import ConvexHull, cKDTree
+
+#: [m] an in-centre closer than this to the surface (the surface read this near the in-radius
+#: deep) keeps the pieces' reading: its inside/outside test would rest on float rounding
+INCENTRE_MARGIN = 1e-5
 
 __all__ = ["BurrCone", "TrueSurfaceReading", "burr_cone", "cone_signed_distance",
            "true_surface_distances"]
@@ -98,6 +105,47 @@ def cone_signed_distance(cone: BurrCone, p_T: np.ndarray) -> np.ndarray:
     return np.where(inside, -np.minimum(base, flank), np.minimum(base, flank))
 
 
+def _depth_supergradient(cone: BurrCone, p_T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) depth (minus the signed distance) of points in T and (n, 3) a supergradient of it.
+
+    The depth is concave on all of space (a convex set's signed distance is convex): inside,
+    it is the least distance to the cone's supporting planes (the base and the flank's tangent
+    plane in the point's meridian), each linear; outside, minus the distance to the nearest
+    point. So depth(x) <= depth(y) + g(y) . (x - y) for every x: the bound that settles a
+    triangle where one plane is the nearest (:func:`true_surface_distances`)."""
+    x, y, z = p_T[:, 0], p_T[:, 1], p_T[:, 2]
+    r = np.hypot(x, y)
+    safe = np.where(r > 0.0, r, 1.0)
+    ex, ey = np.where(r > 0.0, x / safe, 1.0), np.where(r > 0.0, y / safe, 0.0)
+    sa, ca = math.sin(cone.alpha), math.cos(cone.alpha)
+    sd = cone_signed_distance(cone, p_T)
+    inside = sd <= 0.0
+    # inside: the nearer of the base plane (depth z - z_b) and the flank's tangent plane
+    # (depth (z_a - z) sin a - r cos a)
+    base_d = z - cone.z_base
+    flank_d = (cone.z_apex - z) * sa - r * ca
+    use_base = base_d <= flank_d
+    g_in = np.where(use_base[:, None], np.array([0.0, 0.0, 1.0]),
+                    np.stack([-ca * ex, -ca * ey, np.full_like(z, -sa)], axis=1))
+    # outside: minus the unit vector from the nearest point of the meridian triangle
+    q = np.stack([_nearest_on_segment(z, r, (cone.z_base, 0.0), (cone.z_base, cone.r_base)),
+                  _nearest_on_segment(z, r, (cone.z_base, cone.r_base), (cone.z_apex, 0.0))])
+    dist = np.hypot(z - q[..., 0], r - q[..., 1])
+    pick = np.argmin(dist, axis=0)
+    qz, qr = np.choose(pick, q[..., 0]), np.choose(pick, q[..., 1])
+    dz, dr = z - qz, r - qr
+    norm = np.maximum(np.hypot(dz, dr), 1e-300)
+    g_out = -np.stack([dr * ex, dr * ey, dz], axis=1) / norm[:, None]
+    return -sd, np.where(inside[:, None], g_in, g_out)
+
+
+def _nearest_on_segment(z, r, a, b) -> np.ndarray:
+    """(n, 2) nearest points (z, r) of the segment a-b to the points (z, r)."""
+    a, d = np.asarray(a, float), np.asarray(b, float) - np.asarray(a, float)
+    u = np.clip(((z - a[0]) * d[0] + (r - a[1]) * d[1]) / (d @ d), 0.0, 1.0)
+    return np.stack([a[0] + u * d[0], a[1] + u * d[1]], axis=1)
+
+
 @dataclass(frozen=True)
 class TrueSurfaceReading:
     """Samples read against the true surface.
@@ -105,7 +153,8 @@ class TrueSurfaceReading:
     Attributes:
         index: (k,) sample indices read; value: (k,) lower bound of the burr head's signed
             distance to the surface [m] (the reading less ``resolution``); engulfed: (k,) the
-            cone's in-centre lies inside a collision piece (the pieces' reading stands).
+            cone's in-centre lies inside a collision piece and, where the mesh is closed,
+            inside the material (the pieces' reading stands).
         resolution: [m] the largest gap left between the bounds of a sample.
         points: how many (sample, triangle) bounds were read.
     """
@@ -124,13 +173,14 @@ def _initial_pairs(tri: np.ndarray, centres: np.ndarray, radii: np.ndarray):
     rad = np.linalg.norm(tri - c[:, None], axis=2).max(axis=1)
     tree = cKDTree(c)
     small = rad <= 5e-3
-    ks, ts = [], []
-    for k, near in enumerate(tree.query_ball_point(centres, radii + 5e-3)):
-        near = np.asarray(near, int)
-        near = near[small[near]]
-        near = near[np.linalg.norm(c[near] - centres[k], axis=1) <= radii[k] + rad[near]]
-        ks.append(np.full(len(near), k))
-        ts.append(near)
+    lists = tree.query_ball_point(centres, radii + 5e-3)
+    counts = np.fromiter((len(x) for x in lists), int, len(lists))
+    k = np.repeat(np.arange(len(lists)), counts)
+    t = np.fromiter((j for x in lists for j in x), int, int(counts.sum()))
+    keep = small[t]
+    k, t = k[keep], t[keep]
+    keep = np.linalg.norm(c[t] - centres[k], axis=1) <= radii[k] + rad[t]
+    ks, ts = [k[keep]], [t[keep]]
     large = np.flatnonzero(~small)  # few: CAD faces; against every sample
     if len(large):
         d = np.linalg.norm(c[large][None] - centres[:, None], axis=2)
@@ -164,6 +214,30 @@ def _piece_planes(paths: tuple) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(rows), np.array(offsets)
 
 
+def _closed_mesh(hub_model):
+    """(V, F) of the hub's mesh, vertices merged, when it is closed and consistently and
+    outward oriented (inside and outside well defined), else None."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(hub_model.vertices_H, hub_model.faces, process=True)
+    if not (mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0.0):
+        return None
+    return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+def _outside_material(hub_model, p_H: np.ndarray) -> np.ndarray | None:
+    """(n,) whether each point lies outside the hub's material by the generalised winding
+    number (libigl; exact, < 1/2 outside), or None when the mesh is not closed and
+    consistently oriented (an open CAD export: inside is not defined, the pieces decide)."""
+    closed = _closed_mesh(hub_model)
+    if closed is None:
+        return None
+    import igl
+
+    w = igl.winding_number(closed[0], closed[1], np.ascontiguousarray(p_H, float))
+    return np.asarray(w) < 0.5
+
+
 def _inside_a_piece(planes, offsets, p_H: np.ndarray) -> np.ndarray:
     """(n,) whether each point lies inside (or on) some collision piece."""
     out = np.zeros(len(p_H), bool)
@@ -176,8 +250,8 @@ def _inside_a_piece(planes, offsets, p_H: np.ndarray) -> np.ndarray:
 
 def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
                            reach: np.ndarray | float, tolerance: float = 2e-6,
-                           max_levels: int = 24, cone: BurrCone | None = None
-                           ) -> TrueSurfaceReading:
+                           max_levels: int = 24, cone: BurrCone | None = None,
+                           shallow: np.ndarray | float | None = None) -> TrueSurfaceReading:
     """The burr head's signed distance to the hub's triangle mesh at samples ``index``.
 
     Branch and bound over the mesh's triangles, per sample: a triangle's vertices give a
@@ -196,6 +270,9 @@ def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
         tolerance: [m] the bounds' gap at which a sample is settled.
         max_levels: splits at most; a sample still open then keeps its upper bound.
         cone: the burr head (default :func:`burr_cone`).
+        shallow: (per sample or one) a depth [m]: a sample whose upper bound of the depth is
+            already no deeper is settled there (its reading: that upper bound, within its true
+            value's side of ``shallow``); None: every sample to ``tolerance``.
     """
     cone = cone or burr_cone()
     index = np.asarray(index, int)
@@ -211,6 +288,8 @@ def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
     upper = np.full(n, -np.inf)
     settled = np.zeros(n, bool)
     top = np.full(n, -np.inf)
+    early = (np.full(n, -np.inf) if shallow is None
+             else np.broadcast_to(np.asarray(shallow, float), (n,)))
     pairs = 0
     for _level in range(max_levels + 1):
         pairs += len(k)
@@ -221,12 +300,18 @@ def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
         depth = (-sd).max(axis=1)  # the deepest vertex of each triangle
         np.maximum.at(lower, k, depth)
         edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-        ub = depth + edge / math.sqrt(3.0)
+        # two upper bounds: depth is 1-Lipschitz (every point lies within edge / sqrt(3) of
+        # a vertex), and concave (below its tangent plane at the centroid: exact where one
+        # supporting plane of the cone is the nearest over the whole triangle)
+        c_T = p_T.mean(axis=1)
+        f_c, g_c = _depth_supergradient(cone, c_T)
+        lin = f_c + np.einsum("pvi,pi->pv", p_T - c_T[:, None], g_c).max(axis=1)
+        ub = np.minimum(depth + edge / math.sqrt(3.0), lin)
         live = ub > lower[k]
         k, tri, ub = k[live], tri[live], ub[live]
         top = np.full(n, -np.inf)
         np.maximum.at(top, k, ub)
-        done = ~settled & (top - lower <= tolerance)
+        done = ~settled & ((top - lower <= tolerance) | (top <= early))
         upper[done] = np.maximum(lower[done], top[done])
         settled |= done
         keep = ~settled[k]
@@ -239,6 +324,14 @@ def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
     engulfed = np.zeros(n, bool)
     if hub_model.collision_paths:
         planes, offsets = _piece_planes(tuple(str(q) for q in hub_model.collision_paths))
-        engulfed = _inside_a_piece(planes, offsets, p + R @ cone.incentre_T)
+        incentres = p + R @ cone.incentre_T
+        engulfed = _inside_a_piece(planes, offsets, incentres)
+        # a piece may bridge a concave corner or fillet: where the mesh is closed, the
+        # in-centre is read against the material itself (deep surface readings stay engulfed)
+        clear = engulfed & (upper < cone.inradius - INCENTRE_MARGIN)
+        if clear.any():
+            outside = _outside_material(hub_model, incentres[clear])
+            if outside is not None:
+                engulfed[np.flatnonzero(clear)[outside]] = False
     return TrueSurfaceReading(index=index, value=np.minimum(-upper, reach), engulfed=engulfed,
                               resolution=max(gap, tolerance), points=pairs)
