@@ -211,6 +211,9 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         **({"tool": ctx.cell.tool, "tool_title": tool_variant(ctx.cell.tool).title}
            if ctx.cell.tool not in (None, DEFAULT_TOOL) else {}),
     )
+    reliefs = [_relief_record(s) for s in window_stats if s.get("chamfer_relief")]
+    if reliefs:
+        meta["recipe_deviations"] = reliefs
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
     return Plan(scenario=str(config.scenario), hub=str(config.hub), mode=cell.mode,
@@ -281,7 +284,8 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
             kept = len(relaxed.failures) < len(plan.failures)  # both without in-vain records
         if kept:
             deviations = [accepted[w][2] for w in failing if w in accepted]
-            relaxed.meta["recipe_deviations"] = [d.record() for d in deviations]
+            relaxed.meta["recipe_deviations"] = [
+                *relaxed.meta.get("recipe_deviations", []), *(d.record() for d in deviations)]
             log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
                         "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
             plan = relaxed
@@ -290,6 +294,25 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     if in_vain:  # said with the failures of whichever plan is kept
         plan = replace(plan, failures=(*plan.failures, *in_vain))
     return plan
+
+
+def _relief_record(stats: dict) -> dict:
+    """The recipe deviation of a window whose tool points were moved out of the material
+    (:mod:`drakedeburr.plan.burr_depth`)."""
+    from drakedeburr.plan.burr_depth import MARGIN
+    from drakedeburr.plan.relax import Deviation
+
+    r = stats["chamfer_relief"]
+    left = (f"; still {r['excess_left_mm']:.3f} mm too deep" if r["excess_left_mm"] > 0
+            else "")
+    return Deviation(
+        window=int(stats["window"]), item="tool point", default="the depth of cut's",
+        used=f"moved out of the material by up to {r['max_mm']:.3f} mm at {r['cl_points']} "
+             f"CL points",
+        reason=f"the burr reached {r['depth_read_mm']:.3f} mm into the hub, {r['bound_mm']:.3f}"
+               f" mm allowed (depth of cut + the edge tolerance, less "
+               f"{1e3 * MARGIN:.2f} mm kept): a rounded or acute edge{left}"
+    ).record()
 
 
 def _opts(ctx: PlanContext, **changes) -> PlanContext:

@@ -80,7 +80,8 @@ class WindowStats:
     ``speed_in_band_bound``: the planner's figure of the share of the cut that could be in the
     feed band (the fillet repair's: the share with every slow stretch where the feed can be
     held cut at the feed, the others as timed; None without the repair); ``fillets``: the
-    repair's report of each slow stretch.
+    repair's report of each slow stretch; ``chamfer_relief``: see
+    :mod:`drakedeburr.plan.burr_depth`.
     """
 
     window: int
@@ -111,6 +112,9 @@ class WindowStats:
     spin_rule: str = ""
     speed_in_band_bound: float | None = None
     fillets: list = field(default_factory=list)
+    #: tool points moved out where the burr would reach too deep into the hub (a rounded or
+    #: acute edge, :mod:`drakedeburr.plan.burr_depth`): None when the recipe's held everywhere
+    chamfer_relief: dict | None = None
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

@@ -165,7 +165,56 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
 
 
 def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
-    """One planning pass of a window (see :func:`plan_window`)."""
+    """One planning pass of a window (see :func:`plan_window`), its chamfer leg relieved where
+    the burr would reach deeper into the hub than the verifier allows
+    (:mod:`drakedeburr.plan.burr_depth`)."""
+    from drakedeburr.plan import burr_depth
+
+    offset = np.zeros((len(wt), 3))
+    result = _plan_window_at(ctx, wt, q_from, offset)
+    if not result.status.planned or ctx.options.report_only:
+        return result
+    hub = burr_depth.hub_model_of(str(ctx.cell.hub_sdf.parent))
+    r_c, _lift = contact_geometry(ctx.options.contact_radius)
+    p_HQ0 = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
+    bound = wt.depth_of_cut + ctx.config.tolerances.edge_deviation
+    first = worst = None
+    for attempt in range(burr_depth.ROUNDS + 1):
+        X = ctx.kin.X_HT_from_q(np.concatenate(
+            [st.timed.q for st in result.stretches if st.kind in ("approach", "cut", "retract")]))
+        new, worst = burr_depth.relieved_offsets(hub, X, p_HQ0 + offset, offset, bound,
+                                                 wt.closed)
+        first = worst if first is None else first
+        # a tool point never moves by more than the depth of cut (the line stays engaged)
+        size = np.linalg.norm(new, axis=1, keepdims=True)
+        new *= np.minimum(1.0, wt.depth_of_cut / np.maximum(size, 1e-12))
+        if worst <= 0.0 or attempt == burr_depth.ROUNDS or np.allclose(new, offset):
+            break
+        log.info("window %d: the burr reaches %.3f mm into the hub (bound %.3f mm, kept "
+                 "%.3f mm inside); moving %d tool points out by up to %.3f mm", wt.window_index,
+                 1e3 * (worst + bound - burr_depth.MARGIN), 1e3 * bound,
+                 1e3 * burr_depth.MARGIN, int(np.sum(np.any(new != offset, axis=1))),
+                 1e3 * float(np.linalg.norm(new, axis=1).max()))
+        retry = _plan_window_at(ctx, wt, q_from, new)
+        if not retry.status.planned or len(retry.failures) > len(result.failures):
+            log.info("window %d: the moved tool points did not plan; kept the last plan",
+                     wt.window_index)
+            break
+        result, offset = retry, new
+    moved = np.linalg.norm(offset, axis=1)
+    if moved.max() > 0.0:
+        result.stats = replace(result.stats, chamfer_relief={
+            "max_mm": float(1e3 * moved.max()), "cl_points": int(np.sum(moved > 0.0)),
+            "depth_read_mm": float(1e3 * (first + bound - burr_depth.MARGIN)),
+            "bound_mm": float(1e3 * bound),
+            "excess_left_mm": float(1e3 * max(worst - burr_depth.MARGIN, 0.0))})
+    return result
+
+
+def _plan_window_at(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
+                    offset: np.ndarray) -> WindowPlan:
+    """One planning pass of a window, its CL targets' tool points moved by ``offset`` (M, 3)
+    [m] (:mod:`drakedeburr.plan.burr_depth`; zero: the recipe's)."""
     from drakedeburr.plan.cut import execute_cut
 
     r_c, lift = contact_geometry(ctx.options.contact_radius)
@@ -174,7 +223,8 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
     # is rotationally symmetric, so the spin there need not equal the first one (no J6 unwind)
     loop = np.concatenate([np.arange(m), [0]]) if wt.closed else np.arange(m)
     # the IK ties the centre of the cutting circle (``lift`` below T on the axis) to its target
-    p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)[loop]
+    p_HQ = (tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
+            + offset)[loop]
     t0 = time.perf_counter()
     wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
     t_ik = time.perf_counter() - t0
