@@ -4,8 +4,9 @@ and the time per hub (median, p95).
 
     .venv/bin/python benchmarks/bench_catalogue.py --seed 1601 --count 60 -j 2 --out /tmp/cat
 
-Hubs are generated once into OUT/hubs (reused when there); every (cell, hub) gets its plan
-folder and report under OUT/verify/<cell>/<hub>/ and one row in OUT/verify/summary.json.
+Hubs are generated once into OUT/hubs (reused when there); every (cell, hub) gets its report
+(and, when it fails, its plan folder ``plan/``) under OUT/verify/<cell>/<hub>/ and one row in
+OUT/verify/summary.json.
 """
 
 from __future__ import annotations
@@ -64,10 +65,12 @@ def main() -> None:
     ap.add_argument("-j", "--workers", type=int, default=2)
     ap.add_argument("--out", default="catalogue_bench")
     ap.add_argument("--cells", default="tool_in_hand,workpiece_in_hand")
+    ap.add_argument("--start", type=int, default=0,
+                    help="first hub of the catalogue to run (the hubs before it are skipped)")
     args = ap.parse_args()
     out = Path(args.out)
     t0 = time.perf_counter()
-    hubs = generate(args.seed, args.count, out / "hubs", args.workers)
+    hubs = generate(args.seed, args.count, out / "hubs", args.workers)[args.start:]
     t_gen = time.perf_counter() - t0
     from drakedeburr.verify.batch import verify_all
 
@@ -76,7 +79,7 @@ def main() -> None:
 
     summary = verify_all([str(h) for h in hubs], out / "verify",
                          scenarios=args.cells.split(","), workers=args.workers,
-                         progress=progress)
+                         progress=progress, keep_failed_plans=True)
     print(f"catalogue seed {args.seed}: {len(hubs)} hubs (generated/reused in {t_gen:.0f} s), "
           f"{summary['jobs']} jobs in {summary['elapsed_s']:.0f} s on {summary['executor']}")
     for cell in args.cells.split(","):

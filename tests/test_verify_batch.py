@@ -14,7 +14,8 @@ OPTIONS = {"scenarios": ["tool_in_hand"], "planner": "reference", "windows": [0]
 
 
 def test_process_pool_then_dask_cluster(tmp_path):
-    pool = mut.verify_all(HUBS, tmp_path / "pool", workers=2, **OPTIONS)
+    pool = mut.verify_all(HUBS, tmp_path / "pool", workers=2, keep_failed_plans=True,
+                          **OPTIONS)
     assert pool["executor"] == "processes(2)"
     assert [r["hub"] for r in pool["rows"]] == sorted(HUBS)
     for r in pool["rows"]:
@@ -23,6 +24,13 @@ def test_process_pool_then_dask_cluster(tmp_path):
                          .read_text())
         assert doc["passed"] == r["passed"]
         assert doc["summary"]["failed"] == r["failed"]
+        # the plan of a hub that fails is kept to look into, and loads
+        kept = tmp_path / "pool" / "tool_in_hand" / r["hub"] / "plan"
+        assert kept.is_dir() == (not r["passed"])
+        if kept.is_dir():
+            from drakedeburr.plan.io import load_plan
+
+            assert load_plan(kept).hub == doc["plan"]["hub"]
     assert (tmp_path / "pool" / "summary.md").read_text().startswith("| scenario | hub |")
     summary = json.loads((tmp_path / "pool" / "summary.json").read_text())
     assert summary["passed"] == all(r["passed"] for r in pool["rows"])

@@ -38,6 +38,8 @@ class BatchJob:
         quick: coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate.
         html: also write ``report.html`` (without the Meshcat replay).
         grinding_speed: override of the process speed [m/s] (None: the hub's recipe).
+        keep_failed_plans: write the plan folder (``<out_dir>/plan``) of a hub that fails, to
+            look into it afterwards.
     """
 
     scenario: str
@@ -49,6 +51,7 @@ class BatchJob:
     html: bool = False
     grinding_speed: float | None = None
     extra: dict = field(default_factory=dict)
+    keep_failed_plans: bool = False
 
 
 def hub_folders(root: str | Path) -> list[Path]:
@@ -109,6 +112,10 @@ def run_job(job: BatchJob) -> dict:
             from drakedeburr.verify.html import write_report_html
 
             write_report_html(report, out / "report.html")
+        if job.keep_failed_plans and not report.passed:
+            from drakedeburr.plan.io import save_plan
+
+            save_plan(plan, out / "plan")
         row.update(failure_kinds=sorted({f.kind for f in plan.failures}),
                    failure_notes=[str(f) for f in plan.failures[:5]])
         row.update(passed=report.passed, failed=report.failed,
@@ -135,6 +142,7 @@ def verify_all(
     html: bool = False,
     grinding_speed: float | None = None,
     progress: Callable[[int, int, str], None] | None = None,
+    keep_failed_plans: bool = False,
 ) -> dict:
     """Verify every (scenario, hub) and write ``summary.json`` / ``summary.md`` in ``out_dir``.
 
@@ -147,6 +155,7 @@ def verify_all(
             when given, ``workers`` is ignored and the cluster runs the jobs.
         planner, windows, quick, html, grinding_speed: see :class:`BatchJob`.
         progress: callback (done, total, label).
+        keep_failed_plans: also write the plan of every hub that fails (see :class:`BatchJob`).
 
     Returns:
         The summary: ``{"passed": bool, "rows": [...], "elapsed_s": float, "executor": str}``.
@@ -158,7 +167,8 @@ def verify_all(
     out_dir = Path(out_dir)
     jobs = [BatchJob(scenario=s, hub=h, out_dir=str(out_dir / Path(s).stem / Path(h).name),
                      planner=planner, windows=tuple(windows) if windows else None, quick=quick,
-                     html=html, grinding_speed=grinding_speed)
+                     html=html, grinding_speed=grinding_speed,
+                     keep_failed_plans=keep_failed_plans)
             for s in scenarios for h in hub_list]
     started = time.perf_counter()
     rows: list[dict] = []
