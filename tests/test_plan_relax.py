@@ -359,3 +359,18 @@ class _RunPlan:
     failures: tuple
     meta: dict = field(default_factory=dict)
     run: dict = field(default_factory=lambda: {"timings": {}})
+
+
+def test_moved_tool_points_are_a_recipe_deviation():
+    """A window whose tool points the burr-depth reading moved out (plan.burr_depth) is
+    recorded as a deviation from the recipe, with what is left if the move fell short."""
+    relief = {"max_mm": 0.15, "cl_points": 25, "depth_read_mm": 1.45, "bound_mm": 1.37,
+              "excess_left_mm": 0.0}
+    rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
+    assert rec["window"] == 2 and rec["item"] == "tool point"
+    assert "0.150 mm at 25 CL points" in rec["used"]
+    assert "1.450 mm" in rec["reason"] and "1.370 mm" in rec["reason"]
+    assert "still" not in rec["reason"]
+    relief["excess_left_mm"] = 0.02
+    rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
+    assert "still 0.020 mm too deep" in rec["reason"]

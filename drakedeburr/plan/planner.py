@@ -309,9 +309,9 @@ def _relief_record(stats: dict) -> dict:
         window=int(stats["window"]), item="tool point", default="the depth of cut's",
         used=f"moved out of the material by up to {r['max_mm']:.3f} mm at {r['cl_points']} "
              f"CL points",
-        reason=f"the burr reached {r['depth_read_mm']:.3f} mm into the hub, {r['bound_mm']:.3f}"
-               f" mm allowed (depth of cut + the edge tolerance, less "
-               f"{1e3 * MARGIN:.2f} mm kept): a rounded or acute edge{left}"
+        reason=f"the burr reached {r['depth_read_mm']:.3f} mm into the hub where "
+               f"{r['bound_mm']:.3f} mm is allowed (depth of cut + the edge tolerance; the "
+               f"planner keeps {1e3 * MARGIN:.2f} mm inside it): a rounded or acute edge{left}"
     ).record()
 
 
