@@ -8,6 +8,7 @@ nothing."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,6 +17,13 @@ import pytest
 from drakedeburr.cell.true_surface import burr_cone, cone_signed_distance
 from drakedeburr.plan import burr_depth
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
+
+class _Len(SimpleNamespace):
+    """Window targets of M CL points (len)."""
+
+    def __len__(self) -> int:
+        return len(self.p_HC)
+
 
 DEPTH = 1.2e-3
 BOUND = DEPTH + 0.17e-3  # depth of cut + edge_deviation
@@ -109,3 +117,58 @@ def test_a_square_edge_at_the_recipes_flank_moves_nothing():
     offsets, worst = burr_depth.relieved_offsets(hub, X, p_HQ, np.zeros_like(p_HQ), BOUND,
                                                  closed=False)
     assert worst <= 0.0 and not offsets.any()
+
+
+@pytest.mark.parametrize("readings, moved, record", [
+    ((-1e-5,), False, False),  # within: nothing moves, no record
+    ((0.1e-3, -1e-6), True, False),  # moved once, then within
+    ((0.2e-3, 0.15e-3, 0.12e-3, 0.1e-3), True, True),  # still too deep after every round
+])
+def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readings, moved,
+                                                               record):
+    """The window loop (window._plan_window_once): each reading too deep plans the window
+    again with the moved tool points; what moved is in the window's stats, and a window still
+    deeper than the verifier's bound after the last round gets a failure record (which sends
+    it to the recipe relaxation)."""
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.options import PlanOptions
+    from drakedeburr.plan.results import WindowPlan, WindowStatus
+
+    m = 6
+    wt = _Len(window_index=3, p_HC=np.zeros((m, 3)), n_H=np.tile([1.0, 0, 0], (m, 1)),
+              retract_H=np.tile([0, 0, 1.0], (m, 1)), depth_of_cut=DEPTH, closed=True)
+    planned = []
+
+    def fake_at(ctx, wt_, q_from, offset):
+        planned.append(offset.copy())
+        st = SimpleNamespace(kind="cut", timed=SimpleNamespace(q=np.zeros((4, 6))))
+        return WindowPlan(window=3, status=WindowStatus.OK, stretches=[st],
+                          stats=SimpleNamespace(), failures=[])
+
+    calls = iter(readings)
+
+    def fake_relief(hub, X, p_HQ, offset, bound, closed):
+        worst = next(calls)
+        return offset + (np.array([0.0, 0.0, 1e-4]) if worst > 0 else 0.0), worst
+
+    monkeypatch.setattr(mut, "_plan_window_at", fake_at)
+    monkeypatch.setattr(burr_depth, "relieved_offsets", fake_relief)
+    monkeypatch.setattr(burr_depth, "hub_model_of", lambda d: None)
+    monkeypatch.setattr(mut, "replace", lambda obj, **kw: SimpleNamespace(**kw))
+    ctx = SimpleNamespace(
+        options=PlanOptions(workers=1), cell=SimpleNamespace(hub_sdf=Path("/hub/hub.sdf")),
+        kin=SimpleNamespace(X_HT_from_q=lambda q: np.tile(np.eye(4), (len(q), 1, 1))),
+        config=SimpleNamespace(tolerances=SimpleNamespace(edge_deviation=0.17e-3)))
+    out = mut._plan_window_once(ctx, wt, np.zeros(6))
+    assert len(planned) == min(len(readings), burr_depth.ROUNDS + 1)
+    relief = getattr(out.stats, "chamfer_relief", None)
+    assert (relief is not None) == moved
+    if moved:
+        assert relief["max_mm"] == pytest.approx(0.1 * (len(planned) - 1))
+        assert relief["depth_read_mm"] == pytest.approx(
+            1e3 * (readings[0] + BOUND - burr_depth.MARGIN))
+    recs = [f for f in out.failures if f.kind == "burr_depth"]
+    assert bool(recs) == record
+    if record:
+        assert recs[0].value > recs[0].limit == pytest.approx(BOUND)
+        assert out.status is WindowStatus.DEGRADED

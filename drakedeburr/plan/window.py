@@ -208,6 +208,14 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
             "depth_read_mm": float(1e3 * (first + bound - burr_depth.MARGIN)),
             "bound_mm": float(1e3 * bound),
             "excess_left_mm": float(1e3 * max(worst - burr_depth.MARGIN, 0.0))})
+    if worst > burr_depth.MARGIN:  # still deeper than the verifier's bound: said, relaxed
+        deepest = worst + bound - burr_depth.MARGIN
+        result.failures = [*result.failures, FailureRecord(
+            window=wt.window_index, kind="burr_depth", value=float(deepest), limit=float(bound),
+            unit="m", reason=f"the burr reaches {1e3 * deepest:.3f} mm into the hub, "
+                             f"{1e3 * bound:.3f} mm allowed (depth of cut + edge tolerance)",
+            tried=(f"tool points moved out by up to {1e3 * moved.max():.3f} mm",))]
+        result.status = WindowStatus.DEGRADED
     return result
 
 
