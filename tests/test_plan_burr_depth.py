@@ -18,6 +18,7 @@ from drakedeburr.cell.true_surface import burr_cone, cone_signed_distance
 from drakedeburr.plan import burr_depth
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
 
+
 class _Len(SimpleNamespace):
     """Window targets of M CL points (len)."""
 
