@@ -4,7 +4,8 @@ would fill the windows).
 The face plate is cut into square cells (quadtree, start ``COLL_CELL_MM``); each connected part
 of a cell is replaced by its convex hull, and a cell is split while the hull adds more than
 ``COLL_TOL_MM`` of average thickness to its part or contains a *probe point* (points
-``COLL_WINDOW_REACH_MM`` inside the window openings, through the face thickness). Touching
+``COLL_WINDOW_REACH_MM`` inside the window openings, through the face thickness, and points
+``COLL_FRONT_REACH_MM`` above the front face within ``COLL_FRONT_BAND_MM`` of a window). Touching
 pieces are then merged greedily while the merged hull passes the same test. The pad, barrel and
 flanges are hulls of annular sectors. Bolt holes are filled (conservative; no tool goes
 there); the bore stays open.
@@ -23,12 +24,17 @@ from drakedeburr.hub.solid import PlateGeometry, mesh_arrays, plate_manifold, ri
 from drakedeburr.hub.spec import HubSpec
 
 __all__ = ["WindowProbes", "collision_pieces", "window_intrusion", "COLL_CELL_MM",
-           "COLL_TOL_MM", "COLL_WINDOW_REACH_MM", "COLL_SAG_MM", "MIN_CELL_MM"]
+           "COLL_TOL_MM", "COLL_WINDOW_REACH_MM", "COLL_SAG_MM", "COLL_FRONT_REACH_MM",
+           "COLL_FRONT_BAND_MM", "MIN_CELL_MM", "front_probes"]
 
 COLL_CELL_MM = 60.0  # initial quadtree cell of the plate's collision pieces [mm]
 COLL_TOL_MM = 1.0  # allowed average extra thickness of a plate hull [mm]
 COLL_WINDOW_REACH_MM = 0.5  # a hull may reach at most this far into a window opening [mm]
 COLL_SAG_MM = 0.5  # chord sag of the rim's and pad's annular-sector pieces [mm]
+#: a plate hull may stand at most this far proud of the front face (normal to it) within
+#: COLL_FRONT_BAND_MM of a window, where the burr, its shank and the collet work [mm]
+COLL_FRONT_REACH_MM = 1.0
+COLL_FRONT_BAND_MM = 30.0
 MIN_CELL_MM = 2.5  # smallest quadtree cell [mm]
 
 Progress = Callable[[int, int, str], None] | None
@@ -115,6 +121,30 @@ class WindowProbes:
         return bool(len(self.inside(hull_pts, equations)))
 
 
+def front_probes(spec: HubSpec, windows: list[Window], geom: PlateGeometry) -> np.ndarray:
+    """Points ``COLL_FRONT_REACH_MM`` above the front face (normal to it) on rings 1 to
+    ``COLL_FRONT_BAND_MM`` out from each window outline, 2 mm apart [mm]: a plate hull that
+    contains one stands further proud of the face where the tool works. Without them the
+    average-thickness rule let hulls on a dished face bridge its curvature by up to 3.9 mm
+    (r271128_032, piece 286, 3 mm from a CL point), and the burr shank met that phantom
+    material in planning and verification (0.22 mm read, the true face some 4 mm away)."""
+    surf = geom.surface
+    pts = []
+    for w in windows:
+        p = densify(w.poly_mm, 2.0)
+        seg = np.roll(p, -1, axis=0) - p
+        seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+        nrm = np.stack([-seg[:, 1], seg[:, 0]], axis=1)  # into the opening (CCW outline)
+        nrm = nrm + np.roll(nrm, 1, axis=0)
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        for off in np.geomspace(1.0, COLL_FRONT_BAND_MM, 10):
+            q = p - off * nrm
+            g = surf.gradient(q)
+            lift = COLL_FRONT_REACH_MM * np.sqrt(1.0 + np.sum(g * g, axis=1))
+            pts.append(np.column_stack([q, surf.front(q) + lift]))
+    return np.concatenate(pts)
+
+
 @dataclass
 class _Piece:
     pts: np.ndarray  # hull vertices [mm]
@@ -122,13 +152,14 @@ class _Piece:
     hull_vol: float
 
 
-def _piece_ok(pc: _Piece, t: float, probes: WindowProbes,
+def _piece_ok(pc: _Piece, t: float, probes: tuple[WindowProbes, ...],
               equations: np.ndarray | None = None) -> bool:
     excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
-    return excess <= COLL_TOL_MM and not probes.hit(pc.pts, equations)
+    return excess <= COLL_TOL_MM and not any(p.hit(pc.pts, equations) for p in probes)
 
 
-def _quadtree_pieces(plate, t: float, probes: WindowProbes, progress: Progress) -> list[_Piece]:
+def _quadtree_pieces(plate, t: float, probes: tuple[WindowProbes, ...],
+                     progress: Progress) -> list[_Piece]:
     """Hulls of the plate's parts in quadtree cells, split until each passes ``_piece_ok``."""
     from manifold3d import CrossSection
 
@@ -170,7 +201,8 @@ def _quadtree_pieces(plate, t: float, probes: WindowProbes, progress: Progress) 
     return pieces
 
 
-def _merge_pieces(pieces: list[_Piece], t: float, probes: WindowProbes) -> list[_Piece]:
+def _merge_pieces(pieces: list[_Piece], t: float,
+                  probes: tuple[WindowProbes, ...]) -> list[_Piece]:
     """Greedy merge of touching pieces while the merged hull passes ``_piece_ok``."""
     from scipy.spatial import ConvexHull
 
@@ -212,7 +244,8 @@ def collision_pieces(spec: HubSpec, windows: list[Window], geom: PlateGeometry,
     pad and rim by construction (annular sectors). Bolt holes are filled; the bore is open."""
     bore_r = 0.5 * spec.center_bore_diameter * 1e3
     plate = plate_manifold(spec, windows, geom) - tube(0.0, bore_r, -1e3, 1e3)
-    probes = WindowProbes.from_spec(spec, windows, geom)
+    probes = (WindowProbes.from_spec(spec, windows, geom),
+              WindowProbes(front_probes(spec, windows, geom)))
     t = spec.face_thickness * 1e3
     pieces = [p.pts for p in _merge_pieces(_quadtree_pieces(plate, t, probes, progress), t,
                                            probes)]

@@ -29,6 +29,8 @@ import numpy as np
 
 from drakedeburr._io import atomic_write_text
 from drakedeburr.hub.collision import (
+    COLL_FRONT_BAND_MM,
+    COLL_FRONT_REACH_MM,
     COLL_SAG_MM,
     COLL_TOL_MM,
     COLL_WINDOW_REACH_MM,
@@ -118,7 +120,9 @@ def _write_collision(spec: HubSpec, windows: list[Window], geom: PlateGeometry,
     info = {
         "method": "face plate: quadtree of square cells, convex hull of each connected "
                   f"part, split while the hull adds > {COLL_TOL_MM} mm average thickness or "
-                  f"reaches > {COLL_WINDOW_REACH_MM} mm into a window, then greedy merging "
+                  f"reaches > {COLL_WINDOW_REACH_MM} mm into a window or stands > "
+                  f"{COLL_FRONT_REACH_MM} mm proud of the front face within "
+                  f"{COLL_FRONT_BAND_MM:.0f} mm of a window, then greedy merging "
                   "of touching pieces under the same rule; pad and rim: hulls of annular "
                   f"sectors (chord sag <= {COLL_SAG_MM} mm)",
         "piece_count": len(pieces),
