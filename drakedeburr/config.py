@@ -165,7 +165,7 @@ class Tolerances:
     narrowphase_resolve: float = 0.1e-3
     # [m] how far a hub's convex collision pieces may reach past its true surface into a
     # window opening (the hub generator splits any piece reaching further; above the front face
-    # they may stand further proud, and burr_contact re-reads the true surface where the
+    # it allows 1 mm near the windows, and burr_contact re-reads the true surface where the
     # pieces fail); allowed on top of the depth of cut when the burr head's penetration of the
     # pieces is checked
     collision_model_excess: float = 0.5e-3

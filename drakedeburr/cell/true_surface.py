@@ -2,9 +2,10 @@
 
 The scene graph measures the burr head against the hub's convex collision pieces. The pieces
 contain the part's material but may stand proud of its surface: a generated hub's pieces
-reach at most ``Tolerances.collision_model_excess`` (0.5 mm) into a window opening, but stand
-proud of the front face by up to their cell's average-thickness rule allows locally (up to
-3.9 mm seen on a dished face: r271128_032's piece 286), an imported CAD mesh's by up to
+reach at most ``Tolerances.collision_model_excess`` (0.5 mm) into a window opening and 1 mm
+above the front face within 30 mm of a window (elsewhere the average-thickness rule allows
+more locally: 3.7 mm was seen beside a CL point before the front probes,
+:func:`drakedeburr.hub.collision.front_probes`), an imported CAD mesh's by up to
 ``ImportOptions.window_reach`` into an opening and ``front_reach`` above the face (1 and 3 mm),
 where a finer decomposition would cost minutes. Where the pieces' reading fails
 ``burr_contact``, this module reads the same samples against the triangle mesh itself
