@@ -41,10 +41,16 @@ def test_clearance_matches_drake_pairwise_query():
     item = report.item("clearance")
     q = vs.good_plan().trajectory.value(item.time)
     d, pair = cell.min_distance(q, max_distance=0.05)
-    # cell.min_distance mixes self and environment pairs: it can only be smaller
-    assert d <= item.value + 1e-12
     if "hub::" in pair[0] + pair[1] or "fixture::" in pair[0] + pair[1]:
-        assert d == pytest.approx(item.value, abs=1e-12)
+        # the same pair: Drake's GJK converges from above and stops at a tolerance, and the
+        # verifier's reading is the certified one (cell/narrowphase.py: Drake's kept where it
+        # meets the separating-plane bound within 1 um, else solved again): never above
+        # Drake's, below it only by Drake's stopping error (2.6 um seen on the shank)
+        assert item.value <= d + 1e-12
+        assert d - item.value <= 10e-6
+    else:
+        # a self pair nearer than every environment pair
+        assert d <= item.value + 1e-12
 
 
 def test_json_is_deterministic_apart_from_run():

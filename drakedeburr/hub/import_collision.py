@@ -248,5 +248,5 @@ def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.
 
     mm = [p * 1e3 for p in pieces]
     parts = [_Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
-    merged = _merge_pieces(parts, thickness * 1e3, WindowProbes(probes.pts * 1e3))
+    merged = _merge_pieces(parts, thickness * 1e3, (WindowProbes(probes.pts * 1e3),))
     return [p.pts * 1e-3 for p in merged]
