@@ -217,6 +217,12 @@ def test_an_in_centre_inside_a_piece_but_outside_a_closed_mesh_is_read(tmp_path)
     assert closed.value[0] == pytest.approx(2e-3, abs=1e-9)
     opened = true_surface_distances(_hub(V, F[2:], [path]), X, [0, 1], reach=2e-3)
     assert opened.engulfed.tolist() == [True, True]
+    # the closed mesh is kept per mesh content: the same arrays (copies) give the kept
+    # answer, the opened mesh read after it its own
+    from drakedeburr.cell.true_surface import _closed_mesh
+
+    assert _closed_mesh(_hub(V.copy(), F.copy())) is _closed_mesh(_hub(V, F))
+    assert _closed_mesh(_hub(V, F[2:])) is None
 
 
 def test_the_depth_lies_below_its_tangent_plane_everywhere():
