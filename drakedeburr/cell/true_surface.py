@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -170,27 +171,70 @@ class TrueSurfaceReading:
     points: int
 
 
-def _initial_pairs(tri: np.ndarray, centres: np.ndarray, radii: np.ndarray):
+class _MeshIndex:
+    """A hub mesh's triangles [m] with their bounding balls and a KD-tree of their centroids,
+    and (on first use) its closed form: built once per mesh content (:func:`_mesh_index`)."""
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        self.V, self.F = V, F
+        self.tri = V[F]  # (P, 3, 3)
+        self.c = self.tri.mean(axis=1)
+        self.rad = np.sqrt(((self.tri - self.c[:, None]) ** 2).sum(axis=2).max(axis=1))
+        # the triangles by bounding radius, each class with its own tree (a generated hub's
+        # long barrel and face triangles are half its triangles, up to 0.12 m across): a
+        # query ball meets a triangle's only if its centroid is within the class's largest
+        # radius of the ball
+        cls = np.maximum(np.ceil(np.log2(np.maximum(self.rad, 1e-12) / 5e-3)), 0.0).astype(int)
+        self.classes = []
+        for j in np.unique(cls):
+            members = np.flatnonzero(cls == j)
+            self.classes.append((members, float(self.rad[members].max()),
+                                 cKDTree(self.c[members])))
+
+    @functools.cached_property
+    def closed(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(V, F), vertices merged, when the mesh is closed and consistently and outward
+        oriented (inside and outside well defined), else None (trimesh, 0.1-0.3 s a hub)."""
+        import trimesh
+
+        mesh = trimesh.Trimesh(self.V, self.F, process=True)
+        if not (mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0.0):
+            return None
+        return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+_INDEX: dict[str, _MeshIndex] = {}
+
+
+def _mesh_index(hub_model) -> _MeshIndex:
+    """The :class:`_MeshIndex` of the hub's mesh, kept per mesh content (a digest of its
+    arrays, a few ms): a planner reads every window and a verifier every reading against the
+    same mesh, whose triangles, tree and closed form take ~0.1 s and 0.1-0.3 s to build."""
+    v = np.ascontiguousarray(hub_model.vertices_H, float)
+    f = np.ascontiguousarray(hub_model.faces, np.int64)
+    digest = hashlib.blake2b(v.tobytes(), digest_size=16)
+    digest.update(f.tobytes())
+    key = digest.hexdigest()
+    if key not in _INDEX:
+        if len(_INDEX) >= 4:  # a process sees one hub at a time, a test session a few
+            _INDEX.pop(next(iter(_INDEX)))
+        _INDEX[key] = _MeshIndex(v, f)
+    return _INDEX[key]
+
+
+def _initial_pairs(mesh: _MeshIndex, centres: np.ndarray, radii: np.ndarray):
     """(sample, triangle) pairs whose bounding balls meet: the sample's query ball
     (``centres``, ``radii``) and the triangle's (centroid, farthest vertex)."""
-    c = tri.mean(axis=1)
-    rad = np.linalg.norm(tri - c[:, None], axis=2).max(axis=1)
-    tree = cKDTree(c)
-    small = rad <= 5e-3
-    lists = tree.query_ball_point(centres, radii + 5e-3)
-    counts = np.fromiter((len(x) for x in lists), int, len(lists))
-    k = np.repeat(np.arange(len(lists)), counts)
-    t = np.fromiter((j for x in lists for j in x), int, int(counts.sum()))
-    keep = small[t]
-    k, t = k[keep], t[keep]
-    keep = np.linalg.norm(c[t] - centres[k], axis=1) <= radii[k] + rad[t]
-    ks, ts = [k[keep]], [t[keep]]
-    large = np.flatnonzero(~small)  # few: CAD faces; against every sample
-    if len(large):
-        d = np.linalg.norm(c[large][None] - centres[:, None], axis=2)
-        k, j = np.nonzero(d <= radii[:, None] + rad[large][None])
-        ks.append(k)
-        ts.append(large[j])
+    ks, ts = [], []
+    for members, r_max, tree in mesh.classes:
+        lists = tree.query_ball_point(centres, radii + r_max)
+        counts = np.fromiter((len(x) for x in lists), int, len(lists))
+        k = np.repeat(np.arange(len(lists)), counts)
+        t = members[np.fromiter(itertools.chain.from_iterable(lists), int, int(counts.sum()))]
+        d = mesh.c[t] - centres[k]
+        keep = np.einsum("ij,ij->i", d, d) <= (radii[k] + mesh.rad[t]) ** 2
+        ks.append(k[keep])
+        ts.append(t[keep])
     return np.concatenate(ks).astype(int), np.concatenate(ts).astype(int)
 
 
@@ -220,27 +264,8 @@ def _piece_planes(paths: tuple) -> tuple[np.ndarray, np.ndarray]:
 
 def _closed_mesh(hub_model):
     """(V, F) of the hub's mesh, vertices merged, when it is closed and consistently and
-    outward oriented (inside and outside well defined), else None. Kept per mesh content
-    (a digest of its arrays, a few ms): the trimesh processing takes 0.1-0.3 s a hub and a
-    verification reads the in-centres once per reading."""
-    import trimesh
-
-    v = np.ascontiguousarray(hub_model.vertices_H, float)
-    f = np.ascontiguousarray(hub_model.faces, np.int64)
-    digest = hashlib.blake2b(v.tobytes(), digest_size=16)
-    digest.update(f.tobytes())
-    key = digest.hexdigest()
-    if key not in _CLOSED:
-        mesh = trimesh.Trimesh(v, f, process=True)
-        closed = mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0.0
-        if len(_CLOSED) >= 4:  # a process sees one hub at a time, a test session a few
-            _CLOSED.pop(next(iter(_CLOSED)))
-        _CLOSED[key] = ((np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64))
-                        if closed else None)
-    return _CLOSED[key]
-
-
-_CLOSED: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
+    outward oriented (inside and outside well defined), else None."""
+    return _mesh_index(hub_model).closed
 
 
 def _outside_material(hub_model, p_H: np.ndarray) -> np.ndarray | None:
@@ -299,9 +324,9 @@ def true_surface_distances(hub_model, X_HT: np.ndarray, index: np.ndarray, *,
     R, p = X[:, :3, :3], X[:, :3, 3]
     centres = p + R @ cone.centre_T
     reach = np.broadcast_to(np.maximum(np.asarray(reach, float), 0.0), (n,)).copy()
-    V, F = np.asarray(hub_model.vertices_H, float), np.asarray(hub_model.faces, int)
-    k, t = _initial_pairs(V[F], centres, cone.bounding_radius + reach)
-    tri = V[F][t]
+    mesh = _mesh_index(hub_model)
+    k, t = _initial_pairs(mesh, centres, cone.bounding_radius + reach)
+    tri = mesh.tri[t]
     lower = -reach  # depth: anything farther than reach reads as reach
     upper = np.full(n, -np.inf)
     settled = np.zeros(n, bool)
