@@ -152,14 +152,29 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
 def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
     """Joints of the pose at ``q`` lifted by ``lift`` along +Z_H (same branch); where that
     leaves the joint limits (a wrist wound to its J4 limit at the end of a window), the
-    largest of lift/2, /4, /8 that stays inside."""
-    for h in (lift, 0.5 * lift, 0.25 * lift, 0.125 * lift):
-        X = kin.X_HT_from_q(q)
-        X[2, 3] += h
-        qq, ok = kin.track(kin.X_WF_from_X_HT(X[None]), q)
-        if ok[0]:
-            return qq[0]
+    largest of lift/2, /4, /8 that stays inside; where none does (a wrist at its J5 limit:
+    every lift bends it further), the same lifts turned about the tool axis by up to 90 deg
+    (the burr is round: a pose off the cut may take any turn about its axis), the least
+    turn first."""
+    X = kin.X_HT_from_q(q)
+    for spin in _SPINS:
+        R = X[:3, :3] @ _rot_z(spin)
+        for h in (lift, 0.5 * lift, 0.25 * lift, 0.125 * lift):
+            Xh = X.copy()
+            Xh[:3, :3] = R
+            Xh[2, 3] += h
+            qq, ok = kin.track(kin.X_WF_from_X_HT(Xh[None]), q)
+            if ok[0]:
+                return qq[0]
     return None
+
+
+_SPINS = np.radians([0.0, 15.0, -15.0, 30.0, -30.0, 45.0, -45.0, 60.0, -60.0, 90.0, -90.0])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _via(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, lift: float) -> np.ndarray | None:
