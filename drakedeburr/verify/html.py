@@ -36,24 +36,33 @@ def _svg(fig) -> str:
 
 
 def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, np.ndarray]:
-    """At most ~2n points of (x, y) keeping each bin's minimum and maximum (NaN-aware), so a
-    plot of tens of thousands of samples stays small and still shows every extreme."""
+    """At most ~2n points of (x, y) keeping each bin's minimum and maximum (NaN-aware; the
+    first of equal extremes, in sample order), so a plot of tens of thousands of samples
+    stays small and still shows every extreme."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     if len(x) <= 2 * n:
         return x, y
     edges = np.linspace(0, len(x), n + 1).astype(int)
-    xs, ys = [], []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        seg = y[a:b]
-        if not np.isfinite(seg).any():
-            xs.append(x[a])
-            ys.append(np.nan)
-            continue
-        i, j = np.nanargmin(seg), np.nanargmax(seg)
-        for k in sorted({i, j}):
-            xs.append(x[a + k])
-            ys.append(seg[k])
-    return np.asarray(xs), np.asarray(ys)
+    starts = edges[:-1]
+    bins = np.repeat(np.arange(n), np.diff(edges))
+    finite = np.isfinite(y)
+    lo = np.minimum.reduceat(np.where(finite, y, np.inf), starts)
+    hi = np.maximum.reduceat(np.where(finite, y, -np.inf), starts)
+
+    def first(hit: np.ndarray) -> np.ndarray:  # each bin's first sample where ``hit``
+        idx = np.flatnonzero(hit)
+        _, at = np.unique(bins[idx], return_index=True)
+        out = starts.copy()  # an all-NaN bin keeps its first sample
+        out[bins[idx[at]]] = idx[at]
+        return out
+
+    i = first(finite & (y == lo[bins]))
+    j = first(finite & (y == hi[bins]))
+    keep = np.sort(np.concatenate([i, j]))
+    keep = keep[np.concatenate([[True], np.diff(keep) > 0])]
+    ys = y[keep].copy()
+    ys[~finite[keep]] = np.nan  # an all-NaN bin: its first x, y NaN
+    return x[keep], ys
 
 
 def report_figures(report: VerificationReport) -> dict[str, str]:
