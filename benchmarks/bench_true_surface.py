@@ -17,29 +17,11 @@ mesh).
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import subprocess
-import sys
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 MODULE = "drakedeburr/cell/true_surface.py"
-
-
-def _baseline(ref: str):
-    src = subprocess.run(["git", "show", f"{ref}:{MODULE}"], cwd=ROOT, capture_output=True,
-                         text=True, check=True).stdout
-    path = Path(tempfile.mkdtemp()) / "true_surface_baseline.py"
-    path.write_text(src)
-    spec = importlib.util.spec_from_file_location("true_surface_baseline", path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses look their module up
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def poses(hub_name: str, windows: tuple[int, ...]) -> dict[str, np.ndarray]:
@@ -97,10 +79,12 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--windows", default="0,1", help="windows planned per hub")
     args = ap.parse_args()
+    from _baseline import module_at
+
     from drakedeburr.cell import true_surface as new
     from drakedeburr.hub import load_hub
 
-    old = _baseline(args.baseline)
+    old = module_at(args.baseline, MODULE, "true_surface_baseline")
     print(f"## true-surface reading: this tree vs git {args.baseline}, CPU s (median of "
           f"{args.repeat})")
     print(f"{'hub':<13}{'reading':<48}{'poses':>6}{'pairs':>9}{'before':>8}{'now':>8}"

@@ -18,7 +18,6 @@ Run:  PYTHONPATH=. python benchmarks/bench_verify.py [--hubs h5_straight,...] [-
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import subprocess
 import sys
 import tempfile
@@ -57,18 +56,13 @@ class Clock:
 
 def _baseline_measure():
     """The previous ``measure_samples`` from git (else the kept dense reference method)."""
+    from _baseline import module_at
+
     try:
-        src = subprocess.run(["git", "show", f"{BASELINE}:drakedeburr/verify/distances.py"],
-                             cwd=ROOT, capture_output=True, text=True, check=True).stdout
+        mod = module_at(BASELINE, "drakedeburr/verify/distances.py", "distances_baseline")
     except (subprocess.CalledProcessError, FileNotFoundError):
         return (lambda cell, s, tol, *a, **k: distances.measure_samples(
             cell, s, tol, method="dense")), "dense reference method (git unavailable)"
-    path = Path(tempfile.mkdtemp()) / "distances_baseline.py"
-    path.write_text(src)
-    spec = importlib.util.spec_from_file_location("distances_baseline", path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses look their module up
-    spec.loader.exec_module(mod)
     return (lambda cell, s, tol, *a, **k: mod.measure_samples(cell, s, tol)), f"git {BASELINE}"
 
 
