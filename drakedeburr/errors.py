@@ -24,6 +24,7 @@ class NoCuttableWindow(InputError):
         openings: one dict per opening not taken (``kind``, ``reason``, ``radius_mm``, ...).
         rejected: one dict per closed outline rejected as a window edge (``center_xy_mm``,
             ``reason``).
+        notes: what the import changed on the way (e.g. a tyre dropped), for the report.
     """
 
     def __init__(self, message: str, *, source: str, axis, openings: list, rejected: list):
@@ -32,6 +33,7 @@ class NoCuttableWindow(InputError):
         self.axis = [float(x) for x in axis]
         self.openings = list(openings)
         self.rejected = list(rejected)
+        self.notes: list[str] = []
 
 
 class VerificationFailed(DrakeDeburrError):

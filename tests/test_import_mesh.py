@@ -138,6 +138,72 @@ def test_no_windows_and_the_audibot_rim_refused_with_reasons(tmp_path, extdata):
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
+def test_the_audibot_wheel_dae_with_its_tyre_reads_as_its_rim(tmp_path, extdata):
+    """The COLLADA wheel as the ROS description ships it (tyre + rim, 720 mm across): the
+    tyre - the part lying wholly outside the rest - is dropped and said, and the rim gives the
+    same openings, widths and reasons as the rim alone (the derived STL, cut from the same
+    file by hand)."""
+    def refused(path):
+        with pytest.raises(NoCuttableWindow) as e:
+            mut.import_mesh(path, tmp_path / "out")
+        return e.value
+
+    dae = refused(extdata / "wheel_models" / "audibot__wheel.dae")
+    rim = refused(extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl")
+    (note,) = dae.notes
+    assert note.startswith("tyre dropped: 1 part(s)") and "720 mm" in note
+    assert rim.notes == []
+    assert [o["kind"] for o in dae.openings] == [o["kind"] for o in rim.openings] == [
+        "too narrow"] * 5
+    # radii within 2.5 mm: the hub centre is estimated on each file's own vertices (the
+    # tyre's bead-seat fragments inside the rim stay, the low-poly rim has 10 sides)
+    for what, tol in (("width_mm", 0.2), ("radius_mm", 2.5), ("area_mm2", 30.0)):
+        np.testing.assert_allclose(sorted(o[what] for o in dae.openings),
+                                   sorted(o[what] for o in rim.openings), atol=tol)
+    assert len(dae.rejected) == len(rim.rejected) == 5
+
+
+def test_a_tyre_is_dropped_only_when_it_rings_the_rest(tmp_path):
+    """A 500 mm 'rim' (a tube) inside a 700-800 mm ring: the ring's faces go, exactly; the rim
+    alone, or a 800 mm disc with no ring apart from it, is left as it is."""
+    import trimesh
+
+    rim = trimesh.creation.annulus(r_min=0.2, r_max=0.25, height=0.2)
+    tyre = trimesh.creation.annulus(r_min=0.24, r_max=0.38, height=0.22)
+    wheel = trimesh.util.concatenate([rim, tyre])
+    kept, note = mut._without_tyre(tmp_path / "w.stl", wheel, (0.0, 0.0, 1.0))
+    assert note is not None and "760 mm" in note
+    assert len(kept.faces) == len(rim.faces)
+    np.testing.assert_allclose(np.sort(kept.vertices, axis=0), np.sort(rim.vertices, axis=0))
+    same, none = mut._without_tyre(tmp_path / "w.stl", rim, (0.0, 0.0, 1.0))
+    assert same is rim and none is None
+    disc = trimesh.creation.cylinder(radius=0.4, height=0.1)
+    same, none = mut._without_tyre(tmp_path / "d.stl", disc, (0.0, 0.0, 1.0))
+    assert same is disc and none is None
+
+
+def test_gltf_and_off_read_as_the_stl(tmp_path):
+    """The same mesh written as glTF (binary) and OFF reads as the STL does (vertices to the
+    float32 of glTF), unit detected alike; a STEP file is refused naming what to export."""
+    import trimesh
+
+    from drakedeburr.hub.mesh_io import load_hub_mesh
+
+    box = trimesh.creation.box(extents=(400.0, 380.0, 120.0))  # millimetres
+    for suffix in (".stl", ".glb", ".off"):
+        box.export(tmp_path / f"hub{suffix}")
+    ref = load_hub_mesh(tmp_path / "hub.stl")
+    for suffix in (".glb", ".off"):
+        lm = load_hub_mesh(tmp_path / f"hub{suffix}")
+        assert lm.unit == ref.unit == "mm" and lm.watertight
+        np.testing.assert_allclose(lm.mesh.bounds, ref.mesh.bounds, atol=1e-7)
+    step = tmp_path / "hub.step"
+    step.write_text("ISO-10303-21;")
+    with pytest.raises(InputError, match=r"hub\.step: unsupported mesh type '\.step' \(a CAD "
+                                         r"solid, not a triangle mesh\); export the hub as STL"):
+        load_hub_mesh(step)
+
+
 # ------------------------------------------------------------------------------- a real hub
 def test_frame_and_edges_match_the_bundled_hub(imported):
     from scipy.spatial.distance import directed_hausdorff

@@ -66,3 +66,22 @@ def test_a_readable_rim_with_nothing_to_cut_is_a_report_and_exit_1(tmp_path, ext
     assert "no window can be cut" in capsys.readouterr().out
     assert main(args) == 1  # the same folder again: replaced, not refused
     assert not (out / "plan.json").exists()
+
+
+def test_a_wheel_with_its_tyre_and_a_cad_solid(tmp_path, extdata, capsys):
+    """``verify wheel.dae`` (COLLADA, tyre + rim): exit 1 with the rim's report, which says
+    the tyre was dropped; ``verify hub.step``: exit 2 in one line naming the file and what to
+    export (not read as a plan folder)."""
+    dae = extdata / "wheel_models" / "audibot__wheel.dae"
+    out = tmp_path / "out"
+    assert main(["-q", "verify", str(dae), "-o", str(out), "--hub-cache",
+                 str(tmp_path / "hubs")]) == 1
+    doc = json.loads((out / "report.json").read_text())
+    (note,) = doc["plan"]["import_notes"]
+    assert note.startswith("tyre dropped") and note in doc["items"][0]["detail"]
+    step = tmp_path / "hub.step"
+    step.write_text("ISO-10303-21;")
+    capsys.readouterr()
+    assert main(["-q", "verify", str(step), "-o", str(tmp_path / "o2")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "hub.step" in err[0] and "CAD solid" in err[0], err

@@ -244,11 +244,13 @@ def register(subparsers) -> None:
     p.set_defaults(_run=_run_generate)
 
     p = sub.add_parser(
-        "import", help="hub mesh file (STL/OBJ/PLY) -> hub model folder (edges, CoACD pieces)",
+        "import", help="hub mesh file (STL, OBJ, PLY, OFF, DAE, glTF) -> hub model folder "
+        "(edges, CoACD pieces)",
         description="Turn a closed hub mesh into a hub model folder OUT/<name>_<hash> that "
                     "`drakedeburr plan`/`verify` load like a bundled hub (docs/hub.md). "
                     "Re-importing the same file with the same options reuses the folder.")
-    p.add_argument("mesh", help="STL, OBJ or PLY file (metres or millimetres)")
+    p.add_argument("mesh", help="mesh file: STL, OBJ, PLY, OFF, COLLADA (.dae) or glTF "
+                   "(metres or millimetres)")
     p.add_argument("--out", required=True, help="parent folder of the hub folder")
     p.add_argument("--unit", choices=("m", "mm"), help="force the file's unit (default: by size)")
     p.add_argument("--axis", type=number(), nargs=3, metavar=("X", "Y", "Z"),

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.errors import InputError
+from drakedeburr.errors import InputError, NoCuttableWindow
 from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 from drakedeburr.hub.types import WindowEdge
 
@@ -258,17 +258,25 @@ def _scene(V: np.ndarray, F: np.ndarray):
     return scene
 
 
-def _diameter(path: Path, mesh, axis_M, unit: str) -> float:
-    """Extent [m] across the hub axis (principal axis unless given); InputError when it is not
-    a wheel's."""
+def _across(mesh, axis_M) -> tuple[float, np.ndarray, np.ndarray]:
+    """(extent [m] across the hub axis, the axis z_M, the centre of that extent) - the axis
+    is the principal axis unless given."""
     from drakedeburr.hub.extract import principal_axis
 
     z_M = principal_axis(mesh)[0] if axis_M is None else np.asarray(axis_M, float)
     z_M = z_M / np.linalg.norm(z_M)
     v = mesh.vertices - mesh.vertices.mean(axis=0)
     across = v - np.outer(v @ z_M, z_M)
-    span = across @ np.linalg.svd(across, full_matrices=False)[2][:2].T
-    diameter = float(np.max(np.ptp(span, axis=0)))
+    basis = np.linalg.svd(across, full_matrices=False)[2][:2]
+    span = across @ basis.T
+    centre = mesh.vertices.mean(axis=0) + 0.5 * (span.min(axis=0) + span.max(axis=0)) @ basis
+    return float(np.max(np.ptp(span, axis=0))), z_M, centre
+
+
+def _diameter(path: Path, mesh, axis_M, unit: str) -> float:
+    """Extent [m] across the hub axis (principal axis unless given); InputError when it is not
+    a wheel's."""
+    diameter = _across(mesh, axis_M)[0]
     if not DIAMETER_RANGE[0] <= diameter <= DIAMETER_RANGE[1]:
         raise InputError(
             f"{path}: diameter across the hub axis {diameter * 1e3:.0f} mm (file read as "
@@ -276,6 +284,42 @@ def _diameter(path: Path, mesh, axis_M, unit: str) -> float:
             f"{DIAMETER_RANGE[1] * 1e3:.0f} mm); force the unit (unit='m'/'mm') or check the "
             f"file")
     return diameter
+
+
+def _without_tyre(path: Path, mesh, axis_M):
+    """(mesh, note): a wheel exported with its tyre (a ROS robot description's wheel.dae) is
+    too large for a hub; where the parts that make it so lie wholly outside the rest - a ring
+    whose inner radius is at least 0.85 of the rest's outer radius, the rest then hub-sized -
+    they are the tyre: dropped, and said (a WARNING and the note). Anything else is left
+    as it is (the size check then names the diameter)."""
+    diameter, z_M, c = _across(mesh, axis_M)
+    if diameter <= DIAMETER_RANGE[1]:
+        return mesh, None
+    import trimesh
+
+    parts = trimesh.graph.connected_components(  # faces joined by edges; scipy (no networkx)
+        mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), engine="scipy")
+    radii = []
+    for faces in parts:
+        v = mesh.vertices[np.unique(mesh.faces[faces])] - c
+        r = np.linalg.norm(v - np.outer(v @ z_M, z_M), axis=1)
+        radii.append((float(r.min()), float(r.max())))
+    outer = [i for i, (_, r1) in enumerate(radii) if r1 > 0.5 * DIAMETER_RANGE[1]]
+    rest = [i for i in range(len(parts)) if i not in outer]
+    if not outer or not rest:
+        return mesh, None
+    r_rest = max(radii[i][1] for i in rest)
+    if (min(radii[i][0] for i in outer) < 0.85 * r_rest
+            or not DIAMETER_RANGE[0] <= 2.0 * r_rest <= DIAMETER_RANGE[1]):
+        return mesh, None
+    kept = trimesh.Trimesh(mesh.vertices, mesh.faces[np.concatenate([parts[i] for i in rest])],
+                           process=True)
+    n_faces = sum(len(parts[i]) for i in outer)
+    note = (f"tyre dropped: {len(outer)} part(s), {n_faces} faces, a ring "
+            f"{2e3 * min(radii[i][0] for i in outer):.0f}-{diameter * 1e3:.0f} mm across the "
+            f"hub axis around the rest ({2e3 * r_rest:.0f} mm)")
+    log.warning("%s: %s", path, note)
+    return kept, note
 
 
 def _frame_and_windows(path: Path, mesh, options: ImportOptions):
@@ -437,7 +481,8 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     """Turn a hub mesh file into a hub model folder under ``out_root`` (see module doc).
 
     Args:
-        path: STL, OBJ or PLY file of one wheel hub (closed or not, metres or millimetres).
+        path: mesh file of one wheel hub (closed or not, metres or millimetres; a tyre around
+            it is dropped).
         out_root: parent folder; the hub folder is ``out_root/<name>_<hash12>``.
         options: import settings.
         progress: optional callback (done, total, label).
@@ -475,11 +520,17 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     if path.stat().st_size == 0:
         raise InputError(f"{path}: the file is empty")
     lm = load_hub_mesh(path, unit=options.unit)
-    diameter = _diameter(path, lm.mesh, options.axis_M, lm.unit)
-    closed = bool(lm.watertight)
+    mesh, tyre = _without_tyre(path, lm.mesh, options.axis_M)
+    diameter = _diameter(path, mesh, options.axis_M, lm.unit)
+    closed = bool(mesh.is_watertight)
     if progress is not None:
         progress(1, steps, "hub frame and window edges")
-    X_MH, V_H, F, windows, notes, walls = _frame_and_windows(path, lm.mesh, options)
+    try:
+        X_MH, V_H, F, windows, notes, walls = _frame_and_windows(path, mesh, options)
+    except NoCuttableWindow as exc:
+        exc.notes += [tyre] if tyre else []
+        raise
+    notes["dropped"] = tyre
     if progress is not None:
         progress(2, steps, "collision pieces (CoACD)" if closed else "collision pieces (shell)")
     pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)

@@ -100,7 +100,7 @@ def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H
                    "front": notes.get("front"),
                    "min_window_width_mm": notes["min_window_width_mm"],
                    "not_windows": notes["not_windows"], "rejected": notes["rejected"],
-                   "loops": notes["loops"]},
+                   "loops": notes["loops"], "dropped": notes.get("dropped")},
         "frame": "H: origin on the hub axis at the front face of the centre, +Z out of the "
                  "visible face",
         "units": "metres in every data file; mm in this summary",

@@ -1,4 +1,5 @@
-"""Hub mesh import (STL/OBJ/PLY via trimesh) with unit detection and validation.
+"""Hub mesh import (STL, OBJ, PLY, OFF, COLLADA, glTF via trimesh) with unit detection and
+validation.
 
 A car wheel is 0.3-0.9 m across. A mesh whose largest extent is above ``_MM_THRESHOLD`` is
 read as millimetres and scaled to metres; the choice is logged and returned.
@@ -14,11 +15,20 @@ import numpy as np
 
 from drakedeburr.errors import InputError
 
-__all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES"]
+__all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES", "OTHER_MESH_SUFFIXES",
+           "READABLE_FORMATS"]
 
 log = logging.getLogger(__name__)
 
-MESH_SUFFIXES = (".stl", ".obj", ".ply")
+#: triangle-mesh files trimesh reads: a CAD export (STL, OBJ, PLY, OFF), a ROS robot
+#: description's COLLADA (``.dae``, through pycollada) or a glTF export; a file of several
+#: parts (a tyre and a rim, a scene graph) is read as one mesh with every part placed
+MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".dae", ".glb", ".gltf")
+READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or glTF (.glb/.gltf)"
+#: files a user may bring that are not read: CAD solids (B-rep) and other mesh formats; they
+#: are refused with what to export instead
+OTHER_MESH_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt", ".3mf",
+                       ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz")
 _MM_THRESHOLD = 5.0  # a wheel larger than 5 "units" is in millimetres (5 m wheels don't exist)
 _PLAUSIBLE_SIZE_M = (0.05, 2.0)  # [m] largest extent after conversion
 
@@ -44,7 +54,7 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     """Load a hub mesh and convert it to metres.
 
     Args:
-        path: STL, OBJ or PLY file.
+        path: a mesh file (:data:`MESH_SUFFIXES`).
         unit: "m" or "mm" to force the unit; None detects it from the size.
 
     Raises:
@@ -58,7 +68,11 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     if not path.is_file():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
     if path.suffix.lower() not in MESH_SUFFIXES:
-        raise InputError(f"{path}: unsupported mesh type {path.suffix!r}; use STL, OBJ or PLY")
+        what = ("a CAD solid, not a triangle mesh" if path.suffix.lower() in
+                (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt")
+                else "not a format read here")
+        raise InputError(f"{path}: unsupported mesh type {path.suffix!r} ({what}); export the "
+                         f"hub as {READABLE_FORMATS}")
     try:
         # unprocessed first: trimesh's processing drops non-finite vertices silently
         mesh = trimesh.load(path, force="mesh", process=False)

@@ -20,7 +20,8 @@ def register(subparsers) -> None:
         "hub name), fit each with a closed NURBS curve and plan cutter-location points with "
         "each method; prints a table like the source's Tab. 1-2.",
     )
-    p.add_argument("source", help="hub model folder, bundled hub name, or STL/OBJ/PLY file")
+    p.add_argument("source", help="hub model folder, bundled hub name, or mesh file "
+                   "(STL, OBJ, PLY, OFF, DAE, glTF)")
     p.add_argument("--method", action="append", default=None,
                    help="planner (repeatable): proposed, isoparametric, equal_chord_height, "
                    "adaptive; default all")

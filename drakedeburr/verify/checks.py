@@ -162,7 +162,8 @@ def no_window_report(exc, scenario: str, tolerances) -> VerificationReport:
                 for r in exc.rejected]
     detail = (f"no window of {Path(exc.source).name} can be cut: {len(exc.openings)} openings "
               f"too small or not windows, {len(exc.rejected)} outlines rejected: "
-              + "; ".join(reasons))
+              + "; ".join(reasons)
+              + "".join(f" ({note})" for note in getattr(exc, "notes", [])))
     items = (CheckItem("windows", False, 0.0, 1.0, "count", ">=", detail=detail),)
     return VerificationReport(
         passed=False, items=items,
@@ -170,7 +171,8 @@ def no_window_report(exc, scenario: str, tolerances) -> VerificationReport:
                    "expected_windows": [], "windows": [], "targets": 0, "segments": 0,
                    "knots": 0, "duration_s": 0.0, "planner": "", "robot": None,
                    "hub_axis_file": exc.axis, "openings": exc.openings,
-                   "rejected_outlines": exc.rejected},
+                   "rejected_outlines": exc.rejected,
+                   "import_notes": list(getattr(exc, "notes", []))},
         settings={"tolerances": _tolerance_record(tolerances),
                   "samples": 0, "grinding_speed": None},
         run={"elapsed_s": 0.0})

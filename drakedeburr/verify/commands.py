@@ -21,7 +21,6 @@ from drakedeburr.units import m_from_mm
 
 log = logging.getLogger(__name__)
 
-_MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 
 def _windows(text: str | None) -> list[int] | None:
@@ -67,13 +66,21 @@ def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
         argcheck.input_file(args.program, "--program file")
 
 
+def _mesh_suffixes() -> tuple[str, ...]:
+    """Suffixes of a mesh target: the formats read and those refused by name when read
+    (:mod:`drakedeburr.hub.mesh_io`: a STEP file is not a plan folder)."""
+    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES
+
+    return MESH_SUFFIXES + OTHER_MESH_SUFFIXES
+
+
 def _resolve_target(target: str, scenario: str | None):
     """-> ("plan", path) or ("hub", scenario, hub)."""
     from drakedeburr.errors import InputError
     from drakedeburr.resources import hub_names, scenario_names
 
     path = Path(target)
-    if path.suffix.lower() in _MESH_SUFFIXES:
+    if path.suffix.lower() in _mesh_suffixes():
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such hub mesh file")
         return ("hub", scenario or "tool_in_hand", str(path))
@@ -238,7 +245,7 @@ def _run_verify(args: argparse.Namespace) -> int:
         scenario_path(scenario)
     program = _read_program_file(args.program)
     if kind != "plan":
-        if Path(hub).suffix.lower() in _MESH_SUFFIXES:
+        if Path(hub).suffix.lower() in _mesh_suffixes():
             from drakedeburr.errors import NoCuttableWindow
 
             try:
