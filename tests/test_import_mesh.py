@@ -10,6 +10,7 @@ inside/outside with open3d's signed distance: independent of the import's own pr
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -180,6 +181,11 @@ def test_a_tyre_is_dropped_only_when_it_rings_the_rest(tmp_path):
     disc = trimesh.creation.cylinder(radius=0.4, height=0.1)
     same, none = mut._without_tyre(tmp_path / "d.stl", disc, (0.0, 0.0, 1.0))
     assert same is disc and none is None
+    # two parts, the outer one reaching in to 0.8 of the rest's radius: not a tyre around it
+    wide = trimesh.util.concatenate([rim, trimesh.creation.annulus(r_min=0.2, r_max=0.38,
+                                                                   height=0.05)])
+    same, none = mut._without_tyre(tmp_path / "w2.stl", wide, (0.0, 0.0, 1.0))
+    assert same is wide and none is None
 
 
 def test_gltf_and_off_read_as_the_stl(tmp_path):
@@ -202,6 +208,45 @@ def test_gltf_and_off_read_as_the_stl(tmp_path):
     with pytest.raises(InputError, match=r"hub\.step: unsupported mesh type '\.step' \(a CAD "
                                          r"solid, not a triangle mesh\); export the hub as STL"):
         load_hub_mesh(step)
+    gltf = tmp_path / "hub.gltf"
+    gltf.write_text("{}")
+    with pytest.raises(InputError, match=r"hub\.gltf: .*separate buffer files.*\.glb"):
+        load_hub_mesh(gltf)
+
+
+def test_a_collada_file_is_read_in_the_unit_it_states(tmp_path):
+    """COLLADA states its unit (<unit meter=...>; trimesh keeps it as metadata only): a file
+    in millimetres is read as such even where the size rule would call it metres (a 2 mm
+    'wheel' here is refused as too small, not scaled up), metres likewise, and a file in
+    inches is refused naming the unit - never read as millimetres by size."""
+    import trimesh
+
+    from drakedeburr.hub.mesh_io import load_hub_mesh
+
+    box = trimesh.creation.box(extents=(400.0, 380.0, 120.0))
+    box.export(tmp_path / "plain.dae")
+    text = (tmp_path / "plain.dae").read_text()
+
+    def stated(name: str, meter: str, scale: float = 1.0) -> Path:
+        b = box.copy()
+        b.apply_scale(scale)
+        b.export(tmp_path / "tmp.dae")
+        t = (tmp_path / "tmp.dae").read_text().replace(
+            "<up_axis>", f'<unit name="{name}" meter="{meter}"/>\n    <up_axis>', 1)
+        out = tmp_path / f"{name}_{scale:g}.dae"
+        out.write_text(t)
+        return out
+
+    assert "<unit" not in text  # trimesh writes none: the size rule reads it (mm)
+    assert load_hub_mesh(tmp_path / "plain.dae").unit == "mm"
+    lm = load_hub_mesh(stated("millimeter", "0.001"))
+    assert lm.unit == "mm"
+    np.testing.assert_allclose(lm.mesh.extents, [0.4, 0.38, 0.12], rtol=1e-9)
+    with pytest.raises(InputError, match=r"not a wheel's size"):
+        load_hub_mesh(stated("millimeter", "0.001", scale=0.005))  # 2 mm stated: too small
+    assert load_hub_mesh(stated("meter", "1", scale=1e-3)).unit == "m"
+    with pytest.raises(InputError, match=r"inch_1\.dae: the file states its unit as 0\.0254 m"):
+        load_hub_mesh(stated("inch", "0.0254"))
 
 
 # ------------------------------------------------------------------------------- a real hub

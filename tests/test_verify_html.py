@@ -132,13 +132,14 @@ def _envelope_by_bins(x, y, n):
 
 
 def test_envelope_equals_a_bin_by_bin_reading():
-    """Ties (rounded values), NaN runs longer than a bin, bins of one sample: the same points
-    as the bin-by-bin reading."""
+    """Ties (rounded values), NaN runs longer than a bin, +-inf values, bins of 2 samples
+    (the fewest the binning makes): the same points as the bin-by-bin reading."""
     import numpy as np
 
     rng = np.random.default_rng(1)
     for trial in range(24):
-        n_pts = int(rng.integers(10, 30000))
+        n = int(rng.choice([3, 50, 2000]))
+        n_pts = int(rng.integers(2 * n + 1, max(4 * n, 30000)))
         x = np.sort(rng.uniform(0.0, 100.0, n_pts))
         y = rng.normal(size=n_pts)
         if trial % 3 == 0:
@@ -147,8 +148,11 @@ def test_envelope_equals_a_bin_by_bin_reading():
             y[rng.uniform(size=n_pts) < 0.3] = np.nan
             a = int(rng.integers(0, n_pts))
             y[a:a + 300] = np.nan
-        n = int(rng.choice([3, 50, 2000]))
+        if trial % 4 == 1:
+            y[rng.uniform(size=n_pts) < 0.05] = np.inf
+            y[rng.uniform(size=n_pts) < 0.05] = -np.inf
         xe, ye = mut._envelope(x, y, n=n)
+        assert len(xe) < n_pts  # the binned path, not the short series' pass-through
         xr, yr = _envelope_by_bins(x, y, n)
         np.testing.assert_array_equal(xe, xr)
         np.testing.assert_array_equal(ye, yr)

@@ -212,12 +212,15 @@ def _mesh_index(hub_model) -> _MeshIndex:
     same mesh, whose triangles, tree and closed form take ~0.1 s and 0.1-0.3 s to build."""
     v = np.ascontiguousarray(hub_model.vertices_H, float)
     f = np.ascontiguousarray(hub_model.faces, np.int64)
-    digest = hashlib.blake2b(v.tobytes(), digest_size=16)
+    digest = hashlib.blake2b(repr((v.shape, f.shape)).encode(), digest_size=16)
+    digest.update(v.tobytes())
     digest.update(f.tobytes())
     key = digest.hexdigest()
     if key not in _INDEX:
         if len(_INDEX) >= 4:  # a process sees one hub at a time, a test session a few
             _INDEX.pop(next(iter(_INDEX)))
+        v, f = v.copy(), f.copy()  # kept: the caller's arrays may change later
+        v.flags.writeable = f.flags.writeable = False
         _INDEX[key] = _MeshIndex(v, f)
     return _INDEX[key]
 
@@ -235,6 +238,8 @@ def _initial_pairs(mesh: _MeshIndex, centres: np.ndarray, radii: np.ndarray):
         keep = np.einsum("ij,ij->i", d, d) <= (radii[k] + mesh.rad[t]) ** 2
         ks.append(k[keep])
         ts.append(t[keep])
+    if not ks:  # a mesh without triangles
+        return np.zeros(0, int), np.zeros(0, int)
     return np.concatenate(ks).astype(int), np.concatenate(ts).astype(int)
 
 

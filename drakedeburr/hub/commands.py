@@ -147,10 +147,11 @@ def _run_import(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
-    from drakedeburr.hub.mesh_io import MESH_SUFFIXES
+    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES
     from drakedeburr.units import m_from_mm
 
-    argcheck.input_file(args.mesh, "hub mesh file", MESH_SUFFIXES)
+    # the formats not read reach load_hub_mesh, which says what to export instead
+    argcheck.input_file(args.mesh, "hub mesh file", MESH_SUFFIXES + OTHER_MESH_SUFFIXES)
     argcheck.output_folder(args.out, "--out")
     if args.axis and not sum(a * a for a in args.axis) > 0:
         raise InputError(f"--axis {' '.join(map(str, args.axis))}: the hub axis needs a "
@@ -244,12 +245,12 @@ def register(subparsers) -> None:
     p.set_defaults(_run=_run_generate)
 
     p = sub.add_parser(
-        "import", help="hub mesh file (STL, OBJ, PLY, OFF, DAE, glTF) -> hub model folder "
+        "import", help="hub mesh file (STL, OBJ, PLY, OFF, DAE, GLB) -> hub model folder "
         "(edges, CoACD pieces)",
         description="Turn a closed hub mesh into a hub model folder OUT/<name>_<hash> that "
                     "`drakedeburr plan`/`verify` load like a bundled hub (docs/hub.md). "
                     "Re-importing the same file with the same options reuses the folder.")
-    p.add_argument("mesh", help="mesh file: STL, OBJ, PLY, OFF, COLLADA (.dae) or glTF "
+    p.add_argument("mesh", help="mesh file: STL, OBJ, PLY, OFF, COLLADA (.dae) or binary glTF "
                    "(metres or millimetres)")
     p.add_argument("--out", required=True, help="parent folder of the hub folder")
     p.add_argument("--unit", choices=("m", "mm"), help="force the file's unit (default: by size)")

@@ -23,12 +23,15 @@ log = logging.getLogger(__name__)
 #: triangle-mesh files trimesh reads: a CAD export (STL, OBJ, PLY, OFF), a ROS robot
 #: description's COLLADA (``.dae``, through pycollada) or a glTF export; a file of several
 #: parts (a tyre and a rim, a scene graph) is read as one mesh with every part placed
-MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".dae", ".glb", ".gltf")
-READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or glTF (.glb/.gltf)"
+MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".dae", ".glb")
+READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or binary glTF (.glb)"
 #: files a user may bring that are not read: CAD solids (B-rep) and other mesh formats; they
 #: are refused with what to export instead
 OTHER_MESH_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt", ".3mf",
-                       ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz")
+                       ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz", ".gltf")
+_CAD = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt")
+_WHY_NOT = {".gltf": "its geometry may sit in separate buffer files, which the import's cache "
+                     "cannot follow; export binary glTF (.glb)"}
 _MM_THRESHOLD = 5.0  # a wheel larger than 5 "units" is in millimetres (5 m wheels don't exist)
 _PLAUSIBLE_SIZE_M = (0.05, 2.0)  # [m] largest extent after conversion
 
@@ -67,10 +70,10 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
-    if path.suffix.lower() not in MESH_SUFFIXES:
-        what = ("a CAD solid, not a triangle mesh" if path.suffix.lower() in
-                (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt")
-                else "not a format read here")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        what = _WHY_NOT.get(suffix, "a CAD solid, not a triangle mesh" if suffix in _CAD
+                            else "not a format read here")
         raise InputError(f"{path}: unsupported mesh type {path.suffix!r} ({what}); export the "
                          f"hub as {READABLE_FORMATS}")
     try:
@@ -78,6 +81,9 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many kinds; name the file
         raise InputError(f"{path}: cannot read mesh: {exc}") from exc
+    stated = _collada_unit(path) if suffix == ".dae" else None
+    if unit is None and stated is not None:
+        unit = stated
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError(f"{path}: no triangles found")
     if not np.isfinite(mesh.vertices).all():
@@ -91,7 +97,10 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     mesh.process()
     mesh.merge_vertices()
     size = float(mesh.extents.max())
-    if unit is None:
+    if stated is not None and unit == stated:
+        log.info("%s: the file states its unit: %s", path.name,
+                 "metres" if unit == "m" else "millimetres")
+    elif unit is None:
         unit = "mm" if size > _MM_THRESHOLD else "m"
         log.info("%s: largest extent %.4g -> read as %s", path.name, size,
                  "millimetres" if unit == "mm" else "metres")
@@ -109,3 +118,22 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     if not watertight:
         log.info("%s: mesh is not watertight (%d faces)", path.name, len(mesh.faces))
     return LoadedMesh(mesh=mesh, source=path, unit=unit, watertight=watertight)
+
+
+def _collada_unit(path: Path) -> str | None:
+    """The unit a COLLADA file states (``<asset><unit meter=...>``; trimesh keeps it as
+    metadata and does not scale): "m", "mm", or None when it states none; InputError for
+    any other (a SketchUp export in inches, centimetres): its coordinates would be read as
+    millimetres by size."""
+    import collada
+
+    meter = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
+                                               collada.common.DaeBrokenRefError]
+                            ).assetInfo.unitmeter
+    if meter is None:
+        return None
+    for name, value in (("m", 1.0), ("mm", 1e-3)):
+        if abs(meter - value) <= 1e-9 * value:
+            return name
+    raise InputError(f"{path}: the file states its unit as {meter:g} m (<unit meter=...>), "
+                     "neither metres nor millimetres; export the hub in metres or millimetres")

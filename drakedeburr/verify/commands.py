@@ -125,8 +125,9 @@ def _hub_cache(args: argparse.Namespace) -> Path:
     return Path(base) / "drakedeburr" / "hubs"
 
 
-def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
-    """Import a hub mesh file (cached) and return its hub folder."""
+def _import_mesh(mesh: str, args: argparse.Namespace) -> tuple[str, list[str]]:
+    """Import a hub mesh file (cached): its hub folder and what the import changed (a tyre
+    dropped; said again when the folder comes from the cache)."""
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
     from drakedeburr.units import m_from_mm as mm
@@ -140,7 +141,11 @@ def _import_mesh(mesh: str, args: argparse.Namespace) -> str:
     log.info("%s: %s hub folder %s (%d windows, %d collision pieces)", mesh,
              "cached" if res.cached else "imported", res.dir, res.window_count,
              res.piece_count)
-    return str(res.dir)
+    notes = [n for n in [res.summary.get("import", {}).get("dropped")] if n]
+    if res.cached:
+        for note in notes:
+            log.warning("%s: %s", mesh, note)
+    return str(res.dir), notes
 
 
 def _config(args: argparse.Namespace, scenario: str, hub: str):
@@ -227,7 +232,7 @@ def _run_verify(args: argparse.Namespace) -> int:
 
     windows = _windows(args.windows)
     kind, *rest = _resolve_target(args.target, args.scenario)
-    folder = None
+    folder, import_notes = None, []
     if kind == "plan":
         folder = Path(rest[0])
         folder = folder.parent if folder.name == "plan.json" else folder
@@ -249,7 +254,7 @@ def _run_verify(args: argparse.Namespace) -> int:
             from drakedeburr.errors import NoCuttableWindow
 
             try:
-                hub = _import_mesh(hub, args)
+                hub, import_notes = _import_mesh(hub, args)
             except NoCuttableWindow as exc:
                 return _no_window(args, exc, scenario)
         check_windows(windows, hub_windows(hub), Path(hub).name)
@@ -259,6 +264,8 @@ def _run_verify(args: argparse.Namespace) -> int:
             folder = save_plan(plan, args.out, is_ours=_is_output_folder)
     report = verify_plan(plan, config, expected_windows=windows,
                          progress=tqdm_progress("verify"))
+    if import_notes:  # what the mesh import changed (a tyre dropped) goes with the report
+        report = replace(report, plan_info={**report.plan_info, "import_notes": import_notes})
     if program is not None:
         items = (*report.items, _program_item(plan, program))
         report = replace(report, items=items,

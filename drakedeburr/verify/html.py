@@ -37,7 +37,8 @@ def _svg(fig) -> str:
 
 def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, np.ndarray]:
     """At most ~2n points of (x, y) keeping each bin's minimum and maximum (NaN-aware; the
-    first of equal extremes, in sample order), so a plot of tens of thousands of samples
+    first of equal extremes, in sample order; +-inf count where the bin has a finite value,
+    a bin without one is its first x with NaN), so a plot of tens of thousands of samples
     stays small and still shows every extreme."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     if len(x) <= 2 * n:
@@ -45,7 +46,7 @@ def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, 
     edges = np.linspace(0, len(x), n + 1).astype(int)
     starts = edges[:-1]
     bins = np.repeat(np.arange(n), np.diff(edges))
-    finite = np.isfinite(y)
+    finite = ~np.isnan(y)  # a value, infinite ones included
     lo = np.minimum.reduceat(np.where(finite, y, np.inf), starts)
     hi = np.maximum.reduceat(np.where(finite, y, -np.inf), starts)
 
@@ -58,10 +59,12 @@ def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, 
 
     i = first(finite & (y == lo[bins]))
     j = first(finite & (y == hi[bins]))
+    dead = ~np.logical_or.reduceat(np.isfinite(y), starts)  # no finite value in the bin
+    i[dead] = j[dead] = starts[dead]
     keep = np.sort(np.concatenate([i, j]))
     keep = keep[np.concatenate([[True], np.diff(keep) > 0])]
     ys = y[keep].copy()
-    ys[~finite[keep]] = np.nan  # an all-NaN bin: its first x, y NaN
+    ys[np.isin(keep, starts[dead])] = np.nan  # such a bin: its first x, y NaN
     return x[keep], ys
 
 

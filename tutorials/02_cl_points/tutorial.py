@@ -25,7 +25,7 @@ from drakedeburr.path.synthetic import hub_like_window  # noqa: E402
 ap = argparse.ArgumentParser(description=__doc__)
 ap.add_argument("--out", default="out_02", help="output folder")
 ap.add_argument("--test-mode", action="store_true", help="smaller inputs (CI)")
-ap.add_argument("--mesh", help="hub mesh (STL, OBJ, PLY, OFF, DAE, glTF) to extract the "
+ap.add_argument("--mesh", help="hub mesh (STL, OBJ, PLY, OFF, DAE, GLB) to extract the "
                 "windows from")
 args = ap.parse_args()
 out = Path(args.out)
