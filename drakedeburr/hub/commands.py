@@ -147,11 +147,11 @@ def _run_import(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.import_mesh import ImportOptions, import_mesh
-    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES
+    from drakedeburr.hub.mesh_io import MESH_TARGET_SUFFIXES
     from drakedeburr.units import m_from_mm
 
     # the formats not read reach load_hub_mesh, which says what to export instead
-    argcheck.input_file(args.mesh, "hub mesh file", MESH_SUFFIXES + OTHER_MESH_SUFFIXES)
+    argcheck.input_file(args.mesh, "hub mesh file", MESH_TARGET_SUFFIXES)
     argcheck.output_folder(args.out, "--out")
     if args.axis and not sum(a * a for a in args.axis) > 0:
         raise InputError(f"--axis {' '.join(map(str, args.axis))}: the hub axis needs a "

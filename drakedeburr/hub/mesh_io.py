@@ -16,7 +16,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES", "OTHER_MESH_SUFFIXES",
-           "READABLE_FORMATS"]
+           "MESH_TARGET_SUFFIXES", "READABLE_FORMATS"]
 
 log = logging.getLogger(__name__)
 
@@ -27,9 +27,10 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".dae", ".glb")
 READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or binary glTF (.glb)"
 #: files a user may bring that are not read: CAD solids (B-rep) and other mesh formats; they
 #: are refused with what to export instead
-OTHER_MESH_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt", ".3mf",
-                       ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz", ".gltf")
 _CAD = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt")
+OTHER_MESH_SUFFIXES = _CAD + (".3mf", ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz", ".gltf")
+#: a command's file argument with one of these is a mesh: read, or refused by name when read
+MESH_TARGET_SUFFIXES = MESH_SUFFIXES + OTHER_MESH_SUFFIXES
 _WHY_NOT = {".gltf": "its geometry may sit in separate buffer files, which the import's cache "
                      "cannot follow; export binary glTF (.glb)"}
 _MM_THRESHOLD = 5.0  # a wheel larger than 5 "units" is in millimetres (5 m wheels don't exist)

@@ -46,13 +46,13 @@ def _windows_and_view(args: argparse.Namespace):
 
     from drakedeburr.hub.extract import extract_window_edges, resample_loop
     from drakedeburr.hub.inputview import input_view, input_view_of_hub
-    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES, load_hub_mesh
+    from drakedeburr.hub.mesh_io import MESH_TARGET_SUFFIXES, load_hub_mesh
     from drakedeburr.hub.model import load_hub
     from drakedeburr.hub.types import WindowEdge
     from drakedeburr.units import m_from_mm
 
     path = Path(args.source)
-    if path.suffix.lower() in MESH_SUFFIXES + OTHER_MESH_SUFFIXES:  # the others: refused
+    if path.suffix.lower() in MESH_TARGET_SUFFIXES:  # read, or refused by name
         lm = load_hub_mesh(path, unit=args.unit)
         res = extract_window_edges(
             lm.mesh, source=str(path), spacing=2.0e-3, front=args.front,
@@ -76,10 +76,10 @@ def _check_source(source: str) -> None:
     from pathlib import Path
 
     from drakedeburr import argcheck
-    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES
+    from drakedeburr.hub.mesh_io import MESH_TARGET_SUFFIXES
     from drakedeburr.resources import resolve_hub_dir
 
-    if Path(source).suffix.lower() in MESH_SUFFIXES + OTHER_MESH_SUFFIXES:
+    if Path(source).suffix.lower() in MESH_TARGET_SUFFIXES:
         argcheck.input_file(source, "hub mesh file")
     else:
         resolve_hub_dir(source)

@@ -17,6 +17,7 @@ import logging
 from pathlib import Path
 
 from drakedeburr.argcheck import number
+from drakedeburr.hub.mesh_io import MESH_TARGET_SUFFIXES
 from drakedeburr.units import m_from_mm
 
 log = logging.getLogger(__name__)
@@ -66,21 +67,13 @@ def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
         argcheck.input_file(args.program, "--program file")
 
 
-def _mesh_suffixes() -> tuple[str, ...]:
-    """Suffixes of a mesh target: the formats read and those refused by name when read
-    (:mod:`drakedeburr.hub.mesh_io`: a STEP file is not a plan folder)."""
-    from drakedeburr.hub.mesh_io import MESH_SUFFIXES, OTHER_MESH_SUFFIXES
-
-    return MESH_SUFFIXES + OTHER_MESH_SUFFIXES
-
-
 def _resolve_target(target: str, scenario: str | None):
     """-> ("plan", path) or ("hub", scenario, hub)."""
     from drakedeburr.errors import InputError
     from drakedeburr.resources import hub_names, scenario_names
 
     path = Path(target)
-    if path.suffix.lower() in _mesh_suffixes():
+    if path.suffix.lower() in MESH_TARGET_SUFFIXES:
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such hub mesh file")
         return ("hub", scenario or "tool_in_hand", str(path))
@@ -250,7 +243,7 @@ def _run_verify(args: argparse.Namespace) -> int:
         scenario_path(scenario)
     program = _read_program_file(args.program)
     if kind != "plan":
-        if Path(hub).suffix.lower() in _mesh_suffixes():
+        if Path(hub).suffix.lower() in MESH_TARGET_SUFFIXES:
             from drakedeburr.errors import NoCuttableWindow
 
             try:
