@@ -95,7 +95,7 @@ class Cell:
         q_lower, q_upper: position limits [rad].
         v_lower, v_upper: velocity limits [rad/s].
         a_lower, a_upper: acceleration limits [rad/s^2] (assumed values, see the arm's spec).
-        q_home: home configuration [rad] from the scenario; collision-free.
+        q_home: home configuration [rad]: the scenario's, or a plan's (``load_cell(q_home=)``).
         burr_head_ids: proximity geometries of the burr's cutting head.
         hub_ids: proximity geometries of the hub.
         robot_ids: every other geometry that moves with the robot (robot links, spindle body,
@@ -298,19 +298,13 @@ def _hubs_dir_exists() -> bool:
 def _unique_frame(plant, name: str, scenario: Path):
     from pydrake.multibody.tree import ModelInstanceIndex
 
-    frames = [
-        plant.get_frame(index)
-        for m in range(plant.num_model_instances())
-        for index in plant.GetFrameIndices(ModelInstanceIndex(m))
-        if plant.get_frame(index).name() == name
-    ]
+    frames = [plant.get_frame(i) for m in range(plant.num_model_instances())
+              for i in plant.GetFrameIndices(ModelInstanceIndex(m))
+              if plant.get_frame(i).name() == name]
     if len(frames) != 1:
-        raise InputError(
-            f"{scenario}: a scenario needs exactly one frame named {name!r}, found {len(frames)}"
-            + (" (" + ", ".join(
-                plant.GetModelInstanceName(f.model_instance()) for f in frames) + ")"
-               if frames else "")
-        )
+        owners = ", ".join(plant.GetModelInstanceName(f.model_instance()) for f in frames)
+        raise InputError(f"{scenario}: a scenario needs exactly one frame named {name!r}, "
+                         f"found {len(frames)}" + (f" ({owners})" if frames else ""))
     return frames[0]
 
 
@@ -373,12 +367,18 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
 
 
 def load_plan_cell(plan) -> Cell:
-    """The cell a plan was made in: its scenario and hub, its arm and its hub placement
-    (``plan.meta["robot"]``, ``["tool"]``, ``["hub_pose"]``)."""
+    """The cell a plan was made in: its scenario and hub, its arm, its hub placement and its
+    home (``plan.meta["robot"]``, ``["tool"]``, ``["hub_pose"]``, ``["q_home"]``)."""
     meta = plan.meta or {}
-    pose = meta.get("hub_pose")
+    pose, home = meta.get("hub_pose"), meta.get("q_home")
+    a = None if home is None else np.asarray(home, dtype=object)
+    if a is not None and not (a.shape == (6,) and all(
+            isinstance(v, int | float) and np.isfinite(v) for v in a)):
+        raise InputError(f"plan of {plan.hub}: meta q_home must be 6 finite joint angles [rad], "
+                         f"got {home!r}")
     return load_cell(plan.scenario, plan.hub, robot=meta.get("robot"), tool=meta.get("tool"),
-                     hub_pose=None if pose is None else np.asarray(pose, float))
+                     hub_pose=None if pose is None else np.asarray(pose, float),
+                     q_home=None if a is None else a.astype(float))
 
 
 def load_cell(
@@ -389,6 +389,7 @@ def load_cell(
     hub_pose: np.ndarray | None = None,
     tool: str | None = None,
     time_step: float = 0.0,
+    q_home: np.ndarray | None = None,
 ) -> Cell:
     """Build the cell of a scenario with a hub.
 
@@ -405,6 +406,8 @@ def load_cell(
         tool: the burr variant on the scenario's bundled spindle (``TOOL_VARIANTS``); None:
             the standard burr.
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
+        q_home: (6,) home [rad] in place of the mount's (where a hub leaves that one without
+            clearance: :mod:`drakedeburr.plan.home`); ``None``: the mount's.
 
     Returns:
         The :class:`Cell`.
@@ -442,6 +445,8 @@ def load_cell(
                                                              hub_pose)
     plant.Finalize()
     _check_joints(plant, robot_instance, scenario_file)
+    if q_home is not None:
+        plant.SetDefaultPositions(robot_instance, np.asarray(q_home, float))
     mode, world_group = _mode(plant, tool_frame, hub_body, scenario_file)
     sets, moving = _geometry_sets(builder.scene_graph(), plant, robot_instance, hub_instance,
                                   world_group, scenario_file, hub_sdf)
@@ -471,7 +476,8 @@ def load_cell(
     cell._cache["load_args"] = dict(scenario=scenario, hub=hub, robot=robot, tool=tool,
                                     time_step=time_step,
                                     hub_pose=None if hub_pose is None else np.array(hub_pose,
-                                                                                    float))
+                                                                                    float),
+                                    q_home=None if q_home is None else np.array(q_home, float))
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
               hub_sdf, arm.name)
     return cell

@@ -444,9 +444,11 @@ def plan_hub(
 
 def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
                   progress: Progress) -> Plan:
-    """The hub's plan in one cell: where the hub sits (placement search), the windows, the
-    recipe's relaxation where it fails."""
+    """The hub's plan in one cell: where the hub sits (placement search), the home it is
+    planned from (:mod:`drakedeburr.plan.home`), the windows, the recipe's relaxation where
+    it fails."""
     from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.home import clear_home
     from drakedeburr.plan.placement import place_hub
 
     placement = None
@@ -460,6 +462,10 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     q_refs = placement.q_refs if placement else None
     t_windows = time.perf_counter()
     ctx = _context(cell, config, options, q_refs)
+    q_home, home_moved = clear_home(cell, ctx.free_checker)
+    if home_moved is not None:  # the hub leaves the cell's home without clearance
+        cell = load_cell(**{**cell._cache["load_args"], "q_home": q_home})
+        ctx = _context(cell, config, options, q_refs)
     # with relaxation on, a window is abandoned at its first failed IK target (it fails under
     # this recipe whatever the rest does) and relaxed; _relax plans it in full if no
     # relaxation is kept
@@ -469,6 +475,10 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
         plan = _relax(ctx, hub_model, wts, results, progress, t_windows)
     else:
         plan = _assemble_windows(ctx, wts, results, progress, t_windows)
+    if home_moved is not None:
+        plan.meta["q_home"] = q_home.tolist()
+        plan.meta["recipe_deviations"] = [home_moved.record(),
+                                          *plan.meta.get("recipe_deviations", [])]
     if placement is not None:
         plan.meta["hub_pose"] = placement.hub_pose.tolist()
         plan.meta["placement"] = placement.record()
