@@ -22,7 +22,11 @@ from drakedeburr.frames.vectors import angle_between
 from drakedeburr.plan.cut_path import cut_path
 from drakedeburr.plan.interpolate import DensePath
 from drakedeburr.plan.options import PlanContext
-from drakedeburr.plan.program_reading import cone_axes_on_moves, program_orientation_error
+from drakedeburr.plan.program_reading import (
+    cone_axes_on_moves,
+    moves_in_order,
+    program_orientation_error,
+)
 from drakedeburr.plan.results import WindowPlan, WindowStatus
 from drakedeburr.plan.spin import optimize_spin, spin_frames
 from drakedeburr.plan.timing import joint_spline
@@ -89,7 +93,8 @@ def motion_records(window: int, cut, max_jump: float) -> list[FailureRecord]:
     return out
 
 
-def between_samples_error(kin, cut, cp, cone: tuple | None = None) -> tuple[float, float]:
+def between_samples_error(kin, cut, cp, cone: tuple | None = None
+                          ) -> tuple[float, float, float]:
     """How far the executed cut strays *between* the dense samples, where the timed trajectory
     runs on the joint spline through them (:func:`drakedeburr.plan.timing.joint_spline`): read
     at the quarter points of every interval together with the samples, as the verifier reads
@@ -99,24 +104,30 @@ def between_samples_error(kin, cut, cp, cone: tuple | None = None) -> tuple[floa
         (largest angle [rad] between the program's orientation and the executed one, largest
         angle [rad] by which the tool axis leaves its cone there: ``cone`` = (CL target points
         (K, 3), their cone axes (K, 3) tip -> spindle, half-angle), read on the moves as the
-        verifier does; -inf without ``cone``). Where the program's moves are shorter than the
-        sampling and turn the tool, the spline cannot follow its orientation kinks (measured on
-        h5_split's tight corners: 0.1-0.37 mm moves turning 25-50 mrad read 11 mrad off the
-        program at 0.25 mm sampling, 6.6 mrad at 0.125 mm). The cone reading is a guard: at
-        the corner where an unseen hub's cut left the verifier's cone (0.16 rad of cone turn
-        between two CL points), the spline between the samples stayed inside; the cause was
-        the reading of the cone itself (:data:`drakedeburr.plan.cut_path.PIN_MARGIN`).
+        verifier does; -inf without ``cone``; largest distance [m] of the tool point from the
+        program's moves, read as the verifier's ``path_deviation``). Where the program's moves
+        are shorter than the sampling and turn the tool, the spline cannot follow its
+        orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
+        25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm).
+        Where the wrist turns fast while the tool point barely moves (a near stop), the
+        spline's tool point leaves the line between two samples: 0.059 mm between two
+        samples 0.23 mm apart on a relaxed window of catalogue hub 271128_046. The cone reading
+        is a guard: at the corner where an unseen hub's cut left the verifier's cone (0.16 rad
+        of cone turn between two CL points), the spline between the samples stayed inside; the
+        cause was the reading of the cone itself (:data:`drakedeburr.plan.cut_path.PIN_MARGIN`).
     """
     sp = joint_spline(cut.s, cut.q)
     ds = np.diff(cut.s)
     s_all = np.sort(np.concatenate([cut.s] + [cut.s[:-1] + f * ds for f in (0.25, 0.5, 0.75)]))
     X = kin.X_HT_from_q(sp(s_all))
     err = float(program_orientation_error(X, cp.X_target)[0].max())
+    P = cp.X_target[:, :3, 3]
+    dev = float(moves_in_order(X[:, :3, 3], P[:-1], P[1:])[0].max())
     if cone is None:
-        return err, -np.inf
+        return err, -np.inf, dev
     P, C, half = cone
     c = cone_axes_on_moves(X[:, :3, 3], P, C)
-    return err, float(np.max(angle_between(c, -X[:, :3, 2])) - half)
+    return err, float(np.max(angle_between(c, -X[:, :3, 2])) - half), dev
 
 
 def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, t_ik: float,
@@ -138,8 +149,8 @@ def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, 
         out = fit_program(ctx, wt, tr, order, records, refine=step == ctx.options.dense_step)
         if out == "finer":
             step *= 0.5
-            log.debug("window %d: between its samples the cut would stray from the program's "
-                     "orientation or its cone; sampling it every %.3f mm", wt.window_index,
+            log.debug("window %d: between its samples the cut would stray from the program or "
+                      "its cone; sampling it every %.3f mm", wt.window_index,
                      step * 1e3)
             continue
         if isinstance(out, WindowStatus):

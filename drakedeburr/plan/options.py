@@ -51,6 +51,10 @@ class PlanOptions:
             where the program's orientation (slerp between consecutive targets, as a controller
             interpolates) strays from the executed one by more than this share of
             ``Tolerances.orientation_match``.
+        program_position_share: and where the executed tool point strays from the program's
+            linear moves (read as the verifier reads it) by more than this share of
+            ``Tolerances.path_deviation`` (a via on the path splits the move's chord; the
+            corner blends keep 0.6 of it, so only a path that winds between targets gets one).
         via_rounds: rounds of via insertion.
         conform_program: where the program still strays after the vias (moves too short for
             one), pull the executed orientation onto the program's there
@@ -106,6 +110,7 @@ class PlanOptions:
     spin_search: bool = True
     spin_band: float = 1.2
     program_orientation_share: float = 0.6
+    program_position_share: float = 0.8
     via_rounds: int = 8
     conform_program: bool = True
     retry_in_band: float = 0.5
@@ -166,6 +171,11 @@ class PlanContext:
     def program_orientation(self) -> float:
         """Largest program-vs-executed orientation the planner leaves [rad]."""
         return self.options.program_orientation_share * self.config.tolerances.orientation_match
+
+    @property
+    def program_position(self) -> float:
+        """Largest executed-vs-program tool point distance the planner leaves [m]."""
+        return self.options.program_position_share * self.config.tolerances.path_deviation
 
     def limits(self, v_cap: float) -> TimingLimits:
         """Timing limits of a stretch with TCP speed cap ``v_cap`` [m/s]."""

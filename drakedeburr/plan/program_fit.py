@@ -16,6 +16,7 @@ from drakedeburr.plan.cut import between_samples_error, cone_of_cut
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import (
+    moves_in_order,
     program_orientation_error,
     program_orientations,
     rot_angle,
@@ -42,7 +43,8 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
 
         cp, cut, dist, fillets = repair_fillets(ctx, cp, cut, dist, cone_of_cut(wt, order, cp),
                                                 wt.cone_half_angle, w)
-    cp, via = add_vias(cp, ctx.program_orientation, ctx.options.via_rounds, w)
+    cp, via = add_vias(cp, ctx.program_orientation, ctx.options.via_rounds, w,
+                       tol_position=ctx.program_position)
     cut = replace(cut, target_index=cp.target_index)
     if ctx.options.conform_program:
         cp, cut, dist = conform_to_program(ctx, cp, cut, dist, w, cone_of_cut(wt, order, cp, via),
@@ -60,10 +62,10 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
     if bad.size:
         return WindowStatus.PROGRAM_FAILED
     if refine:
-        err, out_of_cone = between_samples_error(
+        err, out_of_cone, dev = between_samples_error(
             kin, cut, cp, (cp.X_target[~via, :3, 3], wt.cone_retract_H[order],
                            wt.cone_half_angle))
-        if err > 0.8 * tol.orientation_match or out_of_cone > 0.0:
+        if err > 0.8 * tol.orientation_match or out_of_cone > 0.0 or dev > ctx.program_position:
             return "finer"
     stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > tol.orientation_match:
@@ -79,34 +81,52 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
 
 
 def via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
-                tol: float) -> np.ndarray:
+                tol: float, tol_position: float = np.inf) -> np.ndarray:
     """Dense samples to make via targets: on each move of the program whose orientation strays
     more than ``tol`` from the executed poses ``X`` (read as the verifier reads it,
     :func:`drakedeburr.plan.program_reading.program_orientation_error`), the sample where it
-    strays most (sorted; never a target's own sample)."""
+    strays most; on each other move whose line the executed tool point leaves by more than
+    ``tol_position`` (:func:`drakedeburr.plan.program_reading.moves_in_order`, the verifier's
+    ``path_deviation`` reading), the sample farthest from it (sorted; never a target's own
+    sample)."""
     err, move = program_orientation_error(X, X_targets)
     err[np.asarray(target_index)] = 0.0
-    out = []
-    for k in np.unique(move[err > tol]):
-        on = np.flatnonzero(move == k)
-        # in the middle half of a move of >= 3 samples: a via next to a target (or on a move
-        # shorter than the sampling) only shortens moves below what the reading resolves
-        mid = on[len(on) // 4:len(on) - len(on) // 4]
-        if len(on) >= 3 and len(mid):
-            out.append(int(mid[np.argmax(err[mid])]))
+    out = _worst_per_move(err, move, tol)
+    if np.isfinite(tol_position):
+        P = X_targets[:, :3, 3]
+        d, move_p, _ = moves_in_order(X[:, :3, 3], P[:-1], P[1:])
+        d[np.asarray(target_index)] = 0.0
+        split = set(move[out].tolist()) if out else set()
+        out += [k for k in _worst_per_move(d, move_p, tol_position)
+                if int(move_p[k]) not in split]
     return np.asarray(sorted(set(out)), int)
 
 
-def add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.05e-3):
+def _worst_per_move(err: np.ndarray, move: np.ndarray, tol: float) -> list[int]:
+    """Per move with a sample above ``tol``: its worst sample in the middle half of the move
+    (a move of >= 3 samples: a via next to a target, or on a move shorter than the sampling,
+    only shortens moves below what the reading resolves)."""
+    out = []
+    for k in np.unique(move[err > tol]):
+        on = np.flatnonzero(move == k)
+        mid = on[len(on) // 4:len(on) - len(on) // 4]
+        if len(on) >= 3 and len(mid):
+            out.append(int(mid[np.argmax(err[mid])]))
+    return out
+
+
+def add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.05e-3,
+             tol_position: float = np.inf):
     """The cut program with via targets: executed poses (position and orientation of a dense
     sample of the cut) made targets where the program's orientation strays more than ``tol``
+    or its moves leave the executed tool point by more than ``tol_position``
     (:func:`via_samples`), for up to ``rounds`` rounds. The executed cut is not changed: a via
     lies on it, so the program only gains a vertex on the path it already runs. Its zone: 45 %
     of the shorter of its two moves, rounded down to ``zone_quantum`` (at least that; a zone
     of 0 would be a stop). Returns (CutPath with the vias, via mask per target)."""
     via = np.zeros(len(cp.target_index), bool)
     for k in range(rounds):
-        add = via_samples(cp.X_HT, cp.X_target, cp.target_index, tol)
+        add = via_samples(cp.X_HT, cp.X_target, cp.target_index, tol, tol_position)
         if add.size == 0:
             break
         at = np.searchsorted(cp.target_index, add)
@@ -119,8 +139,8 @@ def add_vias(cp, tol: float, rounds: int, window: int, zone_quantum: float = 0.0
             leg = 0.45 * min(np.linalg.norm(P[j] - P[j - 1]), np.linalg.norm(P[j + 1] - P[j]))
             zone[j] = max(zone_quantum, np.floor(leg / zone_quantum) * zone_quantum)
         cp = replace(cp, target_index=ti, X_target=Xt, zone=zone)
-        log.debug("window %d: %d via targets where the program's orientation strays more than "
-                 "%.1f mrad (round %d)", window, len(add), 1e3 * tol, k + 1)
+        log.debug("window %d: %d via targets where the program strays more than %.1f mrad or "
+                  "%.3f mm (round %d)", window, len(add), 1e3 * tol, 1e3 * tol_position, k + 1)
     return cp, via
 
 
