@@ -64,3 +64,67 @@ def test_cl_chords_not_measurable_without_cl_points():
     for check in (checks_path.cl_chord_error, checks_path.cl_chord_length):
         item = check(sp, cfg)
         assert not item.passed and item.value is None and "not measurable" in item.detail
+
+
+def test_limit_use_is_read_at_the_knots_where_the_timing_binds():
+    """A slow stretch whose wrist acceleration reaches 0.9 of its limit only in narrow peaks
+    at the trajectory's knots (the timing bounds the limits there; between knots a degree-6
+    piece's acceleration can fall off within a fraction of a millisecond: catalogue hub
+    271128_043 read 0.83-0.85 on the 0.5 ms grid where J3 is at 0.90 at every knot). The
+    grid alone misses the peaks; with the knots every point of the stretch has a limit at
+    0.9 within 1 mm, the analytic peak."""
+    from types import SimpleNamespace
+
+    from scipy.special import erf
+
+    from drakedeburr.verify import checks_process as mut
+
+    v, sigma, A, a_max = 0.08, 0.03e-3, 0.9 * 50.0, 50.0  # m/s, s, rad/s^2
+    knots = np.arange(0.0, 0.2 + 1e-12, 3.1e-3)
+    sign = np.where(np.arange(len(knots)) % 2 == 0, 1.0, -1.0)
+
+    def acc(t):
+        return A * np.sum(sign * np.exp(-((t[:, None] - knots) / sigma) ** 2), axis=1)
+
+    def vel(t):
+        return A * sigma * np.sqrt(np.pi) / 2 * np.sum(
+            sign * (erf((t[:, None] - knots) / sigma) + 1.0), axis=1)
+
+    def value(t):
+        t = np.atleast_1d(np.asarray(t, float))
+        q = np.zeros((len(t), 6))
+        q[:, 0] = v * t  # the tool point moves along x at v (FK below: q[:3] is the point)
+        return q
+
+    def derivative(t, n):
+        t = np.atleast_1d(np.asarray(t, float))
+        d = np.zeros((len(t), 6))
+        if n == 1:
+            d[:, 0], d[:, 3] = v, vel(t)
+        else:
+            d[:, 3] = acc(t)
+        return d
+
+    def X_HT(q):
+        X = np.tile(np.eye(4), (len(q), 1, 1))
+        X[:, :3, 3] = q[:, :3]
+        return X
+
+    traj = SimpleNamespace(t=knots, value=value, derivative=derivative)
+    sp = SimpleNamespace(plan=SimpleNamespace(trajectory=traj), kin=SimpleNamespace(X_HT=X_HT),
+                         limits=SimpleNamespace(velocity=np.full(6, 10.0),
+                                                acceleration=np.full(6, a_max)))
+    cfg = SimpleNamespace(process=SimpleNamespace(tcp_acceleration=3.0))
+    t0, t1 = 0.0103, 0.1897
+    t, s, r, on_grid = mut._limit_ratios(sp, cfg, t0, t1)
+    n_grid = int(np.ceil((t1 - t0) / 0.5e-3)) + 1  # the 0.5 ms grid
+    assert np.all(np.diff(t) >= 0) and on_grid.sum() == n_grid
+    np.testing.assert_allclose(t[on_grid], np.linspace(t0, t1, n_grid))
+    inner = knots[(knots > t0) & (knots < t1)]
+    assert (~on_grid).sum() == 2 * len(inner)
+    grid_only = mut._windowed_max(s[on_grid], r[on_grid], 1e-3, np.ones(on_grid.sum(), bool))
+    with_knots = mut._windowed_max(s, r, 1e-3, on_grid)
+    assert len(with_knots[0]) == on_grid.sum()
+    assert grid_only[0].min() < 0.85  # the grid misses the peaks
+    np.testing.assert_allclose(with_knots[0], 0.9, rtol=1e-6)  # the analytic peak, A / a_max
+    assert set(with_knots[1].tolist()) == {6 + 3}  # J4 acceleration (_LIMITS' column)
