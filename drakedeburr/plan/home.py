@@ -55,7 +55,7 @@ def _bounds(cell, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _nearest(cell, checker, q0: np.ndarray, start: np.ndarray, lo, hi) -> np.ndarray | None:
+def _nearest(checker, q0: np.ndarray, start: np.ndarray, lo, hi) -> np.ndarray | None:
     """The clear configuration SNOPT finds nearest to ``q0`` from ``start`` (None: none)."""
     from pydrake.solvers import MathematicalProgram, SnoptSolver
 
@@ -91,7 +91,7 @@ def clear_home(cell, checker) -> tuple[np.ndarray, Deviation | None]:
     lo, hi = _bounds(cell, q0)
     best, best_cost = None, np.inf
     for step in _STARTS:
-        q = _nearest(cell, checker, q0, q0 + np.asarray(step), lo, hi)
+        q = _nearest(checker, q0, q0 + np.asarray(step), lo, hi)
         if q is None or np.any(q < lo - 1e-9) or np.any(q > hi + 1e-9):
             continue
         if checker.distance(q, 2 * HOME_CLEARANCE) < HOME_CLEARANCE:  # re-read, not trusted
