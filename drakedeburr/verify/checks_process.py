@@ -77,7 +77,7 @@ def _speed_band(sp, cfg, reach: float = 1e-3) -> dict:
         inside = np.abs(vm / v_g - 1.0) <= tol.speed_band
         stretches = slow_stretches(inside, ds, vm)
         if stretches:
-            t_f, s_all, r_f, on_grid = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
+            _, s_all, r_f, on_grid = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
             bound, which = _windowed_max(s_all, r_f, reach, on_grid)
             s_f = s_all[on_grid]
             for st in stretches:
