@@ -1,10 +1,14 @@
 """Whole bundled hubs plan (slow).
 
-* every hub in both cells with the edge-derived targets (``source="edges"``: ground-truth
-  edge, fixed tilt inside the theta_A box, theta_B = 0);
 * every hub in both cells with the real chain (path stage CL points -> orientation stage
-  ToolPath -> plan), each hub with its own process recipe (``process.yaml``: h5_deepdish's
-  smaller tilt box, see docs/plan.md).
+  ToolPath -> plan), every window, each hub with its own process recipe (``process.yaml``:
+  h5_deepdish's smaller tilt box, see docs/plan.md), independently verified;
+* every hub in both cells with the edge-derived targets (``source="edges"``: ground-truth
+  edge, fixed tilt inside the theta_A box, theta_B = 0), windows 0 and 1: a second axis
+  program through the same planner, each window kind (h5_split's large and small windows)
+  and a move between two windows. The other windows of this stand-in source were ~2/3 of its
+  ~280 s of test time (issue 19 item 5) and plan the same kinds of window again; the real
+  chain above plans every window.
 """
 
 import numpy as np
@@ -16,6 +20,7 @@ HUBS = hub_names()
 
 REAL_CHAIN = [(hub, mode, "toolpath") for hub in HUBS for mode in ("tool", "workpiece")]
 EDGES = [(hub, mode, "edges") for hub in HUBS for mode in ("tool", "workpiece")]
+EDGE_WINDOWS = (0, 1)
 
 
 @pytest.mark.slow
@@ -23,13 +28,19 @@ EDGES = [(hub, mode, "edges") for hub in HUBS for mode in ("tool", "workpiece")]
 def test_whole_hub_plans(hub, mode, source):
     from drakedeburr.config import load_config
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan.planner import plan_hub
+    from drakedeburr.plan.planner import PlanOptions, plan_hub
 
     scenario = "tool_in_hand" if mode == "tool" else "workpiece_in_hand"
-    plan = plan_hub(load_config(scenario, hub), source=source)
+    windows = EDGE_WINDOWS if source == "edges" else None
+    plan = plan_hub(load_config(scenario, hub), source=source,
+                    options=PlanOptions(windows=windows))
     assert plan.failures == ()
     planned = [w["window"] for w in plan.meta["windows"]]
-    assert planned == [w.index for w in load_hub(hub).windows]
+    assert planned == [w.index for w in load_hub(hub).windows
+                       if windows is None or w.index in windows]
+    kinds = [s.kind for s in plan.segments]
+    assert kinds.count("cut") == len(planned)
+    assert kinds.count("transition") == len(planned) - 1
     tr = plan.trajectory
     tt = np.linspace(0, tr.duration, 20000)
     qd = tr.derivative(tt)
