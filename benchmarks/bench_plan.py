@@ -219,13 +219,15 @@ def speed(hubs, cells, baseline: str) -> None:
                          f"{n['cpu'] + n['cpu_children']:.1f}",
                          f"{b['failures']}/{n['failures']}",
                          "yes" if n1["digest"] == n["digest"] else "NO",
+                         "yes" if b1["digest"] == n1["digest"] else "no",
                          _band(b), _band(n),
                          f"{100 * min(bounds):.0f}" if bounds else "-"])
             print("  ".join(rows[-1]), flush=True)
     print()
     _table(rows, ["hub", "cell", "before s", "before 1 proc s", "now 1 proc s", "now s",
                   "speed-up", "before CPU s",
-                  "now CPU s", "failures", "same plan 1/N proc", "in band % before",
+                  "now CPU s", "failures", "same plan 1/N proc", "same plan as before",
+                  "in band % before",
                   "in band % now", "least bound %"])
     for (cell, hub), (b, n1) in stages.items():
         names = list(dict.fromkeys(list(b["stages_wall"]) + list(n1["stages_wall"])))

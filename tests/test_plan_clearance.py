@@ -68,11 +68,73 @@ def test_motion_bound_covers_every_moving_point(cell_path):
             assert moved <= D[mb.row[g]] + 1e-9, (inspector.GetName(g), moved, D[mb.row[g]])
 
 
-def test_distances_along_equal_the_full_query(cell_path):
+def test_relative_travel_covers_every_point_of_a_counted_body_pair(cell_path):
+    """The anchor bound of a counted body pair (two moving bodies with a pair the checker's
+    filters let through): the support points of either body's geometries, read in the other
+    body's frame from Drake's own poses, move no farther per step than the relative bound of
+    the body's ball says; each pair's column takes the least of the two relative bounds and
+    the two bodies' own steps together (each bounds how far the pair's distance can change),
+    each solo body's column its geometries' largest own step."""
+    from pydrake.multibody.tree import BodyIndex
+
+    from drakedeburr.cell.narrowphase import bounding_points
+
+    cell, kin, checker, q = cell_path
+    mb = mut.motion_bound(cell)
+    bodies, members, solo, pairs, balls = mut._counted(checker, mb)
+    assert len(pairs) and np.any(solo)
+    inspector = cell.scene_graph.model_inspector()
+    gid_of = {i: g for g, i in mb.row.items()}
+    rng = np.random.default_rng(2)
+    path = np.vstack([q[::5], q[-1] + np.cumsum(rng.normal(0, 0.02, (6, 6)), axis=0)])
+    X = mb.tree.body_poses(path)
+    D = mut.step_displacements(mb, path, X)
+    M = mut.anchor_travel(checker, mb, path, D, X)
+    ctx = cell.plant.CreateDefaultContext()
+
+    def pose(body, qi):
+        cell.plant.SetPositions(ctx, qi)
+        return cell.plant.EvalBodyPoseInWorld(
+            ctx, cell.plant.get_body(BodyIndex(int(body)))).GetAsMatrix4()
+
+    def relative_motion(rows, a, b):  # (N-1,) measured: the rows' points in b's frame
+        worst = np.zeros(len(path) - 1)
+        for g in rows:
+            gid = gid_of[int(g)]
+            P, rho = bounding_points(inspector.GetShape(gid))
+            X_AG = np.linalg.inv(pose(a, cell.q_home)) @ (
+                checker.query_at(cell.q_home).GetPoseInWorld(gid).GetAsMatrix4())
+            P_A = P @ X_AG[:3, :3].T + X_AG[:3, 3]
+            X_ba = [np.linalg.inv(pose(b, qi)) @ pose(a, qi) for qi in path]
+            pts = np.array([P_A @ x[:3, :3].T + x[:3, 3] for x in X_ba])
+            step = np.max(np.linalg.norm(np.diff(pts, axis=0), axis=2), axis=1)
+            turn = [np.arccos(np.clip(0.5 * (np.trace(x0[:3, :3].T @ x1[:3, :3]) - 1), -1, 1))
+                    for x0, x1 in zip(X_ba[:-1], X_ba[1:], strict=True)]
+            worst = np.maximum(worst, step + np.array(turn) * rho)
+        return worst
+
+    own = np.stack([D[:, m].max(axis=1) for m in members], axis=1)
+    n_solo = int(np.sum(solo))
+    assert np.allclose(np.diff(M[:, :n_solo], axis=0), own[:, solo], rtol=0, atol=1e-12)
+    for col, (x, y) in enumerate(pairs, start=n_solo):
+        ax, bx = int(bodies[x]), int(bodies[y])
+        (cx, rx), (cy, ry) = balls[x], balls[y]
+        rel_xy = mut._relative_steps(X, cx[None], np.array([rx]), [ax], [bx])[:, 0]
+        rel_yx = mut._relative_steps(X, cy[None], np.array([ry]), [bx], [ax])[:, 0]
+        assert np.all(relative_motion(members[x], ax, bx) <= rel_xy + 1e-9)
+        assert np.all(relative_motion(members[y], bx, ax) <= rel_yx + 1e-9)
+        step = np.minimum.reduce([rel_xy, rel_yx, own[:, x] + own[:, y]])
+        assert np.allclose(np.diff(M[:, col]), step, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("reach", [20e-3, 4e-3])
+def test_distances_along_equal_the_full_query(cell_path, reach):
+    """Equal at every sample, also with a short anchor reach (anchors every few samples, so
+    a pair the anchor bound let through unread would show)."""
     cell, kin, checker, q = cell_path
     cap = 3e-3
     full = np.array([checker.distance(qi, cap) for qi in q])
-    along, stats = mut.distances_along(checker, q, cap)
+    along, stats = mut.distances_along(checker, q, cap, reach=reach)
     assert np.array_equal(along, full)
     # it did skip work: fewer full queries than samples
     assert stats["anchors"] < len(q) / 2
