@@ -167,6 +167,37 @@ def test_point_segment_distances_against_brute_force():
     assert np.allclose(d2, dd, atol=1e-12)
 
 
+def test_point_segment_pruned_reading_equals_the_reading_against_every_segment():
+    """Many points against many segments are read against the nearest few first (KD-tree of
+    the midpoints): the same distances, segments and fractions bit for bit as against every
+    segment - on a sampled loop, at its vertices (a tie between two segments goes to the
+    first, as against every segment), far from it (no segment settles at once), and where
+    a long segment's half-length keeps points open (the fallback)."""
+    import drakedeburr.verify.geometry as geo
+
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 2 * np.pi, 1501)
+    loop = np.c_[0.1 * np.cos(t), 0.06 * np.sin(t) + 0.01 * np.sin(5 * t), 2e-3 * np.sin(3 * t)]
+    a, b = loop[:-1], loop[1:]
+    b_long = b.copy()
+    b_long[700] = a[700] + 40 * (b[700] - a[700])  # one long segment: every point stays open
+    cases = [(loop + rng.normal(0, 1e-4, loop.shape), a, b),  # a cut around its edge
+             (loop[:-1], a, b),  # exactly at the vertices: ties
+             (rng.normal(0, 0.3, (800, 3)), a, b),  # far away
+             (loop + rng.normal(0, 1e-4, loop.shape), a, b_long)]
+    for p, aa, bb in cases:
+        assert len(p) * len(aa) > geo._DENSE_PAIRS
+        ab = bb - aa
+        L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        ref = geo._point_segment_all(p, aa, ab, L2, 256)
+        got = geo.point_segment(p, aa, bb)
+        for x, y in zip(got, ref, strict=True):
+            assert np.array_equal(x, y)
+    # at a vertex the two segments meeting there tie: the first one is named
+    _, k, f = geo.point_segment(loop[1:-1], a, b)
+    assert np.array_equal(k, np.arange(len(loop) - 2)) and np.all(f == 1.0)
+
+
 def test_plan_without_tool_path_uses_hub_edges():
     """A plan that carries no ToolPath is still checked against the true edge (the CL points
     are inferred from the targets, the local frames from the hub's ground truth)."""
