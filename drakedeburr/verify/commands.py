@@ -255,7 +255,10 @@ def _run_verify(args: argparse.Namespace) -> int:
         plan = make_plan(config, args.planner, windows, progress=tqdm_progress("plan"))
         if args.out:
             folder = save_plan(plan, args.out, is_ours=_is_output_folder)
-    report = verify_plan(plan, config, expected_windows=windows,
+    from drakedeburr.cell.station import load_plan_cell
+
+    cell = load_plan_cell(plan)  # built once: the sampling and the report's replay share it
+    report = verify_plan(plan, config, expected_windows=windows, cell=cell,
                          progress=tqdm_progress("verify"))
     if import_notes:  # what the mesh import changed (a tyre dropped) goes with the report
         report = replace(report, plan_info={**report.plan_info, "import_notes": import_notes})
@@ -264,7 +267,8 @@ def _run_verify(args: argparse.Namespace) -> int:
         report = replace(report, items=items,
                          passed=all(i.passed for i in items if i.required))
     if folder is not None:
-        for path in write_report_files(report, folder, plan=plan, replay=not args.no_replay):
+        for path in write_report_files(report, folder, plan=plan, replay=not args.no_replay,
+                                       cell=cell):
             log.info("wrote %s", path)
     if args.json:
         write_report_json(report, args.json)
@@ -272,7 +276,8 @@ def _run_verify(args: argparse.Namespace) -> int:
         from drakedeburr.verify.html import meshcat_replay_html, write_report_html
 
         write_report_html(report, args.html,
-                          replay_html=None if args.no_replay else meshcat_replay_html(plan))
+                          replay_html=None if args.no_replay else meshcat_replay_html(plan,
+                                                                                      cell))
     _print_report(report)
     return 0 if report.passed else 1
 

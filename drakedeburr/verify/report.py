@@ -172,18 +172,19 @@ def write_report_json(report: VerificationReport, path: str | Path) -> Path:
 
 
 def write_report_files(report: VerificationReport, folder: str | Path, *, plan=None,
-                       replay: bool = True) -> tuple[Path, Path]:
+                       replay: bool = True, cell=None) -> tuple[Path, Path]:
     """Write the report into its plan's folder, where the export gate reads it:
     ``report.json`` and ``report.html`` (with a Meshcat replay of ``plan`` when given and
-    ``replay``). The two are written together (:func:`drakedeburr._io.atomic_write_files`):
-    an interruption leaves both as they were. Returns their paths."""
+    ``replay``, in ``cell`` when given, else the plan's cell built here). The two are written
+    together (:func:`drakedeburr._io.atomic_write_files`): an interruption leaves both as they
+    were. Returns their paths."""
     from drakedeburr._io import atomic_write_files
     from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
     from drakedeburr.verify.html import meshcat_replay_html, report_html
 
     folder = Path(folder)
-    html = report_html(report, replay_html=meshcat_replay_html(plan) if plan is not None and
-                       replay else None)
+    html = report_html(report, replay_html=meshcat_replay_html(plan, cell)
+                       if plan is not None and replay else None)
     written = atomic_write_files({folder / REPORT_HTML: html,
                                   folder / REPORT_FILE: report_json(report)})
     return written[1], written[0]
