@@ -127,6 +127,34 @@ def test_relative_travel_covers_every_point_of_a_counted_body_pair(cell_path):
         assert np.allclose(np.diff(M[:, col]), step, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("filter_burr_contact", [True, False])
+def test_every_candidate_pair_is_covered_by_an_anchor_column(cell_path, filter_burr_contact):
+    """Every pair Drake counts in the checker's context (``GetCollisionCandidates``, the
+    burr-contact filter applied or not) has an anchor column: a moving geometry against a fixed
+    one its body's solo column, two moving geometries their bodies' pair column; no column
+    for a pair Drake filters out (a column for nothing only costs anchors)."""
+    from drakedeburr.plan.kinematics import ClearanceChecker
+
+    cell = cell_path[0]
+    checker = ClearanceChecker(cell, filter_burr_contact=filter_burr_contact)
+    mb = mut.motion_bound(cell)
+    bodies, members, solo, pairs, _ = mut._counted(checker, mb)
+    body_of = {int(g): i for i, m in enumerate(members) for g in m}
+    candidates = checker.query_at(cell.q_home).inspector().GetCollisionCandidates()
+    assert candidates
+    need_solo, need_pair = set(), set()
+    for ga, gb in candidates:
+        ra, rb = mb.row[ga], mb.row[gb]
+        moving = [body_of[r] for r in (ra, rb) if mb.level[r] > 0]
+        if len(moving) == 1:
+            need_solo.add(moving[0])
+        elif len(moving) == 2:
+            assert moving[0] != moving[1]  # Drake never pairs geometries of one body
+            need_pair.add(tuple(sorted(moving)))
+    assert need_solo == set(np.flatnonzero(solo).tolist())
+    assert need_pair == {tuple(p) for p in pairs.tolist()}
+
+
 @pytest.mark.parametrize("reach", [20e-3, 4e-3])
 def test_distances_along_equal_the_full_query(cell_path, reach):
     """Equal at every sample, also with a short anchor reach (anchors every few samples, so

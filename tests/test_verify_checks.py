@@ -196,6 +196,11 @@ def test_point_segment_pruned_reading_equals_the_reading_against_every_segment()
     # at a vertex the two segments meeting there tie: the first one is named
     _, k, f = geo.point_segment(loop[1:-1], a, b)
     assert np.array_equal(k, np.arange(len(loop) - 2)) and np.all(f == 1.0)
+    # a non-finite point reads as NaN at any size (the KD-tree would refuse it)
+    bad = loop.copy()
+    bad[5] = np.nan
+    d, _, _ = geo.point_segment(bad, a, b)
+    assert np.isnan(d[5]) and np.all(np.isfinite(np.delete(d, 5)))
 
 
 def test_plan_without_tool_path_uses_hub_edges():

@@ -206,10 +206,10 @@ def _counted(checker, mb: MotionBound) -> tuple:
     (bodies (B,) plant body indices, members: per body its geometry rows, solo (B,): a pair
     with a fixed geometry counts, pairs (P, 2): body pairs with a pair between them that
     counts, balls: per body a ball (centre (3,) in its frame, radius) holding all its
-    geometries). Cached on the checker."""
+    geometries). Cached on the checker with ``mb``."""
     cached = checker.__dict__.get("_counted")
-    if cached is not None:
-        return cached
+    if cached is not None and cached[0] is mb:
+        return cached[1]
     mv = np.flatnonzero(mb.level > 0)
     bodies = np.unique(mb.body[mv])
     members = [mv[mb.body[mv] == b] for b in bodies]
@@ -230,7 +230,7 @@ def _counted(checker, mb: MotionBound) -> tuple:
         c = mb.c_B[m].mean(axis=0)
         balls.append((c, float(np.max(np.linalg.norm(mb.c_B[m] - c, axis=1) + mb.radius[m]))))
     out = (bodies, members, solo, pairs, balls)
-    checker.__dict__["_counted"] = out
+    checker.__dict__["_counted"] = (mb, out)
     return out
 
 

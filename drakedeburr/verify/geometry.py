@@ -72,8 +72,9 @@ def point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray, chunk: int = 256)
     p, a, b = (np.asarray(x, float) for x in (p, a, b))
     ab = b - a
     L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    if len(p) * len(a) <= _DENSE_PAIRS or len(a) <= _NEAR:
-        return _point_segment_all(p, a, ab, L2, chunk)
+    if (len(p) * len(a) <= _DENSE_PAIRS or len(a) <= _NEAR
+            or not (np.isfinite(p).all() and np.isfinite(a).all() and np.isfinite(b).all())):
+        return _point_segment_all(p, a, ab, L2, chunk)  # (a non-finite input reads as NaN)
     from scipy.spatial import cKDTree
 
     dm, near = cKDTree(a + 0.5 * ab).query(p, k=_NEAR)
