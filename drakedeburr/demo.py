@@ -90,8 +90,12 @@ def run_demo(
 
     t0 = time.perf_counter()
     log.info("demo 3/4: independent verification")
-    report = verify_plan(plan, config, expected_windows=list(windows) if windows else None)
-    written = write_report_files(report, folder, plan=plan)
+    from drakedeburr.cell.station import load_plan_cell
+
+    cell = load_plan_cell(plan)  # built once: the verification and the report's replay
+    report = verify_plan(plan, config, expected_windows=list(windows) if windows else None,
+                         cell=cell)
+    written = write_report_files(report, folder, plan=plan, cell=cell)
     outputs.update(report_json=str(written[0]), report_html=str(written[1]))
     timings["verify"] = time.perf_counter() - t0
 

@@ -81,7 +81,7 @@ def test_relative_travel_covers_every_point_of_a_counted_body_pair(cell_path):
 
     cell, kin, checker, q = cell_path
     mb = mut.motion_bound(cell)
-    bodies, members, solo, pairs, balls = mut._counted(checker, mb)
+    bodies, members, solo, pairs, centre, radius = mut._counted(checker, mb)
     assert len(pairs) and np.any(solo)
     inspector = cell.scene_graph.model_inspector()
     gid_of = {i: g for g, i in mb.row.items()}
@@ -118,9 +118,8 @@ def test_relative_travel_covers_every_point_of_a_counted_body_pair(cell_path):
     assert np.allclose(np.diff(M[:, :n_solo], axis=0), own[:, solo], rtol=0, atol=1e-12)
     for col, (x, y) in enumerate(pairs, start=n_solo):
         ax, bx = int(bodies[x]), int(bodies[y])
-        (cx, rx), (cy, ry) = balls[x], balls[y]
-        rel_xy = mut._relative_steps(X, cx[None], np.array([rx]), [ax], [bx])[:, 0]
-        rel_yx = mut._relative_steps(X, cy[None], np.array([ry]), [bx], [ax])[:, 0]
+        rel_xy = mut._relative_steps(X, centre[[x]], radius[[x]], [ax], [bx])[:, 0]
+        rel_yx = mut._relative_steps(X, centre[[y]], radius[[y]], [bx], [ax])[:, 0]
         assert np.all(relative_motion(members[x], ax, bx) <= rel_xy + 1e-9)
         assert np.all(relative_motion(members[y], bx, ax) <= rel_yx + 1e-9)
         step = np.minimum.reduce([rel_xy, rel_yx, own[:, x] + own[:, y]])
@@ -138,7 +137,7 @@ def test_every_candidate_pair_is_covered_by_an_anchor_column(cell_path, filter_b
     cell = cell_path[0]
     checker = ClearanceChecker(cell, filter_burr_contact=filter_burr_contact)
     mb = mut.motion_bound(cell)
-    bodies, members, solo, pairs, _ = mut._counted(checker, mb)
+    bodies, members, solo, pairs, _, _ = mut._counted(checker, mb)
     body_of = {int(g): i for i, m in enumerate(members) for g in m}
     candidates = checker.query_at(cell.q_home).inspector().GetCollisionCandidates()
     assert candidates

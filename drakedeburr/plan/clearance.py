@@ -205,7 +205,7 @@ def _counted(checker, mb: MotionBound) -> tuple:
     """The moving bodies and which of their pairs the checker counts (its collision filters):
     (bodies (B,) plant body indices, members: per body its geometry rows, solo (B,): a pair
     with a fixed geometry counts, pairs (P, 2): body pairs with a pair between them that
-    counts, balls: per body a ball (centre (3,) in its frame, radius) holding all its
+    counts, centre (B, 3) and radius (B,): per body a ball in its frame holding all its
     geometries). Cached on the checker with ``mb``."""
     cached = checker.__dict__.get("_counted")
     if cached is not None and cached[0] is mb:
@@ -225,11 +225,10 @@ def _counted(checker, mb: MotionBound) -> tuple:
     pairs = np.array([(x, y) for x in range(len(bodies)) for y in range(x + 1, len(bodies))
                       if counts(members[x], [gid_of[int(g)] for g in members[y]])],
                      int).reshape(-1, 2)
-    balls = []
-    for m in members:
-        c = mb.c_B[m].mean(axis=0)
-        balls.append((c, float(np.max(np.linalg.norm(mb.c_B[m] - c, axis=1) + mb.radius[m]))))
-    out = (bodies, members, solo, pairs, balls)
+    centre = np.array([mb.c_B[m].mean(axis=0) for m in members]).reshape(-1, 3)
+    radius = np.array([np.max(np.linalg.norm(mb.c_B[m] - c, axis=1) + mb.radius[m])
+                       for m, c in zip(members, centre, strict=True)])
+    out = (bodies, members, solo, pairs, centre, radius)
     checker.__dict__["_counted"] = (mb, out)
     return out
 
@@ -258,14 +257,12 @@ def anchor_travel(checker, mb: MotionBound, q: np.ndarray, D: np.ndarray,
     them; never more than the two bodies' own steps together). A pair farther than ``cap +
     reach`` at an anchor stays beyond ``cap + slack`` while no column has grown by ``reach -
     slack`` since. ``X`` (N, n_bodies, 4, 4): the body poses when already computed."""
-    bodies, members, solo, pairs, balls = _counted(checker, mb)
+    bodies, members, solo, pairs, centre, radius = _counted(checker, mb)
     own = np.stack([D[:, m].max(axis=1) for m in members], axis=1) if members else None
     cols = [own[:, i] for i in np.flatnonzero(solo)]
     if len(pairs) and len(q) > 1:
         X = mb.tree.body_poses(q) if X is None else X
         x, y = pairs[:, 0], pairs[:, 1]
-        centre = np.array([c for c, _ in balls])
-        radius = np.array([r for _, r in balls])
         rel = np.minimum.reduce([
             _relative_steps(X, centre[x], radius[x], bodies[x], bodies[y]),
             _relative_steps(X, centre[y], radius[y], bodies[y], bodies[x]),
