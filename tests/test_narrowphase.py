@@ -184,3 +184,54 @@ def test_bounding_and_box_points_contain_each_shape():
         assert np.all((box_points(shape) @ n.T).max(0) >= s - 1e-12)
         if isinstance(shape, (Box, Capsule, Sphere)):  # exact: conv(P) + ball(rho) is the shape
             assert np.isclose(((P @ n.T).max(0) + rho - s).min(), 0.0, atol=1e-12)
+
+
+def _shape_points(shape, n: int = 20000) -> np.ndarray:
+    """Dense points of a shape in its frame whose hull is within ~1e-4 of it (a second
+    description of each shape: corners, rims, spheres)."""
+    k = np.arange(n) + 0.5
+    phi, z = np.pi * (1 + 5 ** 0.5) * k, 1 - 2 * k / n  # Fibonacci sphere
+    u = np.c_[np.sqrt(1 - z ** 2) * np.cos(phi), np.sqrt(1 - z ** 2) * np.sin(phi), z]
+    if isinstance(shape, Box):
+        half = np.array([shape.width(), shape.depth(), shape.height()]) / 2
+        return np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+    if isinstance(shape, Cylinder):
+        a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        rim = np.c_[shape.radius() * np.cos(a), shape.radius() * np.sin(a), np.zeros(n)]
+        h = np.array([0, 0, shape.length() / 2])
+        return np.vstack([rim + h, rim - h])
+    if isinstance(shape, Capsule):
+        h = np.array([0, 0, shape.length() / 2])
+        return np.vstack([shape.radius() * u + h, shape.radius() * u - h])
+    if isinstance(shape, Sphere):
+        return shape.radius() * u
+    if isinstance(shape, Ellipsoid):
+        return u * np.array([shape.a(), shape.b(), shape.c()])
+    return mut.hull_vertices(shape)
+
+
+def test_support_is_the_largest_projection_and_posed_shapes_agree():
+    """Each shape kind's support is the largest n.x over dense points of the posed shape (its
+    hull's vertices for Box/Convex: exact; surface samples otherwise, within their spacing), and
+    a shape fixed at its pose (`posed`, world vertices computed once) gives the same support
+    and the same exact distance."""
+    rng = np.random.default_rng(7)
+    shapes = [Box(0.1, 0.2, 0.3), Cylinder(0.05, 0.2), Capsule(0.03, 0.1), Sphere(0.04),
+              Ellipsoid(0.1, 0.05, 0.02), _cube(0.02)]
+    for shape in shapes:
+        S = mut.ShapeSupport(shape)
+        X = _pose(rng.normal(size=3), rng.normal(size=3) * 0.1)
+        P = _shape_points(shape) @ X[:3, :3].T + X[:3, 3]
+        fixed = S.posed(X)
+        for _ in range(20):
+            n = rng.normal(size=3)
+            n /= np.linalg.norm(n)
+            s = S.support(X, n)
+            top = float((P @ n).max())
+            assert s >= top - 1e-12, (S.kind, s, top)
+            assert s <= top + 1e-4, (S.kind, s, top)
+            assert abs(fixed.support(np.eye(4), n) - s) <= 1e-12
+        other = mut.ShapeSupport(Sphere(0.01))
+        X_o = _pose(p=X[:3, 3] + (0.5, 0.0, 0.0))
+        assert abs(mut.exact_distance(fixed, np.eye(4), other, X_o)[0]
+                   - mut.exact_distance(S, X, other, X_o)[0]) <= 1e-9

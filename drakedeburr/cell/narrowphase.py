@@ -23,6 +23,8 @@ Drake's.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["ShapeSupport", "separation", "certified_distance", "exact_distance", "ReadingTally",
@@ -85,12 +87,14 @@ class ShapeSupport:
         from pydrake.geometry import Box, Capsule, Convex, Cylinder, Ellipsoid, Mesh, Sphere
 
         self.kind = type(shape).__name__
+        self.fixed = False  # see posed()
         self.V = None
         if isinstance(shape, (Convex, Mesh)):
             self.V = hull_vertices(shape)
             self.kind = "Convex"
         elif isinstance(shape, Box):
             self.half = np.array([shape.width(), shape.depth(), shape.height()], float) / 2
+            self._half = tuple(self.half.tolist())
         elif isinstance(shape, Cylinder):
             self.r, self.h = float(shape.radius()), float(shape.length()) / 2
         elif isinstance(shape, Capsule):
@@ -99,27 +103,39 @@ class ShapeSupport:
             self.r = float(shape.radius())
         elif isinstance(shape, Ellipsoid):
             self.abc = np.array([shape.a(), shape.b(), shape.c()], float)
+            self._abc = tuple(self.abc.tolist())
         else:
             raise TypeError(f"unsupported collision shape {type(shape).__name__}")
 
     def support(self, X: np.ndarray, n: np.ndarray) -> float:
         """max over the shape posed at ``X`` (4, 4) in world of ``n . x`` [m]."""
-        R, c = X[:3, :3], X[:3, 3]
-        nl = R.T @ n
+        # The verifier and the planner call this ~10^5 times a hub: plain floats for the
+        # closed forms (numpy's per-call overhead on 3-vectors was most of its cost).
+        nl = X[:3, :3].T @ n
         k = self.kind
         if k == "Convex":
-            s = float(np.max(self.V @ nl))
-        elif k == "Box":
-            s = float(np.abs(nl) @ self.half)
-        elif k == "Cylinder":
-            s = self.r * float(np.hypot(nl[0], nl[1])) + self.h * abs(float(nl[2]))
-        elif k == "Capsule":
-            s = self.h * abs(float(nl[2])) + self.r * float(np.linalg.norm(nl))
-        elif k == "Sphere":
-            s = self.r * float(np.linalg.norm(nl))
-        else:  # Ellipsoid
-            s = float(np.linalg.norm(self.abc * nl))
-        return float(c @ n) + s
+            s = float((self.V @ nl).max())
+        else:
+            x, y, z = nl.tolist()
+            if k == "Box":
+                hx, hy, hz = self._half
+                s = abs(x) * hx + abs(y) * hy + abs(z) * hz
+            elif k == "Cylinder":
+                s = self.r * math.hypot(x, y) + self.h * abs(z)
+            elif k == "Capsule":
+                s = self.h * abs(z) + self.r * math.sqrt(x * x + y * y + z * z)
+            elif k == "Sphere":
+                s = self.r * math.sqrt(x * x + y * y + z * z)
+            else:  # Ellipsoid
+                a, b, c = self._abc
+                s = math.sqrt((a * x) ** 2 + (b * y) ** 2 + (c * z) ** 2)
+        return float(X[:3, 3] @ n) + s
+
+    def posed(self, X: np.ndarray) -> ShapeSupport:
+        """This shape fixed at world pose ``X`` (4, 4): a support whose :meth:`support`
+        ignores its pose argument (always ``X``) and, for a hull, reads world-frame vertices
+        computed once (the hub's pieces in the tool-in-hand cell never move)."""
+        return _PosedSupport(self, np.array(X, float))
 
     def add_point(self, prog, X: np.ndarray):
         """A point of the shape posed at ``X`` as decision variables of ``prog``: returns
@@ -153,6 +169,22 @@ class ShapeSupport:
             prog.AddLorentzConeConstraint(np.vstack([np.zeros(3), np.diag(1.0 / self.abc)]),
                                           np.array([1.0, 0, 0, 0]), x)
         return x, R, c
+
+
+class _PosedSupport:
+    """:meth:`ShapeSupport.posed`: a shape at a fixed world pose."""
+
+    def __init__(self, shape: ShapeSupport, X: np.ndarray) -> None:
+        self.shape, self.X, self.kind, self.fixed = shape, X, shape.kind, True
+        self._V_W = None if shape.V is None else shape.V @ X[:3, :3].T + X[:3, 3]
+
+    def support(self, X: np.ndarray, n: np.ndarray) -> float:
+        if self._V_W is not None:
+            return float((self._V_W @ n).max())
+        return self.shape.support(self.X, n)
+
+    def add_point(self, prog, X: np.ndarray):
+        return self.shape.add_point(prog, self.X)
 
 
 def separation(A: ShapeSupport, X_WA: np.ndarray, B: ShapeSupport, X_WB: np.ndarray,

@@ -329,17 +329,34 @@ class ClearanceChecker:
         d = float(r.distance)
         if not d > 0.0:
             return d
+        A, B = self._support(query, r.id_A), self._support(query, r.id_B)
         return certified_distance(
-            d, np.asarray(r.nhat_BA_W), self._support(query, r.id_A),
-            query.GetPoseInWorld(r.id_A).GetAsMatrix4(), self._support(query, r.id_B),
-            query.GetPoseInWorld(r.id_B).GetAsMatrix4(), solve_below=self.resolve_below,
-            solve_from=self.solve_from)[0]
+            d, np.asarray(r.nhat_BA_W), A,
+            None if A.fixed else query.GetPoseInWorld(r.id_A).GetAsMatrix4(), B,
+            None if B.fixed else query.GetPoseInWorld(r.id_B).GetAsMatrix4(),
+            solve_below=self.resolve_below, solve_from=self.solve_from)[0]
 
     def _support(self, query, gid):
+        """The support of geometry ``gid``; fixed at its world pose when its body is welded
+        to the world (the hub in the tool-in-hand cell, the spindle in the other)."""
         s = self._supports.get(gid)
         if s is None:
-            s = self._supports[gid] = ShapeSupport(query.inspector().GetShape(gid))
+            s = ShapeSupport(query.inspector().GetShape(gid))
+            if gid in self._welded_ids():
+                s = s.posed(query.GetPoseInWorld(gid).GetAsMatrix4())
+            self._supports[gid] = s
         return s
+
+    def _welded_ids(self) -> frozenset:
+        ids = self.__dict__.get("_welded")
+        if ids is None:
+            plant, sg = self.cell.plant, self.cell.scene_graph
+            inspector = sg.model_inspector()
+            ids = frozenset(g for b in plant.GetBodiesWeldedTo(plant.world_body())
+                            for g in inspector.GetGeometries(plant.GetBodyFrameIdOrThrow(
+                                b.index())))
+            self.__dict__["_welded"] = ids
+        return ids
 
     def pairs_within(self, q: np.ndarray, max_distance: float) -> list:
         """(pair ids, certified reading [m]) of every unfiltered pair whose certified reading

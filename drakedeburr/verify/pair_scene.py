@@ -168,6 +168,7 @@ class PairScene:
         bodies = sorted({int(b) for b, m in zip(self.body, self.moving, strict=True) if m})
         frames = {b: sg.RegisterFrame(source, GeometryFrame(f"body_{b}")) for b in bodies}
         self.scene_ids = []
+        self._X_fixed: list = []  # world pose of each fixed geometry (None: moving)
         for i, g in enumerate(self.ids):
             b = int(self.body[i])
             # fixed geometry at its world pose as the cell's scene graph composes it (Drake's
@@ -175,6 +176,7 @@ class PairScene:
             X = inspector.GetPoseInFrame(g) if self.moving[i] else plant.EvalBodyPoseInWorld(
                 self.plant_context, plant.get_body(BodyIndex(b))).multiply(
                 inspector.GetPoseInFrame(g))
+            self._X_fixed.append(None if self.moving[i] else X.GetAsMatrix4())
             inst = GeometryInstance(X, inspector.GetShape(g).Clone(), self.names[i])
             inst.set_proximity_properties(ProximityProperties(
                 inspector.GetProximityProperties(g)))
@@ -203,9 +205,12 @@ class PairScene:
                              for pairs in self.track_pairs]
         self._A = [self.scene_ids[i] for i in self.a]
         self._B = [self.scene_ids[i] for i in self.b]
+        self._a, self._b, self._cls = self.a.tolist(), self.b.tolist(), self.cls.tolist()
         self._query = None
+        self._posed: dict[int, np.ndarray] = {}  # moving geometry's pose at this configuration
         self._supports: dict = {}
         self.resolve_below = np.full(3, np.inf)  # until use_tolerances: always solved
+        self._resolve_below = self.resolve_below.tolist()
         self.tally = ReadingTally()
 
     def set_configuration(self, q: np.ndarray, bodies=None) -> None:
@@ -219,6 +224,18 @@ class PairScene:
             self._poses.set_value(frame, plant.EvalBodyPoseInWorld(pc, body))
         self._pose_port.FixValue(self._ctx, self._poses)
         self._query = self._query_port.Eval(self._ctx)
+        self._posed.clear()
+
+    def _pose(self, i: int) -> np.ndarray:
+        """World pose (4, 4) of geometry ``i`` at the current configuration, read from the
+        query once per configuration (fixed geometry: once)."""
+        X = self._X_fixed[i]
+        if X is None:
+            X = self._posed.get(i)
+            if X is None:
+                X = self._posed[i] = self._query.GetPoseInWorld(
+                    self.scene_ids[i]).GetAsMatrix4()
+        return X
 
     def use_tolerances(self, tol) -> None:
         """Set how readings are certified (:mod:`drakedeburr.cell.narrowphase`) and start a
@@ -226,6 +243,7 @@ class PairScene:
         class's limit + ``Tolerances.narrowphase_resolve`` is solved exactly."""
         self.resolve_below = np.array([tol.min_clearance, 0.0, -np.inf]) + float(
             tol.narrowphase_resolve)
+        self._resolve_below = self.resolve_below.tolist()
         self.tally = ReadingTally()
 
     def distance(self, p: int) -> float:
@@ -233,28 +251,32 @@ class PairScene:
         held to a rigorous lower bound for the clearance and self classes
         (:meth:`certify`)."""
         r = self._query.ComputeSignedDistancePairClosestPoints(self._A[p], self._B[p])
-        if not r.distance > 0.0 or self.cls[p] == BURR:
-            return r.distance
-        q = self._query
-        n_BA = np.asarray(r.nhat_BA_W) * (1.0 if r.id_A == self._A[p] else -1.0)
-        return self.certify(p, r.distance, n_BA, q.GetPoseInWorld(self._A[p]).GetAsMatrix4(),
-                            q.GetPoseInWorld(self._B[p]).GetAsMatrix4())
+        d = r.distance
+        if not d > 0.0 or self._cls[p] == BURR:
+            return d
+        n_BA = np.asarray(r.nhat_BA_W)
+        if r.id_A != self._A[p]:
+            n_BA = -n_BA
+        return self.certify(p, d, n_BA, self._pose(self._a[p]), self._pose(self._b[p]))
 
     def certify(self, p: int, d: float, n_BA: np.ndarray, X_WA: np.ndarray,
                 X_WB: np.ndarray) -> float:
         """Drake's reading ``d`` [m] of pair ``p`` (normal ``n_BA`` from its ``b`` toward its
         ``a`` geometry, posed at ``X_WA``, ``X_WB``) as a certified reading
         (:func:`~drakedeburr.cell.narrowphase.certified_distance`), tallied."""
-        value, how = certified_distance(d, n_BA, self._support(int(self.a[p])), X_WA,
-                                        self._support(int(self.b[p])), X_WB,
-                                        solve_below=float(self.resolve_below[self.cls[p]]))
+        value, how = certified_distance(d, n_BA, self._support(self._a[p]), X_WA,
+                                        self._support(self._b[p]), X_WB,
+                                        solve_below=self._resolve_below[self._cls[p]])
         self.tally.add(d, value, how)
         return value
 
     def _support(self, i: int):
         s = self._supports.get(i)
         if s is None:
-            s = self._supports[i] = ShapeSupport(self._inspector.GetShape(self.ids[i]))
+            s = ShapeSupport(self._inspector.GetShape(self.ids[i]))
+            if self._X_fixed[i] is not None:
+                s = s.posed(self._X_fixed[i])
+            self._supports[i] = s
         return s
 
     def pair_names(self, p: int) -> tuple[str, str]:
