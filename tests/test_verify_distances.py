@@ -26,7 +26,7 @@ def _samples(plan, n_max=None):
     return s
 
 
-def test_tracked_sweep_reads_the_dense_minima():
+def test_tracked_sweep_reads_the_dense_minima(monkeypatch):
     """Per sample and class, the tracked sweep's minimum and pair equal the cell's own
     ComputeSignedDistancePairwiseClosestPoints (the dense reference, each reading certified
     the same way) bit for bit wherever that minimum is within ``narrowphase_resolve`` of the
@@ -34,11 +34,15 @@ def test_tracked_sweep_reads_the_dense_minima():
     narrow phase overestimated is kept as its separating-plane bound, which the dense
     reference reads at every pair: the sweep, reading only the pairs that can matter, is then
     at least the dense minimum (never below what it read)."""
+    import drakedeburr.verify.sweep as sweep_mod
+
     cell, _ = vs.cell_and_hub()
     plan = vs.good_plan()
     s = _samples(plan)
     tol = vs.config().tolerances
-    sw = sweep(mut.pair_scene_of(cell), plan.trajectory, s.t, s.q, tol)
+    monkeypatch.setattr(sweep_mod, "_PART_SAMPLES", 400)  # read in parts, merged
+    assert len(sweep_mod.part_bounds(len(s))) >= 4
+    sw = sweep(mut.pair_scene_of(cell), plan.trajectory, s.t, s.q, tol, workers=1)
     probe = mut.DistanceProbe(cell, tol.query_distance, tol)
     names = mut.pair_scene_of(cell).pair_names
     mismatch = []
@@ -56,6 +60,58 @@ def test_tracked_sweep_reads_the_dense_minima():
     assert len(mismatch) <= 0.01 * len(s), mismatch[:5]
     # and it reads far fewer pairs than there are pairs x samples
     assert len(sw.rec_pair) < 0.02 * len(s) * len(mut.pair_scene_of(cell).a)
+
+
+def test_part_bounds_cover_every_sample_whatever_the_machine():
+    from drakedeburr.verify.sweep import part_bounds
+
+    for n in (1, 2, 1500, 2999, 3001, 17363, 40000):
+        b = part_bounds(n)
+        assert b[0][0] == 0 and b[-1][1] == n - 1
+        assert all(b[k][1] == b[k + 1][0] for k in range(len(b) - 1))  # one shared sample
+        assert all(hi > lo for lo, hi in b) or n == 1
+
+
+def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
+    """The parts read by a pool worker (another process that builds the same cell) give the
+    sweep this process reads alone, array for array, and the same narrow-phase tally."""
+    import drakedeburr.plan.parallel as parallel
+    import drakedeburr.verify.sweep as sweep_mod
+
+    cell, _ = vs.cell_and_hub()
+    plan = vs.good_plan()
+    s = _samples(plan)
+    tol = vs.config().tolerances
+    scene = mut.pair_scene_of(cell)
+    monkeypatch.setattr(sweep_mod, "_PART_SAMPLES", 600)
+    one = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=1)
+    tally_one = dict(scene.tally.counts)
+    assert cell._cache.get("load_args") is not None  # what a worker builds its cell from
+    from_worker = []
+    real_map = parallel.map_tasks
+
+    def spy(n, here, remote, workers, done=None):
+        def counted(k, value):
+            from_worker.append(k)
+            return done(k, value)
+        return real_map(n, here, remote, workers, counted)
+
+    monkeypatch.setattr(parallel, "map_tasks", spy)
+    two = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=2)
+    assert from_worker  # at least one part came back from the worker
+    assert dict(scene.tally.counts) == tally_one
+    for f in ("best", "best_pair", "level", "lower", "delta", "e", "rec_sample", "rec_pair",
+              "rec_value", "X"):
+        assert np.array_equal(getattr(one, f), getattr(two, f)), f
+    assert (one.posed, one.refreshes) == (two.posed, two.refreshes)
+    # the parts' motion bounds are the whole run's (they depend on each interval alone) and
+    # the class minima are exact in both
+    monkeypatch.setattr(sweep_mod, "_PART_SAMPLES", 10 ** 9)
+    whole = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=1)
+    for f in ("best", "best_pair", "X"):
+        assert np.array_equal(getattr(one, f), getattr(whole, f)), f
+    delta, e = sweep_mod.track_motion(scene, plan.trajectory, s.t, whole.X)
+    assert np.array_equal(one.delta, delta) and np.array_equal(one.e, e)
 
 
 def test_dense_and_tracked_methods_agree():

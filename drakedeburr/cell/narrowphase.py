@@ -269,6 +269,13 @@ class ReadingTally:
             if how == "solved":
                 self.overestimate = max(self.overestimate, d - value)
 
+    def merge(self, other: ReadingTally) -> None:
+        """Add another run's tally (a part of a sweep read in another process)."""
+        for k, v in other.counts.items():
+            self.counts[k] += v
+        self.lowered += other.lowered
+        self.overestimate = max(self.overestimate, other.overestimate)
+
     def summary(self) -> str:
         c = self.counts
         return (f"narrow phase: each of {sum(c.values())} positive readings held to a "

@@ -22,7 +22,7 @@ import logging
 import os
 from collections.abc import Callable, Sequence
 
-__all__ = ["plan_all_windows", "worker_count", "shutdown_pool"]
+__all__ = ["plan_all_windows", "map_tasks", "warm_pool", "worker_count", "shutdown_pool"]
 
 log = logging.getLogger(__name__)
 
@@ -182,6 +182,76 @@ def _replay(records: list) -> None:
             logger.handle(rec)
 
 
+_WARM = -1  # the task id of a warm-up (map_tasks drops its reply)
+
+
+def warm_pool(fn, args: tuple, workers: int | None = None) -> None:
+    """Start the pool now (``workers`` as :func:`worker_count` with two tasks) and give each
+    idle worker ``fn(*args)`` (build a cell, say), so that a later :func:`map_tasks` finds
+    them ready: a worker's start-up (~2 s) then overlaps this process's own work."""
+    for w in _pool(worker_count(workers, 2) - 1):
+        if w.task is None and w.proc.poll() is None:
+            w.send(fn, args, _WARM)
+
+
+def map_tasks(n: int, run_here: Callable[[int], object],
+              remote: Callable[[int], tuple] | None, workers: int | None,
+              done: Callable[[int, object], object] | None = None) -> list:
+    """Tasks ``0..n-1``, this process taking them from the front (``run_here(k)``) while
+    ``workers - 1`` pool processes take them from the back (``remote(k)`` -> (picklable
+    function, args) run there; its value passed through ``done(k, value)`` here). A task a
+    worker fails is run here instead: the same result, since every task's result may depend
+    only on its inputs. ``remote`` None: all here, in order. -> results in task order."""
+    size = worker_count(workers, n) - 1 if remote is not None else 0
+    if size == 0:
+        return [run_here(k) for k in range(n)]
+    import select
+
+    pool = _pool(size)
+    results: dict[int, object] = {}
+    todo = list(range(n))
+
+    def submit() -> None:
+        for w in pool:
+            if w.task is None and todo and w.proc.poll() is None:
+                k = todo.pop()  # workers from the back
+                w.send(*remote(k), k)
+
+    def collect(timeout: float | None) -> None:
+        busy = {w.proc.stdout.fileno(): w for w in pool if w.task is not None}
+        if not busy:
+            return
+        ready, _, _ = select.select(list(busy), [], [], timeout)
+        for fd in ready:
+            w = busy[fd]
+            k = w.task
+            try:
+                status, value = w.receive()
+            except (EOFError, OSError) as exc:
+                status, value = "error", f"the worker process ended ({exc})"
+            if k == _WARM:
+                continue  # a warm-up's reply (its failure shows again on a real task)
+            if status == "ok":
+                results[k] = value if done is None else done(k, value)
+            else:
+                log.warning("task %d: worker failed (%s); running it here", k, value)
+                results[k] = run_here(k)
+
+    try:
+        submit()
+        while todo:
+            k = todo.pop(0)  # this process from the front
+            results[k] = run_here(k)
+            collect(0.0)
+            submit()
+        while any(w.task is not None for w in pool):
+            collect(None)
+    except BaseException:
+        shutdown_pool(kill=True)  # the workers may be busy with tasks nobody waits for
+        raise
+    return [results[k] for k in range(n)]
+
+
 def plan_all_windows(ctx, windows: Sequence, workers: int | None,
                      progress: Callable[[int, int, str], None] | None = None) -> list:
     """Every window planned (:func:`drakedeburr.plan.window.plan_window`), in their order.
@@ -198,67 +268,30 @@ def plan_all_windows(ctx, windows: Sequence, workers: int | None,
     from drakedeburr.plan.window import plan_window
 
     n = len(windows)
-    size = worker_count(workers, n) - 1
     recipe = _recipe(ctx)
-    if size == 0 or recipe is None:
-        out = []
-        for k, wt in enumerate(windows):
-            if progress is not None:
-                progress(k, n, f"window {wt.window_index}")
-            out.append(plan_window(ctx, wt))
-        return out
-    import select
-
-    workers = _pool(size)
     level = logging.getLogger().getEffectiveLevel()
-    results: dict[int, object] = {}
-    todo = list(range(n))
-    done = 0
+    count = [0]
 
-    def finished(k: int, res) -> None:
-        nonlocal done
-        results[k] = res
-        done += 1
+    def finished(k: int, res):
+        count[0] += 1
         if progress is not None:
-            progress(done, n, f"window {windows[k].window_index}")
+            progress(count[0], n, f"window {windows[k].window_index}")
+        return res
 
-    def submit() -> None:
-        for w in workers:
-            if w.task is None and todo and w.proc.poll() is None:
-                k = todo.pop()  # workers from the back
-                w.send(_plan_in_worker, (recipe, ctx.config, ctx.options, ctx.q_refs,
-                                         windows[k], level), k)
+    serial = recipe is None or worker_count(workers, n) == 1
 
-    def collect(timeout: float | None) -> None:
-        busy = {w.proc.stdout.fileno(): w for w in workers if w.task is not None}
-        if not busy:
-            return
-        ready, _, _ = select.select(list(busy), [], [], timeout)
-        for fd in ready:
-            w = busy[fd]
-            k = w.task
-            try:
-                status, value = w.receive()
-            except (EOFError, OSError) as exc:
-                status, value = "error", f"the worker process ended ({exc})"
-            if status == "ok":
-                _replay(value[1])
-                finished(k, value[0])
-            else:  # plan that window here: the same plan
-                log.warning("window %d: worker failed (%s); planning it here",
-                            windows[k].window_index, value)
-                finished(k, plan_window(ctx, windows[k]))
+    def here(k: int):
+        if not serial:
+            return finished(k, plan_window(ctx, windows[k]))
+        if progress is not None:
+            progress(k, n, f"window {windows[k].window_index}")
+        return plan_window(ctx, windows[k])
 
-    try:
-        submit()
-        while todo:
-            k = todo.pop(0)  # this process from the front
-            finished(k, plan_window(ctx, windows[k]))
-            collect(0.0)
-            submit()
-        while any(w.task is not None for w in workers):
-            collect(None)
-    except BaseException:
-        shutdown_pool(kill=True)  # the workers may be busy with windows nobody waits for
-        raise
-    return [results[k] for k in range(n)]
+    def remote(k: int) -> tuple:
+        return _plan_in_worker, (recipe, ctx.config, ctx.options, ctx.q_refs, windows[k], level)
+
+    def done(k: int, value):
+        _replay(value[1])
+        return finished(k, value[0])
+
+    return map_tasks(n, here, None if recipe is None else remote, workers, done)

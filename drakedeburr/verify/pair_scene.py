@@ -279,5 +279,20 @@ class PairScene:
             self._supports[i] = s
         return s
 
+    def digest(self) -> str:
+        """A digest of what the readings depend on: geometry names, pairs, classes, the fixed
+        geometry's and the home configuration's poses (two processes that built the same cell
+        agree on it, so one may read parts of a sweep for the other)."""
+        d = self.__dict__.get("_digest")
+        if d is None:
+            import hashlib
+
+            h = hashlib.sha256("\n".join(self.names).encode())
+            for arr in (self.a, self.b, self.cls, self.track, self.X_home, self.tracks.reach,
+                        *(X for X in self._X_fixed if X is not None)):
+                h.update(np.ascontiguousarray(arr).tobytes())
+            d = self.__dict__["_digest"] = h.hexdigest()
+        return d
+
     def pair_names(self, p: int) -> tuple[str, str]:
         return self.names[self.a[p]], self.names[self.b[p]]

@@ -347,6 +347,10 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
         from drakedeburr.cell.station import load_plan_cell
 
         cell = load_plan_cell(plan)
+    if plan.trajectory is not None and len(plan.segments) > 1:
+        from drakedeburr.verify.sweep import warm_workers
+
+        warm_workers(cell)  # parts of the distance sweep go to them (verify.sweep)
     if hub_model is None:
         from drakedeburr.hub.model import load_hub
 
