@@ -6,13 +6,15 @@
    on the same samples as the baseline; the figures of both must agree. Wall time and CPU
    time of the process (the machine is shared: the CPU time is the steadier figure).
 2. The continuous clearance certificate of each hub (clearance_certificate) and what it read.
-3. ``drakedeburr verify PLANFOLDER`` timed as a new user runs it (``--cli``).
+3. ``drakedeburr verify PLANFOLDER`` timed as a new user runs it (``--cli``), and against the
+   tree of a previous commit on copies of the same plan (``--cli-baseline REF``: interleaved
+   runs, medians, the two reports' items compared).
 
 The plans are made with ``plan_hub`` defaults (tool-in-hand) into ``--plans DIR`` and reused
 from there on later runs (planning a hub takes 20-40 s).
 
 Run:  PYTHONPATH=. python benchmarks/bench_verify.py [--hubs h5_straight,...] [--cli]
-      [--plans /tmp/bench_verify_plans] [--quick]
+      [--plans /tmp/bench_verify_plans] [--quick] [--cli-baseline REF [--repeat N]]
 """
 
 from __future__ import annotations
@@ -182,12 +184,64 @@ def bench_cli(folder: Path) -> None:
           f"{r.returncode}")
 
 
+def _tree_at(ref: str) -> Path:
+    """This repository's files at git ``ref`` in a temporary folder (``git archive``)."""
+    out = Path(tempfile.mkdtemp(prefix=f"bench_verify_{ref}_"))
+    tar = subprocess.run(["git", "archive", ref], cwd=ROOT, capture_output=True, check=True)
+    subprocess.run(["tar", "-x", "-C", str(out)], input=tar.stdout, check=True)
+    return out
+
+
+def _report_items(folder: Path) -> list:
+    import json
+    import re
+
+    items = json.loads((folder / "report.json").read_text())["items"]
+    for it in items:  # the reading counts differ with how the sweep was split
+        it["detail"] = re.sub(r"\d+ (positive readings|lowered|readings|intervals)", r"N \1",
+                              str(it.get("detail", "")))
+    return items
+
+
+def bench_cli_against(folder: Path, ref: str, repeat: int) -> None:
+    """``python -m drakedeburr.cli verify`` of this tree and of the tree at ``ref`` on copies
+    of the same plan, interleaved ``repeat`` times: median wall times, and whether the two
+    reports' items agree (reading counts aside)."""
+    import os
+    import shutil
+    import statistics
+
+    trees = {"this tree": ROOT, ref: _tree_at(ref)}
+    times: dict[str, list[float]] = {k: [] for k in trees}
+    copies = {}
+    for k in trees:
+        copies[k] = Path(tempfile.mkdtemp(prefix="bench_verify_plan_")) / folder.name
+        shutil.copytree(folder, copies[k])
+    for _ in range(repeat):
+        for k, tree in trees.items():
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            w = time.perf_counter()
+            r = subprocess.run([sys.executable, "-m", "drakedeburr.cli", "verify",
+                                str(copies[k]), "-q"], capture_output=True, text=True, env=env)
+            times[k].append(time.perf_counter() - w)
+            if r.returncode not in (0, 1):
+                raise RuntimeError(f"{k}: verify exited {r.returncode}: {r.stderr[-500:]}")
+    med = {k: statistics.median(v) for k, v in times.items()}
+    same = _report_items(copies["this tree"]) == _report_items(copies[ref])
+    print(f"  CLI verify, median of {repeat} interleaved: this tree {med['this tree']:.1f} s, "
+          f"{ref} {med[ref]:.1f} s ({med[ref] / med['this tree']:.2f}x); report items the "
+          f"same (reading counts aside): {same}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hubs", default="h5_straight", help="comma-separated bundled hubs")
     ap.add_argument("--plans", default=str(Path(tempfile.gettempdir()) / "bench_verify_plans"))
     ap.add_argument("--cli", action="store_true", help="also time the CLI on each plan")
     ap.add_argument("--quick", action="store_true", help="window 0 only")
+    ap.add_argument("--cli-baseline", metavar="REF",
+                    help="also time the CLI of the tree at git REF on the same plans")
+    ap.add_argument("--repeat", type=int, default=3, help="CLI runs per tree (--cli-baseline)")
     args = ap.parse_args()
     baseline, label = _baseline_measure()
     print(f"## verification per hub (tool-in-hand, plan_hub defaults); baseline distances: "
@@ -196,6 +250,8 @@ def main() -> None:
         folder = bench_hub(hub, Path(args.plans), args.quick, baseline)
         if args.cli:
             bench_cli(folder)
+        if args.cli_baseline:
+            bench_cli_against(folder, args.cli_baseline, args.repeat)
 
 
 if __name__ == "__main__":

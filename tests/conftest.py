@@ -7,6 +7,10 @@ import pytest
 
 matplotlib.use("Agg")
 os.environ.setdefault("DRAKEDEBURR_TEST_MODE", "1")
+# one process per test: the suite already fills the cores (pytest -n auto), and a window or
+# sweep worker pool there only adds its own model building; the pools are tested with
+# explicit worker counts (test_plan_parallel, test_verify_distances)
+os.environ.setdefault("DRAKEDEBURR_WORKERS", "1")
 
 REPO = Path(__file__).resolve().parent.parent
 

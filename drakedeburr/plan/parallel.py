@@ -126,6 +126,7 @@ class _Worker:
         env = dict(os.environ)
         here = str(Path(drakedeburr.__file__).resolve().parent.parent)  # this drakedeburr
         env["PYTHONPATH"] = os.pathsep.join([here] + [p for p in [env.get("PYTHONPATH")] if p])
+        env["DRAKEDEBURR_WORKERS"] = "1"  # a worker never starts a pool of its own
         self.proc = subprocess.Popen([sys.executable, "-m", "drakedeburr.plan.worker"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
         self.task: int | None = None
