@@ -198,7 +198,7 @@ def _report_items(folder: Path) -> list:
 
     items = json.loads((folder / "report.json").read_text())["items"]
     for it in items:  # the reading counts differ with how the sweep was split
-        it["detail"] = re.sub(r"\d+ (positive readings|lowered|readings|intervals)", r"N \1",
+        it["detail"] = re.sub(r"\d+ (positive readings|lowered|readings|intervals|solved)", r"N \1",
                               str(it.get("detail", "")))
     return items
 
@@ -212,6 +212,13 @@ def bench_cli_against(folder: Path, ref: str, repeat: int) -> None:
     import statistics
 
     trees = {"this tree": ROOT, ref: _tree_at(ref)}
+    for k, tree in trees.items():  # each run imports its own tree's package
+        r = subprocess.run([sys.executable, "-c",
+                            "import drakedeburr; print(drakedeburr.__file__)"],
+                           capture_output=True, text=True, cwd=tree,
+                           env={**os.environ, "PYTHONPATH": str(tree)})
+        if not Path(r.stdout.strip()).resolve().is_relative_to(Path(tree).resolve()):
+            raise RuntimeError(f"{k}: imports {r.stdout.strip()}, not {tree}")
     times: dict[str, list[float]] = {k: [] for k in trees}
     copies = {}
     for k in trees:
@@ -222,7 +229,8 @@ def bench_cli_against(folder: Path, ref: str, repeat: int) -> None:
             env = {**os.environ, "PYTHONPATH": str(tree)}
             w = time.perf_counter()
             r = subprocess.run([sys.executable, "-m", "drakedeburr.cli", "verify",
-                                str(copies[k]), "-q"], capture_output=True, text=True, env=env)
+                                str(copies[k]), "-q"], capture_output=True, text=True, env=env,
+                               cwd=tree)  # "-m" puts the working folder first on the path
             times[k].append(time.perf_counter() - w)
             if r.returncode not in (0, 1):
                 raise RuntimeError(f"{k}: verify exited {r.returncode}: {r.stderr[-500:]}")
