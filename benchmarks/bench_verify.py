@@ -4,7 +4,8 @@
    cut geometry) and the checks, with the distance stage of the previous implementation
    (commit BASELINE: the cell's broad-phase query, a Drake FK and a Jacobian per sample) run
    on the same samples as the baseline; the figures of both must agree. Wall time and CPU
-   time of the process (the machine is shared: the CPU time is the steadier figure).
+   time of the process (the machine is shared: the CPU time is the steadier figure; parts of
+   the distance sweep read by a pool worker, ``verify.sweep``, are in the wall time only).
 2. The continuous clearance certificate of each hub (clearance_certificate) and what it read.
 3. ``drakedeburr verify PLANFOLDER`` timed as a new user runs it (``--cli``), and against the
    tree of a previous commit on copies of the same plan (``--cli-baseline REF``: interleaved
@@ -155,11 +156,15 @@ def bench_hub(hub: str, plans: Path, quick: bool, baseline) -> None:
 def _uncertified(cell, sp, config, certified: tuple[float, float], old) -> None:
     """The distance stage again with Drake's readings taken as they are (what the verifier
     did before cell.narrowphase): its cost, the clearance it would have certified, and its
-    per-sample minima against the baseline's ``old`` (both uncertified: like for like)."""
+    per-sample minima against the baseline's ``old`` (both uncertified: like for like). In
+    this process alone (one core): the patched reading is this process's."""
+    import os
+
     from drakedeburr.verify.pair_scene import PairScene
 
-    keep = PairScene.certify
+    keep, workers = PairScene.certify, os.environ.get("DRAKEDEBURR_WORKERS")
     PairScene.certify = lambda self, p, d, *a: d
+    os.environ["DRAKEDEBURR_WORKERS"] = "1"  # the patch is this process's: no worker reads
     try:
         w, c = time.perf_counter(), time.process_time()
         raw = distances.measure_samples(cell, sp.samples, config.tolerances,
@@ -167,6 +172,10 @@ def _uncertified(cell, sp, config, certified: tuple[float, float], old) -> None:
         dt = (time.perf_counter() - w, time.process_time() - c)
     finally:
         PairScene.certify = keep
+        if workers is None:
+            os.environ.pop("DRAKEDEBURR_WORKERS", None)
+        else:
+            os.environ["DRAKEDEBURR_WORKERS"] = workers
     k, k0 = sp.distances.certificate.clearance, raw.certificate.clearance
     print(f"  Drake's readings as they are: distances {dt[0]:.2f} s wall / {dt[1]:.2f} s cpu "
           f"(certified readings: {certified[0]:.2f} / {certified[1]:.2f}, "
