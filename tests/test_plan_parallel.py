@@ -62,3 +62,56 @@ def test_worker_count_reads_the_environment(monkeypatch):
         worker_count(None, 5)
     monkeypatch.delenv("DRAKEDEBURR_WORKERS")
     assert worker_count(None, 64) >= 1
+
+
+def test_a_worker_never_takes_a_rewritten_model_for_the_callers(tmp_path):
+    """A worker keeps the cell it built for later tasks. When the hub is regenerated at the same
+    path, the caller's cell fingerprint changes, so the worker builds the cell again. A worker
+    whose fresh build still differs from the caller's cell refuses the task."""
+    import shutil
+
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+    from drakedeburr.resources import hub_dir
+
+    hub = tmp_path / "hub"
+    shutil.copytree(hub_dir("h5_straight"), hub)
+    first = load_cell("tool_in_hand", hub)
+    recipe, fp1 = dict(first._cache["load_args"]), cell_fingerprint(first)
+    cache: dict = {}
+    cell, built = worker_cell(recipe, fp1, cache, lambda c: "built")
+    assert cell_fingerprint(cell) == fp1 and built == "built"
+    assert worker_cell(recipe, fp1, cache, lambda c: "again")[0] is cell  # kept
+    piece = hub / "collision" / "piece_000.obj"  # the hub regenerated: one piece smaller
+    lines = [(" ".join(["v"] + [repr(0.7 * float(x)) for x in ln.split()[1:4]])
+              if ln.startswith("v ") else ln) for ln in piece.read_text().splitlines()]
+    piece.write_text("\n".join(lines) + "\n")
+    fp2 = cell_fingerprint(load_cell("tool_in_hand", hub))
+    assert fp2 != fp1
+    cell2, _ = worker_cell(recipe, fp2, cache, lambda c: "built")
+    assert cell2 is not cell and cell_fingerprint(cell2) == fp2
+    with pytest.raises(RuntimeError, match="differs"):
+        worker_cell(recipe, fp1, cache, lambda c: "built")
+
+
+def test_map_tasks_runs_failed_tasks_here_and_does_not_wait_for_a_warm_up():
+    """Every task's result in order; a worker busy with a warm-up when the tasks are done is not
+    waited for (its reply is dropped by a later call); a task the worker fails runs here."""
+    import time
+
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    try:
+        parallel.warm_pool(time.sleep, (60.0,), workers=2)
+        pool = parallel._pool(1)
+        assert pool[0].task == parallel._WARM
+        out = parallel.map_tasks(4, lambda k: k * k, lambda k: (divmod, (k, 0)), 2)
+        assert out == [0, 1, 4, 9]
+        assert pool[0].task == parallel._WARM  # still sleeping: not waited for
+        parallel.shutdown_pool(kill=True)
+        # a worker that raises (divmod by zero): the task runs here, same result
+        out = parallel.map_tasks(3, lambda k: -k, lambda k: (divmod, (k, 0)), 2)
+        assert out == [0, -1, -2]
+    finally:
+        parallel.shutdown_pool(kill=True)

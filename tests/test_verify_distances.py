@@ -90,11 +90,11 @@ def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
     from_worker = []
     real_map = parallel.map_tasks
 
-    def spy(n, here, remote, workers, done=None):
+    def spy(n, here, remote, workers, done=None, **kw):
         def counted(k, value):
             from_worker.append(k)
             return done(k, value)
-        return real_map(n, here, remote, workers, counted)
+        return real_map(n, here, remote, workers, counted, **kw)
 
     monkeypatch.setattr(parallel, "map_tasks", spy)
     two = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=2)

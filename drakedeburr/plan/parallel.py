@@ -27,7 +27,7 @@ __all__ = ["plan_all_windows", "map_tasks", "warm_pool", "worker_count", "shutdo
 log = logging.getLogger(__name__)
 
 _POOL: dict = {}  # {"workers": [_Worker]}
-_WORKER: dict = {}  # in a worker: recipe key -> PlanContext
+_WORKER: dict = {}  # in a worker: recipe key -> (cell, {tolerances: (kin, checkers)})
 
 
 def worker_count(requested: int | None, n_windows: int) -> int:
@@ -62,24 +62,66 @@ def _recipe(ctx) -> dict | None:
     return None if args is None else dict(args)
 
 
-def _worker_context(recipe: dict, config, options, q_refs):
-    """The worker's :class:`PlanContext` for a recipe (built once per cell and options)."""
+def cell_fingerprint(cell) -> str:
+    """A digest of a cell's geometry (~30 ms, kept in the cell's cache): every proximity
+    geometry's name, shape kind, hull or bounding points in its frame and world pose at the
+    default configuration, and the cell's home and joint limits. Two processes that built the
+    same cell agree on it; a model rewritten at the same path (a hub regenerated) changes it,
+    so a worker's cell kept from an earlier run is never taken for the caller's."""
+    fp = cell._cache.get("fingerprint")
+    if fp is None:
+        import hashlib
+
+        import numpy as np
+        from pydrake.geometry import Role
+
+        from drakedeburr.cell.narrowphase import box_points
+
+        plant, inspector = cell.plant, cell.scene_graph.model_inspector()
+        pc = plant.CreateDefaultContext()
+        h = hashlib.sha256()
+        for g in sorted(inspector.GetAllGeometryIds(Role.kProximity), key=lambda g: g.get_value()):
+            shape = inspector.GetShape(g)
+            X = plant.EvalBodyPoseInWorld(pc, plant.GetBodyFromFrameId(inspector.GetFrameId(
+                g))).multiply(inspector.GetPoseInFrame(g)).GetAsMatrix4()
+            h.update(f"{inspector.GetName(g)}|{type(shape).__name__}".encode())
+            h.update(np.ascontiguousarray(box_points(shape)).tobytes() + X.tobytes())
+        for arr in (cell.q_home, cell.q_lower, cell.q_upper):
+            h.update(np.ascontiguousarray(arr, float).tobytes())
+        fp = cell._cache["fingerprint"] = h.hexdigest()
+    return fp
+
+
+def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) -> tuple:
+    """In a worker: (the caller's cell, ``build(cell)``), kept in ``cache`` (one cell at a
+    time) and built again when the kept cell's fingerprint is not the caller's (a model
+    rewritten since). Raises RuntimeError when even a fresh build differs (the caller then
+    runs the task itself)."""
     from drakedeburr.cell.station import load_cell
+
+    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
+    got = cache.get(key)
+    if got is None or cell_fingerprint(got[0]) != fingerprint:
+        cache.clear()
+        cell = load_cell(**recipe)
+        if cell_fingerprint(cell) != fingerprint:
+            raise RuntimeError("the worker's cell differs from the caller's")
+        got = cache[key] = (cell, build(cell))
+    return got
+
+
+def _worker_context(recipe: dict, fingerprint: str, config, options, q_refs):
+    """The worker's :class:`PlanContext` for a recipe (built once per cell and tolerances)."""
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.options import PlanContext
 
     tol = config.tolerances  # the checkers' certification depends on these two
-    key = repr(sorted((k, repr(v)) for k, v in recipe.items())) + repr(
-        (tol.min_clearance, tol.narrowphase_resolve))
-    cell_ctx = _WORKER.get(key)
-    if cell_ctx is None:
-        _WORKER.clear()  # one cell at a time
-        cell = load_cell(**recipe)
-        cell_ctx = _WORKER[key] = (cell, cell_kinematics(cell),
-                                   ClearanceChecker(cell, tolerances=config.tolerances),
-                                   ClearanceChecker(cell, filter_burr_contact=False,
-                                                    tolerances=config.tolerances))
-    cell, kin, checker, free = cell_ctx
+    cell, per_tol = worker_cell(recipe, fingerprint, _WORKER, lambda cell: {})
+    key = (tol.min_clearance, tol.narrowphase_resolve)
+    if key not in per_tol:
+        per_tol[key] = (cell_kinematics(cell), ClearanceChecker(cell, tolerances=tol),
+                        ClearanceChecker(cell, filter_burr_contact=False, tolerances=tol))
+    kin, checker, free = per_tol[key]
     return PlanContext(cell=cell, kin=kin, checker=checker, free_checker=free, config=config,
                        options=options, q_refs=dict(q_refs))
 
@@ -95,11 +137,11 @@ class _Records(logging.Handler):
         self.records.append(record)
 
 
-def _plan_in_worker(recipe: dict, config, options, q_refs, wt, level: int):
+def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, wt, level: int):
     """Task of a worker: (WindowPlan, the log records emitted while planning it)."""
     from drakedeburr.plan.window import plan_window
 
-    ctx = _worker_context(recipe, config, options, q_refs)
+    ctx = _worker_context(recipe, fingerprint, config, options, q_refs)
     root = logging.getLogger()
     handler = _Records()
     handler.setLevel(level)
@@ -197,12 +239,15 @@ def warm_pool(fn, args: tuple, workers: int | None = None) -> None:
 
 def map_tasks(n: int, run_here: Callable[[int], object],
               remote: Callable[[int], tuple] | None, workers: int | None,
-              done: Callable[[int, object], object] | None = None) -> list:
+              done: Callable[[int, object], object] | None = None,
+              name: Callable[[int], str] = lambda k: f"task {k}") -> list:
     """Tasks ``0..n-1``, this process taking them from the front (``run_here(k)``) while
     ``workers - 1`` pool processes take them from the back (``remote(k)`` -> (picklable
     function, args) run there; its value passed through ``done(k, value)`` here). A task a
-    worker fails is run here instead: the same result, since every task's result may depend
-    only on its inputs. ``remote`` None: all here, in order. -> results in task order."""
+    worker fails (or cannot be sent) is run here instead, logged by ``name(k)``: the same
+    result, since every task's result may depend only on its inputs. ``remote`` None: all
+    here, in order. A worker's warm-up (:func:`warm_pool`) still running when the tasks are
+    done is not waited for. -> results in task order."""
     size = worker_count(workers, n) - 1 if remote is not None else 0
     if size == 0:
         return [run_here(k) for k in range(n)]
@@ -216,7 +261,13 @@ def map_tasks(n: int, run_here: Callable[[int], object],
         for w in pool:
             if w.task is None and todo and w.proc.poll() is None:
                 k = todo.pop()  # workers from the back
-                w.send(*remote(k), k)
+                try:
+                    w.send(*remote(k), k)
+                except OSError as exc:  # the worker is gone: this process runs the task
+                    log.warning("%s: worker unreachable (%s); running it here", name(k), exc)
+                    w.close(kill=True)
+                    w.task = None
+                    todo.append(k)
 
     def collect(timeout: float | None) -> None:
         busy = {w.proc.stdout.fileno(): w for w in pool if w.task is not None}
@@ -235,7 +286,7 @@ def map_tasks(n: int, run_here: Callable[[int], object],
             if status == "ok":
                 results[k] = value if done is None else done(k, value)
             else:
-                log.warning("task %d: worker failed (%s); running it here", k, value)
+                log.warning("%s: worker failed (%s); running it here", name(k), value)
                 results[k] = run_here(k)
 
     try:
@@ -245,7 +296,7 @@ def map_tasks(n: int, run_here: Callable[[int], object],
             results[k] = run_here(k)
             collect(0.0)
             submit()
-        while any(w.task is not None for w in pool):
+        while any(w.task not in (None, _WARM) for w in pool):
             collect(None)
     except BaseException:
         shutdown_pool(kill=True)  # the workers may be busy with tasks nobody waits for
@@ -289,10 +340,12 @@ def plan_all_windows(ctx, windows: Sequence, workers: int | None,
         return plan_window(ctx, windows[k])
 
     def remote(k: int) -> tuple:
-        return _plan_in_worker, (recipe, ctx.config, ctx.options, ctx.q_refs, windows[k], level)
+        return _plan_in_worker, (recipe, cell_fingerprint(ctx.cell), ctx.config, ctx.options,
+                                 ctx.q_refs, windows[k], level)
 
     def done(k: int, value):
         _replay(value[1])
         return finished(k, value[0])
 
-    return map_tasks(n, here, None if recipe is None else remote, workers, done)
+    return map_tasks(n, here, None if recipe is None else remote, workers, done,
+                     name=lambda k: f"window {windows[k].window_index}")

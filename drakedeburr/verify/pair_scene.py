@@ -280,14 +280,18 @@ class PairScene:
         return s
 
     def digest(self) -> str:
-        """A digest of what the readings depend on: geometry names, pairs, classes, the fixed
-        geometry's and the home configuration's poses (two processes that built the same cell
-        agree on it, so one may read parts of a sweep for the other)."""
+        """A digest of what the readings depend on: the cell's geometry
+        (:func:`drakedeburr.plan.parallel.cell_fingerprint`), geometry names, pairs,
+        classes, tracks, the fixed geometry's and the home configuration's poses (two
+        processes that built the same cell agree on it, so one may read parts of a sweep for
+        the other)."""
         d = self.__dict__.get("_digest")
         if d is None:
             import hashlib
 
-            h = hashlib.sha256("\n".join(self.names).encode())
+            from drakedeburr.plan.parallel import cell_fingerprint
+
+            h = hashlib.sha256((cell_fingerprint(self.cell) + "\n".join(self.names)).encode())
             for arr in (self.a, self.b, self.cls, self.track, self.X_home, self.tracks.reach,
                         *(X for X in self._X_fixed if X is not None)):
                 h.update(np.ascontiguousarray(arr).tobytes())

@@ -341,16 +341,13 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
     from drakedeburr.verify.cut_geometry import cut_geometry
     from drakedeburr.verify.distances import measure_samples
     from drakedeburr.verify.program import read_program
+    from drakedeburr.verify.sweep import warm_workers
 
     validate_plan(plan)
     if cell is None:
         from drakedeburr.cell.station import load_plan_cell
 
         cell = load_plan_cell(plan)
-    if plan.trajectory is not None and len(plan.segments) > 1:
-        from drakedeburr.verify.sweep import warm_workers
-
-        warm_workers(cell)  # parts of the distance sweep go to them (verify.sweep)
     if hub_model is None:
         from drakedeburr.hub.model import load_hub
 
@@ -359,6 +356,7 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
     tol = config.tolerances
     kin = VerifyKinematics(cell)
     samples = _samples(plan, kin, tol, progress)
+    warm_workers(cell, len(samples))  # parts of the distance sweep go to them
     program = read_program(plan, samples, tol)
     edge_of = {w.index: w for w in hub_model.windows}
     cut_windows = sorted({s.window_index for s in plan.segments if s.kind == "cut"})

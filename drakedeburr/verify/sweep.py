@@ -352,7 +352,7 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
         workers: processes (:func:`drakedeburr.plan.parallel.worker_count`; None: the cores);
         the parts are the same whatever the count, and so is the result.
     """
-    from drakedeburr.plan.parallel import map_tasks
+    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks
 
     scene.use_tolerances(tol)  # readings held to rigorous bounds (cell.narrowphase)
     parts, n = part_bounds(len(t)), len(t)
@@ -371,8 +371,8 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
 
     def remote(k: int) -> tuple:
         a, b = parts[k]
-        return _part_in_worker, (dict(recipe), scene.digest(), traj, t[a:b + 1], q[a:b + 1],
-                                 tol)
+        return _part_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+                                 traj, t[a:b + 1], q[a:b + 1], tol)
 
     def done(k: int, value) -> _Part:
         part, tally = value
@@ -380,44 +380,42 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
         return finished(k, part)
 
     use_pool = recipe is not None and len(parts) > 1
-    results = map_tasks(len(parts), here, remote if use_pool else None, workers, done)
+    results = map_tasks(len(parts), here, remote if use_pool else None, workers, done,
+                        name=lambda k: f"distance sweep, samples {parts[k][0]}-{parts[k][1]}")
     return _merge(scene, t, q, parts, results)
 
 
-_WORKER_SCENE: dict = {}  # in a pool worker: the last cell's recipe -> PairScene
+_WORKER_SCENE: dict = {}  # in a pool worker: the caller's cell and its PairScene
 
 
-def warm_workers(cell, workers: int | None = None) -> None:
-    """Have the pool's workers build ``cell``'s pair scene now (before the samples are
-    taken), so that they are ready when the sweep hands them parts."""
+def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
+    """Have the pool's idle workers build ``cell``'s pair scene now (from its recorded
+    ``load_args``), so that they are ready when the sweep of ``n_samples`` hands them parts;
+    nothing when that sweep is one part or the cell cannot be built again."""
     recipe = cell._cache.get("load_args")
-    if recipe is not None:
-        from drakedeburr.plan.parallel import warm_pool
+    if recipe is not None and len(part_bounds(n_samples)) > 1:
+        from drakedeburr.plan.parallel import cell_fingerprint, warm_pool
 
-        warm_pool(_warm_scene, (dict(recipe),), workers)
-
-
-def _warm_scene(recipe: dict) -> None:
-    _worker_scene(recipe)
+        warm_pool(_warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
 
 
-def _worker_scene(recipe: dict) -> PairScene:
-    from drakedeburr.cell.station import load_cell
+def _worker_scene(recipe: dict, fingerprint: str) -> PairScene:
+    from drakedeburr.plan.parallel import worker_cell
     from drakedeburr.verify.distances import pair_scene_of
 
-    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
-    scene = _WORKER_SCENE.get(key)
-    if scene is None:
-        _WORKER_SCENE.clear()  # one cell at a time
-        scene = _WORKER_SCENE[key] = pair_scene_of(load_cell(**recipe))
-    return scene
+    return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
 
 
-def _part_in_worker(recipe: dict, digest: str, traj, t: np.ndarray, q: np.ndarray, tol):
+def _warm_scene(recipe: dict, fingerprint: str) -> None:
+    _worker_scene(recipe, fingerprint)
+
+
+def _part_in_worker(recipe: dict, fingerprint: str, digest: str, traj, t: np.ndarray,
+                    q: np.ndarray, tol):
     """A pool worker's task: one part read in the same cell -> (_Part, its reading tally)."""
-    scene = _worker_scene(recipe)
+    scene = _worker_scene(recipe, fingerprint)
     if scene.digest() != digest:
-        raise RuntimeError("the worker's cell differs from the caller's")
+        raise RuntimeError("the worker's pair scene differs from the caller's")
     scene.use_tolerances(tol)
     return _sweep_part(scene, traj, t, q, tol), scene.tally
 
