@@ -24,3 +24,14 @@ def module_at(ref: str, path: str, name: str):
     sys.modules[spec.name] = mod  # dataclasses look their module up
     spec.loader.exec_module(mod)
     return mod
+
+
+def tree_at(ref: str, prefix: str = "bench_tree_") -> Path:
+    """This repository's files at git ``ref`` in a new temporary folder (``git archive``); run
+    code from there with that folder as the working directory (``python -m`` and ``-c`` put
+    the working folder first on the path)."""
+    out = Path(tempfile.mkdtemp(prefix=prefix))
+    data = subprocess.run(["git", "-C", str(ROOT), "archive", ref], check=True,
+                          capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(out)], input=data, check=True)
+    return out

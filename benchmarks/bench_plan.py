@@ -156,20 +156,6 @@ def accel_sweep(cell, wts, hub_name: str, scales=(1.0, 2.0, 4.0, 10.0, 20.0)) ->
                   "vs x1", "failures", "plan s"])
 
 
-def _baseline_tree(ref: str) -> str:
-    """The tree of commit ``ref`` in a temporary folder (git archive); its path."""
-    import subprocess
-    import tempfile
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parent.parent
-    out = Path(tempfile.mkdtemp(prefix="bench_plan_base_"))
-    data = subprocess.run(["git", "-C", str(root), "archive", ref], check=True,
-                          capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(out)], input=data, check=True)
-    return str(out)
-
-
 def _run(tree: str, scenario: str, hub: str, workers: int | None) -> dict:
     """One planning run of the tree at ``tree`` in a subprocess (benchmarks/plan_run.py)."""
     import json
@@ -200,7 +186,9 @@ def speed(hubs, cells, baseline: str) -> None:
     from pathlib import Path
 
     here = str(Path(__file__).resolve().parent.parent)
-    base = _baseline_tree(baseline)
+    from _baseline import tree_at
+
+    base = str(tree_at(baseline, "bench_plan_base_"))
     load = os.getloadavg()[0]
     print(f"## planning time: previous implementation ({baseline}) vs this tree, same run "
           f"(load average {load:.1f} at the start, {os.cpu_count()} cores)\n")

@@ -193,14 +193,6 @@ def bench_cli(folder: Path) -> None:
           f"{r.returncode}")
 
 
-def _tree_at(ref: str) -> Path:
-    """This repository's files at git ``ref`` in a temporary folder (``git archive``)."""
-    out = Path(tempfile.mkdtemp(prefix=f"bench_verify_{ref}_"))
-    tar = subprocess.run(["git", "archive", ref], cwd=ROOT, capture_output=True, check=True)
-    subprocess.run(["tar", "-x", "-C", str(out)], input=tar.stdout, check=True)
-    return out
-
-
 def _report_items(folder: Path) -> list:
     import json
     import re
@@ -220,7 +212,9 @@ def bench_cli_against(folder: Path, ref: str, repeat: int) -> None:
     import shutil
     import statistics
 
-    trees = {"this tree": ROOT, ref: _tree_at(ref)}
+    from _baseline import tree_at
+
+    trees = {"this tree": ROOT, ref: tree_at(ref, f"bench_verify_{ref}_")}
     for k, tree in trees.items():  # each run imports its own tree's package
         r = subprocess.run([sys.executable, "-c",
                             "import drakedeburr; print(drakedeburr.__file__)"],

@@ -209,8 +209,7 @@ class PairScene:
         self._query = None
         self._posed: dict[int, np.ndarray] = {}  # moving geometry's pose at this configuration
         self._supports: dict = {}
-        self.resolve_below = np.full(3, np.inf)  # until use_tolerances: always solved
-        self._resolve_below = self.resolve_below.tolist()
+        self.resolve_below = [np.inf] * 3  # per class; until use_tolerances: always solved
         self.tally = ReadingTally()
 
     def set_configuration(self, q: np.ndarray, bodies=None) -> None:
@@ -241,9 +240,8 @@ class PairScene:
         """Set how readings are certified (:mod:`drakedeburr.cell.narrowphase`) and start a
         new tally: a clearance/self reading whose separating-plane bound falls below its
         class's limit + ``Tolerances.narrowphase_resolve`` is solved exactly."""
-        self.resolve_below = np.array([tol.min_clearance, 0.0, -np.inf]) + float(
-            tol.narrowphase_resolve)
-        self._resolve_below = self.resolve_below.tolist()
+        self.resolve_below = (np.array([tol.min_clearance, 0.0, -np.inf]) + float(
+            tol.narrowphase_resolve)).tolist()
         self.tally = ReadingTally()
 
     def distance(self, p: int) -> float:
@@ -266,7 +264,7 @@ class PairScene:
         (:func:`~drakedeburr.cell.narrowphase.certified_distance`), tallied."""
         value, how = certified_distance(d, n_BA, self._support(self._a[p]), X_WA,
                                         self._support(self._b[p]), X_WB,
-                                        solve_below=self._resolve_below[self._cls[p]])
+                                        solve_below=self.resolve_below[self._cls[p]])
         self.tally.add(d, value, how)
         return value
 
