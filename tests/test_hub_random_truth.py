@@ -253,3 +253,34 @@ def test_import_of_an_open_face_only_file(hubs, tmp_path):
         assert np.all(outside_all(p - [0, 0, 2e-3]) > 0)
     cell = load_cell("tool_in_hand", res.dir)
     assert len(cell.hub_ids) == res.piece_count
+
+
+def _max_turn_deg(p):
+    """Largest turn between consecutive chords of a closed polyline [deg]."""
+    v = np.roll(p, -1, axis=0) - p
+    w = np.roll(v, 1, axis=0)
+    c = np.sum(v * w, axis=1) / np.linalg.norm(v, axis=1) / np.linalg.norm(w, axis=1)
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))).max())
+
+
+@pytest.mark.parametrize("i", INDICES)
+def test_extracted_edges_are_as_smooth_as_the_truth(hubs, i):
+    """At the importer's 0.5 mm spacing the loop turns between chords no more than the
+    generator's edge does (a profile misreading the face start by a facet of the round used to
+    zig-zag it by 0.2-0.3 mm: 30-70 deg turns), and the CL stage needs about as many points
+    as on the truth (it followed the zig-zag with up to 1529 instead of ~115)."""
+    from drakedeburr.path import fit_edge_curve, plan_cl
+    from drakedeburr.path.cl_planning import PlannerParams
+    from drakedeburr.plan.planner import CL_COUNT_BUDGET, CL_DELTA
+
+    hub = hubs[i]
+    res = extract_window_edges(hub.trimesh, source=hub.name, spacing=0.5e-3)
+    params = PlannerParams(delta_max=CL_DELTA, count_budget=CL_COUNT_BUDGET)
+    for w in res.windows:
+        k = int(np.argmin([np.linalg.norm(t.p_HE.mean(0) - w.p_HE.mean(0))
+                           for t in hub.windows]))
+        truth = resample_loop(hub.windows[k].p_HE, n=len(w.p_HE))
+        assert _max_turn_deg(w.p_HE) <= _max_turn_deg(truth) + 3.0, w.index
+        n = len(plan_cl(fit_edge_curve(w.p_HE), method="adaptive", params=params).u)
+        n_truth = len(plan_cl(fit_edge_curve(truth), method="adaptive", params=params).u)
+        assert n <= 1.15 * n_truth, (w.index, n, n_truth)

@@ -19,6 +19,12 @@ front). The edge point is the first sample of the first run of ``run`` face samp
 the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
 wider front part): then the first run after that step.
 
+**Noise.** A profile reads the face start on its own 0.1 mm grid from the facets of a
+tessellated round, so neighbouring profiles can disagree by a facet. The band width (outline to
+edge) is therefore filtered along the loop, a running median then a Gaussian of about a
+millimetre, and the face read again there (:func:`_smoothed_edge`); the true band of a round or
+chamfer changes over millimetres, not between profiles 0.5 mm apart.
+
 **Plausibility** (a loop that fails is rejected with its reason, not used): no jump of more
 than ``MAX_STEP`` between neighbouring edge points (the walk left the face onto another
 surface), the 3-D length at most ``MAX_LENGTH_RATIO`` x the opening outline's, and the
@@ -42,6 +48,8 @@ MAX_STEP = 3e-3  # [m] largest jump between neighbouring edge points of a plausi
 MAX_LENGTH_RATIO = 1.6  # 3-D loop length / opening outline length
 MAX_WARP = 0.35  # deviation from the best-fit plane / plan-view diameter
 MAX_MISSING = 0.05  # share of the outline without a face beside it
+BAND_MEDIAN = 2.5e-3  # [m] running median of the band width along the loop ("Noise")
+BAND_SIGMA = 1.0e-3  # [m] Gaussian smoothing of the band width along the loop ("Noise")
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,11 +191,44 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     p = np.column_stack([xy[rows, k], z0 - t[rows, k]])
     band = np.full(P, np.nan)
     band[rows] = s[k]
+    if len(rows) >= 16:
+        p = _smoothed_edge(scene, p, outline_xy[rows], out[rows], band[rows], z0, step)
     figures = {"outline_length": float(np.linalg.norm(
         np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1).sum()),
         "missing": float(1.0 - ok.mean())}
     reason = _implausible(p, figures)
     return EdgeLine(None if reason else p, band, outline_xy, reason, figures)
+
+
+def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray,
+                   band: np.ndarray, z0: float, step: float) -> np.ndarray:
+    """The edge points with the band width filtered along the loop (module doc, "Noise").
+
+    Each profile reads the face start on its own ``step`` grid, from the facets of a
+    tessellated round: neighbouring profiles 0.5 mm apart can differ by a facet (0.1-0.3 mm)
+    where the true band changes by microns, which zig-zags the loop (turns of 30-70 deg between
+    0.5 mm chords on a real CAD export; the CL stage then follows the zig-zag with hundreds of
+    points and the wrist with it). The band is filtered as a periodic signal along the loop:
+    a running median over ``BAND_MEDIAN`` (drops single-profile jumps), then a Gaussian of
+    ``BAND_SIGMA`` (averages the grid steps), both with scipy.ndimage. The face is then read
+    again at the filtered band (a ray cast); a point whose ray misses or lands more than
+    ``JUMP`` off the face height read at the raw band keeps its raw position.
+    """
+    from scipy.ndimage import gaussian_filter1d, median_filter
+
+    spacing = float(np.median(np.linalg.norm(np.diff(outline_xy, axis=0), axis=1)))
+    size = max(1, int(round(BAND_MEDIAN / spacing))) | 1
+    b = median_filter(band, size=size, mode="wrap")
+    b = gaussian_filter1d(b, BAND_SIGMA / spacing, mode="wrap")
+    xy = outline_xy + b[:, None] * out
+    t, _ = _cast(scene, xy, z0)
+    z = z0 - t
+    # the profile's own hidden-wall test (JUMP per 0.1 mm) over the distance moved
+    tol = JUMP * np.maximum(np.abs(b - band), step) / 1e-4
+    keep = np.isfinite(t) & (np.abs(z - p[:, 2]) <= tol)
+    q = p.copy()
+    q[keep] = np.column_stack([xy[keep], z[keep]])
+    return q
 
 
 def _implausible(p: np.ndarray, fig: dict) -> str:

@@ -46,7 +46,7 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 2
+IMPORT_VERSION = 3  # 3: edge band filtered along the loop (hub/edgeline.py "Noise")
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
 _NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
