@@ -256,3 +256,31 @@ def write_reference() -> None:
 if __name__ == "__main__":
     if "--write" in sys.argv:
         write_reference()
+
+
+def test_adaptive_splits_where_a_feature_is_sharper_than_its_grid(caplog):
+    """A kink of a few tenths of a millimetre (four edge points 0.5 mm apart pushed 0.2 mm
+    sideways, one moved along: an edge read off a tessellated mesh) that no plan on the DP's
+    0.16 mm grid passes on the spline: the best grid plan with its failing segments split,
+    checked on every segment, about the clean loop's count (the isoparametric fallback used
+    here before spread ~20x as many points over the whole loop)."""
+    from drakedeburr.hub.extract import resample_loop
+
+    params = mut.PlannerParams(delta_max=0.03e-3, count_budget=1)
+    p = resample_loop(hub_like_window("small", 400), 0.5e-3)
+    t = np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    side = np.cross([0.0, 0.0, 1.0], t)
+    i = len(p) // 3
+    q = p.copy()
+    q[i:i + 4] += 0.2e-3 * np.array([1.0, 1.0, -1.0, 1.0])[:, None] * side[i:i + 4]
+    q[i + 1] += 0.2e-3 * t[i + 1]
+    kinked = fit_edge_curve(q)
+    with caplog.at_level("WARNING", logger=mut.__name__):
+        plan = mut.plan_cl(kinked, "adaptive", params)
+    assert "no plan on the grid passes" in caplog.text  # the case this test is about
+    seg = segment_figures(kinked, plan.u)
+    assert seg["chord_height"].max() <= params.delta_max
+    assert seg["chord"].max() <= params.l_max
+    clean = len(mut.plan_cl(fit_edge_curve(p), "adaptive", params).u)
+    assert len(plan.u) <= 1.5 * clean, (len(plan.u), clean)

@@ -41,6 +41,11 @@ from scipy.spatial.distance import pdist
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.hub.types import WindowKind
+from drakedeburr.path.cl_equal_chord import (
+    SAMPLED_MARGIN,
+    plan_equal_chord_height,
+    samples_for,
+)
 from drakedeburr.path.edge_curve import EdgeCurve
 from drakedeburr.path.metrics import cl_metrics
 from drakedeburr.path.types import ClPath
@@ -62,9 +67,6 @@ log = logging.getLogger(__name__)
 
 METHODS: tuple[str, ...] = ("proposed", "isoparametric", "equal_chord_height", "adaptive")
 
-# relative safety margin between the sampled chord height used while planning and the refined
-# one reported by the metrics (sampling underestimates a smooth maximum by < 5e-4 relative)
-_SAMPLED_MARGIN = 5e-3
 # start points tried by the adaptive DP (each is one DP pass)
 N_STARTS = 5
 
@@ -243,23 +245,13 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     u_next[-1] += 1.0
     if length_cap and (curve.chord_length(u, u_next) > params.l_max).any():
         return False
-    samples = _samples_for(curve, u, u_next)
-    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
+    samples = samples_for(curve, u, u_next)
+    target = params.delta_max * (1.0 - SAMPLED_MARGIN)
     # every 8th sample first: a plan failing there fails the full test (same values, fewer)
     if (curve.sampled_chord_height_lower_bound(u, u_next, samples) > target).any():
         return False
     d = curve.chord_height(u, u_next, samples=samples, refine=False)
     return bool((d <= target).all())
-
-
-def _samples_for(curve: EdgeCurve, u0, u1, s0=None) -> int:
-    """Samples per segment so that the sampled max is within ~1e-3 of the true one: one per
-    0.25 mm of the longest arc, 48..600 (s0: arc length to u0 if known)."""
-    return _sample_count(float(np.max(curve.arc_length(u0, u1, s0=s0))))
-
-
-def _sample_count(arc: float) -> int:
-    return int(np.clip(arc / 0.25e-3, 48, 600))
 
 
 def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
@@ -269,87 +261,6 @@ def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
         if _segments_ok(curve, u, params):
             return u
         n += max(1, n // 50)
-
-
-def _plan_equal_chord_height(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
-    target = params.delta_max * (1.0 - _SAMPLED_MARGIN)
-    L = curve.length
-    s, out = 0.0, [0.0]
-    # a step can never exceed the length of the rest of the loop
-    while True:
-        rest = L - s
-        ch = _ChordHeightFrom(curve, s)
-        # grow a bracket geometrically (steps 1, 2, 4, ... mm below the rest of the loop, all
-        # measured in one call together with the rest itself), then shrink it with guesses
-        # from the model h ~ step^2 (safeguarded inside the bracket); stop within 0.2 % of
-        # the target
-        steps = [min(rest, 1e-3)]
-        while steps[-1] * 2.0 < rest:
-            steps.append(steps[-1] * 2.0)
-        if steps[-1] >= rest:
-            steps = []
-        h_all = ch.many(np.array([rest, *steps]))
-        if h_all[0] <= target and ch(rest, refine=True) <= params.delta_max:
-            break
-        lo, hi, h_lo, h_hi = 0.0, rest, 0.0, np.inf
-        for step, h in zip(steps, h_all[1:], strict=True):
-            if h > target:
-                hi, h_hi = step, h
-                break
-            lo, h_lo = step, h
-        for _ in range(40):
-            if h_lo >= 0.998 * target or hi - lo < 1e-7:
-                break
-            guess = hi * np.sqrt(target / h_hi) if np.isfinite(h_hi) else 0.5 * (lo + hi)
-            width = hi - lo
-            guess = float(np.clip(guess, lo + 0.05 * width, hi - 0.05 * width))
-            h = ch(guess)
-            if h > target:
-                hi, h_hi = guess, h
-            else:
-                lo, h_lo = guess, h
-        # the search used sampled chord heights; confirm the step with the refined one
-        while lo > 1e-6 and ch(lo, refine=True) > params.delta_max:
-            lo *= 0.995
-        s += lo
-        out.append(s)
-    return curve.u_from_arc(np.array(out))
-
-
-class _ChordHeightFrom:
-    """Chord height of the arc from arc length s to s + step, for many steps from one s (the
-    start parameter is found once, not once per trial step)."""
-
-    def __init__(self, curve: EdgeCurve, s: float):
-        self.curve, self.s = curve, s
-        self.u0 = curve.u_from_arc(s)
-        self.s0 = curve.arc_length(np.mod(self.u0, 1.0))
-
-    def __call__(self, step: float, refine: bool = False) -> float:
-        curve, s, u0 = self.curve, self.s, self.u0
-        u1 = curve.u_from_arc(s + step)
-        if s + step >= curve.length - 1e-12 or u1 <= u0:
-            u1 = u1 + 1.0
-        return float(curve.chord_height(u0, u1, samples=_samples_for(curve, u0, u1, self.s0),
-                                        refine=refine)[0])
-
-    def many(self, steps: np.ndarray) -> np.ndarray:
-        """Sampled chord heights (refine=False) for several steps at once, (K,): the values of
-        K calls (each arc keeps its own sample count; shorter sample rows are padded with
-        their last sample, t = 1, which does not change a maximum)."""
-        curve, s, u0 = self.curve, self.s, self.u0
-        steps = np.asarray(steps, float)
-        if len(steps) == 0:
-            return np.zeros(0)
-        u1 = curve.u_from_arc(s + steps)
-        u1 = np.where((s + steps >= curve.length - 1e-12) | (u1 <= u0), u1 + 1.0, u1)
-        # _samples_for per arc, the arcs measured in one call (elementwise: the same values)
-        arcs = curve.arc_length(u0, u1, s0=self.s0)
-        counts = [_sample_count(float(a)) for a in arcs]
-        t = np.ones((len(steps), max(counts) + 1))
-        for k, c in enumerate(counts):
-            t[k, : c + 1] = np.linspace(0.0, 1.0, c + 1)
-        return curve.chord_height_at(u0, u1, t)
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
@@ -473,6 +384,7 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
     chords, heights = _chords_and_heights(p, reach, params.l_max, params.delta_max)
     # the grid samples the chord height (slightly low): plans are re-checked on the spline,
     # best first; the margin is tightened only if none passes
+    cands = []
     for margins in ((1.0, 0.997), (0.99, 0.97), (0.94, 0.9)):
         cands = []
         for margin in margins:
@@ -486,8 +398,36 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
         for _, u in sorted(cands, key=lambda c: c[0]):
             if _true_ok(curve, u, params):
                 return u
+    # a feature sharper than the grid resolves (a corner of a few tenths of a millimetre): the
+    # best grid plans with the segments that fail on the spline split until they pass
+    split = [v for _, u in sorted(cands, key=lambda c: c[0])[:3]
+             if (v := _split_failing(curve, u, params)) is not None]
+    if split:
+        u = min(split, key=len)
+        log.warning("adaptive: no plan on the grid passes the spline check (a feature sharper "
+                    "than the grid); its failing segments split: %d points", len(u))
+        return u
     log.warning("adaptive: no plan on the grid passes the spline check; using isoparametric")
     return _plan_isoparametric(curve, params)
+
+
+def _split_failing(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
+                   rounds: int = 40) -> np.ndarray | None:
+    """``u`` with every segment that fails the true chord-length or chord-height check split
+    at its arc-length midpoint, round after round until all pass (None after ``rounds``)."""
+    for _ in range(rounds):
+        u_next = np.roll(u, -1)
+        u_next[-1] += 1.0
+        bad = ((curve.chord_length(u, u_next) > params.l_max)
+               | (curve.chord_height(u, u_next) > params.delta_max))
+        if not bad.any():
+            return u
+        s = curve.arc_length(u)
+        s_next = np.roll(s, -1)
+        s_next[-1] += curve.length
+        mid = curve.u_from_arc(0.5 * (s[bad] + s_next[bad]))
+        u = np.sort(np.concatenate([u, mid]))
+    return None
 
 
 def _dp_candidates(curve, u_grid, chord, ok, budget, k_max) -> list:
@@ -527,7 +467,7 @@ def _neighbour_cv(curve: EdgeCurve, u: np.ndarray) -> float:
 _PLANNERS: dict[str, Callable[[EdgeCurve, PlannerParams], np.ndarray]] = {
     "proposed": _plan_proposed,
     "isoparametric": _plan_isoparametric,
-    "equal_chord_height": _plan_equal_chord_height,
+    "equal_chord_height": plan_equal_chord_height,
     "adaptive": _plan_adaptive,
 }
 
