@@ -14,6 +14,10 @@
   cell becomes the hull of its triangles offset by +-``shell_thickness``/2 along their
   normals, and a cell is split while a hull holds a probe (in a window opening, or above the
   front surface). A tool reaching the hub from outside must cross such a shell first.
+* **Closed meshes whose refinement does not converge** (a piece still holds a probe after
+  ``max_refine_rounds``): each such piece is dropped and the mesh surface it covered is
+  covered by shell pieces instead (:func:`shell_patch`). The solid's interior there is no
+  longer covered, but a tool can only get into it through that surface.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["front_probes", "solid_pieces", "shell_pieces", "coacd_version"]
+__all__ = ["front_probes", "solid_pieces", "shell_pieces", "shell_patch", "coacd_version"]
 
 Progress = Callable[[int, int, str], None] | None
 
@@ -250,3 +254,44 @@ def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.
     parts = [_Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
     merged = _merge_pieces(parts, thickness * 1e3, (WindowProbes(probes.pts * 1e3),))
     return [p.pts * 1e-3 for p in merged]
+
+
+def shell_patch(pieces: list[np.ndarray], V: np.ndarray, F: np.ndarray, probes, options,
+                progress: Progress = None) -> tuple[list[np.ndarray], dict]:
+    """``pieces`` with every piece that holds a probe replaced by shell pieces (module doc).
+
+    The surface a dropped piece covered: the triangles of (``V``, ``F``) (H, metres) near its
+    hull, subdivided to a quarter of ``shell_thickness`` first so that a large triangle
+    crossing the hull is caught by a vertex or centre inside the hull grown by
+    ``shell_thickness``. A tool outside the hub meets one of those triangles before it can
+    enter the dropped piece's volume, and the shell holds them.
+    """
+    import trimesh
+    from scipy.spatial import ConvexHull
+
+    bad = [i for i, p in enumerate(pieces) if len(probes.inside(p))]
+    stats = {"pieces_replaced_by_shell": len(bad), "shell_patch_pieces": 0}
+    if not bad:
+        return pieces, stats
+    grow = options.shell_thickness
+    tri_lo, tri_hi = V[F].min(axis=1), V[F].max(axis=1)
+    chosen = np.zeros(len(F), bool)
+    for i in bad:
+        eq = ConvexHull(pieces[i]).equations
+        lo, hi = pieces[i].min(axis=0) - grow, pieces[i].max(axis=0) + grow
+        near = np.flatnonzero(np.all((tri_hi >= lo) & (tri_lo <= hi), axis=1))
+        if not len(near):
+            continue
+        Vs, Fs, parent = trimesh.remesh.subdivide_to_size(V, F[near], 0.25 * grow,
+                                                           return_index=True)
+        pts = np.concatenate([Vs, Vs[Fs].mean(axis=1)])
+        inside = np.all(pts @ eq[:, :3].T + eq[:, 3] <= grow, axis=1)
+        hit = inside[:len(Vs)][Fs].any(axis=1) | inside[len(Vs):]
+        chosen[near[np.unique(parent[hit])]] = True
+    keep = [p for i, p in enumerate(pieces) if i not in set(bad)]
+    if chosen.any():
+        patch, _ = shell_pieces(V, F[chosen], probes, options, progress)
+        keep.extend(patch)
+        stats["shell_patch_pieces"] = len(patch)
+    stats["shell_patch_triangles"] = int(chosen.sum())
+    return keep, stats

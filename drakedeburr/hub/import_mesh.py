@@ -46,7 +46,7 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 3  # 3: edge band filtered along the loop (hub/edgeline.py "Noise")
+IMPORT_VERSION = 3  # 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
 _NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
@@ -396,7 +396,12 @@ def _collision(path: Path, V_H, F, walls, closed: bool, options: ImportOptions,
     from manifold3d import Manifold, Mesh64
 
     from drakedeburr.hub.collision import WindowProbes, window_intrusion
-    from drakedeburr.hub.import_collision import front_probes, shell_pieces, solid_pieces
+    from drakedeburr.hub.import_collision import (
+        front_probes,
+        shell_patch,
+        shell_pieces,
+        solid_pieces,
+    )
 
     scene = _scene(V_H, F)
     normals = trimesh.Trimesh(V_H, F, process=False).face_normals
@@ -423,6 +428,8 @@ def _collision(path: Path, V_H, F, walls, closed: bool, options: ImportOptions,
                              f"{solid.status().name}); self-intersections or inverted faces?")
         pieces, stats = solid_pieces(solid.simplify(options.simplify_tolerance), probes,
                                      np.concatenate([probe_edge[ok], face_cut]), options, sub)
+        pieces, patched = shell_patch(pieces, V_H, F, probes, options, sub)
+        stats.update(patched)
     else:
         pieces, stats = shell_pieces(V_H, F, probes, options, sub)
     loops = [{"p_HE": wall[:, :3], "n_wall_H": wall[:, 3:6]} for wall in walls]
