@@ -211,8 +211,9 @@ def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray
     points and the wrist with it). The band is filtered as a periodic signal along the loop:
     a running median over ``BAND_MEDIAN`` (drops single-profile jumps), then a Gaussian of
     ``BAND_SIGMA`` (averages the grid steps), both with scipy.ndimage. The face is then read
-    again at the filtered band (a ray cast); a point whose ray misses or lands more than
-    ``JUMP`` off the face height read at the raw band keeps its raw position.
+    again at the filtered band (a ray cast); a point whose ray misses, or whose height differs
+    from the raw one by more than the profile's hidden-wall step (``JUMP`` per 0.1 mm moved),
+    keeps its raw position.
     """
     from scipy.ndimage import gaussian_filter1d, median_filter
 
