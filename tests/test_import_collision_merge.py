@@ -55,8 +55,9 @@ def test_a_piece_left_in_a_window_is_replaced_by_a_shell_of_the_surface_it_cover
     V, F = _plate_with_window()
     good = [_slab(-0.03, -0.01, -0.03, 0.03), _slab(0.01, 0.03, -0.03, 0.03),
             _slab(-0.01, 0.01, 0.01, 0.03)]
-    bad = _slab(-0.008, 0.008, -0.025, -0.005)  # 5 mm into the window; no mesh vertex in it
-    xs, zs = np.linspace(-0.005, 0.005, 5), np.linspace(0.001, 0.009, 5)
+    # 5 mm into the window; no vertex and no triangle centre of the mesh in it (grown by 1 mm)
+    bad = _slab(0.005, 0.008, -0.025, -0.005)
+    xs, zs = np.linspace(0.0055, 0.0075, 5), np.linspace(0.001, 0.009, 5)
     probes = WindowProbes(np.array([[x, -0.009, z] for x in xs for z in zs]))
     assert len(probes.inside(bad)) == len(probes.pts)
     options = SimpleNamespace(shell_thickness=1e-3, shell_max_edge=8e-3, shell_cell=0.04,
@@ -69,9 +70,27 @@ def test_a_piece_left_in_a_window_is_replaced_by_a_shell_of_the_surface_it_cover
     pts = trimesh.Trimesh(V, F).sample(20000, seed=1)
     eq_bad = ConvexHull(bad).equations
     covered = pts[np.all(pts @ eq_bad[:, :3].T + eq_bad[:, 3] <= 0.0, axis=1)]
-    assert len(covered) > 500
+    assert len(covered) > 100
     inside_any = np.zeros(len(covered), bool)
     for p in patch:
         eq = ConvexHull(p).equations
         inside_any |= np.all(covered @ eq[:, :3].T + eq[:, 3] <= 1e-12, axis=1)
     assert inside_any.all(), (~inside_any).sum()
+
+
+def test_a_triangle_meets_a_piece_whatever_its_size():
+    """The exact triangle-against-hull test of the shell patch: a 300 mm sliver through a 4 mm
+    box meets it (no vertex is near; subdividing it to 0.25 mm would take 2^11 splits an edge),
+    one 0.5 mm beside it meets the box grown by 1 mm, one 1.5 mm beside it does not."""
+    from scipy.spatial import ConvexHull
+
+    box = np.array([[x, y, z] for x in (0.0, 0.004) for y in (0.0, 0.004) for z in (0.0, 0.004)])
+    eq = ConvexHull(box).equations
+
+    def sliver(y):
+        return np.array([[-0.15, y, 0.002], [0.15, y, 0.002], [0.15, y, 0.0021]])
+
+    assert mut._meets(sliver(0.002), eq, 1e-3)
+    assert mut._meets(sliver(0.0045), eq, 1e-3)
+    assert not mut._meets(sliver(0.0055), eq, 1e-3)
+    assert not mut._meets(sliver(0.002) + [0, 0, 0.01], eq, 1e-3)

@@ -211,9 +211,9 @@ def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray
     points and the wrist with it). The band is filtered as a periodic signal along the loop:
     a running median over ``BAND_MEDIAN`` (drops single-profile jumps), then a Gaussian of
     ``BAND_SIGMA`` (averages the grid steps), both with scipy.ndimage. The face is then read
-    again at the filtered band (a ray cast); a point whose ray misses, or whose height differs
-    from the raw one by more than the profile's hidden-wall step (``JUMP`` per 0.1 mm moved),
-    keeps its raw position.
+    again at the filtered band (a ray cast); a point whose ray misses, lands on a wall, or whose
+    height differs from the raw one by more than the profile's hidden-wall step (``JUMP`` per
+    0.1 mm moved) keeps its raw position.
     """
     from scipy.ndimage import gaussian_filter1d, median_filter
 
@@ -222,11 +222,13 @@ def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray
     b = median_filter(band, size=size, mode="wrap")
     b = gaussian_filter1d(b, BAND_SIGMA / spacing, mode="wrap")
     xy = outline_xy + b[:, None] * out
-    t, _ = _cast(scene, xy, z0)
+    t, n = _cast(scene, xy, z0)
     z = z0 - t
-    # the profile's own hidden-wall test (JUMP per 0.1 mm) over the distance moved
+    # the profile's own tests over the distance moved: no hidden wall (JUMP per 0.1 mm), not
+    # on a wall (facets of either winding: |n_z|)
     tol = JUMP * np.maximum(np.abs(b - band), step) / 1e-4
-    keep = np.isfinite(t) & (np.abs(z - p[:, 2]) <= tol)
+    keep = (np.isfinite(t) & (np.abs(z - p[:, 2]) <= tol)
+            & (np.abs(n[:, 2]) >= math.cos(WALL_ANGLE)))
     q = p.copy()
     q[keep] = np.column_stack([xy[keep], z[keep]])
     return q

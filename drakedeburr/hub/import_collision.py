@@ -256,17 +256,37 @@ def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.
     return [p.pts * 1e-3 for p in merged]
 
 
+def _meets(tri: np.ndarray, eq: np.ndarray, grow: float) -> bool:
+    """Whether triangle ``tri`` (3, 3) meets the convex hull of half-spaces ``eq`` (F, 4),
+    unit normals as qhull gives them, grown by ``grow``: the triangle clipped by each
+    half-space in turn (Sutherland-Hodgman) keeps a point. Exact for any triangle size; written
+    by hand because trimesh/scipy offer no triangle-polytope test."""
+    poly = [tuple(p) for p in tri]
+    for a, b, c, d in eq:
+        dist = [a * x + b * y + c * z + d - grow for x, y, z in poly]
+        out = []
+        for k, p in enumerate(poly):
+            q, dp, dq = poly[k - 1], dist[k], dist[k - 1]
+            if (dp <= 0.0) != (dq <= 0.0):  # the edge q -> p crosses the plane
+                t = dq / (dq - dp)
+                out.append(tuple(qi + t * (pi - qi) for pi, qi in zip(p, q, strict=True)))
+            if dp <= 0.0:
+                out.append(p)
+        poly = out
+        if not poly:
+            return False
+    return True
+
+
 def shell_patch(pieces: list[np.ndarray], V: np.ndarray, F: np.ndarray, probes, options,
                 progress: Progress = None) -> tuple[list[np.ndarray], dict]:
     """``pieces`` with every piece that holds a probe replaced by shell pieces (module doc).
 
-    The surface a dropped piece covered: the triangles of (``V``, ``F``) (H, metres) near its
-    hull, subdivided to a quarter of ``shell_thickness`` first so that a large triangle
-    crossing the hull is caught by a vertex or centre inside the hull grown by
-    ``shell_thickness``. A tool outside the hub meets one of those triangles before it can
-    enter the dropped piece's volume, and the shell holds them.
+    The surface a dropped piece covered: every triangle of (``V``, ``F``) (H, metres) that
+    meets its hull grown by ``shell_thickness`` (:func:`_meets`, exact whatever the triangle's
+    size). A tool outside the hub meets one of those triangles before it can enter the dropped
+    piece's volume, and the shell holds them.
     """
-    import trimesh
     from scipy.spatial import ConvexHull
 
     bad = [i for i, p in enumerate(pieces) if len(probes.inside(p))]
@@ -274,24 +294,20 @@ def shell_patch(pieces: list[np.ndarray], V: np.ndarray, F: np.ndarray, probes, 
     if not bad:
         return pieces, stats
     grow = options.shell_thickness
-    tri_lo, tri_hi = V[F].min(axis=1), V[F].max(axis=1)
+    tri = V[F]
+    tri_lo, tri_hi = tri.min(axis=1), tri.max(axis=1)
     chosen = np.zeros(len(F), bool)
     for i in bad:
         eq = ConvexHull(pieces[i]).equations
         lo, hi = pieces[i].min(axis=0) - grow, pieces[i].max(axis=0) + grow
-        near = np.flatnonzero(np.all((tri_hi >= lo) & (tri_lo <= hi), axis=1))
-        if not len(near):
-            continue
-        Vs, Fs, parent = trimesh.remesh.subdivide_to_size(V, F[near], 0.25 * grow,
-                                                           return_index=True)
-        pts = np.concatenate([Vs, Vs[Fs].mean(axis=1)])
-        inside = np.all(pts @ eq[:, :3].T + eq[:, 3] <= grow, axis=1)
-        hit = inside[:len(Vs)][Fs].any(axis=1) | inside[len(Vs):]
-        chosen[near[np.unique(parent[hit])]] = True
+        near = np.flatnonzero(np.all((tri_hi >= lo) & (tri_lo <= hi), axis=1) & ~chosen)
+        for j in near:
+            chosen[j] = _meets(tri[j], eq, grow)
     keep = [p for i, p in enumerate(pieces) if i not in set(bad)]
     if chosen.any():
-        patch, _ = shell_pieces(V, F[chosen], probes, options, progress)
+        patch, shell = shell_pieces(V, F[chosen], probes, options, progress)
         keep.extend(patch)
         stats["shell_patch_pieces"] = len(patch)
+        stats["shell_patch_pieces_with_probes"] = shell["pieces_with_probes"]
     stats["shell_patch_triangles"] = int(chosen.sum())
     return keep, stats
