@@ -303,7 +303,8 @@ def shell_patch(pieces: list[np.ndarray], V: np.ndarray, F: np.ndarray, probes, 
         near = np.flatnonzero(np.all((tri_hi >= lo) & (tri_lo <= hi), axis=1) & ~chosen)
         for j in near:
             chosen[j] = _meets(tri[j], eq, grow)
-    keep = [p for i, p in enumerate(pieces) if i not in set(bad)]
+    dropped = set(bad)
+    keep = [p for i, p in enumerate(pieces) if i not in dropped]
     if chosen.any():
         patch, shell = shell_pieces(V, F[chosen], probes, options, progress)
         keep.extend(patch)

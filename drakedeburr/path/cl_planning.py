@@ -384,7 +384,6 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
     chords, heights = _chords_and_heights(p, reach, params.l_max, params.delta_max)
     # the grid samples the chord height (slightly low): plans are re-checked on the spline,
     # best first; the margin is tightened only if none passes
-    cands = []
     for margins in ((1.0, 0.997), (0.99, 0.97), (0.94, 0.9)):
         cands = []
         for margin in margins:
@@ -395,13 +394,14 @@ def _plan_adaptive(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
                 km = min(G, 3 * km)
                 found = _dp_candidates(curve, u_grid, chord, ok, budget, km)
             cands += found
-        for _, u in sorted(cands, key=lambda c: c[0]):
+        ranked = [u for _, u in sorted(cands, key=lambda c: c[0])]
+        for u in ranked:
             if _true_ok(curve, u, params):
                 return u
     # a feature sharper than the grid resolves (a corner of a few tenths of a millimetre): the
-    # best grid plans with the segments that fail on the spline split until they pass
-    split = [v for _, u in sorted(cands, key=lambda c: c[0])[:3]
-             if (v := _split_failing(curve, u, params)) is not None]
+    # best grid plans (of the loosest margins) with the segments that fail on the spline split
+    # until they pass
+    split = [v for u in ranked[:3] if (v := _split_failing(curve, u, params)) is not None]
     if split:
         u = min(split, key=len)
         log.warning("adaptive: no plan on the grid passes the spline check (a feature sharper "
@@ -416,10 +416,7 @@ def _split_failing(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
     """``u`` with every segment that fails the true chord-length or chord-height check split
     at its arc-length midpoint, round after round until all pass (None after ``rounds``)."""
     for _ in range(rounds):
-        u_next = np.roll(u, -1)
-        u_next[-1] += 1.0
-        bad = ((curve.chord_length(u, u_next) > params.l_max)
-               | (curve.chord_height(u, u_next) > params.delta_max))
+        bad = _failing(curve, u, params)
         if not bad.any():
             return u
         s = curve.arc_length(u)
@@ -450,11 +447,16 @@ def _dp_candidates(curve, u_grid, chord, ok, budget, k_max) -> list:
     return out
 
 
-def _true_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams) -> bool:
+def _failing(curve: EdgeCurve, u: np.ndarray, params: PlannerParams) -> np.ndarray:
+    """(N,) which segments of the closed plan ``u`` fail L_max or the true chord height."""
     u_next = np.roll(u, -1)
     u_next[-1] += 1.0
-    return bool((curve.chord_length(u, u_next) <= params.l_max).all()
-                and (curve.chord_height(u, u_next) <= params.delta_max).all())
+    return ((curve.chord_length(u, u_next) > params.l_max)
+            | (curve.chord_height(u, u_next) > params.delta_max))
+
+
+def _true_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams) -> bool:
+    return not _failing(curve, u, params).any()
 
 
 def _neighbour_cv(curve: EdgeCurve, u: np.ndarray) -> float:
