@@ -115,3 +115,76 @@ def test_map_tasks_runs_failed_tasks_here_and_does_not_wait_for_a_warm_up():
         assert out == [0, -1, -2]
     finally:
         parallel.shutdown_pool(kill=True)
+
+
+def test_a_worker_gets_its_next_task_while_this_process_is_busy(tmp_path):
+    """map_tasks feeds the workers from a thread: a worker that finishes a task gets the next
+    one at once, not when this process ends its own. Here this process's first task waits for
+    the worker to have done every other task (each touches a file); fed only between this
+    process's tasks, the worker would do one and the wait would time out."""
+    import time
+    from pathlib import Path
+
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    files = [tmp_path / f"task{k}" for k in range(5)]
+    ran_here = []
+
+    def here(k):
+        ran_here.append(k)
+        deadline = time.monotonic() + 60.0
+        while k == 0 and not all(f.exists() for f in files[1:]):
+            assert time.monotonic() < deadline, "the worker was not fed while this task ran"
+            time.sleep(0.05)
+        return f"here {k}"
+
+    try:
+        out = parallel.map_tasks(5, here, lambda k: (Path.touch, (files[k],)), 2)
+    finally:
+        parallel.shutdown_pool(kill=True)
+    assert ran_here == [0]
+    assert out == ["here 0", None, None, None, None]
+    assert all(f.exists() for f in files[1:]) and not files[0].exists()
+
+
+def test_a_task_only_this_process_runs():
+    """remote(k) None: task k is never sent (here a worker could not run it); the others may
+    be, and every result comes back in order."""
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    try:
+        out = parallel.map_tasks(3, lambda k: ("here", k),
+                                 lambda k: None if k == 2 else (divmod, (k, 1)), 2)
+    finally:
+        parallel.shutdown_pool(kill=True)
+    assert out[2] == ("here", 2)
+    assert out[0] in (("here", 0), (0, 0)) and out[1] in (("here", 1), (1, 0))
+
+
+def test_a_plans_cell_recipe_is_the_one_its_cell_records():
+    """verify starts its workers building the plan's cell from plan_cell_args before this
+    process builds it: the recipe must be the one the built cell records (the workers' cache
+    key), and a cell built by the warm-up (no fingerprint yet) is kept for the checked task."""
+    from types import SimpleNamespace
+
+    from drakedeburr.cell.recipe import plan_cell_args
+    from drakedeburr.cell.station import load_plan_cell
+    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+
+    X = np.eye(4)
+    X[:3, 3] = [0.001, -0.002, 0.0]  # as a placement search leaves it, in plan.json (lists)
+    plan = SimpleNamespace(scenario="tool_in_hand", hub="h5_straight", meta={
+        "hub_pose": X.tolist(), "q_home": [0.1, 0.2, 0.3, 0, 0.5, 0.0]})
+    cell = load_plan_cell(plan)
+    recipe = plan_cell_args(plan)
+
+    def key(r):
+        return repr(sorted((k, repr(v)) for k, v in r.items()))
+
+    assert key(recipe) == key(cell._cache["load_args"])
+    cache: dict = {}
+    warm, _ = worker_cell(recipe, None, cache, lambda c: "built")  # the warm-up
+    assert worker_cell(recipe, cell_fingerprint(cell), cache, lambda c: "again")[0] is warm
+    assert cell_fingerprint(warm) == cell_fingerprint(cell)

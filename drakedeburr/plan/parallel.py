@@ -22,7 +22,8 @@ import logging
 import os
 from collections.abc import Callable, Sequence
 
-__all__ = ["plan_all_windows", "map_tasks", "warm_pool", "worker_count", "shutdown_pool"]
+__all__ = ["plan_all_windows", "map_tasks", "warm_pool", "worker_count", "shutdown_pool",
+           "running_workers"]
 
 log = logging.getLogger(__name__)
 
@@ -96,15 +97,16 @@ def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) ->
     """In a worker: (the caller's cell, ``build(cell)``), kept in ``cache`` (one cell at a
     time) and built again when the kept cell's fingerprint is not the caller's (a model
     rewritten since). Raises RuntimeError when even a fresh build differs (the caller then
-    runs the task itself)."""
+    runs the task itself). ``fingerprint`` None (a warm-up before the caller has built its
+    cell): the kept or fresh cell, unchecked; every task checks it again."""
     from drakedeburr.cell.station import load_cell
 
     key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
     got = cache.get(key)
-    if got is None or cell_fingerprint(got[0]) != fingerprint:
+    if got is None or fingerprint not in (None, cell_fingerprint(got[0])):
         cache.clear()
         cell = load_cell(**recipe)
-        if cell_fingerprint(cell) != fingerprint:
+        if fingerprint not in (None, cell_fingerprint(cell)):
             raise RuntimeError("the worker's cell differs from the caller's")
         got = cache[key] = (cell, build(cell))
     return got
@@ -212,10 +214,16 @@ def _pool(size: int) -> list[_Worker]:
     return workers[:size]
 
 
+def running_workers() -> int:
+    """Worker processes of the pool running now."""
+    return sum(w.proc.poll() is None for w in _POOL.get("workers", []))
+
+
 def shutdown_pool(kill: bool = False) -> None:
-    """Stop the worker processes (started again when needed)."""
+    """Stop the worker processes (started again when needed); one still warming up
+    (:func:`warm_pool`) is killed, not waited for: it holds nothing but its cache."""
     for w in _POOL.pop("workers", []):
-        w.close(kill=kill)
+        w.close(kill=kill or w.task == _WARM)
 
 
 def _replay(records: list) -> None:
@@ -228,11 +236,13 @@ def _replay(records: list) -> None:
 _WARM = -1  # the task id of a warm-up (map_tasks drops its reply)
 
 
-def warm_pool(fn, args: tuple, workers: int | None = None) -> None:
+def warm_pool(fn, args: tuple, workers: int | None = None, start: bool = True) -> None:
     """Start the pool now (``workers`` as :func:`worker_count` with two tasks) and give each
     idle worker ``fn(*args)`` (build a cell, say), so that a later :func:`map_tasks` finds
-    them ready: a worker's start-up (~2 s) then overlaps this process's own work."""
-    for w in _pool(worker_count(workers, 2) - 1):
+    them ready: a worker's start-up (~2 s) then overlaps this process's own work.
+    ``start`` False: only the workers already running, none started."""
+    size = worker_count(workers, 2) - 1
+    for w in _pool(size) if start else _POOL.get("workers", [])[:size]:
         if w.task is None and w.proc.poll() is None:
             w.send(fn, args, _WARM)
 
@@ -247,33 +257,87 @@ def map_tasks(n: int, run_here: Callable[[int], object],
     worker fails (or cannot be sent) is run here instead, logged by ``name(k)``: the same
     result, since every task's result may depend only on its inputs. ``remote`` None: all
     here, in order. A worker's warm-up (:func:`warm_pool`) still running when the tasks are
-    done is not waited for. -> results in task order."""
+    done is not waited for. -> results in task order.
+
+    The workers are fed by a thread of this process (:func:`_feed`), so a worker that
+    finishes gets its next task at once, not when this process ends its own task; ``remote``
+    and ``done`` run in the calling thread. ``remote(k)`` None: task k runs only here."""
     size = worker_count(workers, n) - 1 if remote is not None else 0
     if size == 0:
         return [run_here(k) for k in range(n)]
-    import select
+    import collections
+    import queue
+    import threading
 
     pool = _pool(size)
+    sends = [remote(k) for k in range(n)]  # here: remote() may read this process's models
+    todo, lock = collections.deque(range(n)), threading.Lock()
+    replies: queue.Queue = queue.Queue()
+    stop = threading.Event()
+    feeder = threading.Thread(target=_feed, args=(pool, todo, lock, sends, replies, stop),
+                              name="drakedeburr-feed", daemon=True)
     results: dict[int, object] = {}
-    todo = list(range(n))
 
-    def submit() -> None:
+    def take(block: bool) -> None:  # the workers' replies so far (one at least if block)
+        while True:
+            try:
+                k, status, value = replies.get(block=block, timeout=None)
+            except queue.Empty:
+                return
+            if status == "ok":
+                log.debug("%s: done by a worker", name(k))
+                results[k] = value if done is None else done(k, value)
+            else:
+                log.warning("%s: worker failed (%s); running it here", name(k), value)
+                results[k] = run_here(k)
+            block = False
+
+    feeder.start()
+    try:
+        while True:
+            with lock:
+                k = todo.popleft() if todo else None  # this process from the front
+            if k is None:
+                break
+            results[k] = run_here(k)
+            take(block=False)
+        while len(results) < n:
+            take(block=True)
+    except BaseException:
+        stop.set()
+        feeder.join()
+        shutdown_pool(kill=True)  # the workers may be busy with tasks nobody waits for
+        raise
+    stop.set()
+    feeder.join()
+    return [results[k] for k in range(n)]
+
+
+def _feed(pool: list, todo, lock, sends: list, replies, stop) -> None:
+    """The feeder thread of :func:`map_tasks`: gives each idle worker the last task left
+    (``todo``, shared with the calling thread under ``lock``) and puts every reply to a task
+    it sent on ``replies`` as (task, "ok" | "error", value); a warm-up's reply is dropped (its
+    failure shows again on a real task). Ends when no worker is busy and none can take a task,
+    or on ``stop``."""
+    import select
+
+    while not stop.is_set():
         for w in pool:
-            if w.task is None and todo and w.proc.poll() is None:
-                k = todo.pop()  # workers from the back
+            if w.task is None and w.proc.poll() is None:
+                with lock:
+                    k = todo.pop() if todo and sends[todo[-1]] is not None else None
+                if k is None:
+                    break
                 try:
-                    w.send(*remote(k), k)
-                except OSError as exc:  # the worker is gone: this process runs the task
-                    log.warning("%s: worker unreachable (%s); running it here", name(k), exc)
+                    w.send(*sends[k], k)
+                except OSError as exc:  # the worker is gone: the caller runs the task
                     w.close(kill=True)
                     w.task = None
-                    todo.append(k)
-
-    def collect(timeout: float | None) -> None:
+                    replies.put((k, "error", f"worker unreachable ({exc})"))
         busy = {w.proc.stdout.fileno(): w for w in pool if w.task is not None}
         if not busy:
             return
-        ready, _, _ = select.select(list(busy), [], [], timeout)
+        ready, _, _ = select.select(list(busy), [], [], 0.05)
         for fd in ready:
             w = busy[fd]
             k = w.task
@@ -281,27 +345,8 @@ def map_tasks(n: int, run_here: Callable[[int], object],
                 status, value = w.receive()
             except (EOFError, OSError) as exc:
                 status, value = "error", f"the worker process ended ({exc})"
-            if k == _WARM:
-                continue  # a warm-up's reply (its failure shows again on a real task)
-            if status == "ok":
-                results[k] = value if done is None else done(k, value)
-            else:
-                log.warning("%s: worker failed (%s); running it here", name(k), value)
-                results[k] = run_here(k)
-
-    try:
-        submit()
-        while todo:
-            k = todo.pop(0)  # this process from the front
-            results[k] = run_here(k)
-            collect(0.0)
-            submit()
-        while any(w.task not in (None, _WARM) for w in pool):
-            collect(None)
-    except BaseException:
-        shutdown_pool(kill=True)  # the workers may be busy with tasks nobody waits for
-        raise
-    return [results[k] for k in range(n)]
+            if k != _WARM:
+                replies.put((k, status, value))
 
 
 def plan_all_windows(ctx, windows: Sequence, workers: int | None,
