@@ -34,6 +34,7 @@ from typing import Literal
 
 import numpy as np
 
+from drakedeburr.cell.recipe import cell_recipe
 from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
 from drakedeburr.resources import (
@@ -367,18 +368,10 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
 
 
 def load_plan_cell(plan) -> Cell:
-    """The cell a plan was made in: its scenario and hub, its arm, its hub placement and its
-    home (``plan.meta["robot"]``, ``["tool"]``, ``["hub_pose"]``, ``["q_home"]``)."""
-    meta = plan.meta or {}
-    pose, home = meta.get("hub_pose"), meta.get("q_home")
-    a = None if home is None else np.asarray(home, dtype=object)
-    if a is not None and not (a.shape == (6,) and all(
-            isinstance(v, int | float) and np.isfinite(v) for v in a)):
-        raise InputError(f"plan of {plan.hub}: meta q_home must be 6 finite joint angles [rad], "
-                         f"got {home!r}")
-    return load_cell(plan.scenario, plan.hub, robot=meta.get("robot"), tool=meta.get("tool"),
-                     hub_pose=None if pose is None else np.asarray(pose, float),
-                     q_home=None if a is None else a.astype(float))
+    """The cell a plan was made in (:func:`drakedeburr.cell.recipe.plan_cell_args`)."""
+    from drakedeburr.cell.recipe import plan_cell_args
+
+    return load_cell(**plan_cell_args(plan))
 
 
 def load_cell(
@@ -473,11 +466,9 @@ def load_cell(
         arr.setflags(write=False)
     _check_payload(cell)
     # how to build this cell again (a planner's worker process builds the same one)
-    cell._cache["load_args"] = dict(scenario=scenario, hub=hub, robot=robot, tool=tool,
-                                    time_step=time_step,
-                                    hub_pose=None if hub_pose is None else np.array(hub_pose,
-                                                                                    float),
-                                    q_home=None if q_home is None else np.array(q_home, float))
+    cell._cache["load_args"] = cell_recipe(scenario, hub, robot=robot, tool=tool,
+                                           time_step=time_step, hub_pose=hub_pose,
+                                           q_home=q_home)
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
               hub_sdf, arm.name)
     return cell

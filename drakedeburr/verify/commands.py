@@ -235,6 +235,9 @@ def _run_verify(args: argparse.Namespace) -> int:
         check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
         config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
+        from drakedeburr.verify.sweep import warm_workers_for_plan
+
+        warm_workers_for_plan(plan)  # the sweep's workers start while this process samples
     else:
         scenario, hub = rest
         _check_outputs(args, kind, None)
@@ -266,13 +269,19 @@ def _run_verify(args: argparse.Namespace) -> int:
         items = (*report.items, _program_item(plan, program))
         report = replace(report, items=items,
                          passed=all(i.passed for i in items if i.required))
+    written = ()
     if folder is not None:
-        for path in write_report_files(report, folder, plan=plan, replay=not args.no_replay,
-                                       cell=cell):
+        written = write_report_files(report, folder, plan=plan, replay=not args.no_replay,
+                                     cell=cell)
+        for path in written:
             log.info("wrote %s", path)
     if args.json:
         write_report_json(report, args.json)
-    if args.html:
+    if args.html and written:  # the page just written into the folder: not drawn again
+        from drakedeburr._io import atomic_write_text
+
+        atomic_write_text(Path(args.html), written[1].read_text())
+    elif args.html:
         from drakedeburr.verify.html import meshcat_replay_html, write_report_html
 
         write_report_html(report, args.html,

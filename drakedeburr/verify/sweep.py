@@ -399,14 +399,26 @@ def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
         warm_pool(_warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
 
 
-def _worker_scene(recipe: dict, fingerprint: str) -> PairScene:
+def warm_workers_for_plan(plan, workers: int | None = None) -> None:
+    """Have the pool's idle workers start building the cell ``plan`` was made in and its pair
+    scene now, before this process has built that cell (a worker's start-up, ~2.5 s, then
+    overlaps this process's cell, sampling and program reading instead of the sweep). Each
+    part a worker reads later is still checked against this process's cell
+    (:func:`_part_in_worker`)."""
+    from drakedeburr.cell.recipe import plan_cell_args
+    from drakedeburr.plan.parallel import warm_pool
+
+    warm_pool(_warm_scene, (plan_cell_args(plan), None), workers)
+
+
+def _worker_scene(recipe: dict, fingerprint: str | None) -> PairScene:
     from drakedeburr.plan.parallel import worker_cell
     from drakedeburr.verify.distances import pair_scene_of
 
     return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
 
 
-def _warm_scene(recipe: dict, fingerprint: str) -> None:
+def _warm_scene(recipe: dict, fingerprint: str | None) -> None:
     _worker_scene(recipe, fingerprint)
 
 
@@ -418,6 +430,18 @@ def _part_in_worker(recipe: dict, fingerprint: str, digest: str, traj, t: np.nda
         raise RuntimeError("the worker's pair scene differs from the caller's")
     scene.use_tolerances(tol)
     return _sweep_part(scene, traj, t, q, tol), scene.tally
+
+
+def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep: Sweep, tol):
+    """A pool worker's task: the certificate of a sweep (:func:`drakedeburr.verify.certificate.
+    certify`) in the same cell -> (certificate, its reading tally)."""
+    from drakedeburr.verify.certificate import certify
+
+    scene = _worker_scene(recipe, fingerprint)
+    if scene.digest() != digest:
+        raise RuntimeError("the worker's pair scene differs from the caller's")
+    scene.use_tolerances(tol)
+    return certify(scene, traj, sweep, tol), scene.tally
 
 
 def _merge(scene: PairScene, t: np.ndarray, q: np.ndarray, parts: list, res: list) -> Sweep:
