@@ -156,3 +156,31 @@ def test_envelope_equals_a_bin_by_bin_reading():
         xr, yr = _envelope_by_bins(x, y, n)
         np.testing.assert_array_equal(xe, xr)
         np.testing.assert_array_equal(ye, yr)
+
+
+def test_figures_drawn_on_a_worker_are_the_figures_drawn_here(report_file, caplog):
+    """With a pool worker running, the report's figures are drawn there while this process
+    records the replay: the same SVG text as drawn here (deterministic, no date). Without a
+    running worker they are drawn here and no worker is started for them."""
+    import logging
+
+    from drakedeburr.plan import parallel
+
+    _, report = report_file
+    here = mut.report_figures(report)
+    assert list(here) == ["theta", "joints", "speed", "clearance", "deviation"]
+    assert all("<dc:date>" not in svg for svg in here.values())
+    plan = vs.good_plan()
+    cell, _ = vs.cell_and_hub()
+    parallel.shutdown_pool(kill=True)
+    try:
+        parallel._pool(1)
+        with caplog.at_level(logging.DEBUG, logger="drakedeburr.plan.parallel"):
+            figs, replay = mut.figures_and_replay(report, plan, cell, workers=2)
+    finally:
+        parallel.shutdown_pool(kill=True)
+    assert "the report's figures: done by a worker" in caplog.text
+    assert figs == here
+    assert replay is not None and "<html" in replay[:500].lower()
+    figs, replay = mut.figures_and_replay(report, plan, cell, workers=2)
+    assert figs == here and parallel.running_workers() == 0

@@ -115,6 +115,9 @@ def verify_plan(
         return _nothing_planned(plan, config, hub_model, expected_windows)
     sp = sample_plan(plan, config, cell=cell, hub_model=hub_model,
                      expected_windows=expected_windows, progress=progress)
+    from drakedeburr.verify.html import warm_plotting
+
+    warm_plotting()  # the sweep's workers are idle until the report's figures
     return verify_sampled(sp, config, elapsed=_time.perf_counter() - started)
 
 

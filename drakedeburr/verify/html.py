@@ -18,7 +18,8 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.units import mm_from_m, mm_s_from_m_s
 from drakedeburr.verify.report import VerificationReport, report_dict
 
-__all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html"]
+__all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html",
+           "figures_and_replay", "warm_plotting"]
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +28,7 @@ _KIND_NAMES = {0: "home", 1: "transition", 2: "approach", 3: "cut", 4: "retract"
 
 def _svg(fig) -> str:
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight")
+    fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})  # reproducible
     import matplotlib.pyplot as plt
 
     plt.close(fig)
@@ -68,8 +69,9 @@ def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, 
     return x[keep], ys
 
 
-def report_figures(report: VerificationReport) -> dict[str, str]:
-    """The report's plots as inline SVG strings, keyed by a short id.
+def report_figures(report: VerificationReport,
+                   which: tuple[str, ...] | None = None) -> dict[str, str]:
+    """The report's plots as inline SVG strings, keyed by a short id (``which``: only these).
 
     Ids: ``theta`` (theta_A/theta_B along each window's cut), ``joints`` (joint angles vs
     time), ``speed`` (TCP speed vs time), ``clearance`` (distances vs time), ``deviation``
@@ -81,13 +83,14 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     import matplotlib.pyplot as plt
 
     plt.rcParams["svg.hashsalt"] = "drakedeburr"  # deterministic SVG ids
-    s = report.series
-    if "t" not in s:  # no samples: nothing could be planned (the items say why)
+    if "t" not in report.series:  # no samples: nothing could be planned (the items say why)
         return {}
-    t = s["t"]
-    tol = report.settings["tolerances"]
-    out = {}
+    return {k: _svg(draw(report, plt)) for k, draw in _FIGURES.items()
+            if which is None or k in which}
 
+
+def _fig_theta(report: VerificationReport, plt):
+    s = report.series
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.2), sharey=True)
     cut = s["kind"] == 3
     for w in sorted(set(s["window"][cut].tolist())):
@@ -104,17 +107,24 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
         ax.set_title(f"{name} of the executed axis [rad]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    out["theta"] = _svg(fig)
+    return fig
 
+
+def _fig_joints(report: VerificationReport, plt):
+    s = report.series
     fig, ax = plt.subplots(figsize=(10, 3.2))
     for j in range(s["q"].shape[1]):
-        ax.plot(*_envelope(t, np.degrees(s["q"][:, j])), lw=1, label=f"J{j + 1}")
+        ax.plot(*_envelope(s["t"], np.degrees(s["q"][:, j])), lw=1, label=f"J{j + 1}")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("joint angle [deg]")
     ax.legend(ncol=6, fontsize=7)
     ax.grid(alpha=0.3)
-    out["joints"] = _svg(fig)
+    return fig
 
+
+def _fig_speed(report: VerificationReport, plt):
+    s, t, tol = report.series, report.series["t"], report.settings["tolerances"]
+    cut = s["kind"] == 3
     fig, ax = plt.subplots(figsize=(10, 3.2))
     ax.plot(*_envelope(t, s["speed"] * 1e3), lw=0.8, color="C0", label="TCP speed")
     v_g = report.settings.get("grinding_speed", 0.15)
@@ -127,10 +137,13 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     ax.set_ylabel("tool speed relative to the hub [mm/s]")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
-    out["speed"] = _svg(fig)
+    return fig
 
+
+def _fig_clearance(report: VerificationReport, plt):
+    s, t, tol = report.series, report.series["t"], report.settings["tolerances"]
     fig, ax = plt.subplots(figsize=(10, 3.2))
-    cap = report.settings["tolerances"]["query_distance"]
+    cap = tol["query_distance"]
     for key, label in (("clearance", "robot/tool to hub and cell"), ("self", "robot to itself"),
                        ("burr", "burr head to hub")):
         v = np.where(np.isfinite(s[key]), s[key], cap)
@@ -140,8 +153,11 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     ax.set_ylabel(f"signed distance [mm] (capped at {cap * 1e3:.0f})")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
-    out["clearance"] = _svg(fig)
+    return fig
 
+
+def _fig_deviation(report: VerificationReport, plt):
+    s, t, tol = report.series, report.series["t"], report.settings["tolerances"]
     fig, ax = plt.subplots(figsize=(10, 3.2))
     ax.plot(*_envelope(t, s["path_dev"] * 1e3), ".", ms=1.5, label="T vs program")
     ax.plot(*_envelope(t, s["edge_dev"] * 1e3), ".", ms=1.5, label="contact vs true edge")
@@ -151,8 +167,45 @@ def report_figures(report: VerificationReport) -> dict[str, str]:
     ax.set_ylabel("deviation [mm]")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
-    out["deviation"] = _svg(fig)
-    return out
+    return fig
+
+
+_FIGURES = {"theta": _fig_theta, "joints": _fig_joints, "speed": _fig_speed,
+            "clearance": _fig_clearance, "deviation": _fig_deviation}
+
+
+def figures_and_replay(report: VerificationReport, plan=None, cell=None,
+                       workers: int | None = None) -> tuple[dict[str, str], str | None]:
+    """(:func:`report_figures`, :func:`meshcat_replay_html` of ``plan`` or None without one),
+    made at once when a pool worker is running (:func:`drakedeburr.plan.parallel.map_tasks`;
+    ``workers`` as there): the figures there while this process records the replay; none is
+    started for them (a worker's start-up costs more than the figures). The same figures
+    wherever they are drawn (deterministic SVG)."""
+    from drakedeburr.plan.parallel import map_tasks, running_workers
+
+    if plan is None:
+        return report_figures(report), None
+    replay, figs = map_tasks(
+        2, lambda k: report_figures(report) if k else meshcat_replay_html(plan, cell),
+        lambda k: (report_figures, (report,)) if k else None,
+        workers if running_workers() else 1,
+        name=lambda k: "the report's figures" if k else "the Meshcat replay")
+    return figs, replay
+
+
+def warm_plotting(workers: int | None = None) -> None:
+    """Have the pool's idle running workers import matplotlib now (~0.3 s), so that
+    :func:`figures_and_replay` finds it loaded there; starts no worker."""
+    from drakedeburr.plan.parallel import warm_pool
+
+    warm_pool(_import_pyplot, (), workers, start=False)
+
+
+def _import_pyplot() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot  # noqa: F401
 
 
 def meshcat_replay_html(plan, cell=None, hub_model=None, *, fps: float = 20.0,
@@ -212,10 +265,12 @@ iframe { width: 100%; height: 600px; border: 1px solid #ccc; }
 """
 
 
-def report_html(report: VerificationReport, *, replay_html: str | None = None) -> str:
-    """The HTML page (see module docstring)."""
+def report_html(report: VerificationReport, *, replay_html: str | None = None,
+                figures: dict[str, str] | None = None) -> str:
+    """The HTML page (see module docstring); ``figures``: :func:`report_figures` of the
+    report when already made."""
     doc = report_dict(report)
-    figs = report_figures(report)
+    figs = report_figures(report) if figures is None else figures
     rows = []
     for it in report.items:
         cls = "pass" if it.passed else ("fail" if it.required else "adv")

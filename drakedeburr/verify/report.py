@@ -180,11 +180,11 @@ def write_report_files(report: VerificationReport, folder: str | Path, *, plan=N
     were. Returns their paths."""
     from drakedeburr._io import atomic_write_files
     from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
-    from drakedeburr.verify.html import meshcat_replay_html, report_html
+    from drakedeburr.verify.html import figures_and_replay, report_html
 
     folder = Path(folder)
-    html = report_html(report, replay_html=meshcat_replay_html(plan, cell)
-                       if plan is not None and replay else None)
+    figures, replay_html = figures_and_replay(report, plan if replay else None, cell)
+    html = report_html(report, replay_html=replay_html, figures=figures)
     written = atomic_write_files({folder / REPORT_HTML: html,
                                   folder / REPORT_FILE: report_json(report)})
     return written[1], written[0]
