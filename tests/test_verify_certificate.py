@@ -198,3 +198,37 @@ def test_a_plan_just_above_the_limit_is_refined_until_the_limit_is_proven():
     # the target: the limit while the smallest reading is within the gap above it
     assert resolution_target(c.observed, limit, config2.tolerances) == limit
     assert resolution_target(limit - 1e-6, limit, config2.tolerances) < limit - 1e-5
+
+
+def test_the_certificate_made_on_a_worker_is_the_one_made_here(caplog):
+    """verify makes the certificate on a pool worker (the sweep's, holding the same pair
+    scene) while this process reads the program and the cut geometry: on the grazing case
+    (refined intervals, a witness between two samples) every field is the one made here, and
+    the scene's reading tally (the method's counts) is the same."""
+    import logging
+
+    from drakedeburr.plan import parallel
+    from drakedeburr.verify.distances import pair_scene_of
+    from drakedeburr.verify.sweep import sweep
+
+    sp, config, _, _ = _grazing_case()
+    tol, traj = config.tolerances, sp.plan.trajectory
+    scene = pair_scene_of(sp.cell)
+    here = mut.certify(scene, traj, sweep(scene, traj, sp.samples.t, sp.samples.q, tol,
+                                          workers=1), tol)
+    counts = dict(scene.tally.counts)
+    assert here.refined > 0 and here.clearance.observed < tol.min_clearance
+    sw = sweep(scene, traj, sp.samples.t, sp.samples.q, tol, workers=1)  # a fresh tally
+    ran = []
+    parallel.shutdown_pool(kill=True)
+    try:
+        parallel._pool(1)
+        with caplog.at_level(logging.DEBUG, logger="drakedeburr.plan.parallel"):
+            there = mut.certify_alongside(scene, traj, sw, tol, lambda: ran.append("here"),
+                                          workers=2)
+    finally:
+        parallel.shutdown_pool(kill=True)
+    assert "the clearance certificate: done by a worker" in caplog.text
+    assert ran == ["here"]
+    assert there == here
+    assert scene.tally.counts == counts

@@ -40,7 +40,7 @@ from drakedeburr.verify.motion_bounds import (
 from drakedeburr.verify.pair_scene import CLEARANCE, SELF
 from drakedeburr.verify.sweep import class_limits, resolution_target
 
-__all__ = ["ClassCertificate", "ClearanceCertificate", "certify", "METHOD"]
+__all__ = ["ClassCertificate", "ClearanceCertificate", "certify", "certify_alongside", "METHOD"]
 
 METHOD = ("Lipschitz bound per pair: ball displacement from FK at both ends of each interval + "
           "h^2/8 x point acceleration bound (exact joint-rate bounds of the trajectory's "
@@ -295,7 +295,46 @@ def certify(scene, traj, sweep, tol) -> ClearanceCertificate:
             observed_pair=scene.pair_names(p_obs) if p_obs >= 0 else ("", ""),
             unresolved=tally.unresolved[c], unresolved_below_limit=tally.below[c])
     return ClearanceCertificate(clearance=out[CLEARANCE], self_distance=out[SELF],
-                                method=f"{METHOD}; {scene.tally.summary()}", gap=ref.gap,
+                                method=_method(scene), gap=ref.gap,
                                 share=ref.share, floor=ref.floor,
                                 sweep_readings=len(sweep.rec_pair), samples_posed=sweep.posed,
                                 refined=refined, refine_readings=ref.readings, depth=depth)
+
+
+def _method(scene) -> str:
+    return f"{METHOD}; {scene.tally.summary()}"
+
+
+def certify_alongside(scene, traj, sweep, tol, alongside=None,
+                      workers: int | None = None) -> ClearanceCertificate:
+    """:func:`certify`, made on a running pool worker (the sweep's: it holds the same pair
+    scene, checked by its digest; ``workers`` as :func:`drakedeburr.plan.parallel.map_tasks`)
+    while this process runs ``alongside()``; without a worker, ``alongside()`` then
+    :func:`certify` here. The same certificate either way: the worker's
+    readings are added to this scene's tally before the method is written."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks, running_workers
+
+    recipe = scene.cell._cache.get("load_args")
+    if alongside is None or recipe is None or not running_workers():
+        if alongside is not None:
+            alongside()
+        return certify(scene, traj, sweep, tol)
+    from drakedeburr.verify.sweep import certify_in_worker
+
+    def here(k: int):
+        return alongside() if k == 0 else certify(scene, traj, sweep, tol)
+
+    def remote(k: int):
+        lean = replace(sweep, X=np.empty((0,)))  # the poses (~30 MB): certify reads none
+        return None if k == 0 else (certify_in_worker, (
+            dict(recipe), cell_fingerprint(scene.cell), scene.digest(), traj, lean, tol))
+
+    def done(k: int, value):
+        cert, tally = value
+        scene.tally.merge(tally)
+        return replace(cert, method=_method(scene))
+
+    return map_tasks(2, here, remote, workers, done,
+                     name=lambda k: "the clearance certificate" if k else "alongside")[1]

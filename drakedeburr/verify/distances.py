@@ -170,7 +170,7 @@ def _measure_dense(cell, samples, tol, progress=None):
 
 
 def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
-                    trajectory=None, method: str = "tracked"):
+                    trajectory=None, method: str = "tracked", alongside=None):
     """Distances, the FK cross-check, the manipulability and the clearance certificate of the
     samples -> :class:`drakedeburr.verify.sampling.Distances` (module docstring).
 
@@ -181,8 +181,10 @@ def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
             ``2 * n_segments`` steps (the first half is the sampling).
         trajectory: the plan's joint trajectory (needed by ``"tracked"``).
         method: ``"tracked"`` (default) or ``"dense"`` (module docstring).
+        alongside: optional work of the caller's that needs no distance, run here after the
+            sweep, while a running pool worker makes the certificate (else before it).
     """
-    from drakedeburr.verify.certificate import certify
+    from drakedeburr.verify.certificate import certify_alongside
     from drakedeburr.verify.sampling import Distances
 
     def step(done, total, label="distances"):
@@ -190,6 +192,8 @@ def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
             progress(n_segments + int(n_segments * done / total), 2 * n_segments, label)
 
     if method == "dense":
+        if alongside is not None:
+            alongside()
         return _measure_dense(cell, samples, tol, step)
     if method != "tracked":
         raise ValueError(f"method must be 'tracked' or 'dense', got {method!r}")
@@ -199,7 +203,7 @@ def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
 
     scene = pair_scene_of(cell)
     sweep = run_sweep(scene, trajectory, samples.t, samples.q, tol, step)
-    certificate = certify(scene, trajectory, sweep, tol)
+    certificate = certify_alongside(scene, trajectory, sweep, tol, alongside)
     fb = cell.flange_frame
     manip = scene.tree.jacobian_det(sweep.X, int(fb.body().index()),
                                     fb.GetFixedPoseInBodyFrame().translation())

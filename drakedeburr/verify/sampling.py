@@ -357,16 +357,21 @@ def sample_plan(plan, config: Config, *, cell=None, hub_model=None,
     kin = VerifyKinematics(cell)
     samples = _samples(plan, kin, tol, progress)
     warm_workers(cell, len(samples))  # parts of the distance sweep go to them
-    program = read_program(plan, samples, tol)
     edge_of = {w.index: w for w in hub_model.windows}
     cut_windows = sorted({s.window_index for s in plan.segments if s.kind == "cut"})
     tool_paths = tool_paths_of(plan)
     refs: dict[int, WindowRef | None] = {
         w: window_ref(w, plan.targets, tool_paths.get(w), edge_of.get(w), config.process)
         for w in cut_windows}
+    read: dict = {}
+
+    def program_and_cut() -> None:  # needs no distance: made while the certificate is
+        read["program"] = program = read_program(plan, samples, tol)
+        read["cut"] = cut_geometry(plan, samples, program, refs, edge_of, cut_windows, tol)
+
     distances = measure_samples(cell, samples, tol, progress, len(plan.segments),
-                                trajectory=plan.trajectory)
-    cut = cut_geometry(plan, samples, program, refs, edge_of, cut_windows, config.tolerances)
+                                trajectory=plan.trajectory, alongside=program_and_cut)
+    program, cut = read["program"], read["cut"]
     return SampledPlan(
         plan=plan, config=config, cell=cell, kin=kin, limits=JointLimits.of_cell(cell),
         hub_model=hub_model, expected_windows=windows,
