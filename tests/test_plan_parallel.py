@@ -188,3 +188,17 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     warm, _ = worker_cell(recipe, None, cache, lambda c: "built")  # the warm-up
     assert worker_cell(recipe, cell_fingerprint(cell), cache, lambda c: "again")[0] is warm
     assert cell_fingerprint(warm) == cell_fingerprint(cell)
+
+
+def test_a_task_that_cannot_be_sent_runs_here():
+    """A task whose arguments cannot be pickled is run here (the worker, which may hold half
+    of it, is stopped), and the call returns every result instead of waiting forever."""
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    try:
+        out = parallel.map_tasks(3, lambda k: ("here", k),
+                                 lambda k: (divmod, (lambda: 0, 1)), 2)
+    finally:
+        parallel.shutdown_pool(kill=True)
+    assert out == [("here", 0), ("here", 1), ("here", 2)]

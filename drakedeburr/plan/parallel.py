@@ -281,8 +281,16 @@ def map_tasks(n: int, run_here: Callable[[int], object],
     def take(block: bool) -> None:  # the workers' replies so far (one at least if block)
         while True:
             try:
-                k, status, value = replies.get(block=block, timeout=None)
+                k, status, value = replies.get(block=block, timeout=0.5 if block else None)
             except queue.Empty:
+                if block and not feeder.is_alive() and replies.empty():
+                    lost = [k for k in range(n) if k not in results]  # the feeder died
+                    for k in lost:
+                        log.warning("%s: no worker reply; running it here", name(k))
+                        results[k] = run_here(k)
+                    return
+                if block:
+                    continue
                 return
             if status == "ok":
                 log.debug("%s: done by a worker", name(k))
@@ -334,6 +342,10 @@ def _feed(pool: list, todo, lock, sends: list, replies, stop) -> None:
                     w.close(kill=True)
                     w.task = None
                     replies.put((k, "error", f"worker unreachable ({exc})"))
+                except Exception as exc:  # not picklable, say: the caller runs the task
+                    w.close(kill=True)  # its input may hold half a task
+                    w.task = None
+                    replies.put((k, "error", f"could not be sent ({exc})"))
         busy = {w.proc.stdout.fileno(): w for w in pool if w.task is not None}
         if not busy:
             return
