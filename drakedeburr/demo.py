@@ -144,9 +144,9 @@ def _check_args(args: argparse.Namespace) -> None:
         get_robot(args.robot)
     from drakedeburr.plan.io import is_plan_folder
 
-    argcheck.output_folder(args.out, "--out")
-    argcheck.output_folder(Path(args.out) / "plan", "--out", is_ours=is_plan_folder)
-    argcheck.free_space(args.out, 8_000_000, "--out")
+    argcheck.output_folder(args.out, "-o/--out")
+    argcheck.output_folder(Path(args.out) / "plan", "-o/--out", is_ours=is_plan_folder)
+    argcheck.free_space(args.out, 8_000_000, "-o/--out")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -173,7 +173,7 @@ def register(subparsers) -> None:
     p.add_argument("--hub", default=None, help="bundled hub name (default: the default hub)")
     p.add_argument("--scenario", default=DEFAULT_SCENARIO,
                    help="bundled scenario or YAML path (default %(default)s)")
-    p.add_argument("--out", default="out/demo", help="output folder (default %(default)s)")
+    p.add_argument("-o", "--out", default="out/demo", help="output folder (default %(default)s)")
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
     p.add_argument("--format", default=None, choices=("rapid", "krl", "ls"),

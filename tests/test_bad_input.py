@@ -283,6 +283,7 @@ CASES = [
     C("show tool_in_hand --hub missing --html s.html", 2, ("missing",)),
     C("show tool_in_hand --html adir", 2, ("adir", "--html")),
     C("demo --out afile --test-mode", 2, ("afile", "folder is needed")),
+    C("demo -o afile --test-mode", 2, ("afile", "-o/--out", "folder is needed")),
     C("demo --out d --hub missing --test-mode", 2, ("missing",)),
     C("demo --out d --robot bogus --test-mode", 2, ("bogus", "irb1600")),
 ]
