@@ -49,7 +49,10 @@ def test_gate_passes_the_verified_plan_and_its_program_carries_the_plan(verified
     # the program read back is the plan's, move by move (speeds, zones, poses, configuration)
     copy = tmp_path / "copy"
     shutil.copytree(verified, copy)
-    main(["-q", "verify", str(copy), "--quick", "--no-replay", "--program", str(out)])
+    page = tmp_path / "page.html"  # --html: the page written into the plan folder, copied
+    main(["-q", "verify", str(copy), "--quick", "--no-replay", "--program", str(out),
+          "--html", str(page)])
+    assert page.read_bytes() == (copy / "report.html").read_bytes()
     report = json.loads((copy / "report.json").read_text())
     item = next(i for i in report["items"] if i["name"] == "program_file")
     assert item["passed"] and item["required"], item["detail"]

@@ -148,19 +148,35 @@ def test_a_worker_gets_its_next_task_while_this_process_is_busy(tmp_path):
     assert all(f.exists() for f in files[1:]) and not files[0].exists()
 
 
-def test_a_task_only_this_process_runs():
-    """remote(k) None: task k is never sent (here a worker could not run it); the others may
-    be, and every result comes back in order."""
+def test_a_task_only_this_process_runs(tmp_path):
+    """remote(k) None: task k is never sent; the worker still gets the tasks before it (the
+    last sendable one first), and every result comes back in order. This process's first
+    task waits for the worker to have done tasks 1 and 2."""
+    import time
+    from pathlib import Path
+
     from drakedeburr.plan import parallel
+
+    files = [tmp_path / f"task{k}" for k in range(4)]
+    ran_here = []
+
+    def here(k):
+        ran_here.append(k)
+        deadline = time.monotonic() + 60.0
+        while k == 0 and not (files[1].exists() and files[2].exists()):
+            assert time.monotonic() < deadline, "the tasks before the last were not sent"
+            time.sleep(0.05)
+        return ("here", k)
 
     parallel.shutdown_pool(kill=True)
     try:
-        out = parallel.map_tasks(3, lambda k: ("here", k),
-                                 lambda k: None if k == 2 else (divmod, (k, 1)), 2)
+        out = parallel.map_tasks(4, here, lambda k: None if k == 3 else (Path.touch, (
+            files[k],)), 2)
     finally:
         parallel.shutdown_pool(kill=True)
-    assert out[2] == ("here", 2)
-    assert out[0] in (("here", 0), (0, 0)) and out[1] in (("here", 1), (1, 0))
+    assert ran_here == [0, 3]
+    assert out == [("here", 0), None, None, ("here", 3)]
+    assert not files[3].exists()
 
 
 def test_a_plans_cell_recipe_is_the_one_its_cell_records():
@@ -190,15 +206,55 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     assert cell_fingerprint(warm) == cell_fingerprint(cell)
 
 
-def test_a_task_that_cannot_be_sent_runs_here():
-    """A task whose arguments cannot be pickled is run here (the worker, which may hold half
-    of it, is stopped), and the call returns every result instead of waiting forever."""
+def test_a_task_that_cannot_be_sent_runs_here(caplog):
+    """A task whose arguments cannot be pickled (pickled in the calling thread, before any is
+    sent) is run here with a warning; the worker stays up."""
+    import logging
+
     from drakedeburr.plan import parallel
 
     parallel.shutdown_pool(kill=True)
     try:
-        out = parallel.map_tasks(3, lambda k: ("here", k),
-                                 lambda k: (divmod, (lambda: 0, 1)), 2)
+        with caplog.at_level(logging.WARNING, logger="drakedeburr.plan.parallel"):
+            out = parallel.map_tasks(3, lambda k: ("here", k),
+                                     lambda k: (divmod, (lambda: 0, 1)), 2)
+        assert parallel.running_workers() == 1
     finally:
         parallel.shutdown_pool(kill=True)
     assert out == [("here", 0), ("here", 1), ("here", 2)]
+    assert caplog.text.count("cannot be sent to a worker") == 3
+
+
+#: run by a worker (builtins.exec): half a pickled reply on the caller's stream, then death
+HALF_A_REPLY = """
+import os, pickle, sys
+out = sys.modules["__main__"].STATE["out"]
+data = pickle.dumps(("ok", list(range(100000))))
+out.write(data[:len(data) // 2])
+out.flush()
+os._exit(17)
+"""
+
+
+def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog):
+    """A worker killed while writing its reply (a truncated pickle, not an EOF): the task runs
+    here with a warning, that worker is stopped and no worker is left holding a task of the
+    first call; the second call gets only its own results."""
+    import logging
+    import time
+
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    try:
+        with caplog.at_level(logging.WARNING, logger="drakedeburr.plan.parallel"):
+            out = parallel.map_tasks(3, lambda k: ("here", k), lambda k: (
+                exec, (HALF_A_REPLY, {})) if k == 2 else (time.sleep, (1.0,)), 3)
+        assert "could not be read" in caplog.text
+        assert out[2] == ("here", 2) and out[0] == ("here", 0) and out[1] in (None,
+                                                                            ("here", 1))
+        assert all(w.task is None for w in parallel._POOL.get("workers", []))
+        out = parallel.map_tasks(3, lambda k: ("again", k), lambda k: (abs, (-k,)), 3)
+        assert all(v in (("again", k), k) for k, v in enumerate(out)), out  # no stale reply
+    finally:
+        parallel.shutdown_pool(kill=True)

@@ -206,6 +206,7 @@ def test_the_certificate_made_on_a_worker_is_the_one_made_here(caplog):
     (refined intervals, a witness between two samples) every field is the one made here, and
     the scene's reading tally (the method's counts) is the same."""
     import logging
+    import time
 
     from drakedeburr.plan import parallel
     from drakedeburr.verify.distances import pair_scene_of
@@ -224,8 +225,8 @@ def test_the_certificate_made_on_a_worker_is_the_one_made_here(caplog):
     try:
         parallel._pool(1)
         with caplog.at_level(logging.DEBUG, logger="drakedeburr.plan.parallel"):
-            there = mut.certify_alongside(scene, traj, sw, tol, lambda: ran.append("here"),
-                                          workers=2)
+            there = mut.certify_alongside(  # alongside lasts: the worker takes its task
+                scene, traj, sw, tol, lambda: (ran.append("here"), time.sleep(1.0)), workers=2)
     finally:
         parallel.shutdown_pool(kill=True)
     assert "the clearance certificate: done by a worker" in caplog.text

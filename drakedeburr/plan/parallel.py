@@ -176,18 +176,27 @@ class _Worker:
         self.task: int | None = None
 
     def send(self, fn, args: tuple, task: int) -> None:
-        import pickle
+        self.send_bytes(_task_bytes(fn, args), task)
 
-        pickle.dump((fn, args), self.proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+    def send_bytes(self, data: bytes, task: int) -> None:
+        """A task pickled by :func:`_task_bytes`."""
+        self.proc.stdin.write(data)
         self.proc.stdin.flush()
         self.task = task
 
     def receive(self):
-        """("ok", result) or ("error", message); raises EOFError when the process died."""
+        """("ok", result) or ("error", message); a reply that cannot be read (the process
+        died, or was killed while writing it) is an error, and the worker is stopped: its pipe
+        may still hold the rest of that reply."""
         import pickle
 
         self.task = None
-        return pickle.load(self.proc.stdout)
+        try:
+            return pickle.load(self.proc.stdout)
+        except Exception as exc:  # EOFError, a truncated pickle, a closed pipe
+            self.close(kill=True)
+            return "error", f"the worker's reply could not be read ({type(exc).__name__}: {exc})"
+
 
     def close(self, kill: bool = False) -> None:
         try:
@@ -198,6 +207,12 @@ class _Worker:
             self.proc.wait(timeout=None if not kill else 10)
         except (OSError, ValueError):
             pass
+
+
+def _task_bytes(fn, args: tuple) -> bytes:
+    import pickle
+
+    return pickle.dumps((fn, args), protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def _pool(size: int) -> list[_Worker]:
@@ -270,7 +285,7 @@ def map_tasks(n: int, run_here: Callable[[int], object],
     import threading
 
     pool = _pool(size)
-    sends = [remote(k) for k in range(n)]  # here: remote() may read this process's models
+    sends = [_sendable(remote, k, name) for k in range(n)]  # pickled here, now
     todo, lock = collections.deque(range(n)), threading.Lock()
     replies: queue.Queue = queue.Queue()
     stop = threading.Event()
@@ -292,7 +307,9 @@ def map_tasks(n: int, run_here: Callable[[int], object],
                 if block:
                     continue
                 return
-            if status == "ok":
+            if k in results or not 0 <= k < n:  # cannot come from this call: dropped
+                log.warning("a worker's reply to no task of this call was dropped")
+            elif status == "ok":
                 log.debug("%s: done by a worker", name(k))
                 results[k] = value if done is None else done(k, value)
             else:
@@ -321,31 +338,64 @@ def map_tasks(n: int, run_here: Callable[[int], object],
     return [results[k] for k in range(n)]
 
 
+def _sendable(remote: Callable[[int], tuple | None], k: int, name) -> bytes | None:
+    """Task ``k`` pickled in the calling thread (its arguments as they are now), or None when
+    it runs only here (``remote(k)`` None, or it cannot be pickled: logged)."""
+    task = remote(k)
+    if task is None:
+        return None
+    try:
+        return _task_bytes(*task)
+    except Exception as exc:  # not picklable: the caller runs it
+        log.warning("%s cannot be sent to a worker (%s); running it here", name(k), exc)
+        return None
+
+
 def _feed(pool: list, todo, lock, sends: list, replies, stop) -> None:
-    """The feeder thread of :func:`map_tasks`: gives each idle worker the last task left
-    (``todo``, shared with the calling thread under ``lock``) and puts every reply to a task
-    it sent on ``replies`` as (task, "ok" | "error", value); a warm-up's reply is dropped (its
-    failure shows again on a real task). Ends when no worker is busy and none can take a task,
-    or on ``stop``."""
+    """The feeder thread of :func:`map_tasks`: gives each idle worker the last task left that
+    a worker may run (``todo``, shared with the calling thread under ``lock``; ``sends`` the
+    pickled tasks) and puts every reply to a task it sent on ``replies`` as (task, "ok" |
+    "error", value); a warm-up's reply is dropped (its failure shows again on a real task).
+    Ends when no worker is busy and none can take a task, or on ``stop``. Should it fail, the
+    workers busy with its tasks are stopped (their replies would otherwise reach a later
+    call) and those tasks reported as errors, so the caller runs them."""
+    try:
+        _feed_loop(pool, todo, lock, sends, replies, stop)
+    except BaseException as exc:
+        log.error("the worker feeder failed (%s: %s); the tasks it had sent run here",
+                  type(exc).__name__, exc)
+        for w in pool:
+            if w.task not in (None, _WARM):
+                replies.put((w.task, "error", "the worker feeder failed"))
+            if w.task is not None:
+                w.close(kill=True)
+                w.task = None
+
+
+def _next_sendable(todo, sends: list) -> int | None:
+    for k in reversed(todo):
+        if sends[k] is not None:
+            todo.remove(k)
+            return k
+    return None
+
+
+def _feed_loop(pool: list, todo, lock, sends: list, replies, stop) -> None:
     import select
 
     while not stop.is_set():
         for w in pool:
             if w.task is None and w.proc.poll() is None:
                 with lock:
-                    k = todo.pop() if todo and sends[todo[-1]] is not None else None
+                    k = _next_sendable(todo, sends)
                 if k is None:
                     break
                 try:
-                    w.send(*sends[k], k)
+                    w.send_bytes(sends[k], k)
                 except OSError as exc:  # the worker is gone: the caller runs the task
                     w.close(kill=True)
                     w.task = None
                     replies.put((k, "error", f"worker unreachable ({exc})"))
-                except Exception as exc:  # not picklable, say: the caller runs the task
-                    w.close(kill=True)  # its input may hold half a task
-                    w.task = None
-                    replies.put((k, "error", f"could not be sent ({exc})"))
         busy = {w.proc.stdout.fileno(): w for w in pool if w.task is not None}
         if not busy:
             return
@@ -353,10 +403,7 @@ def _feed(pool: list, todo, lock, sends: list, replies, stop) -> None:
         for fd in ready:
             w = busy[fd]
             k = w.task
-            try:
-                status, value = w.receive()
-            except (EOFError, OSError) as exc:
-                status, value = "error", f"the worker process ended ({exc})"
+            status, value = w.receive()
             if k != _WARM:
                 replies.put((k, status, value))
 

@@ -12,9 +12,12 @@ import os
 import pickle
 import sys
 
+#: the stream the replies go to (kept here so that a test can write a broken reply)
+STATE: dict = {}
+
 
 def main() -> None:
-    stream_out = os.fdopen(os.dup(1), "wb")
+    stream_out = STATE["out"] = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)  # stray output to stderr
     sys.stdout = sys.stderr
     stream_in = sys.stdin.buffer

@@ -235,9 +235,6 @@ def _run_verify(args: argparse.Namespace) -> int:
         check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
         config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
-        from drakedeburr.verify.sweep import warm_workers_for_plan
-
-        warm_workers_for_plan(plan)  # the sweep's workers start while this process samples
     else:
         scenario, hub = rest
         _check_outputs(args, kind, None)
@@ -245,6 +242,10 @@ def _run_verify(args: argparse.Namespace) -> int:
 
         scenario_path(scenario)
     program = _read_program_file(args.program)
+    if kind == "plan" and len(plan.trajectory.t) >= 2:
+        from drakedeburr.verify.sweep import warm_workers_for_plan
+
+        warm_workers_for_plan(plan)  # the sweep's workers start while this process samples
     if kind != "plan":
         if Path(hub).suffix.lower() in MESH_TARGET_SUFFIXES:
             from drakedeburr.errors import NoCuttableWindow
@@ -278,9 +279,10 @@ def _run_verify(args: argparse.Namespace) -> int:
     if args.json:
         write_report_json(report, args.json)
     if args.html and written:  # the page just written into the folder: not drawn again
-        from drakedeburr._io import atomic_write_text
+        from drakedeburr._io import atomic_write_bytes
+        from drakedeburr.verify.gate import REPORT_HTML
 
-        atomic_write_text(Path(args.html), written[1].read_text())
+        atomic_write_bytes(Path(args.html), (folder / REPORT_HTML).read_bytes())
     elif args.html:
         from drakedeburr.verify.html import meshcat_replay_html, write_report_html
 

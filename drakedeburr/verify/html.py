@@ -69,24 +69,23 @@ def _envelope(x: np.ndarray, y: np.ndarray, n: int = 2000) -> tuple[np.ndarray, 
     return x[keep], ys
 
 
-def report_figures(report: VerificationReport,
-                   which: tuple[str, ...] | None = None) -> dict[str, str]:
-    """The report's plots as inline SVG strings, keyed by a short id (``which``: only these).
+def report_figures(report: VerificationReport) -> dict[str, str]:
+    """The report's plots as inline SVG strings, keyed by a short id.
 
     Ids: ``theta`` (theta_A/theta_B along each window's cut), ``joints`` (joint angles vs
     time), ``speed`` (TCP speed vs time), ``clearance`` (distances vs time), ``deviation``
-    (path and edge deviation vs time).
+    (path and edge deviation vs time). Drawn in matplotlib's default style whatever the
+    process set (a notebook's, say), so the same in any process.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    plt.rcParams["svg.hashsalt"] = "drakedeburr"  # deterministic SVG ids
     if "t" not in report.series:  # no samples: nothing could be planned (the items say why)
         return {}
-    return {k: _svg(draw(report, plt)) for k, draw in _FIGURES.items()
-            if which is None or k in which}
+    with plt.style.context("default"), plt.rc_context({"svg.hashsalt": "drakedeburr"}):
+        return {k: _svg(draw(report, plt)) for k, draw in _FIGURES.items()}  # stable SVG ids
 
 
 def _fig_theta(report: VerificationReport, plt):
