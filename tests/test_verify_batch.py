@@ -63,3 +63,22 @@ def test_hub_folders_and_errors(tmp_path):
     row = mut.run_job(mut.BatchJob("tool_in_hand", "no_such_hub", str(tmp_path / "x"),
                                    planner="reference"))
     assert row["error"] and not row["passed"]
+
+
+def test_a_cluster_job_plans_and_verifies_in_its_own_process(tmp_path, monkeypatch):
+    """verify-all on a Dask cluster runs each job with one_process: no pool of worker
+    processes, whatever the cluster worker's environment (its threads would otherwise share
+    one pool); a job without it may use the cores."""
+    import os
+
+    from drakedeburr.plan import parallel
+
+    parallel.shutdown_pool(kill=True)
+    monkeypatch.delenv("DRAKEDEBURR_WORKERS")
+    assert parallel.worker_count(None, 5) == min(5, len(os.sched_getaffinity(0)))
+    job = mut.BatchJob(scenario="tool_in_hand", hub=HUBS[0], out_dir=str(tmp_path / "j"),
+                       planner="reference", windows=(0,), quick=True, grinding_speed=0.075,
+                       one_process=True)
+    row = mut.run_job(job)
+    assert row["error"] is None and row["passed"], row
+    assert os.environ["DRAKEDEBURR_WORKERS"] == "1" and parallel.running_workers() == 0

@@ -13,7 +13,7 @@ import json
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from drakedeburr._io import atomic_write_text
@@ -40,6 +40,9 @@ class BatchJob:
         grinding_speed: override of the process speed [m/s] (None: the hub's recipe).
         keep_failed_plans: write the plan folder (``<out_dir>/plan``) of a hub that fails, to
             look into it afterwards.
+        one_process: plan and verify in the process running the job, no pool of worker
+            processes (sets ``$DRAKEDEBURR_WORKERS`` to 1 there: a cluster's worker runs
+            several jobs at once, and a pool shared by their threads would mix their tasks).
     """
 
     scenario: str
@@ -52,6 +55,7 @@ class BatchJob:
     grinding_speed: float | None = None
     extra: dict = field(default_factory=dict)
     keep_failed_plans: bool = False
+    one_process: bool = False
 
 
 def hub_folders(root: str | Path) -> list[Path]:
@@ -95,6 +99,10 @@ def run_job(job: BatchJob) -> dict:
     row = {"scenario": Path(job.scenario).stem, "hub": Path(job.hub).name, "passed": False,
            "failed": [], "advisory_failed": [], "error": None}
     try:
+        if job.one_process:
+            import os
+
+            os.environ["DRAKEDEBURR_WORKERS"] = "1"  # for every job this process runs
         from drakedeburr.config import default_tolerances, load_config
 
         tol = default_tolerances(**QUICK_SAMPLING) if job.quick else None
@@ -185,7 +193,8 @@ def verify_all(
 
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
-            futures = client.map(run_job, jobs, pure=False)
+            futures = client.map(run_job, [replace(j, one_process=True) for j in jobs],
+                                 pure=False)
             for fut in as_completed(futures):
                 done(fut.result())
         finally:
