@@ -225,9 +225,11 @@ def test_a_task_that_cannot_be_sent_runs_here(caplog):
     assert caplog.text.count("cannot be sent to a worker") == 3
 
 
-#: run by a worker (builtins.exec): half a pickled reply on the caller's stream, then death
+#: run by a worker (builtins.exec, ``mark`` a path in its globals): marks that it runs, writes
+#: half a pickled reply on the caller's stream, then dies
 HALF_A_REPLY = """
 import os, pickle, sys
+open(mark, "w").close()
 out = sys.modules["__main__"].STATE["out"]
 data = pickle.dumps(("ok", list(range(100000))))
 out.write(data[:len(data) // 2])
@@ -236,23 +238,32 @@ os._exit(17)
 """
 
 
-def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog):
+def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog, tmp_path):
     """A worker killed while writing its reply (a truncated pickle, not an EOF): the task runs
-    here with a warning, that worker is stopped and no worker is left holding a task of the
-    first call; the second call gets only its own results."""
+    here with a warning, that worker is stopped and holds no task of the first call; the
+    second call gets only its own results. This process's task waits for the worker's to
+    have started."""
     import logging
     import time
 
     from drakedeburr.plan import parallel
 
+    mark = tmp_path / "started"
+
+    def here(k):
+        deadline = time.monotonic() + 60.0
+        while k == 0 and not mark.exists():
+            assert time.monotonic() < deadline, "the worker never started its task"
+            time.sleep(0.05)
+        return ("here", k)
+
     parallel.shutdown_pool(kill=True)
     try:
         with caplog.at_level(logging.WARNING, logger="drakedeburr.plan.parallel"):
-            out = parallel.map_tasks(3, lambda k: ("here", k), lambda k: (
-                exec, (HALF_A_REPLY, {})) if k == 2 else (time.sleep, (1.0,)), 3)
+            out = parallel.map_tasks(2, here, lambda k: (exec, (HALF_A_REPLY, {
+                "mark": str(mark)})) if k == 1 else None, 2)
         assert "could not be read" in caplog.text
-        assert out[2] == ("here", 2) and out[0] == ("here", 0) and out[1] in (None,
-                                                                            ("here", 1))
+        assert out == [("here", 0), ("here", 1)]
         assert all(w.task is None for w in parallel._POOL.get("workers", []))
         out = parallel.map_tasks(3, lambda k: ("again", k), lambda k: (abs, (-k,)), 3)
         assert all(v in (("again", k), k) for k, v in enumerate(out)), out  # no stale reply
