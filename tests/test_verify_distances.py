@@ -75,6 +75,8 @@ def test_part_bounds_cover_every_sample_whatever_the_machine():
 def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
     """The parts read by a pool worker (another process that builds the same cell) give the
     sweep this process reads alone, array for array, and the same narrow-phase tally."""
+    import select
+
     import drakedeburr.plan.parallel as parallel
     import drakedeburr.verify.sweep as sweep_mod
 
@@ -97,7 +99,15 @@ def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
         return real_map(n, here, remote, workers, counted, **kw)
 
     monkeypatch.setattr(parallel, "map_tasks", spy)
+    # as `verify PLAN` does: the worker builds the plan's cell before this process has read
+    # anything (no fingerprint yet); every part it reads is checked against this cell
+    parallel.shutdown_pool(kill=True)
+    sweep_mod.warm_workers_for_plan(plan, workers=2)
+    worker = parallel._POOL["workers"][0]
+    assert worker.task == parallel._WARM
+    assert select.select([worker.proc.stdout], [], [], 300)[0]  # the warm-up is done
     two = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=2)
+    parallel.shutdown_pool(kill=True)
     assert from_worker  # at least one part came back from the worker
     assert dict(scene.tally.counts) == tally_one
     for f in ("best", "best_pair", "level", "lower", "delta", "e", "rec_sample", "rec_pair",
