@@ -226,7 +226,8 @@ def test_a_task_that_cannot_be_sent_runs_here(caplog):
 
 
 #: run by a worker (builtins.exec, ``mark`` a path in its globals): marks that it runs, writes
-#: half a pickled reply on the caller's stream, then dies
+#: half a pickled reply on the caller's stream (drakedeburr.plan.worker.STATE, the worker
+#: module running as __main__), then dies
 HALF_A_REPLY = """
 import os, pickle, sys
 open(mark, "w").close()
