@@ -34,7 +34,7 @@ from typing import Literal
 
 import numpy as np
 
-from drakedeburr.cell.recipe import cell_recipe
+from drakedeburr.cell.recipe import cell_recipe, plan_cell_args
 from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
 from drakedeburr.resources import (
@@ -369,8 +369,6 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
 
 def load_plan_cell(plan) -> Cell:
     """The cell a plan was made in (:func:`drakedeburr.cell.recipe.plan_cell_args`)."""
-    from drakedeburr.cell.recipe import plan_cell_args
-
     return load_cell(**plan_cell_args(plan))
 
 

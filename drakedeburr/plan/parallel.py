@@ -197,7 +197,6 @@ class _Worker:
             self.close(kill=True)
             return "error", f"the worker's reply could not be read ({type(exc).__name__}: {exc})"
 
-
     def close(self, kill: bool = False) -> None:
         try:
             if kill:
@@ -298,14 +297,13 @@ def map_tasks(n: int, run_here: Callable[[int], object],
             try:
                 k, status, value = replies.get(block=block, timeout=0.5 if block else None)
             except queue.Empty:
-                if block and not feeder.is_alive() and replies.empty():
-                    lost = [k for k in range(n) if k not in results]  # the feeder died
-                    for k in lost:
-                        log.warning("%s: no worker reply; running it here", name(k))
-                        results[k] = run_here(k)
+                if not block:
                     return
-                if block:
+                if feeder.is_alive() or not replies.empty():
                     continue
+                for k in [k for k in range(n) if k not in results]:  # the feeder ended
+                    log.warning("%s: no worker reply; running it here", name(k))
+                    results[k] = run_here(k)
                 return
             if k in results or not 0 <= k < n:  # cannot come from this call: dropped
                 log.warning("a worker's reply to no task of this call was dropped")

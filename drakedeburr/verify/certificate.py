@@ -327,9 +327,11 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
         return alongside() if k == 0 else certify(scene, traj, sweep, tol)
 
     def remote(k: int):
+        if k == 0:
+            return None
         lean = replace(sweep, X=np.empty((0,)))  # the poses (~30 MB): certify reads none
-        return None if k == 0 else (certify_in_worker, (
-            dict(recipe), cell_fingerprint(scene.cell), scene.digest(), traj, lean, tol))
+        return certify_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+                                   traj, lean, tol)
 
     def done(k: int, value):
         cert, tally = value

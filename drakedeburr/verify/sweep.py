@@ -425,10 +425,7 @@ def _warm_scene(recipe: dict, fingerprint: str | None) -> None:
 def _part_in_worker(recipe: dict, fingerprint: str, digest: str, traj, t: np.ndarray,
                     q: np.ndarray, tol):
     """A pool worker's task: one part read in the same cell -> (_Part, its reading tally)."""
-    scene = _worker_scene(recipe, fingerprint)
-    if scene.digest() != digest:
-        raise RuntimeError("the worker's pair scene differs from the caller's")
-    scene.use_tolerances(tol)
+    scene = _checked_scene(recipe, fingerprint, digest, tol)
     return _sweep_part(scene, traj, t, q, tol), scene.tally
 
 
@@ -437,11 +434,18 @@ def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep: 
     certify`) in the same cell -> (certificate, its reading tally)."""
     from drakedeburr.verify.certificate import certify
 
+    scene = _checked_scene(recipe, fingerprint, digest, tol)
+    return certify(scene, traj, sweep, tol), scene.tally
+
+
+def _checked_scene(recipe: dict, fingerprint: str, digest: str, tol) -> PairScene:
+    """In a worker: the caller's pair scene (refused when its digest differs), with the
+    tolerances set and a fresh reading tally."""
     scene = _worker_scene(recipe, fingerprint)
     if scene.digest() != digest:
         raise RuntimeError("the worker's pair scene differs from the caller's")
     scene.use_tolerances(tol)
-    return certify(scene, traj, sweep, tol), scene.tally
+    return scene
 
 
 def _merge(scene: PairScene, t: np.ndarray, q: np.ndarray, parts: list, res: list) -> Sweep:
