@@ -10,9 +10,14 @@ excepted), the joint speed (95 %) and acceleration (90 %) limits the planner tim
 plan's joints and path velocity at both ends of the stretch. The speed along the stretch is
 prescribed: 143 mm/s (inside the band) with a raised-cosine dip to 50 mm/s of a given width
 centred on the plan's slowest point (no dip: constant 143 mm/s). The result is re-checked
-densely with the cell's own FK and distance queries (not SNOPT's word): a profile is *held*
-when the tool stays within 0.05 mm of the path, the axis at most 2 mrad outside its cone, the
-clearance at least 1.98 mm and every joint acceleration within the model's limit.
+densely with the cell's own FK and distance queries (not SNOPT's word) against the verifier's
+own tolerances (``Tolerances``: the tool within ``path_deviation`` of the path, the axis inside
+its cone to ``cone_slack``, clearance at least ``min_clearance`` at every one of 1500 points,
+every joint acceleration within the model's limit): only then is a profile *held*. Where SNOPT's
+solution leaks between its constraints, the stretch is solved once more with the constraints
+twice as dense and the cone margin doubled. The looser verdict earlier versions printed (2 mrad
+outside the cone, 1.98 mm clearance allowed) is shown beside it: a figure built on it is not
+one a verified plan can reach.
 
 The narrowest dip held at each fillet is how much of the window a (locally) optimal joint path
 must still cut outside the band; it is evidence, not a proof (SNOPT is a local solver).
@@ -47,12 +52,16 @@ def _profile(s, v_hi, dip):
     return sg, t
 
 
-def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_points=24):
+def hold(cell, kin, checker, tol, s, q, p, cone_s, cones, half_angle, dip, targets,
+         control_points=24, constraint_step=1e-3, cone_margin=2e-3, position_tolerance=0.02e-3):
     """One KTO over the stretch (s, q, p: the plan's samples) with the prescribed profile;
-    returns (held, SNOPT success, max path deviation, least cone margin, least clearance,
-    largest acceleration ratio, seconds)."""
+    returns (held to the verifier's tolerances ``tol``, held to the looser criterion, SNOPT
+    success, max path deviation, least cone margin as the verifier reads the cone, least
+    clearance, largest acceleration ratio, seconds). ``targets``: the window's CL points in
+    program order and their cone axes, (K, 3) each."""
     from drakedeburr.plan.cut_path import axes_interp
     from drakedeburr.plan.fillets import FilletOptions, stretch_kto
+    from drakedeburr.plan.program_reading import cone_axes_on_moves
     from drakedeburr.verify.geometry import point_segment
 
     sg, tg = _profile(s, V_BAND, dip)
@@ -61,8 +70,9 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     res, traj = stretch_kto(
         cell, checker, s, q, p, axes_interp(cone_s, cones, s), half_angle, np.interp(s, sg, tg),
         amax, np.asarray(kin.v_max),
-        FilletOptions(control_points=control_points, acceleration_share=0.9, cone_margin=2e-3,
-                      iterations=500))
+        FilletOptions(control_points=control_points, acceleration_share=0.9,
+                      cone_margin=cone_margin, constraint_step=constraint_step, iterations=500,
+                      position_tolerance=position_tolerance))
     sec = time.perf_counter() - t0
     tt = np.linspace(traj.start_time(), traj.end_time(), 1500)
     Q = np.array([traj.value(t).ravel() for t in tt])
@@ -73,18 +83,38 @@ def hold(cell, kin, checker, s, q, p, cone_s, cones, half_angle, dip, control_po
     s_at = s[k] + f * np.diff(s)[k]
     axis = -X[:, :3, 2]
     ang = np.arccos(np.clip(np.sum(axes_interp(cone_s, cones, s_at) * axis, 1), -1, 1))
+    margin_interp = float(np.min(half_angle - ang))
+    # the cone as the verifier reads it: on the program's moves between the CL points
+    ang = np.arccos(np.clip(np.sum(cone_axes_on_moves(P, *targets) * axis, 1), -1, 1))
     margin = float(np.min(half_angle - ang))
-    clear = float(checker.min_distances(Q[::10], 0.01).min())
+    clear = float(checker.min_distances_along(Q, 0.01).min())
     acc = float(np.max(np.abs(Qdd) / amax))
     dmax = float(dev.max())
-    held = dmax <= 0.05e-3 and margin >= -2e-3 and clear >= 1.98e-3 and acc <= 1.0
-    return held, res.is_success(), dmax, margin, clear, acc, sec
+    strict = (dmax <= tol.path_deviation and margin >= -tol.cone_slack
+              and clear >= tol.min_clearance and acc <= 1.0)
+    loose = dmax <= 0.05e-3 and margin_interp >= -2e-3 and clear >= 1.98e-3 and acc <= 1.0
+    return strict, loose, res.is_success(), dmax, margin, clear, acc, sec
+
+
+def held_at(cell, kin, checker, tol, s, q, p, cone_s, cones, half_angle, dip, targets, **kw):
+    """:func:`hold`, solved once more with denser constraints and twice the cone margin where
+    the first solution holds only the looser criterion: (held, loosely held, cone margin)."""
+    strict, loose, *_, margin, _clear, _acc, _sec = hold(cell, kin, checker, tol, s, q, p,
+                                                         cone_s, cones, half_angle, dip,
+                                                         targets, **kw)
+    if loose and not strict:
+        strict, _loose, *_, margin, _clear, _acc, _sec = hold(
+            cell, kin, checker, tol, s, q, p, cone_s, cones, half_angle, dip, targets,
+            constraint_step=0.5e-3, cone_margin=4e-3, **kw)
+    return strict, loose, margin
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hub", default=None)
     ap.add_argument("--window", type=int, default=0)
+    ap.add_argument("--position-tolerance-mm", type=float, default=0.02,
+                    help="half-width of the tool point's box at each path constraint")
     args = ap.parse_args()
 
     from drakedeburr.cell.station import load_cell
@@ -98,7 +128,8 @@ def main() -> None:
     checker = ClearanceChecker(cell)
     wt = window_targets_for_hub(load_hub(hub_name), source="toolpath",
                                 windows=[args.window])[0]
-    plan = plan_windows(cell, [wt], load_config("tool_in_hand", hub_name))
+    cfg = load_config("tool_in_hand", hub_name)
+    plan = plan_windows(cell, [wt], cfg)
     seg = next(sg for sg in plan.segments if sg.kind == "cut")
     tr = plan.trajectory
     sel = (tr.t >= seg.t_range[0]) & (tr.t <= seg.t_range[1])
@@ -113,6 +144,8 @@ def main() -> None:
     order = np.argsort(at)
     cone_s = s[at[order]]
     cones = wt.cone_retract_H[np.array([x.cl_index for x in tg])[order]]
+    targets = (np.array([x.X_HT[:3, 3] for x in tg]),
+               wt.cone_retract_H[np.array([x.cl_index for x in tg])])
     L = s[-1]
     slow = (v < 0.95 * 0.150) & (s > 0.02) & (s < L - 0.02)
     runs = np.flatnonzero(np.diff(np.concatenate([[0], slow.astype(int), [0]])))
@@ -128,22 +161,27 @@ def main() -> None:
           f"cut {1e3 * L:.0f} mm, planner {100 * band:.0f} % in band\n")
     print("fillet mm   planner: slow mm  slowest mm/s | constant 143  dip 10 mm  dip 20 mm  "
           "dip 40 mm  -> narrowest dip held")
-    need, widths = 0.0, (None, 0.010, 0.020, 0.040)
+    need, need_loose, widths = 0.0, 0.0, (None, 0.010, 0.020, 0.040)
     for a, b in merged:
         c_i = a + int(np.argmin(v[a:b]))
         lo = np.searchsorted(s, max(s[c_i] - HALF_SPAN, 0.01))
         hi = np.searchsorted(s, min(s[c_i] + HALF_SPAN, L - 0.01))
-        cells, narrowest = [], None
+        cells, narrowest, loose_narrowest = [], None, None
         for width in widths:
             dip = None if width is None else (s[c_i], width, V_DIP)
-            held, ok, dmax, margin, clear, acc, sec = hold(
-                cell, kin, checker, s[lo:hi + 1], q[lo:hi + 1], p[lo:hi + 1], cone_s, cones,
-                wt.cone_half_angle, dip)
-            cells.append(f"{'held' if held else 'no'} ({1e3 * margin:+.0f} mrad)")
+            held, loose, margin = held_at(
+                cell, kin, checker, cfg.tolerances, s[lo:hi + 1], q[lo:hi + 1], p[lo:hi + 1],
+                cone_s, cones, wt.cone_half_angle, dip, targets,
+                position_tolerance=1e-3 * args.position_tolerance_mm)
+            loose_narrowest = (loose_narrowest if loose_narrowest is not None or not loose
+                               else (0.0 if width is None else width))
+            cells.append(f"{'held' if held else 'loose' if loose else 'no'} "
+                         f"({1e3 * margin:+.1f} mrad)")
             if held:
                 narrowest = 0.0 if width is None else width
                 break
         need += widths[-1] if narrowest is None else narrowest
+        need_loose += widths[-1] if loose_narrowest is None else loose_narrowest
         print(f"{1e3 * s[a]:5.0f}-{1e3 * s[b - 1]:3.0f}  {1e3 * (s[b - 1] - s[a]):14.0f}  "
               f"{1e3 * v[a:b].min():12.0f} | {'  '.join(cells)}  -> "
               f"{'none of these' if narrowest is None else f'{1e3 * narrowest:.0f} mm'}")
@@ -152,7 +190,8 @@ def main() -> None:
           f"fillet (counted as {1e3 * widths[-1]:.0f} mm where none of them was) and the "
           f"rest-to-rest ends ({1e3 * ends:.1f} mm): {1e3 * (need + ends):.0f} mm of "
           f"{1e3 * L:.0f} -> at most {100 * (1 - (need + ends) / L):.0f} % of this window in "
-          f"the band (planner: {100 * band:.0f} %)")
+          f"the band (planner: {100 * band:.0f} %); held only to the looser criterion: "
+          f"{100 * (1 - (need_loose + ends) / L):.0f} %")
 
 
 if __name__ == "__main__":
