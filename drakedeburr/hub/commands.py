@@ -163,7 +163,8 @@ def _run_import(args: argparse.Namespace) -> int:
         min_window_width=None if args.min_window_width_mm is None
         else m_from_mm(args.min_window_width_mm),
         window_reach=m_from_mm(args.window_reach_mm),
-        front_reach=m_from_mm(args.front_reach_mm), seed=args.seed)
+        front_reach=m_from_mm(args.front_reach_mm),
+        front_reach_far=m_from_mm(args.front_reach_far_mm), seed=args.seed)
     progress = None if args.no_progress else tqdm_progress(f"import {Path(args.mesh).name}")
     res = import_mesh(args.mesh, args.out, options=options, progress=progress)
     c = res.summary["collision"]
@@ -262,9 +263,11 @@ def register(subparsers) -> None:
     _add_front_and_burr(p)
     p.add_argument("--window-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
-    p.add_argument("--front-reach-mm", type=_NONNEGATIVE_MM, default=3.0,
+    p.add_argument("--front-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
                    help="how far a collision piece may stand proud of the surface seen from "
-                        "the front [mm]")
+                        "the front within 30 mm of a window, where the tool works [mm]")
+    p.add_argument("--front-reach-far-mm", type=_NONNEGATIVE_MM, default=3.0,
+                   help="the same further than 30 mm from every window [mm]")
     p.add_argument("--seed", type=_SEED, default=0, help="CoACD random seed, >= 0")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_import)

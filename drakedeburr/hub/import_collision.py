@@ -6,8 +6,9 @@
   down the wall, kept where they are outside the solid) is replaced by the hulls of the solid
   inside it cut in two at an offending probe's edge point (across the edge, else along the
   wall plane, else across the longest extent), round after round. The same for pieces standing
-  more than ``front_reach`` proud of the surface seen from the front (probes on a plan-view
-  grid; cut circumferentially, else radially).
+  more than ``front_reach`` proud of the surface seen from the front within ``front_band`` of
+  a window (``front_reach_far`` further out; probes on a plan-view grid; cut
+  circumferentially, else radially).
 * **Open meshes** (not watertight, several parts, inconsistent winding): inside and outside
   are undefined, so the pieces cover the *surface*: triangles are subdivided to at most
   ``shell_max_edge``, a plan-view quadtree groups them into cells, each connected group of a
@@ -32,12 +33,15 @@ __all__ = ["front_probes", "solid_pieces", "shell_pieces", "shell_patch", "coacd
 Progress = Callable[[int, int, str], None] | None
 
 
-def front_probes(scene, face_normals: np.ndarray, options, closed: bool = True):
-    """Probes ``front_reach`` above the surface seen along -Z_H (plan-view grid) and their cut
-    data (K, 9): surface point, circumferential and radial directions (cut planes that part
-    a hull bridging a concave corner of the face or a ring; circumferential first: fewer
-    pieces, measured)."""
+def front_probes(scene, face_normals: np.ndarray, options, closed: bool = True,
+                 walls_xy: np.ndarray | None = None):
+    """Probes above the surface seen along -Z_H (plan-view grid): ``front_reach`` above it
+    within ``front_band`` (plan view) of a window's wall line (``walls_xy`` (K, 2)),
+    ``front_reach_far`` further out or without walls; and their cut data (K, 9): surface
+    point, circumferential and radial directions (cut planes that part a hull bridging a
+    concave corner of the face or a ring; circumferential first: fewer pieces, measured)."""
     import open3d as o3d
+    from scipy.spatial import cKDTree
 
     h = options.front_probe_spacing
     r_max = 0.35  # [m] half the largest wheel diameter the importer accepts
@@ -53,13 +57,17 @@ def front_probes(scene, face_normals: np.ndarray, options, closed: bool = True):
     foot = rays[hit, :3].astype(float) - np.c_[np.zeros((hit.sum(), 2)), t[hit]]
     n = face_normals[ans["primitive_ids"].numpy()[hit].astype(np.int64)]
     n[n[:, 2] < 0] *= -1.0
-    q = foot + options.front_reach * n
+    reach = np.full(len(foot), options.front_reach_far)
+    if walls_xy is not None and len(walls_xy):
+        near = cKDTree(walls_xy).query(foot[:, :2], distance_upper_bound=options.front_band)[0]
+        reach[np.isfinite(near)] = options.front_reach
+    q = foot + reach[:, None] * n
     er = np.c_[foot[:, :2], np.zeros(len(foot))]
     er /= np.maximum(np.linalg.norm(er, axis=1, keepdims=True), 1e-12)
     et = np.c_[-er[:, 1], er[:, 0], np.zeros(len(er))]
     qt = o3d.core.Tensor(q.astype(np.float32))
     d = (scene.compute_signed_distance(qt) if closed else scene.compute_distance(qt)).numpy()
-    ok = d > 0.5 * options.front_reach
+    ok = d > 0.5 * reach
     return q[ok], np.c_[foot, et, er][ok]
 
 

@@ -46,7 +46,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 3  # 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
+IMPORT_VERSION = 4  # 4: pieces held to 1 mm above the front near the windows (front_band)
+# 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
 _NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
@@ -87,9 +88,14 @@ class ImportOptions:
             ``max_refine_rounds`` on the same mesh in another pose (known weakness).
         probe_depth: the opening probes span this depth below the edge [m].
         max_refine_rounds: refinement rounds for pieces that reach into an opening.
-        front_reach: a piece may stand at most this far proud of the surface seen from the
-            front (+Z_H, where the tool works) [m]; probes on a plan-view grid of
-            ``front_probe_spacing`` [m].
+        front_reach: within ``front_band`` of a window's wall line (plan view), where the
+            burr, its shank and the collet work, a piece may stand at most this far proud of
+            the surface seen from the front (+Z_H) [m]: the generator's own bound there
+            (``hub.collision.COLL_FRONT_REACH_MM``, ``COLL_FRONT_BAND_MM``). At 3 mm a CoACD
+            hull bridged a concave part of an unseen hub's front 2.5 mm proud beside a window
+            where the shank needs 2.05 mm above the face, and the window could not be planned
+            (benchmarks/RESULTS.md, r3141_001). front_reach_far: the same further out [m].
+            Probes on a plan-view grid of ``front_probe_spacing`` [m].
         refine: how such a piece's part is split: "cut" or "coacd" (see import_collision).
         shell_max_edge, shell_thickness, shell_cell, shell_min_cell: the surface shell of an
             open mesh: triangles subdivided to this edge length, hull thickness, first and
@@ -116,7 +122,9 @@ class ImportOptions:
     window_reach: float = 1.0e-3
     probe_depth: float = 20e-3
     max_refine_rounds: int = 40
-    front_reach: float = 3.0e-3
+    front_reach: float = 1.0e-3
+    front_reach_far: float = 3.0e-3
+    front_band: float = 30e-3
     front_probe_spacing: float = 4.0e-3
     refine: str = "cut"
     shell_max_edge: float = 8e-3
@@ -416,7 +424,8 @@ def _collision(path: Path, V_H, F, walls, closed: bool, options: ImportOptions,
             probe_edge.append(wall)
     probe_pts, probe_edge = np.concatenate(probe_pts), np.concatenate(probe_edge)
     ok = in_opening(probe_pts)
-    face_pts, face_cut = front_probes(scene, normals, options, closed=closed)
+    face_pts, face_cut = front_probes(scene, normals, options, closed=closed,
+                                      walls_xy=np.concatenate([w[:, :2] for w in walls]))
     probes = WindowProbes(np.concatenate([probe_pts[ok], face_pts]))
     t_coll = time.perf_counter()
     sub = None if progress is None else (lambda d, n, label: progress(2, steps, label))

@@ -121,6 +121,8 @@ def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H
             "piece_count": len(pieces),
             "hull_volume_over_solid": round(hull_volume / volume, 4),
             "window_reach_allowed_mm": round(options.window_reach * 1e3, 3),
-            "front_reach_allowed_mm": round(options.front_reach * 1e3, 3), **coll,
+            "front_reach_allowed_mm": round(options.front_reach * 1e3, 3),
+            "front_reach_far_allowed_mm": round(options.front_reach_far * 1e3, 3),
+            "front_band_mm": round(options.front_band * 1e3, 3), **coll,
         },
     }
