@@ -6,9 +6,9 @@ reach at most ``Tolerances.collision_model_excess`` (0.5 mm) into a window openi
 above the front face within 30 mm of a window (elsewhere the average-thickness rule allows
 more locally: 3.7 mm was seen beside a CL point before the front probes,
 :func:`drakedeburr.hub.collision.front_probes`), an imported CAD mesh's by up to
-``ImportOptions.window_reach`` into an opening and ``front_reach`` above the face (1 mm each
-near a window, 3 mm above the face further out), where a finer decomposition would cost
-minutes. Where the pieces' reading fails ``burr_contact``, this module reads the same samples
+``ImportOptions.window_reach`` into an opening and ``front_reach`` above the face near a
+window (1 mm each; ``front_reach_far``, 3 mm, further out), where a finer decomposition would
+cost minutes. Where the pieces' reading fails ``burr_contact``, this module reads the same samples
 against the triangle mesh itself (``HubModel.vertices_H`` / ``faces``).
 
 Written here because no library at hand measures it: Drake's signed distance needs convex

@@ -263,11 +263,13 @@ def register(subparsers) -> None:
     _add_front_and_burr(p)
     p.add_argument("--window-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
-    p.add_argument("--front-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
+    p.add_argument("--front-reach-mm", type=_POSITIVE_MM, default=1.0,
                    help="how far a collision piece may stand proud of the surface seen from "
-                        "the front within 30 mm of a window, where the tool works [mm]")
-    p.add_argument("--front-reach-far-mm", type=_NONNEGATIVE_MM, default=3.0,
-                   help="the same further than 30 mm from every window [mm]")
+                        "the front within 15 mm of a window, where the tool is low over the "
+                        "face [mm] (before IMPORT_VERSION 4: everywhere, default 3)")
+    p.add_argument("--front-reach-far-mm", type=_POSITIVE_MM, default=3.0,
+                   help="the same further than 15 mm from every window, >= --front-reach-mm "
+                        "[mm]")
     p.add_argument("--seed", type=_SEED, default=0, help="CoACD random seed, >= 0")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(_run=_run_import)

@@ -67,7 +67,10 @@ def front_probes(scene, face_normals: np.ndarray, options, closed: bool = True,
     et = np.c_[-er[:, 1], er[:, 0], np.zeros(len(er))]
     qt = o3d.core.Tensor(q.astype(np.float32))
     d = (scene.compute_signed_distance(qt) if closed else scene.compute_distance(qt)).numpy()
-    ok = d > 0.5 * reach
+    # a probe nearer the mesh than its simplification (closed) or the shell's half thickness
+    # (open) may lie inside the solid the pieces are cut from: it could never be freed
+    inner = options.simplify_tolerance if closed else 0.5 * options.shell_thickness
+    ok = d > np.maximum(0.5 * reach, inner + 0.1e-3)
     return q[ok], np.c_[foot, et, er][ok]
 
 

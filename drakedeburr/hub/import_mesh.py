@@ -88,14 +88,21 @@ class ImportOptions:
             ``max_refine_rounds`` on the same mesh in another pose (known weakness).
         probe_depth: the opening probes span this depth below the edge [m].
         max_refine_rounds: refinement rounds for pieces that reach into an opening.
-        front_reach: within ``front_band`` of a window's wall line (plan view), where the
-            burr, its shank and the collet work, a piece may stand at most this far proud of
-            the surface seen from the front (+Z_H) [m]: the generator's own bound there
-            (``hub.collision.COLL_FRONT_REACH_MM``, ``COLL_FRONT_BAND_MM``). At 3 mm a CoACD
-            hull bridged a concave part of an unseen hub's front 2.5 mm proud beside a window
-            where the shank needs 2.05 mm above the face, and the window could not be planned
-            (benchmarks/RESULTS.md, r3141_001). front_reach_far: the same further out [m].
-            Probes on a plan-view grid of ``front_probe_spacing`` [m].
+        front_reach: within ``front_band`` of a window's wall line, a piece may stand at most
+            this far proud of the surface seen from the front (+Z_H) [m]: the generator's own
+            bound near a window (``hub.collision.COLL_FRONT_REACH_MM``). At 3 mm a CoACD hull
+            bridged a concave part of an unseen hub's front 2.5 mm proud beside a window where
+            the burr's shank needs 2.05 mm above the face, and the window could not be planned
+            (benchmarks/RESULTS.md, r3141_001). Probes on a plan-view grid of
+            ``front_probe_spacing`` [m].
+        front_reach_far: the same further out [m].
+        front_band: plan-view distance from a window's wall line within which
+            ``front_reach`` holds [m]. Where the tool is low over the face: the burr's head
+            (12 mm) and the lowest line of its shank, which at the recipes' tilts (<= 0.44 rad
+            from the normal) rises ~2 mm per mm away from the edge, stay within ~10 mm of the
+            edge below 3 mm above it. Not the generator's 30 mm: on an imported mesh that band
+            also takes in a rim's step beside the windows, where an open mesh's shell cannot
+            hold 1 mm (review, session 19).
         refine: how such a piece's part is split: "cut" or "coacd" (see import_collision).
         shell_max_edge, shell_thickness, shell_cell, shell_min_cell: the surface shell of an
             open mesh: triangles subdivided to this edge length, hull thickness, first and
@@ -124,7 +131,7 @@ class ImportOptions:
     max_refine_rounds: int = 40
     front_reach: float = 1.0e-3
     front_reach_far: float = 3.0e-3
-    front_band: float = 30e-3
+    front_band: float = 15e-3
     front_probe_spacing: float = 4.0e-3
     refine: str = "cut"
     shell_max_edge: float = 8e-3
@@ -519,6 +526,10 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     t_start = time.perf_counter()
     if options.refine not in ("cut", "coacd"):
         raise InputError(f"ImportOptions.refine must be 'cut' or 'coacd', got {options.refine!r}")
+    if not 0 < options.front_reach <= options.front_reach_far or not options.front_band >= 0:
+        raise InputError(f"ImportOptions: need 0 < front_reach <= front_reach_far and "
+                         f"front_band >= 0, got {options.front_reach!r}, "
+                         f"{options.front_reach_far!r}, {options.front_band!r}")
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
@@ -553,6 +564,12 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
         log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
                     path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
+    if coll["front_probes_inside_pieces"]:
+        log.warning("%s: %d probes above the front surface lie inside collision pieces (pieces "
+                    "stand more than %.1f mm proud within %.0f mm of a window, %.1f mm further "
+                    "out): the planner may find the tool blocked there", path,
+                    coll["front_probes_inside_pieces"], options.front_reach * 1e3,
+                    options.front_band * 1e3, options.front_reach_far * 1e3)
     if progress is not None:
         progress(3, steps, "write folder")
     hulls = [Manifold.hull_points(pv) for pv in pieces]
