@@ -344,21 +344,11 @@ def test_collision_pieces_cover_the_solid_and_leave_the_openings_free(imported):
     assert gap.min() >= 1.0e-3, f"a piece comes {gap.min() * 1e3:.2f} mm near an opening probe"
     # pieces stand at most ~3 mm proud of the surface seen from the front (where the tool
     # works): points above it along its normal are outside every piece
-    import open3d as o3d
-
-    g = np.arange(-0.24, 0.24, 5e-3)
-    gx, gy = np.meshgrid(g, g)
-    rays = np.zeros((gx.size, 6), np.float32)
-    rays[:, 0], rays[:, 1], rays[:, 2], rays[:, 5] = gx.ravel(), gy.ravel(), 1.0, -1.0
-    ans = scene.cast_rays(o3d.core.Tensor(rays))
-    t = ans["t_hit"].numpy()
-    hit = np.isfinite(t)
-    n = truth.trimesh.face_normals[ans["primitive_ids"].numpy()[hit].astype(np.int64)]
-    n[n[:, 2] < 0] *= -1
+    foot, n = _front_surface(truth, scene, 5e-3)
     # (the import guarantees 3 mm at its own 4 mm probe grid; between its probes a piece may
     # stand a little higher: on this independent 5 mm grid <= 0.1 % at 3.5 mm, none at 5 mm)
     for h, share in ((3.5e-3, 1e-3), (5.0e-3, 0.0)):
-        above = rays[hit, :3] - np.c_[np.zeros((hit.sum(), 2)), t[hit]] + h * n
+        above = foot + h * n
         above = above[_signed_distance(scene, above) > h - 0.5e-3]
         assert len(above) > 3000
         gap = _max_violation(eqs, above @ X_HHb[:3, :3].T + X_HHb[:3, 3])
@@ -374,18 +364,12 @@ def test_collision_pieces_cover_the_solid_and_leave_the_openings_free(imported):
     assert summ["import"]["sha256"] == res.sha256
 
 
-def _front_near_windows_held(truth, eqs, scene, X_HHb):
-    """Near the windows, where the burr's head and shank are low over the face (the shank ~2 mm
-    above it at the edge), the pieces stand at most ~1 mm proud of the front
-    (``ImportOptions.front_reach`` within ``front_band``): on an independent 2.5 mm grid,
-    points 1.5 mm above the front within 12 mm (plan view) of a true window edge are outside
-    every piece (measured: 0 of ~4000). With the former 3 mm everywhere 0.67 % of them were
-    inside one, and on an unseen hub a CoACD hull stood 2.5 mm proud beside a window, which
-    could then not be planned."""
+def _front_surface(truth, scene, spacing):
+    """The true front surface seen along -Z_H on a plan-view grid of ``spacing`` [m]: the ray
+    hits (K, 3) and the facet normals there, turned to +Z_H (K, 3)."""
     import open3d as o3d
-    from scipy.spatial import cKDTree
 
-    g = np.arange(-0.24, 0.24, 2.5e-3)
+    g = np.arange(-0.24, 0.24, spacing)
     gx, gy = np.meshgrid(g, g)
     rays = np.zeros((gx.size, 6), np.float32)
     rays[:, 0], rays[:, 1], rays[:, 2], rays[:, 5] = gx.ravel(), gy.ravel(), 1.0, -1.0
@@ -394,7 +378,20 @@ def _front_near_windows_held(truth, eqs, scene, X_HHb):
     hit = np.isfinite(t)
     n = truth.trimesh.face_normals[ans["primitive_ids"].numpy()[hit].astype(np.int64)]
     n[n[:, 2] < 0] *= -1
-    foot = rays[hit, :3] - np.c_[np.zeros((hit.sum(), 2)), t[hit]]
+    return rays[hit, :3] - np.c_[np.zeros((hit.sum(), 2)), t[hit]], n
+
+
+def _front_near_windows_held(truth, eqs, scene, X_HHb):
+    """Near the windows, where the burr's head and shank are low over the face (the shank ~2 mm
+    above it at the edge), the pieces stand at most ~1 mm proud of the front
+    (``ImportOptions.front_reach`` within ``front_band``): on an independent 2.5 mm grid,
+    points 1.5 mm above the front within 12 mm (plan view) of a true window edge are outside
+    every piece (measured: 0 of 3872). With the former 3 mm everywhere 8 of them were inside
+    one, and on an unseen hub a CoACD hull stood 2.5 mm proud beside a window, which
+    could then not be planned."""
+    from scipy.spatial import cKDTree
+
+    foot, n = _front_surface(truth, scene, 2.5e-3)
     edge = cKDTree(np.concatenate([w.p_HE[:, :2] for w in truth.windows]))
     d_edge = edge.query(foot[:, :2])[0]
     above = foot + 1.5e-3 * n
