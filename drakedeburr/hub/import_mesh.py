@@ -99,10 +99,10 @@ class ImportOptions:
         front_band: plan-view distance from a window's wall line within which
             ``front_reach`` holds [m]. Where the tool is low over the face: the burr's head
             (12 mm) and the lowest line of its shank, which at the recipes' tilts (<= 0.44 rad
-            from the normal) rises ~2 mm per mm away from the edge, stay within ~10 mm of the
-            edge below 3 mm above it. Not the generator's 30 mm: on an imported mesh that band
-            also takes in a rim's step beside the windows, where an open mesh's shell cannot
-            hold 1 mm (review, session 19).
+            from the normal) rises at least ~2 mm per mm away from the edge, stay within
+            ~10 mm of the edge below 3 mm above it. Not the generator's 30 mm: on an imported
+            mesh that band also takes in a rim's step beside the windows, where an open mesh's
+            shell cannot hold 1 mm (review, session 19).
         refine: how such a piece's part is split: "cut" or "coacd" (see import_collision).
         shell_max_edge, shell_thickness, shell_cell, shell_min_cell: the surface shell of an
             open mesh: triangles subdivided to this edge length, hull thickness, first and
