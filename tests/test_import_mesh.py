@@ -455,3 +455,34 @@ def test_front_openings_and_input_view(imported, capsys):
                               for w in truth.windows]) * 1e3  # the STL's mm coordinates
     pts = np.concatenate([np.asarray(e["points"]) for e in view["edges"]])
     assert cKDTree(truth_M).query(pts)[0].max() < 0.5  # mm
+
+
+def test_front_probes_near_the_windows_stand_lower():
+    """The importer's front probes stand ``front_reach`` above their surface point within
+    ``front_band`` (plan view) of a wall line and ``front_reach_far`` further out (or with no
+    walls), each clear of the mesh by more than half its height and the simplification + 0.1 mm
+    (a probe inside the simplified solid could never be cut free)."""
+    import open3d as o3d
+    import trimesh
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.hub.import_collision import front_probes
+    from drakedeburr.hub.model import load_hub
+
+    truth = load_hub("h5_straight")
+    V, F = truth.vertices_H, truth.faces
+    scene = _scene(V, F)
+    normals = trimesh.Trimesh(V, F, process=False).face_normals
+    walls = np.concatenate([w.p_HE[:, :2] for w in truth.windows])
+    o = mut.ImportOptions()
+    q, cut = front_probes(scene, normals, o, closed=True, walls_xy=walls)
+    height = np.linalg.norm(q - cut[:, :3], axis=1)
+    near = cKDTree(walls).query(cut[:, :2])[0] <= o.front_band
+    assert 1000 < near.sum() < len(q) - 1000
+    np.testing.assert_allclose(height[near], o.front_reach, atol=1e-9)
+    np.testing.assert_allclose(height[~near], o.front_reach_far, atol=1e-9)
+    d = scene.compute_signed_distance(o3d.core.Tensor(q.astype(np.float32))).numpy()
+    assert np.all(d > np.maximum(0.5 * height, o.simplify_tolerance + 0.1e-3) - 1e-7)
+    q_far, cut_far = front_probes(scene, normals, o, closed=True)  # no walls
+    np.testing.assert_allclose(np.linalg.norm(q_far - cut_far[:, :3], axis=1),
+                               o.front_reach_far, atol=1e-9)
