@@ -143,9 +143,9 @@ def main() -> None:
                                   axis=2), axis=1)
     order = np.argsort(at)
     cone_s = s[at[order]]
-    cones = wt.cone_retract_H[np.array([x.cl_index for x in tg])[order]]
-    targets = (np.array([x.X_HT[:3, 3] for x in tg]),
-               wt.cone_retract_H[np.array([x.cl_index for x in tg])])
+    cl = np.array([x.cl_index for x in tg])
+    cones = wt.cone_retract_H[cl[order]]
+    targets = (np.array([x.X_HT[:3, 3] for x in tg]), wt.cone_retract_H[cl])
     L = s[-1]
     slow = (v < 0.95 * 0.150) & (s > 0.02) & (s < L - 0.02)
     runs = np.flatnonzero(np.diff(np.concatenate([[0], slow.astype(int), [0]])))

@@ -69,12 +69,12 @@ def _pieces(folder):
         "piece_*.obj"))]
 
 
-def _distance_to_pieces(folder, q):
+def _distance_to_pieces(folder, eqs, q):
     """(K,) exact distance of each point to the union of the collision pieces (0 inside one):
     open3d's distance to the hulls' triangles (scipy's hulls of the pieces' vertices), a reading
     independent of the importer's. The largest plane violation (:func:`_max_violation`) is only
     a lower bound of it: beside a thin slab's edge it read 0.24 mm where the piece was 2.67 mm
-    away."""
+    away. ``eqs``: the pieces' plane equations (:func:`_pieces` of the folder)."""
     import open3d as o3d
     from scipy.spatial import ConvexHull
 
@@ -86,7 +86,7 @@ def _distance_to_pieces(folder, q):
         scene.add_triangles(o3d.core.Tensor(V.astype(np.float32)),
                             o3d.core.Tensor(ConvexHull(V).simplices.astype(np.uint32)))
     d = scene.compute_distance(o3d.core.Tensor(q.astype(np.float32))).numpy().astype(float)
-    d[_max_violation(_pieces(folder), q) <= 0] = 0.0
+    d[_max_violation(eqs, q) <= 0] = 0.0
     return d
 
 
@@ -339,7 +339,7 @@ def test_collision_pieces_cover_the_solid_and_leave_the_openings_free(imported):
     probes = probes[_signed_distance(scene, probes) > 2.0e-3]  # really in the opening
     assert len(probes) > 2000
     q_open = probes @ X_HHb[:3, :3].T + X_HHb[:3, 3]
-    gap = _distance_to_pieces(res.dir, q_open)
+    gap = _distance_to_pieces(res.dir, eqs, q_open)
     assert np.all(gap >= _max_violation(eqs, q_open) - 1e-7)  # the two readings agree
     assert gap.min() >= 1.0e-3, f"a piece comes {gap.min() * 1e3:.2f} mm near an opening probe"
     # pieces stand at most ~3 mm proud of the surface seen from the front (where the tool
