@@ -158,14 +158,29 @@ def test_envelope_equals_a_bin_by_bin_reading():
         np.testing.assert_array_equal(ye, yr)
 
 
-def test_figures_drawn_on_a_worker_are_the_figures_drawn_here(report_file, caplog):
+def test_figures_drawn_on_a_worker_are_the_figures_drawn_here(report_file, caplog,
+                                                            monkeypatch):
     """With a pool worker running, the report's figures are drawn there while this process
     records the replay: the same SVG text as drawn here (deterministic, no date). Without a
     running worker they are drawn here and no worker is started for them."""
     import logging
+    import time
 
     from drakedeburr.plan import parallel
 
+    replay_here = mut.meshcat_replay_html
+
+    def replay_once_sent(*args, **kwargs):
+        # the replay (this process's task) starts only once the feeder thread has handed the
+        # figures to the worker, so that this process never takes them first: the test does
+        # not depend on how the interpreter slices the two threads
+        deadline = time.monotonic() + 20.0
+        while (parallel.running_workers() and time.monotonic() < deadline
+               and all(w.task is None for w in parallel._POOL.get("workers", []))):
+            time.sleep(0.005)
+        return replay_here(*args, **kwargs)
+
+    monkeypatch.setattr(mut, "meshcat_replay_html", replay_once_sent)
     _, report = report_file
     here = mut.report_figures(report)
     assert list(here) == ["theta", "joints", "speed", "clearance", "deviation"]
