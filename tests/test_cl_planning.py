@@ -114,6 +114,37 @@ def test_isoparametric_is_uniform_in_arc_length(windows):
     np.testing.assert_allclose(arcs, c.length / len(arcs), rtol=1e-9)
 
 
+def test_isoparametric_ends_on_sharp_corners_within_its_bound(monkeypatch):
+    """A square loop with sharp corners (points 0.5 mm apart): the isoparametric plan meets
+    both thresholds on every segment with at most length / (2 delta) + 1 points (an arc lies
+    within half its length of its chord), and where the check never passes the search stops
+    there with an error instead of growing forever."""
+    side = np.arange(0.0, 40e-3, 0.5e-3)
+    flat = np.zeros_like(side)
+    sq = np.concatenate([np.c_[side, flat], np.c_[flat + 40e-3, side],
+                         np.c_[40e-3 - side, flat + 40e-3], np.c_[flat, 40e-3 - side]])
+    curve = fit_edge_curve(np.c_[sq, np.zeros(len(sq))])
+    params = mut.PlannerParams(delta_max=0.03e-3)
+    plan = mut.plan_cl(curve, "isoparametric", params)
+    seg = segment_figures(curve, plan.u)
+    assert seg["chord_height"].max() <= params.delta_max
+    assert seg["chord"].max() <= params.l_max
+    assert len(plan.u) > 100  # the corners, not the straight sides, set the count
+    assert len(plan.u) <= curve.length / (2.0 * params.delta_max) + 1
+    rounds = []
+
+    def never_ok(curve, u, params):
+        rounds.append(len(u))
+        assert len(rounds) < 500, "the search does not stop"
+        return False
+
+    monkeypatch.setattr(mut, "_segments_ok", never_ok)
+    with pytest.raises(InputError, match="still break the chord height of 0.030 mm"):
+        mut.plan_cl(curve, "isoparametric", params)
+    cap = int(np.ceil(curve.length / (2.0 * params.delta_max * (1.0 - mut.SAMPLED_MARGIN)))) + 1
+    assert rounds[-1] == cap and len(rounds) < 400
+
+
 def test_unknown_method_and_bad_params(windows):
     with pytest.raises(InputError, match="unknown CL planning method 'fast'"):
         mut.plan_cl(windows["small"], "fast")

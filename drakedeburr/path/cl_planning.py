@@ -255,12 +255,23 @@ def _segments_ok(curve: EdgeCurve, u: np.ndarray, params: PlannerParams,
 
 
 def _plan_isoparametric(curve: EdgeCurve, params: PlannerParams) -> np.ndarray:
-    n = max(4, int(np.ceil(curve.length / params.l_max)))
+    """The fewest points equally spaced in arc length (to within 2 %) that meet both
+    thresholds. An arc of length L lies within L/2 of an end of its chord, so ``n_cap``
+    points (arcs of at most twice the chord-height target) meet any target: the search ends
+    there at the latest, also on a cusp; failing there, the curve's arc length is wrong."""
+    target = params.delta_max * (1.0 - SAMPLED_MARGIN)
+    n_cap = max(4, int(np.ceil(curve.length / (2.0 * target))) + 1)
+    n = min(max(4, int(np.ceil(curve.length / params.l_max))), n_cap)
     while True:
         u = curve.u_from_arc(np.arange(n) * curve.length / n)
         if _segments_ok(curve, u, params):
             return u
-        n += max(1, n // 50)
+        if n >= n_cap:
+            raise InputError(f"edge curve of {curve.length * 1e3:.1f} mm: {n} points equally "
+                             f"spaced in arc length still break the chord height of "
+                             f"{params.delta_max * 1e3:.3f} mm (its arc-length table is "
+                             "inconsistent)")
+        n = min(n + max(1, n // 50), n_cap)
 
 
 def _chords_and_heights(p: np.ndarray, reach: int, l_max: float, delta: float):
