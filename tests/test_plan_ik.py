@@ -244,3 +244,71 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     assert 0 < upper < 0.01
     for q in clear[:: max(1, len(clear) // 6)]:
         assert checker.ranked_distance(q, 0.01) <= upper + 1e-9
+
+
+class _AxisField:
+    """A stand-in for the cell's distance queries: every pose reads ``top - slope * angle``
+    from its tool axis to the axis ``peak`` (a distance that depends on the axis alone, as a
+    spin-invariant pair's does), never in contact."""
+
+    def __init__(self, kin, peak, top, slope):
+        self.kin, self.peak, self.top, self.slope = kin, peak, top, slope
+
+    def value(self, axis):
+        return self.top - self.slope * np.arccos(np.clip(axis @ self.peak, -1.0, 1.0))
+
+    def axis_of(self, q):
+        return -self.kin.X_HT_from_q(q)[:3, 2]
+
+    def axis_reading(self, q, cap):
+        d = self.value(self.axis_of(q))
+        return d, d
+
+    def collides(self, q):
+        return False
+
+    def min_distance(self, q, cap):
+        return self.axis_reading(q, cap)[0], ("spindle::burr/spindle::burr_shank", "hub::hub")
+
+
+def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
+    """Where the sampled axes come within NEAR_MISS of the bound, a search between them finds
+    the best axis in the cone: a field peaking 1.3 half-angles off the cone axis, between two
+    sampled azimuths, is best on the rim toward the peak. With that best above the bound the
+    probe returns a pose there (in the cone, reading above the bound); below it, the largest
+    reading found is the field's maximum over the cone to 1 um, and the target is unreachable
+    although the sampled best alone is a near miss."""
+    from drakedeburr.frames.vectors import perpendicular_basis
+    from drakedeburr.plan.ik import IkOptions, cone_clearance_probe
+    from drakedeburr.plan.ik_seeds import NEAR_MISS, unreachable
+
+    cell, kin, _, wt, p_HQ, lift = fillet
+    bound = IkOptions().min_distance_floor
+    c = wt.cone_retract_H[0] / np.linalg.norm(wt.cone_retract_H[0])
+    half = wt.cone_half_angle
+    e1, e2, _ = perpendicular_basis(c).T
+    phi = np.radians(11.25)  # half way between two of the 16 sampled azimuths
+    ring = np.cos(phi) * e1 + np.sin(phi) * e2
+    peak = np.cos(1.3 * half) * c + np.sin(1.3 * half) * ring
+    slope = 0.01  # [m/rad]
+    best_in_cone = slope * 0.3 * half  # below the peak, on the rim toward it
+    for margin in (0.02e-3, -0.03e-3):
+        field = _AxisField(kin, peak, bound + margin + best_in_cone, slope)
+        res = cone_clearance_probe(kin, field, p_HQ[0], c, half, wt.retract_H[0], wt.t_H[0],
+                                   cell.q_home, lift=lift, bound=bound)
+        sampled = max(field.value(np.cos(r * half) * c + np.sin(r * half) * (
+            np.cos(f) * e1 + np.sin(f) * e2)) for r in (0.0, 0.33, 0.66, 0.98)
+            for f in np.linspace(0, 2 * np.pi, 16, endpoint=False))
+        assert bound - NEAR_MISS <= sampled < bound  # the case: a near miss when sampled
+        if margin > 0:
+            assert res["feasible"] and not unreachable(res, IkOptions())
+            axis = field.axis_of(res["q"])
+            assert np.arccos(np.clip(axis @ c, -1, 1)) <= half + 1e-9
+            assert field.value(axis) >= bound
+            X = kin.X_HT_from_q(res["q"])
+            assert np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HQ[0]) < 1e-6
+        else:
+            assert not res["feasible"] and unreachable(res, IkOptions())
+            assert res["best_clearance"] >= bound - NEAR_MISS  # the sampled verdict alone
+            assert abs(res["axis_bound"] - (bound + margin)) < 1e-6
+            assert res["axis_bound"] <= bound + margin + 1e-12

@@ -439,6 +439,11 @@ def _failure(run: _WindowRun, window: int, i: int, best, probe) -> FailureRecord
         reason = (f"unreachable: no tool axis in the cone ({np.degrees(run.half):.1f} deg) and "
                   f"spin clears the cell; best {probe['best_clearance'] * 1e3:.2f} mm "
                   f"({probe['pair'][0]} vs {probe['pair'][1]})")
+        bound = float(probe.get("axis_bound", np.inf))
+        if bound < run.options.min_distance_floor:  # a near miss searched between the axes
+            where.update(cone_axis_bound=bound)
+            reason += (f"; on every axis in the cone the tool's round parts (shank, collet, "
+                       f"spindle body) come within {bound * 1e3:.3f} mm of the hub side")
     return FailureRecord(window=window, kind="ik", point=i, reason=reason, value=value,
                          limit=limit, unit=unit, where=where,
                          tried=(f"{run.options.retries + 1} seeds", "SNOPT then IPOPT"))

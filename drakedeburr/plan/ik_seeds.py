@@ -245,8 +245,13 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     settings: the same target probed again (another start seed, the other spin rule, the full
     pass after a fail-fast one) is answered from the memo with the identical result.
 
+    A near miss (the best within ``NEAR_MISS`` of the bound) is searched on between the
+    sampled axes (:func:`_refine_near_miss`).
+
     Returns:
-        ``{"feasible", "best_clearance", "pair", "q", "queries"}`` (q: the best pose found).
+        ``{"feasible", "best_clearance", "pair", "q", "queries", "axis_bound"}`` (q: the best
+        pose found; axis_bound: the largest reading of the spin-invariant pairs found over the
+        axes, an upper bound on every pose of its axis [m], inf where none is near).
     """
     args = (p_HQ, cone_retract_H, half_angle, pref_retract_H, t_H, lift, bound, min_wrist,
             rings, ring_axes, spins, per_axis)
@@ -289,13 +294,14 @@ def _probe(kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray, p_
         return d, upper
 
     first, dead = np.full(len(axes), -np.inf), np.zeros(len(axes), bool)
+    uppers = np.full(len(axes), -np.inf)
     for k, q in enumerate(cands):
         if len(q):
-            first[k], upper = query(q[0])
+            first[k], uppers[k] = query(q[0])
             # a spin-invariant pair (ClearanceChecker.spin_invariant) short of the near-miss
             # line at the first pose is as short at every pose of the axis: none can meet the
             # bound nor make the best a near miss, so the axis is not searched further
-            dead[k] = upper < bound - NEAR_MISS - READING_GAP
+            dead[k] = uppers[k] < bound - NEAR_MISS - READING_GAP
             if best["feasible"]:
                 break
     if not best["feasible"]:
@@ -310,16 +316,81 @@ def _probe(kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray, p_
                     break
             if best["feasible"]:
                 break
+    best["axis_bound"] = float(uppers.max())
+    if not best["feasible"] and best["best_clearance"] >= bound - NEAR_MISS:
+        _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound,
+                          min_wrist, spins, per_axis, [axes[k] for k in np.argsort(
+                              -uppers, kind="stable")[:3] if np.isfinite(uppers[k])],
+                          best, query)
     if best["q"] is not None:
         best["pair"] = checker.min_distance(best["q"], bound + 1e-3)[1]
     return best
 
 
+#: a near miss's compass search over the axes: first step and the step it stops below, as
+#: shares of the cone's radius in the tangent plane; at most this many axes per start
+_REFINE_STEPS = (0.25, 0.01)
+_REFINE_EVALS = 48
+
+
+def _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound, min_wrist,
+                      spins, per_axis, starts, best, query) -> None:
+    """A near miss searched on between the sampled axes: from each of ``starts`` (the sampled
+    axes whose spin-invariant pairs stand farthest off), a compass search in the cone's
+    tangent plane, kept inside the cone, for the axis whose spin-invariant pairs stand
+    farthest off. Those pairs' distance depends on the axis alone (every spin, every branch),
+    so it bounds every pose of the axis: ``best["axis_bound"]`` becomes the largest found.
+    Where it reaches the bound, that axis's poses are read in full (``query``: a clear one
+    makes the probe feasible). Hand-written: a two-parameter search whose every step is one
+    analytic IK and one distance query of the cell; scipy's optimisers would need a smooth
+    objective, which a distance over convex pieces is not."""
+    e1, e2, _ = perpendicular_basis(c).T
+    radius = np.tan(half_angle)
+
+    def axis(xy):
+        a = c + xy[0] * e1 + xy[1] * e2
+        return a / np.linalg.norm(a)
+
+    def poses(xy):
+        return _probe_candidates(kin, p_HQ, [axis(xy)], t_H, q_ref, lift, spins, min_wrist,
+                                 per_axis)[0]
+
+    def upper(xy) -> float:
+        q = poses(xy)
+        if not len(q):
+            return -np.inf
+        best["queries"] += 1
+        return checker.axis_reading(q[0], bound + 1e-3)[1]
+
+    for a in starts:
+        xy = np.array([a @ e1, a @ e2]) / max(float(a @ c), 1e-9)
+        value, step, evals = upper(xy), _REFINE_STEPS[0] * radius, 1
+        while step > _REFINE_STEPS[1] * radius and value < bound and evals < _REFINE_EVALS:
+            for d in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
+                cand = xy + d
+                n = np.linalg.norm(cand)
+                cand = cand * (radius / n) if n > radius else cand
+                v = upper(cand)
+                evals += 1
+                if v > value:
+                    xy, value = cand, v
+                    break
+            else:
+                step *= 0.5
+        best["axis_bound"] = max(best["axis_bound"], float(value))
+        if value >= bound:
+            for qq in poses(xy):
+                if not checker.collides(qq) and query(qq)[0] >= bound:
+                    return
+
+
 def unreachable(probe: dict, options: IkOptions) -> bool:
     """The probe's best pose is more than ``NEAR_MISS`` short of the bound (the sampled search
-    may miss a pose within that; the retries may still find it)."""
-    return (not probe["feasible"]
-            and probe["best_clearance"] < options.min_distance_floor - NEAR_MISS)
+    may miss a pose within that; the retries may still find it), or a near miss whose search
+    between the axes kept the spin-invariant pairs under the bound on every axis it read."""
+    return not probe["feasible"] and (
+        probe["best_clearance"] < options.min_distance_floor - NEAR_MISS
+        or probe.get("axis_bound", np.inf) < options.min_distance_floor)
 
 
 def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray,
