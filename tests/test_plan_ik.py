@@ -312,3 +312,53 @@ def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
             assert res["best_clearance"] >= bound - NEAR_MISS  # the sampled verdict alone
             assert abs(res["axis_bound"] - (bound + margin)) < 1e-6
             assert res["axis_bound"] <= bound + margin + 1e-12
+
+
+def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
+    """When a window's IK fails at a target where the cone probe finds an admissible pose, a
+    start is tracked back from that pose to the first target (window._backward_seed): the
+    start meets the first target (Drake's FK: position, cone, clearance), and the forward IK
+    from it reaches every target up to the failed one, arriving at the probe's pose (1 mrad)."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.ik import cone_clearance_probe, solve_window_ik
+    from drakedeburr.plan.options import PlanContext, PlanOptions
+    from drakedeburr.plan.types import FailureRecord
+    from drakedeburr.plan.window import _backward_seed
+
+    cell, kin, checker, wt, p_HQ, lift = fillet
+    options = PlanOptions()
+    opts = options.ik
+    ctx = PlanContext(cell=cell, kin=kin, checker=checker, free_checker=None, config=None,
+                      options=options)
+
+    def forward(q_first):
+        return solve_window_ik(cell, kin, checker, p_HQ, wt.retract_H, wt.cone_retract_H,
+                               wt.cone_half_angle, wt.t_H, cell.q_home, options=opts, lift=lift,
+                               q_first=q_first, stop_at_failure=True)
+
+    trial = forward(None)
+    i = 20
+    assert trial.ok[:i + 1].all()
+    failed = replace(trial, ok=np.arange(len(trial.ok)) < i, failures=(FailureRecord(
+        window=wt.window_index, kind="ik", point=i, reason="stand-in failure"),))
+    loop = np.arange(len(wt))
+    start = _backward_seed(ctx, wt, loop, p_HQ, lift, failed)
+    assert start is not None
+    err, ang, clear = _drake_recheck(fillet, start[None], opts)
+    assert err[0] < 1e-5 and ang[0] <= wt.cone_half_angle + 1e-6
+    assert clear[0] >= opts.min_distance_floor - 1e-9 and kin.within_limits(start)
+    probe = cone_clearance_probe(kin, checker, p_HQ[i], wt.cone_retract_H[i],
+                                 max(float(wt.cone_half_angle), 1e-3), wt.retract_H[i], wt.t_H[i],
+                                 trial.q[i - 1], lift=lift, bound=opts.min_distance_floor,
+                                 min_wrist=opts.min_wrist)
+    assert probe["feasible"]
+    again = forward(start)
+    assert again.ok[:i + 1].all()
+    err, ang, clear = _drake_recheck(fillet, again.q[:i + 1], opts)
+    assert err.max() < 1e-5 and ang.max() <= wt.cone_half_angle + 1e-6
+    assert clear.min() >= opts.min_distance_floor - 1e-9
+    # the probe's pose is of another family than the one the first track arrived in (5e-5
+    # rad from it when written, the first track 1.8 rad off)
+    assert np.abs(trial.q[i] - probe["q"]).max() > opts.trust_region
+    assert np.abs(again.q[i] - probe["q"]).max() <= 1e-3

@@ -133,6 +133,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
     if opt.report_only:
         seeds = seeds[:1]
     wik, best_score = None, 0
+    tracked_back: set[int] = set()
     for attempt, q_first in enumerate(seeds):
         trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
                                 wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
@@ -157,11 +158,51 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         log.debug("window %d: start seed %d left %d IK failures (executed motion %s); trying "
                  "another", wt.window_index, attempt, len(trial.failures),
                  "ok" if dense_ok else "leaves the limits")
+        # one start tracked back from each failed target (of the first two) where the probe
+        # found an admissible pose the tracks did not arrive in
+        first_fail = int(trial.failures[0].point) if trial.failures else None
+        if (first_fail is not None and first_fail not in tracked_back and len(tracked_back) < 2
+                and not opt.report_only):
+            tracked_back.add(first_fail)
+            back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial)
+            if back is not None and not _known(back, seeds):
+                seeds.insert(attempt + 1, back)
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
         wound = rewound_start(kin, trial, q_first)
         if wound is not None and not _known(wound, seeds) and not opt.report_only:
             seeds.insert(attempt + 1, wound)
     return wik, len(seeds)
+
+
+def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: np.ndarray,
+                   lift: float, trial) -> np.ndarray | None:
+    """A start configuration that arrives at the first target the trial failed in a pose the
+    cone probe found admissible there: the IK tracked backwards from that pose to the
+    window's first target (None when the probe found no pose or the backward pass fails)."""
+    from drakedeburr.plan.ik_seeds import cone_clearance_probe
+
+    if not trial.failures:
+        return None
+    i = int(trial.failures[0].point)  # a position in ``loop``
+    before = np.flatnonzero(trial.ok[:i])
+    if i == 0 or not len(before):
+        return None
+    kin, opt = ctx.kin, ctx.options.ik
+    cone, pref, t_H = wt.cone_retract_H[loop], wt.retract_H[loop], wt.t_H[loop]
+    half = max(float(wt.cone_half_angle), 1e-3)
+    probe = cone_clearance_probe(kin, ctx.checker, p_HQ[i], cone[i], half, pref[i], t_H[i],
+                                 trial.q[before[-1]], lift=lift, bound=opt.min_distance_floor,
+                                 min_wrist=opt.min_wrist)
+    if not probe["feasible"]:
+        return None
+    rev = np.arange(i, -1, -1)
+    back = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ[rev], pref[rev], cone[rev],
+                           wt.cone_half_angle, -t_H[rev], probe["q"],
+                           window_index=wt.window_index, options=opt, q_first=probe["q"],
+                           lift=lift, stop_at_failure=True)
+    log.debug("window %d: tracked back from an admissible pose at CL %d: %d of %d targets",
+              wt.window_index, int(loop[i]), int(back.ok.sum()), len(rev))
+    return back.q[-1].copy() if back.ok.all() else None
 
 
 def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
