@@ -226,15 +226,21 @@ def test_a_report_only_window_is_planned_once(monkeypatch):
     monkeypatch.setattr(mut, "solve_window_ik",
                         lambda *a, q_first, **k: starts.append(q_first) or failed)
     monkeypatch.setattr(mut, "rewound_start", lambda *a: np.full(6, 2.0))
+    backs = []
+    monkeypatch.setattr(mut, "_backward_seed", lambda *a: backs.append(1) or np.full(6, 3.0))
     monkeypatch.setattr(mut, "track_poses", lambda *a: SimpleNamespace(ok=np.array([True])))
     wt = _Window(window_index=0, retract_H=np.zeros((1, 3)), t_H=np.zeros((1, 3)),
                  cone_retract_H=np.zeros((1, 3)), cone_half_angle=0.1)
-    for report_only, n in ((True, 1), (False, 3)):  # not report_only: both seeds, rewound one
+    # not report_only: the first seed, the rewound one, the one tracked back from the failed
+    # target (once for that target), the second seed
+    for report_only, n in ((True, [0.0]), (False, [0.0, 2.0, 3.0, 1.0])):
         starts.clear()
+        backs.clear()
         ctx = PlanContext(cell=None, kin=SimpleNamespace(), checker=None, free_checker=None,
                           config=None, options=PlanOptions(report_only=report_only))
         mut._solve_ik(ctx, wt, np.zeros(6), np.array([0, 0]), np.zeros((2, 3)), 0.0)
-        assert len(starts) == n, report_only
+        assert [float(q[0]) for q in starts] == n, report_only
+        assert len(backs) == (0 if report_only else 1)
 
 
 class _Window(SimpleNamespace):
