@@ -205,7 +205,7 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
 
 def test_a_report_only_window_is_planned_once(monkeypatch):
     """report_only: one pass (no second spin rule), from the first start configuration only
-    (no further seeds, no rewound start), whatever its failures."""
+    (no further seeds, no rewound start, no start tracked back), whatever its failures."""
     from drakedeburr.plan import window as mut
     from drakedeburr.plan.results import WindowPlan
 
@@ -231,9 +231,9 @@ def test_a_report_only_window_is_planned_once(monkeypatch):
     monkeypatch.setattr(mut, "track_poses", lambda *a: SimpleNamespace(ok=np.array([True])))
     wt = _Window(window_index=0, retract_H=np.zeros((1, 3)), t_H=np.zeros((1, 3)),
                  cone_retract_H=np.zeros((1, 3)), cone_half_angle=0.1)
-    # not report_only: the first seed, the rewound one, the one tracked back from the failed
-    # target (once for that target), the second seed
-    for report_only, n in ((True, [0.0]), (False, [0.0, 2.0, 3.0, 1.0])):
+    # not report_only: the first seed, the rewound one, the second seed, then the one tracked
+    # back from the failed target (once for that target)
+    for report_only, n in ((True, [0.0]), (False, [0.0, 2.0, 1.0, 3.0])):
         starts.clear()
         backs.clear()
         ctx = PlanContext(cell=None, kin=SimpleNamespace(), checker=None, free_checker=None,

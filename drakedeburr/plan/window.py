@@ -159,14 +159,15 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
                  "another", wt.window_index, attempt, len(trial.failures),
                  "ok" if dense_ok else "leaves the limits")
         # one start tracked back from each failed target (of the first two) where the probe
-        # found an admissible pose the tracks did not arrive in
+        # found a clear pose the tracks did not arrive in: tried after the ranked starts (it
+        # may lie far from the reference, and the moves to and from the window with it)
         first_fail = int(trial.failures[0].point) if trial.failures else None
         if (first_fail is not None and first_fail not in tracked_back and len(tracked_back) < 2
                 and not opt.report_only):
             tracked_back.add(first_fail)
             back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial)
             if back is not None and not _known(back, seeds):
-                seeds.insert(attempt + 1, back)
+                seeds.append(back)
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
         wound = rewound_start(kin, trial, q_first)
         if wound is not None and not _known(wound, seeds) and not opt.report_only:
@@ -177,9 +178,12 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
 def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: np.ndarray,
                    lift: float, trial) -> np.ndarray | None:
     """A start configuration that arrives at the first target the trial failed in a pose the
-    cone probe found admissible there: the IK tracked backwards from that pose to the
-    window's first target (None when the probe found no pose or the backward pass fails)."""
-    from drakedeburr.plan.ik_seeds import cone_clearance_probe
+    cone probe found clear there: the IK tracked backwards from that pose to the window's
+    first target. None when the probe's pose clears the bound by less than ``NEAR_MISS`` (a
+    pose at the bound's edge is what the failed tracks came within micrometres of: on an
+    unseen hub, tracking back from such poses made the plan ~30 s longer and planned nothing
+    more) or the backward pass fails."""
+    from drakedeburr.plan.ik_seeds import NEAR_MISS, cone_clearance_probe
 
     if not trial.failures:
         return None
@@ -193,7 +197,7 @@ def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: 
     probe = cone_clearance_probe(kin, ctx.checker, p_HQ[i], cone[i], half, pref[i], t_H[i],
                                  trial.q[before[-1]], lift=lift, bound=opt.min_distance_floor,
                                  min_wrist=opt.min_wrist)
-    if not probe["feasible"]:
+    if not probe["feasible"] or probe["best_clearance"] < opt.min_distance_floor + NEAR_MISS:
         return None
     rev = np.arange(i, -1, -1)
     back = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ[rev], pref[rev], cone[rev],
