@@ -315,7 +315,7 @@ def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
 
 
 def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
-    """When a window's IK fails at a target where the cone probe finds an admissible pose, a
+    """When a window's IK fails at a target where its cone probe found an admissible pose, a
     start is tracked back from that pose to the first target (window._backward_seed): the
     start meets the first target (Drake's FK: position, cone, clearance), and the forward IK
     from it reaches every target up to the failed one, arriving at the probe's pose (1 mrad)."""
@@ -340,19 +340,21 @@ def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
     trial = forward(None)
     i = 20
     assert trial.ok[:i + 1].all()
-    failed = replace(trial, ok=np.arange(len(trial.ok)) < i, failures=(FailureRecord(
-        window=wt.window_index, kind="ik", point=i, reason="stand-in failure"),))
-    loop = np.arange(len(wt))
-    start = _backward_seed(ctx, wt, loop, p_HQ, lift, failed)
-    assert start is not None
-    err, ang, clear = _drake_recheck(fillet, start[None], opts)
-    assert err[0] < 1e-5 and ang[0] <= wt.cone_half_angle + 1e-6
-    assert clear[0] >= opts.min_distance_floor - 1e-9 and kin.within_limits(start)
     probe = cone_clearance_probe(kin, checker, p_HQ[i], wt.cone_retract_H[i],
                                  max(float(wt.cone_half_angle), 1e-3), wt.retract_H[i], wt.t_H[i],
                                  trial.q[i - 1], lift=lift, bound=opts.min_distance_floor,
                                  min_wrist=opts.min_wrist)
     assert probe["feasible"]
+    failed = replace(trial, ok=np.arange(len(trial.ok)) < i, failures=(FailureRecord(
+        window=wt.window_index, kind="ik", point=i, reason="stand-in failure"),),
+        probes={i: probe})
+    loop = np.arange(len(wt))
+    assert _backward_seed(ctx, wt, loop, p_HQ, lift, replace(failed, probes={}), i) is None
+    start = _backward_seed(ctx, wt, loop, p_HQ, lift, failed, i)
+    assert start is not None
+    err, ang, clear = _drake_recheck(fillet, start[None], opts)
+    assert err[0] < 1e-5 and ang[0] <= wt.cone_half_angle + 1e-6
+    assert clear[0] >= opts.min_distance_floor - 1e-9 and kin.within_limits(start)
     again = forward(start)
     assert again.ok[:i + 1].all()
     err, ang, clear = _drake_recheck(fillet, again.q[:i + 1], opts)

@@ -141,6 +141,8 @@ class WindowIk:
         clearance: (M,) minimum distance [m] (capped at ``influence + bound``).
         failures: per-point failure records.
         stats: timings and solver counts.
+        probes: point -> the cone probe of each failed point where it ran
+            (:func:`cone_clearance_probe`).
     """
 
     q: np.ndarray
@@ -149,6 +151,7 @@ class WindowIk:
     clearance: np.ndarray
     failures: tuple[FailureRecord, ...] = ()
     stats: dict = field(default_factory=dict)
+    probes: dict = field(default_factory=dict)
 
 
 def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
@@ -260,6 +263,7 @@ def solve_window_ik(
     ok = np.zeros(m, bool)
     clearance = np.zeros(m)
     failures: list[FailureRecord] = []
+    probes: dict[int, dict] = {}
     t0 = time.perf_counter()
     p_T_pref = p_HT + lift * pref_retract_H  # T itself at the preferred axis (seeds)
     q_prev, i_prev = None, -1
@@ -289,6 +293,8 @@ def solve_window_ik(
             q_prev, i_prev = q_out[i], i
         else:
             failures.append(_failure(run, window_index, i, best, probe))
+            if probe is not None:
+                probes[i] = probe
             if stop_at_failure:
                 break
         if progress is not None:
@@ -303,7 +309,7 @@ def solve_window_ik(
              "accepted, %d distance re-solves", window_index, int(ok.sum()), m, dt,
              1e3 * stats["seconds_per_point"], c["analytic"], c["distance"])
     return WindowIk(q=q_out, ok=ok, X_HT=X_out, clearance=clearance, failures=tuple(failures),
-                    stats=stats)
+                    stats=stats, probes=probes)
 
 
 def _unreached(kin, window: int, i: int, p_HT, retract_H, t_H) -> FailureRecord:

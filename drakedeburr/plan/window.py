@@ -165,7 +165,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         if (first_fail is not None and first_fail not in tracked_back and len(tracked_back) < 2
                 and not opt.report_only):
             tracked_back.add(first_fail)
-            back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial)
+            back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial, first_fail)
             if back is not None and not _known(back, seeds):
                 seeds.append(back)
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
@@ -176,34 +176,24 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
 
 
 def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: np.ndarray,
-                   lift: float, trial) -> np.ndarray | None:
-    """A start configuration that arrives at the first target the trial failed in a pose the
-    cone probe found clear there: the IK tracked backwards from that pose to the window's
-    first target. None when the probe's pose clears the bound by less than ``NEAR_MISS`` (a
-    pose at the bound's edge is what the failed tracks came within micrometres of: on an
-    unseen hub, tracking back from such poses made the plan ~30 s longer and planned nothing
-    more) or the backward pass fails."""
-    from drakedeburr.plan.ik_seeds import NEAR_MISS, cone_clearance_probe
+                   lift: float, trial, i: int) -> np.ndarray | None:
+    """A start configuration that arrives at target ``i`` (a position in ``loop``), where the
+    trial failed, in the pose the cone probe found clear there: the IK tracked backwards from
+    that pose to the window's first target. None when the probe did not run there, its pose
+    clears the bound by less than ``NEAR_MISS`` (a pose at the bound's edge is what the failed
+    tracks came within micrometres of: on an unseen hub, tracking back from such poses made
+    the plan ~30 s longer and planned nothing more) or the backward pass fails."""
+    from drakedeburr.plan.ik_seeds import NEAR_MISS
 
-    if not trial.failures:
-        return None
-    i = int(trial.failures[0].point)  # a position in ``loop``
-    before = np.flatnonzero(trial.ok[:i])
-    if i == 0 or not len(before):
-        return None
-    kin, opt = ctx.kin, ctx.options.ik
-    cone, pref, t_H = wt.cone_retract_H[loop], wt.retract_H[loop], wt.t_H[loop]
-    half = max(float(wt.cone_half_angle), 1e-3)
-    probe = cone_clearance_probe(kin, ctx.checker, p_HQ[i], cone[i], half, pref[i], t_H[i],
-                                 trial.q[before[-1]], lift=lift, bound=opt.min_distance_floor,
-                                 min_wrist=opt.min_wrist)
-    if not probe["feasible"] or probe["best_clearance"] < opt.min_distance_floor + NEAR_MISS:
+    probe, opt = trial.probes.get(i), ctx.options.ik
+    if (i == 0 or probe is None or not probe["feasible"]
+            or probe["best_clearance"] < opt.min_distance_floor + NEAR_MISS):
         return None
     rev = np.arange(i, -1, -1)
-    back = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ[rev], pref[rev], cone[rev],
-                           wt.cone_half_angle, -t_H[rev], probe["q"],
-                           window_index=wt.window_index, options=opt, q_first=probe["q"],
-                           lift=lift, stop_at_failure=True)
+    back = solve_window_ik(ctx.cell, ctx.kin, ctx.checker, p_HQ[rev], wt.retract_H[loop][rev],
+                           wt.cone_retract_H[loop][rev], wt.cone_half_angle, -wt.t_H[loop][rev],
+                           probe["q"], window_index=wt.window_index, options=opt,
+                           q_first=probe["q"], lift=lift, stop_at_failure=True)
     log.debug("window %d: tracked back from an admissible pose at CL %d: %d of %d targets",
               wt.window_index, int(loop[i]), int(back.ok.sum()), len(rev))
     return back.q[-1].copy() if back.ok.all() else None
