@@ -141,8 +141,8 @@ class WindowIk:
         clearance: (M,) minimum distance [m] (capped at ``influence + bound``).
         failures: per-point failure records.
         stats: timings and solver counts.
-        probes: point -> the cone probe of each failed point where it ran
-            (:func:`cone_clearance_probe`).
+        probes: point -> the cone probe of each failed point (:func:`cone_clearance_probe`;
+            None where it did not run).
     """
 
     q: np.ndarray
@@ -258,12 +258,10 @@ def solve_window_ik(
     run = _WindowRun(cell=cell, kin=kin, checker=checker, solvers=solvers, options=options,
                      lift=lift, half=half,
                      reach=options.min_distance + options.influence_distance, counts=counts)
-    q_out = np.full((m, 6), np.nan)
-    X_out = np.full((m, 4, 4), np.nan)
-    ok = np.zeros(m, bool)
-    clearance = np.zeros(m)
+    q_out, X_out = np.full((m, 6), np.nan), np.full((m, 4, 4), np.nan)
+    ok, clearance = np.zeros(m, bool), np.zeros(m)
     failures: list[FailureRecord] = []
-    probes: dict[int, dict] = {}
+    probes: dict[int, dict | None] = {}  # per failed point: its cone probe (None: not run)
     t0 = time.perf_counter()
     p_T_pref = p_HT + lift * pref_retract_H  # T itself at the preferred axis (seeds)
     q_prev, i_prev = None, -1
@@ -293,8 +291,7 @@ def solve_window_ik(
             q_prev, i_prev = q_out[i], i
         else:
             failures.append(_failure(run, window_index, i, best, probe))
-            if probe is not None:
-                probes[i] = probe
+            probes[i] = probe
             if stop_at_failure:
                 break
         if progress is not None:
