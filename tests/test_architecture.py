@@ -14,8 +14,9 @@ ROOT = Path(drakedeburr.__file__).parent
 #: CLI layer (``*/commands.py``, cli.py, demo.py) may import anything
 ORDER = ("hub", "path", "frames", "orientation", "robots", "programs", "cell", "viz", "plan",
          "verify", "post", "laser")
-#: modules shared by every stage (configuration, units, errors, I/O, model lookup)
-BASE = {"config", "units", "errors", "_io", "resources"}
+#: modules shared by every stage (configuration, units, errors, I/O, model lookup, lazy
+#: re-exports)
+BASE = {"config", "units", "errors", "_io", "resources", "_lazy"}
 
 
 def _modules():

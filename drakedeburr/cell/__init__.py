@@ -5,21 +5,10 @@ are the same code with different frames. Tool geometry (the burr) is defined onc
 :mod:`drakedeburr.cell.tools`.
 """
 
-from drakedeburr.cell.reach import ReachResult, ReachSurvey, ReachTarget, face_targets, survey_reach
-from drakedeburr.cell.station import Cell, load_cell, resolve_hub_sdf
-from drakedeburr.cell.tools import BURR, FLOATING_SPINDLE, SPINDLE_STAND, BurrGeometry
+from drakedeburr._lazy import lazy_exports
 
-__all__ = [
-    "Cell",
-    "load_cell",
-    "resolve_hub_sdf",
-    "BurrGeometry",
-    "BURR",
-    "FLOATING_SPINDLE",
-    "SPINDLE_STAND",
-    "ReachTarget",
-    "ReachResult",
-    "ReachSurvey",
-    "face_targets",
-    "survey_reach",
-]
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
+    "reach": ("ReachResult", "ReachSurvey", "ReachTarget", "face_targets", "survey_reach"),
+    "station": ("Cell", "load_cell", "resolve_hub_sdf"),
+    "tools": ("BURR", "FLOATING_SPINDLE", "SPINDLE_STAND", "BurrGeometry"),
+})

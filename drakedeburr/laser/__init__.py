@@ -11,36 +11,18 @@
 * :mod:`~drakedeburr.laser.fanuc_ls` - FANUC .ls programs with the analogue output
 """
 
-from drakedeburr.laser.feature import FeatureSettings, LaserTargets, plan_contour
-from drakedeburr.laser.hole import HoleProgram, ServoLimits, plan_hole
-from drakedeburr.laser.kinematics import (
-    FiveBarGeometry,
-    check_reach,
-    forward_kinematics,
-    inverse_kinematics,
-    jacobian,
-    singularity_measures,
-)
-from drakedeburr.laser.power import PowerMap, PowerProfile
-from drakedeburr.laser.shapes import (
-    SHAPE_KINDS,
-    Circle,
-    Contour,
-    Hexagon,
-    Keyhole,
-    Polyline,
-    Rectangle,
-    Semicircle,
-    Slot,
-    build_contour,
-)
+from drakedeburr._lazy import lazy_exports
 
-__all__ = [
-    "FiveBarGeometry", "forward_kinematics", "inverse_kinematics", "jacobian",
-    "singularity_measures", "check_reach",
-    "Circle", "Semicircle", "Rectangle", "Slot", "Keyhole", "Hexagon", "Polyline",
-    "SHAPE_KINDS", "Contour", "build_contour",
-    "ServoLimits", "HoleProgram", "plan_hole",
-    "FeatureSettings", "LaserTargets", "plan_contour",
-    "PowerMap", "PowerProfile",
-]
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
+    "feature": ("FeatureSettings", "LaserTargets", "plan_contour"),
+    "hole": ("HoleProgram", "ServoLimits", "plan_hole"),
+    "kinematics": (
+        "FiveBarGeometry", "check_reach", "forward_kinematics", "inverse_kinematics", "jacobian",
+        "singularity_measures",
+    ),
+    "power": ("PowerMap", "PowerProfile"),
+    "shapes": (
+        "SHAPE_KINDS", "Circle", "Contour", "Hexagon", "Keyhole", "Polyline", "Rectangle",
+        "Semicircle", "Slot", "build_contour",
+    ),
+})

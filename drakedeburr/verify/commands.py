@@ -217,11 +217,6 @@ def _run_verify(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from drakedeburr.argcheck import check_windows, hub_windows
-    from drakedeburr.cli import tqdm_progress
-    from drakedeburr.plan.io import save_plan
-    from drakedeburr.verify.batch import make_plan
-    from drakedeburr.verify.checks import config_for_plan, verify_plan
-    from drakedeburr.verify.report import write_report_files, write_report_json
 
     windows = _windows(args.windows)
     kind, *rest = _resolve_target(args.target, args.scenario)
@@ -233,8 +228,6 @@ def _run_verify(args: argparse.Namespace) -> int:
         plan = _load_plan(folder)
         _same_robot(plan, getattr(args, "robot", None))
         check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
-        speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
-        config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
     else:
         scenario, hub = rest
         _check_outputs(args, kind, None)
@@ -245,8 +238,19 @@ def _run_verify(args: argparse.Namespace) -> int:
     if kind == "plan" and len(plan.trajectory.t) >= 2:
         from drakedeburr.verify.sweep import warm_workers_for_plan
 
-        warm_workers_for_plan(plan)  # the sweep's workers start while this process samples
-    if kind != "plan":
+        # the sweep's workers start now, their imports and cell overlapping this process's
+        # (hence before the imports below)
+        warm_workers_for_plan(plan)
+    from drakedeburr.cli import tqdm_progress
+    from drakedeburr.plan.io import save_plan
+    from drakedeburr.verify.batch import make_plan
+    from drakedeburr.verify.checks import config_for_plan, verify_plan
+    from drakedeburr.verify.report import write_report_files, write_report_json
+
+    if kind == "plan":
+        speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+        config = config_for_plan(plan, tolerances=_tolerances(args), grinding_speed=speed)
+    else:
         if Path(hub).suffix.lower() in MESH_TARGET_SUFFIXES:
             from drakedeburr.errors import NoCuttableWindow
 
