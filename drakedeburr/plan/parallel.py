@@ -22,8 +22,8 @@ import logging
 import os
 from collections.abc import Callable, Sequence
 
-__all__ = ["plan_all_windows", "map_tasks", "warm_pool", "worker_count", "shutdown_pool",
-           "running_workers"]
+__all__ = ["plan_all_windows", "map_tasks", "map_calls", "warm_pool", "worker_count",
+           "shutdown_pool", "running_workers"]
 
 log = logging.getLogger(__name__)
 
@@ -139,11 +139,8 @@ class _Records(logging.Handler):
         self.records.append(record)
 
 
-def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, wt, level: int):
-    """Task of a worker: (WindowPlan, the log records emitted while planning it)."""
-    from drakedeburr.plan.window import plan_window
-
-    ctx = _worker_context(recipe, fingerprint, config, options, q_refs)
+def _logged(level: int, fn: Callable, args: tuple):
+    """In a worker: (``fn(*args)``, the log records at ``level`` or above it emitted)."""
     root = logging.getLogger()
     handler = _Records()
     handler.setLevel(level)
@@ -151,10 +148,48 @@ def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, wt,
     root.addHandler(handler)
     root.setLevel(level)
     try:
-        return plan_window(ctx, wt), handler.records
+        return fn(*args), handler.records
     finally:
         root.removeHandler(handler)
         root.setLevel(old_level)
+
+
+def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, wt, level: int):
+    """Task of a worker: (WindowPlan, the log records emitted while planning it)."""
+    from drakedeburr.plan.window import plan_window
+
+    ctx = _worker_context(recipe, fingerprint, config, options, q_refs)
+    return _logged(level, plan_window, (ctx, wt))
+
+
+def map_calls(n: int, call: Callable[[int], tuple], workers: int | None = None,
+              name: Callable[[int], str] = lambda k: f"task {k}", *,
+              here: Callable[[int], object] | None = None) -> list:
+    """``fn(*args)`` for each ``call(k) -> (fn, args)`` (``fn`` a module-level function, so a
+    worker can import it), ``k = 0..n-1``, by :func:`map_tasks` on the workers *already
+    running* and here (``here(k)`` instead, when given: the same value, e.g. with this
+    process's own state); the log records a worker emits are emitted here. For short tasks
+    (a second each at most): a worker started for them would arrive after they are done.
+    -> values in task order."""
+    level = logging.getLogger().getEffectiveLevel()
+    running = sum(w.proc.poll() is None for w in _POOL.get("workers", []))
+    size = min(worker_count(workers, n), running + 1)
+
+    def local(k: int):
+        if here is not None:
+            return here(k)
+        fn, args = call(k)
+        return fn(*args)
+
+    def remote(k: int) -> tuple:
+        fn, args = call(k)
+        return _logged, (level, fn, args)
+
+    def done(k: int, value):
+        _replay(value[1])
+        return value[0]
+
+    return map_tasks(n, local, remote, size, done, name)
 
 
 class _Worker:

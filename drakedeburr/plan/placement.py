@@ -196,6 +196,22 @@ def _clear_share(cell, kin: CellKinematics, samples, per, tol) -> tuple[float, f
     return (n_ok / n if n else 0.0), float(least)
 
 
+def _may_win(cand: tuple, first: tuple, first_share: float) -> bool:
+    """Whether a candidate ranked after ``first`` (by windows reached, then margin) can still
+    be chosen over it once ``first``'s clearance share is known: only with as many windows
+    reached and a larger share (the key compared below: windows, share to 0.01, margin)."""
+    return cand[0] == first[0] and round(first_share, 2) < 1.0
+
+
+def _candidate_clearance(recipe: dict, kin: CellKinematics, samples, per, tol):
+    """A worker's task: :func:`_clear_share` of a candidate, its cell built from ``recipe``
+    (kept as the worker's cell: a window planned in it later finds it built)."""
+    from drakedeburr.plan import parallel
+
+    cell = parallel.worker_cell(recipe, None, parallel._WORKER, lambda c: {})[0]
+    return _clear_share(cell, kin, samples, per, tol)
+
+
 def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
               turns: int = 6, offsets: tuple[float, ...] = (0.0, -0.05, 0.05),
               checked: int = 2) -> Placement:
@@ -210,7 +226,9 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
         offsets: offsets tried on a chuck [m] (the nominal first: it wins ties).
         checked: best candidates whose clearance is checked in a built cell.
     """
+    from drakedeburr.cell.recipe import cell_recipe
     from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan.parallel import map_calls
 
     kin0 = cell_kinematics(cell)
     seat = seat_offset(cell, hub_model)
@@ -226,15 +244,39 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
             n, margin, per = _score(_moved(kin0, X), samples, wrist)
             cands.append((n, margin, -k, -abs(off), X, per, period * k / turns, off))
     cands.sort(key=lambda c: c[:4], reverse=True)
+    top = cands[:checked]
+    recipes = [cell_recipe(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name,
+                           tool=cell.tool, hub_pose=c[4]) for c in top]
+    tol = config.tolerances
+    built: dict[int, object] = {}
+    shares: dict[int, tuple[float, float]] = {}
+
+    def call(k: int) -> tuple:
+        return _candidate_clearance, (recipes[k], _moved(kin0, top[k][4]), samples, top[k][5],
+                                      tol)
+
+    def here(k: int) -> tuple[float, float] | None:
+        if k and 0 in shares and not _may_win(top[k], top[0], shares[0][0]):
+            return None  # it cannot beat the first candidate: not built
+        built[k] = load_cell(**recipes[k])
+        shares[k] = _clear_share(built[k], _moved(kin0, top[k][4]), samples, top[k][5], tol)
+        return shares[k]
+
+    # the candidates are checked at once on the running workers (each the same reading
+    # wherever it is made); the winner's cell is then this process's, built if a worker
+    # read it
+    read = map_calls(len(top), call, options.workers,
+                     name=lambda k: f"placement candidate {k}", here=here)
     best, best_key = None, None
-    for n, margin, _, _, X, per, turn, off in cands[:checked]:
-        placed = load_cell(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name,
-                           tool=cell.tool, hub_pose=X)
-        share, least = _clear_share(placed, _moved(kin0, X), samples, per, config.tolerances)
+    for k, (n, margin, _, _, X, per, turn, off) in enumerate(top):
+        if read[k] is None:
+            continue
+        share, least = read[k]
         key = (n, round(share, 2), margin)
         if best_key is None or key > best_key:
-            best, best_key = (X, per, turn, off, n, margin, least, placed), key
-    X, per, turn, off, n, margin, least, placed = best
+            best, best_key = (X, per, turn, off, n, margin, least, k), key
+    X, per, turn, off, n, margin, least, k = best
+    placed = built.get(k) or load_cell(**recipes[k])
     refs = branch_sequence(per, kin0.q_home, np.array([1.0, 1.0, 1.0, 0.3, 0.3, 0.3]))
     log.info("hub placement: turn %.1f deg, offset %.0f mm, seat %.1f mm: %d of %d windows "
              "reachable on one branch (joint margin %.2f rad)", np.degrees(turn), 1e3 * off,

@@ -36,7 +36,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
-from drakedeburr.plan.parallel import plan_all_windows
+from drakedeburr.plan.parallel import map_calls, plan_all_windows, warm_pool, worker_count
 from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
@@ -341,33 +341,42 @@ def window_targets_for_hub(hub_model, *, source: str = "auto",
     """
     params = params or hub_model.process
     chosen = [w for w in hub_model.windows if windows is None or w.index in set(windows)]
+    if progress is not None:
+        progress(0, len(chosen), "targets")
+    # the windows at once on the pool's running workers (each the same targets wherever
+    # they are made)
+    made = map_calls(len(chosen), lambda k: (_window_targets, (chosen[k], source, params)),
+                     name=lambda k: f"targets of window {chosen[k].index}")
     out = []
-    for k, edge in enumerate(chosen):
-        if progress is not None:
-            progress(k, len(chosen), f"targets window {edge.index}")
-        wt = None
-        if source in ("toolpath", "auto"):
-            try:
-                wt = WindowTargets.from_tool_path(_tool_path(edge, params))
-            except InputError as exc:
-                if skipped is None:
-                    raise
-                log.warning("window %d not planned: %s", edge.index, exc)
-                skipped.append(FailureRecord(window=edge.index, kind="window",
-                                             reason=f"no tool path: {exc}",
-                                             tried=("orientation stage (recipe's theta box)",)))
-                continue
-            except ImportError as exc:
-                if source == "toolpath":
-                    raise
-                log.warning("window %d: path/orientation stage unavailable (%s); using the "
-                            "ground-truth edge with a fixed tilt instead", edge.index, exc)
+    for edge, (wt, why) in zip(chosen, made, strict=True):
         if wt is None:
-            wt = WindowTargets.from_window_edge(edge, params=params)
+            if skipped is None:
+                raise InputError(why)
+            log.warning("window %d not planned: %s", edge.index, why)
+            skipped.append(FailureRecord(window=edge.index, kind="window",
+                                         reason=f"no tool path: {why}",
+                                         tried=("orientation stage (recipe's theta box)",)))
+            continue
         out.append(wt)
     if progress is not None:
         progress(len(chosen), len(chosen), "targets")
     return out
+
+
+def _window_targets(edge, source: str, params: ProcessParameters):
+    """One window's targets (:func:`window_targets_for_hub`) -> (WindowTargets, None), or
+    (None, why) when its ToolPath cannot give targets."""
+    if source in ("toolpath", "auto"):
+        try:
+            return WindowTargets.from_tool_path(_tool_path(edge, params)), None
+        except InputError as exc:
+            return None, str(exc)
+        except ImportError as exc:
+            if source == "toolpath":
+                raise
+            log.warning("window %d: path/orientation stage unavailable (%s); using the "
+                        "ground-truth edge with a fixed tilt instead", edge.index, exc)
+    return WindowTargets.from_window_edge(edge, params=params), None
 
 
 def _tool_path(edge, params: ProcessParameters):
@@ -416,6 +425,8 @@ def plan_hub(
     from drakedeburr.plan import relax
 
     options = options or PlanOptions()
+    if worker_count(options.workers, 2) > 1:  # the pool imports while this process loads
+        warm_pool(_import_planning, (), options.workers)  # (the targets, placement use it)
     cell = load_cell(config.scenario, config.hub, robot=config.robot, tool=config.tool)
     hub_model = load_hub(cell.hub_sdf.parent)
     t0 = time.perf_counter()
@@ -440,6 +451,15 @@ def plan_hub(
         plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets
     return plan
+
+
+def _import_planning() -> None:
+    """A worker's warm-up at the start of :func:`plan_hub`: the modules of the tasks it gets
+    (window targets, placement candidates, windows)."""
+    import drakedeburr.cell.station
+    import drakedeburr.orientation.orient
+    import drakedeburr.path.cl_planning
+    import drakedeburr.plan.window  # noqa: F401
 
 
 def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
