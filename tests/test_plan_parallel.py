@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from pool_support import wait_until
 
 from drakedeburr.resources import hub_names
 
@@ -122,7 +123,6 @@ def test_a_worker_gets_its_next_task_while_this_process_is_busy(tmp_path):
     one at once, not when this process ends its own. Here this process's first task waits for
     the worker to have done every other task (each touches a file); fed only between this
     process's tasks, the worker would do one and the wait would time out."""
-    import time
     from pathlib import Path
 
     from drakedeburr.plan import parallel
@@ -133,10 +133,9 @@ def test_a_worker_gets_its_next_task_while_this_process_is_busy(tmp_path):
 
     def here(k):
         ran_here.append(k)
-        deadline = time.monotonic() + 60.0
-        while k == 0 and not all(f.exists() for f in files[1:]):
-            assert time.monotonic() < deadline, "the worker was not fed while this task ran"
-            time.sleep(0.05)
+        if k == 0:
+            wait_until(lambda: all(f.exists() for f in files[1:]),
+                       "the worker was not fed while this task ran")
         return f"here {k}"
 
     try:
@@ -152,7 +151,6 @@ def test_a_task_only_this_process_runs(tmp_path):
     """remote(k) None: task k is never sent; the worker still gets the tasks before it (the
     last sendable one first), and every result comes back in order. This process's first
     task waits for the worker to have done tasks 1 and 2."""
-    import time
     from pathlib import Path
 
     from drakedeburr.plan import parallel
@@ -162,10 +160,9 @@ def test_a_task_only_this_process_runs(tmp_path):
 
     def here(k):
         ran_here.append(k)
-        deadline = time.monotonic() + 60.0
-        while k == 0 and not (files[1].exists() and files[2].exists()):
-            assert time.monotonic() < deadline, "the tasks before the last were not sent"
-            time.sleep(0.05)
+        if k == 0:
+            wait_until(lambda: files[1].exists() and files[2].exists(),
+                       "the tasks before the last were not sent")
         return ("here", k)
 
     parallel.shutdown_pool(kill=True)
@@ -245,17 +242,14 @@ def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog, tm
     second call gets only its own results. This process's task waits for the worker's to
     have started."""
     import logging
-    import time
 
     from drakedeburr.plan import parallel
 
     mark = tmp_path / "started"
 
     def here(k):
-        deadline = time.monotonic() + 60.0
-        while k == 0 and not mark.exists():
-            assert time.monotonic() < deadline, "the worker never started its task"
-            time.sleep(0.05)
+        if k == 0:
+            wait_until(mark.exists, "the worker never started its task")
         return ("here", k)
 
     parallel.shutdown_pool(kill=True)

@@ -3,11 +3,11 @@ search's candidate clearances are read on the workers already running as well as
 the same result bit for bit; a candidate that cannot win is not built."""
 
 import logging
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from pool_support import wait_until
 
 from drakedeburr.resources import hub_names
 
@@ -54,10 +54,8 @@ def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkey
         mark = tmp_path / "worker"
 
         def here(k):
-            deadline = time.monotonic() + 60.0
-            while k == 0 and not mark.exists():
-                assert time.monotonic() < deadline, "no worker took the task"
-                time.sleep(0.02)
+            if k == 0:
+                wait_until(mark.exists, "no worker took the task")
 
         parallel.map_tasks(2, here, lambda k: (Path.touch, (mark,)), 2)
         caplog.clear()
