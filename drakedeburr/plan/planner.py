@@ -408,7 +408,8 @@ def plan_hub(
     the standard burr leaves windows failing where the spindle body, clamp or collet meets
     something (a deep dish), the hub is planned again with the long-reach burr and that
     plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
-    one burr for the whole hub, no tool change within a program).
+    one burr for the whole hub, no tool change within a program); the failing windows are
+    planned with it first, and the rest only when it cuts one of them (:func:`_long_reach`).
 
     Args:
         config: the run's configuration (:func:`drakedeburr.config.load_config`): scenario,
@@ -438,19 +439,45 @@ def plan_hub(
     if options.relax and config.tool is None and relax.reach_may_help(plan, cell):
         t1 = time.perf_counter()
         t_standard = t1 - t0
-        log.warning("the standard burr leaves window(s) %s failing where the spindle meets the "
-                    "cell: planning the hub again with the %s", relax.failing_windows(plan),
-                    relax.long_reach().title)
-        alt = _plan_in_cell(load_cell(config.scenario, config.hub, robot=config.robot,
-                                      tool=relax.LONG_REACH),
-                            hub_model, wts, config, options, progress)
-        plan = relax.choose_tool(plan, alt)
+        plan = _long_reach(plan, hub_model, wts, config, options, progress)
         plan.run["timings"].update(standard_burr_seconds=t_standard,
                                    long_reach_seconds=time.perf_counter() - t1)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         plan = replace(plan, failures=(*skipped, *plan.failures))
     plan.run["timings"]["targets_seconds"] = t_targets
     return plan
+
+
+def _long_reach(plan: Plan, hub_model, wts, config: Config, options: PlanOptions,
+                progress: Progress) -> Plan:
+    """The hub planned again with the long-reach burr, the standard burr's ``plan`` or that
+    one kept (:func:`drakedeburr.plan.relax.choose_tool`).
+
+    The windows the standard burr left failing are planned first, in the long-reach cell
+    placed for the whole hub (as the full pass places it). A window's plan depends only on
+    the cell, the placement and its own targets, so one that fails there (its milder recipes
+    included, and no move between windows failing) fails in the full pass too; when every
+    such window does, the long-reach plan cannot leave fewer windows failing, and the other
+    windows are not planned again (on an unseen 10-window hub, one window failing with
+    either burr, that was most of the planning time)."""
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.plan import relax
+
+    failing = relax.failing_windows(plan)
+    log.warning("the standard burr leaves window(s) %s failing where the spindle meets the "
+                "cell: planning %s again with the %s", failing,
+                "them" if -1 not in failing else "the hub", relax.long_reach().title)
+    cell = load_cell(config.scenario, config.hub, robot=config.robot, tool=relax.LONG_REACH)
+    if -1 not in failing and len(failing) < len(wts):
+        first = _plan_in_cell(cell, hub_model, wts, config, options, progress,
+                              only=set(failing))
+        still = relax.failing_windows(first)
+        if -1 not in still and set(failing) <= set(still):
+            return relax.keep_standard(plan, first)
+        log.warning("the %s cuts window(s) %s: planning the hub with it",
+                    relax.long_reach().title, sorted(set(failing) - set(still)))
+    return relax.choose_tool(plan, _plan_in_cell(cell, hub_model, wts, config, options,
+                                                 progress))
 
 
 def _import_planning() -> None:
@@ -463,10 +490,10 @@ def _import_planning() -> None:
 
 
 def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
-                  progress: Progress) -> Plan:
+                  progress: Progress, only: set[int] | None = None) -> Plan:
     """The hub's plan in one cell: where the hub sits (placement search), the home it is
     planned from (:mod:`drakedeburr.plan.home`), the windows, the recipe's relaxation where
-    it fails."""
+    it fails. ``only``: the windows planned (the placement is still the whole hub's)."""
     from drakedeburr.cell.station import load_cell
     from drakedeburr.plan.home import clear_home
     from drakedeburr.plan.placement import place_hub
@@ -489,6 +516,8 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     # with relaxation on, a window is abandoned at its first failed IK target (it fails under
     # this recipe whatever the rest does) and relaxed; _relax plans it in full if no
     # relaxation is kept
+    if only is not None:
+        wts = [wt for wt in wts if wt.window_index in only]
     results = plan_all_windows(_opts(ctx, fail_fast=options.relax), wts,
                                options.workers, progress)
     if options.relax and any(r.failures for r in results):

@@ -40,7 +40,7 @@ from drakedeburr.config import OrientationBounds
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "reach_may_help",
-           "choose_tool", "failing_windows", "long_reach"]
+           "choose_tool", "keep_standard", "failing_windows", "long_reach"]
 
 log = logging.getLogger(__name__)
 
@@ -139,6 +139,24 @@ def reach_may_help(plan, cell) -> bool:
     if cell.tool != DEFAULT_TOOL:
         return False
     return any(n.rsplit("::", 1)[-1] in _TOOL_BODY for f in plan.failures for n in _pair(f))
+
+
+def keep_standard(plan, first):
+    """The standard burr's ``plan`` kept: the long-reach burr, tried first on the windows it
+    left failing (``first``: the plan of those windows alone, placed for the whole hub),
+    left every one of them failing; a failure record per window says so."""
+    lr = long_reach()
+    notes = []
+    for w in failing_windows(plan):
+        own = next((f for f in first.failures if f.window == w), None)
+        notes.append(FailureRecord(
+            window=w, kind="relaxation", tried=(lr.title,),
+            reason=f"the {lr.title} was tried on window(s) {failing_windows(plan)} first (the "
+                   "hub placed for it as a whole) and left them failing, so the hub was not "
+                   "planned again with it" + ("" if own is None else f"; here: {own.reason}")))
+    log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title,
+             failing_windows(first))
+    return replace(plan, failures=(*plan.failures, *notes))
 
 
 def choose_tool(plan, alt):
