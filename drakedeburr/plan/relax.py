@@ -145,13 +145,13 @@ def keep_standard(plan, first):
     """The standard burr's ``plan`` kept: the long-reach burr, tried first on the windows it
     left failing (``first``: the plan of those windows alone, placed for the whole hub),
     left every one of them failing; a failure record per window says so."""
-    lr = long_reach()
+    lr, failing = long_reach(), failing_windows(plan)
     notes = []
-    for w in failing_windows(plan):
+    for w in failing:
         own = next((f for f in first.failures if f.window == w), None)
         notes.append(FailureRecord(
             window=w, kind="relaxation", tried=(lr.title,),
-            reason=f"the {lr.title} was tried on window(s) {failing_windows(plan)} first (the "
+            reason=f"the {lr.title} was tried on window(s) {failing} first (the "
                    "hub placed for it as a whole) and left them failing, so the hub was not "
                    "planned again with it" + ("" if own is None else f"; here: {own.reason}")))
     log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title,
