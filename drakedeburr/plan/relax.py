@@ -145,17 +145,23 @@ def keep_standard(plan, first):
     """The standard burr's ``plan`` kept: the long-reach burr, tried first on the windows it
     left failing (``first``: the plan of those windows alone, placed for the whole hub),
     left every one of them failing; a failure record per window says so."""
-    lr, failing = long_reach(), failing_windows(plan)
+    return _standard_kept(plan, first, f"was tried on window(s) {failing_windows(plan)} first "
+                                       "(the hub placed for it as a whole) and left them "
+                                       "failing, so the hub was not planned again with it")
+
+
+def _standard_kept(plan, tried, how: str):
+    """``plan`` with a relaxation record per failing window: the long-reach burr ``how``
+    (its plan ``tried`` gives each window's own reason)."""
+    lr = long_reach()
     notes = []
-    for w in failing:
-        own = next((f for f in first.failures if f.window == w), None)
+    for w in failing_windows(plan):
+        own = next((f for f in tried.failures if f.window == w), None)
         notes.append(FailureRecord(
             window=w, kind="relaxation", tried=(lr.title,),
-            reason=f"the {lr.title} was tried on window(s) {failing} first (the "
-                   "hub placed for it as a whole) and left them failing, so the hub was not "
-                   "planned again with it" + ("" if own is None else f"; here: {own.reason}")))
+            reason=f"the {lr.title} {how}" + ("" if own is None else f"; here: {own.reason}")))
     log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title,
-             failing_windows(first))
+             failing_windows(tried))
     return replace(plan, failures=(*plan.failures, *notes))
 
 
@@ -175,12 +181,5 @@ def choose_tool(plan, alt):
         log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing",
                     std.title, lr.title, len(a), len(b))
         return alt
-    notes = []
-    for w in a:
-        own = next((f for f in alt.failures if f.window == w), None)
-        notes.append(FailureRecord(
-            window=w, kind="relaxation", tried=(lr.title,),
-            reason=f"the {lr.title} was tried for the hub and left {len(b)} window(s) "
-                   f"failing {b}" + ("" if own is None else f"; here: {own.reason}")))
-    log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title, b)
-    return replace(plan, failures=(*plan.failures, *notes))
+    return _standard_kept(plan, alt, f"was tried for the hub and left {len(b)} window(s) "
+                                     f"failing {b}")
