@@ -112,13 +112,19 @@ def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) ->
     return got
 
 
+def planning_cell(recipe: dict, fingerprint: str | None = None) -> tuple:
+    """In a worker: (the planner's cell of ``recipe``, its per-tolerances cache), kept for the
+    worker's later planning tasks (:func:`worker_cell`)."""
+    return worker_cell(recipe, fingerprint, _WORKER, lambda cell: {})
+
+
 def _worker_context(recipe: dict, fingerprint: str, config, options, q_refs):
     """The worker's :class:`PlanContext` for a recipe (built once per cell and tolerances)."""
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.options import PlanContext
 
     tol = config.tolerances  # the checkers' certification depends on these two
-    cell, per_tol = worker_cell(recipe, fingerprint, _WORKER, lambda cell: {})
+    cell, per_tol = planning_cell(recipe, fingerprint)
     key = (tol.min_clearance, tol.narrowphase_resolve)
     if key not in per_tol:
         per_tol[key] = (cell_kinematics(cell), ClearanceChecker(cell, tolerances=tol),
@@ -172,8 +178,7 @@ def map_calls(n: int, call: Callable[[int], tuple], workers: int | None = None,
     (a second each at most): a worker started for them would arrive after they are done.
     -> values in task order."""
     level = logging.getLogger().getEffectiveLevel()
-    running = sum(w.proc.poll() is None for w in _POOL.get("workers", []))
-    size = min(worker_count(workers, n), running + 1)
+    size = min(worker_count(workers, n), running_workers() + 1)
 
     def local(k: int):
         if here is not None:

@@ -206,10 +206,9 @@ def _may_win(cand: tuple, first: tuple, first_share: float) -> bool:
 def _candidate_clearance(recipe: dict, kin: CellKinematics, samples, per, tol):
     """A worker's task: :func:`_clear_share` of a candidate, its cell built from ``recipe``
     (kept as the worker's cell: a window planned in it later finds it built)."""
-    from drakedeburr.plan import parallel
+    from drakedeburr.plan.parallel import planning_cell
 
-    cell = parallel.worker_cell(recipe, None, parallel._WORKER, lambda c: {})[0]
-    return _clear_share(cell, kin, samples, per, tol)
+    return _clear_share(planning_cell(recipe)[0], kin, samples, per, tol)
 
 
 def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
