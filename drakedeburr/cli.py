@@ -214,13 +214,38 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # usage error (2, one line) or --help (0)
         return exc.code if isinstance(exc.code, int) else 2
-    level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose > 1 else logging.INFO)
+    configure_logging(args.verbose, args.quiet)
+    return _run(args)
+
+
+def configure_logging(verbose: int, quiet: bool) -> None:
+    """Log records to stderr: warnings with -q, debug with -vv, else info. The solvers' own
+    messages (e.g. IPOPT stopping at its iteration cap on a retried IK point, which the
+    planner handles) only with -vv."""
+    level = logging.WARNING if quiet else (logging.DEBUG if verbose > 1 else logging.INFO)
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s",
                         datefmt="%H:%M:%S", stream=sys.stderr)
-    # the solvers' own messages (e.g. IPOPT stopping at its iteration cap on a retried IK
-    # point, which the planner handles) only with -vv
-    logging.getLogger("drake").setLevel(level if args.verbose > 1 else logging.ERROR)
-    return _run(args)
+    _quiet_drake(level if verbose > 1 else logging.ERROR)
+
+
+class _AtLeast(logging.Filter):
+    def __init__(self, level: int) -> None:
+        super().__init__()
+        self.level = level
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= self.level
+
+
+def _quiet_drake(level: int) -> None:
+    """Drake's own log records (the ``drake`` logger, fed by its C++ spdlog) below ``level``
+    are dropped, whenever pydrake is imported. A filter, not the logger's level: importing
+    pydrake sets that logger's level to INFO (``pydrake.common`` ties it to spdlog), and the
+    CLI imports pydrake only once a command runs (so ``--help`` stays fast)."""
+    logger = logging.getLogger("drake")
+    for f in [f for f in logger.filters if isinstance(f, _AtLeast)]:
+        logger.removeFilter(f)
+    logger.addFilter(_AtLeast(level))
 
 
 if __name__ == "__main__":  # pragma: no cover

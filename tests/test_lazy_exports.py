@@ -46,3 +46,29 @@ def test_the_command_line_parser_imports_no_heavy_library():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == ""
+
+
+_IPOPT_AT_ITS_CAP = """
+import sys
+from drakedeburr import cli
+cli.configure_logging(int(sys.argv[1]), False)
+from pydrake.solvers import IpoptSolver, MathematicalProgram, SolverOptions
+prog = MathematicalProgram()
+x = prog.NewContinuousVariables(2)
+prog.AddCost((x[0] - 1) ** 4 + (x[1] * x[0] - 3) ** 2)
+options = SolverOptions()
+options.SetOption(IpoptSolver().solver_id(), "max_iter", 1)
+print(IpoptSolver().Solve(prog, None, options).get_solution_result())
+"""
+
+
+@pytest.mark.parametrize("verbose", [0, 2])
+def test_the_solvers_own_messages_only_with_vv_though_pydrake_is_imported_later(verbose):
+    """The CLI configures logging before any command imports pydrake, and importing pydrake
+    resets the ``drake`` logger's level: its warnings (IPOPT at its iteration cap, which the
+    planner handles) must still stay out of a normal run's output."""
+    run = subprocess.run([sys.executable, "-c", _IPOPT_AT_ITS_CAP, str(verbose)],
+                         capture_output=True, text=True, check=True)
+    assert "IterationLimit" in run.stdout
+    assert ("IPOPT terminated after exceeding the maximum iteration limit" in run.stderr) == (
+        verbose == 2), run.stderr
