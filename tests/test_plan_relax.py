@@ -200,7 +200,7 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
     assert calls == [(False, True, [0])]
     assert assembled == [[in_full]]
     assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"
-    assert "every start configuration with both spin rules" in out.failures[-1].reason
+    assert "both spin rules stopped at a first failure" in out.failures[-1].reason
 
 
 def test_a_report_only_window_is_planned_once(monkeypatch):
@@ -281,6 +281,51 @@ def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first
         assert out is plans[1]
     else:
         assert out.status is WindowStatus.ABANDONED and out.failures
+
+
+
+@pytest.mark.parametrize("fail_fast", [True, False])
+@pytest.mark.parametrize("least_mm", [1.9, 2.1])
+def test_a_fail_fast_cut_under_the_clearance_is_abandoned_before_its_program(
+        monkeypatch, fail_fast, least_mm):
+    """execute_cut: a tracked cut that stays under the clearance (after its axis is pinned)
+    fails this recipe whatever its program and timing would be; fail-fast (the first pass and
+    the relaxed variants) abandons it there, with the tracking's records; a full pass, or a
+    clear cut, goes on to the program."""
+    from drakedeburr.plan import cut as mut
+    from drakedeburr.plan import program_fit
+
+    n = 50
+    dist = np.full(n, least_mm * 1e-3 + 0.2e-3)
+    dist[20:24] = least_mm * 1e-3
+    rec = FailureRecord(0, "dense", "clearance")
+
+    def track(ctx, wt, wik, good, order, X_ik, step, records):
+        if dist.min() < ctx.cut_clearance:
+            records.append(rec)
+        return mut._Try(cp=None, cut=SimpleNamespace(ok=np.ones(n, bool)), dist=dist,
+                        spin_mode="ik")
+
+    class Fitted(Exception):
+        pass
+
+    def fit(*args, **kwargs):
+        raise Fitted
+
+    monkeypatch.setattr(mut, "_track_cut", track)
+    monkeypatch.setattr(program_fit, "fit_program", fit)
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
+                      config=SimpleNamespace(tolerances=SimpleNamespace(min_clearance=2e-3)),
+                      options=PlanOptions(fail_fast=fail_fast))
+    wik = SimpleNamespace(X_HT=np.zeros((3, 4, 4)))
+    call = functools.partial(mut.execute_cut, ctx, SimpleNamespace(window_index=0), wik,
+                             np.arange(3), np.arange(3), 0.0, [])
+    if fail_fast and least_mm < 2.0:
+        out = call()
+        assert out.status is WindowStatus.ABANDONED and out.failures == [rec]
+    else:
+        with pytest.raises(Fitted):
+            call()
 
 
 # ---------------------------------------------------------------- the burr, for the whole hub

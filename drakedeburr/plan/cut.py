@@ -146,6 +146,14 @@ def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, 
         if not np.all(tr.cut.ok):
             return WindowPlan.skipped(wt.window_index, WindowStatus.MOTION_FAILED,
                                       failures + records)
+        if ctx.options.fail_fast and np.any(tr.dist < ctx.cut_clearance):
+            # the window fails this recipe (the pinned axis and tightened blends did not
+            # clear the hub): relaxed next (PlanOptions.fail_fast), its program and timing
+            # not made (on an unseen hub they were ~40 s a window and spin rule)
+            log.debug("window %d: the executed cut stays under the clearance; abandoned for "
+                      "a milder recipe", wt.window_index)
+            return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED,
+                                      failures + records)
         out = fit_program(ctx, wt, tr, order, records, refine=step == ctx.options.dense_step)
         if out == "finer":
             step *= 0.5

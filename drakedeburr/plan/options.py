@@ -80,8 +80,9 @@ class PlanOptions:
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
             the cores this process may use, 1: one after the other here). The plan is the
             same whatever the number (it is not recorded in the plan).
-        fail_fast: stop a window's IK pass at its first failed target (the window fails
-            under the recipe whatever the rest does: status ``ABANDONED``) instead of planning
+        fail_fast: stop a window's IK pass at its first failed target, and a window whose
+            executed cut stays under the clearance after its axis is pinned (the window fails
+            under the recipe whatever the rest does: status ``ABANDONED``), instead of planning
             the rest of it; the other start seeds and spin rule are still tried, each stopping
             at its first failure. Set by ``plan_hub`` for its first pass when ``relax`` is on:
             a window that fails is relaxed, and planned once for its report

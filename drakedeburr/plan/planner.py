@@ -229,11 +229,11 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     plans (windows are planned independently); the hub's plan is assembled from them.
 
     ``results`` (the first pass, one per window) may hold windows abandoned at their first
-    failed IK target (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): every start
-    configuration and both spin rules failed there. Those not replaced by a kept relaxation
-    are planned in full here, once, for the report (``PlanOptions.report_only``: the first
-    start, the IK's own rule; its failure records say where the window fails and by how
-    much)."""
+    failure (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): an IK target every start
+    configuration failed, or an executed cut under the clearance, with both spin rules. Those
+    not replaced by a kept relaxation are planned in full here, once, for the report
+    (``PlanOptions.report_only``: the first start, the IK's own rule; its failure records say
+    where the window fails and by how much)."""
     from drakedeburr.plan import relax
 
     edges = {e.index: e for e in hub_model.windows}
@@ -263,8 +263,9 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),
                              reason="milder recipes failed too: " + "; ".join(
                                  f"{t}: {r}" for t, r in tried[w]) + (
-                                 "; the recipe failed from every start configuration with both"
-                                 " spin rules, the records are the first start's"
+                                 "; with the recipe both spin rules stopped at a first failure"
+                                 " (an IK target no start configuration reached, or the executed"
+                                 " cut under the clearance), the records are the first start's"
                                  if w in abandoned else ""))
                for w in failing if w not in accepted and tried[w]]
     complete([k for k, wt in enumerate(wts) if wt.window_index not in accepted])

@@ -29,8 +29,9 @@ class WindowStatus(enum.Enum):
     MOTION_FAILED = "motion_failed"  # the executed cut leaves the configuration: skipped
     PROGRAM_FAILED = "program_failed"  # a program target unreachable: skipped
     APPROACH_FAILED = "approach_failed"  # approach or retract unreachable: skipped
-    # failed under the recipe at an IK target, the rest not planned (PlanOptions.fail_fast:
-    # relaxation comes next, and the window is planned in full if none is kept)
+    # failed under the recipe at an IK target or with its executed cut under the clearance,
+    # the rest not planned (PlanOptions.fail_fast: relaxation comes next, and the window is
+    # planned in full if none is kept)
     ABANDONED = "abandoned"
 
     @property
