@@ -15,7 +15,7 @@ import pytest
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.plan import planner
 from drakedeburr.plan.options import PlanContext, PlanOptions
-from drakedeburr.plan.relax import TILT_STEPS, relax_windows
+from drakedeburr.plan.relax import TILT_STEPS, relax_windows, window_ladder
 from drakedeburr.plan.results import WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
@@ -31,7 +31,7 @@ def _edge(kind: str = "large"):
 def relaxed_targets(edge, params, reason, plan_one):
     """One window through relax_windows: (targets or None, deviation or None, tried)."""
     accepted, tried = relax_windows([edge], params, {edge.index: reason},
-                                    lambda wts: [plan_one(wt) for wt in wts])
+                                    lambda es: [window_ladder(e, params, plan_one) for e in es])
     wt, _, dev = accepted.get(edge.index, (None, None, None))
     return wt, dev, tried[edge.index]
 
@@ -111,7 +111,7 @@ def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatc
     wt0 = SimpleNamespace(window_index=0, relaxed=True)
     seen = {}
 
-    def fake_relax_windows(edges, params, reasons, plan_many):
+    def fake_relax_windows(edges, params, reasons, ladders):
         seen["edges"], seen["reasons"] = [e.index for e in edges], reasons
         return {0: (wt0, "window 0 relaxed", dev)}, {0: [], 1: [("theta box 0.09-0.26 rad",
                                                                  "ik: b")]}
@@ -145,23 +145,29 @@ def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatc
         assert "recipe_deviations" not in out.meta
 
 
-def test_every_failing_window_is_relaxed_in_one_batch_per_step():
-    """The variants of all failing windows go to the planner together, one batch per tilt
-    step: a window that plans clean drops out, the others go on to the next step."""
+def test_every_failing_window_climbs_its_own_ladder_and_all_at_once():
+    """The failing windows' ladders go to the planner together, one task each (no window waits
+    for another's variant of a step): each window's variants in turn, milder each step, up to
+    its first clean one; the same windows accepted and the same tries said as one batch per
+    step gave."""
     from drakedeburr.hub import load_hub
 
     large = [w for w in load_hub("h5_split").windows if w.kind == "large"][:2]
-    batches = []
+    calls, planned = [], []
 
-    def plan_many(wts):
-        batches.append([wt.window_index for wt in wts])
+    def plan_one(wt):
+        planned.append(wt.window_index)
         # the first window plans clean at the first step, the second never
-        return [_plan([] if wt.window_index == large[0].index else
-                      [FailureRecord(wt.window_index, "ik", "x")]) for wt in wts]
+        return _plan([] if wt.window_index == large[0].index else
+                      [FailureRecord(wt.window_index, "ik", "x")])
 
-    accepted, tried = relax_windows(large, ProcessParameters(), {}, plan_many)
-    assert batches == [[large[0].index, large[1].index]] + [[large[1].index]] * (
-        len(TILT_STEPS) - 1)
+    def ladders(edges):
+        calls.append([e.index for e in edges])
+        return [window_ladder(e, ProcessParameters(), plan_one) for e in edges]
+
+    accepted, tried = relax_windows(large, ProcessParameters(), {}, ladders)
+    assert calls == [[large[0].index, large[1].index]]
+    assert planned == [large[0].index] + [large[1].index] * len(TILT_STEPS)
     assert list(accepted) == [large[0].index] and accepted[large[0].index][1].failures == ()
     assert accepted[large[0].index][2].used == "theta box 0.09-0.26 rad"
     assert [t for t, _ in tried[large[1].index]] == [

@@ -22,7 +22,7 @@ import logging
 import os
 from collections.abc import Callable, Sequence
 
-__all__ = ["plan_all_windows", "map_tasks", "map_calls", "warm_pool", "worker_count",
+__all__ = ["plan_all_windows", "map_windows", "map_tasks", "map_calls", "warm_pool", "worker_count",
            "shutdown_pool", "running_workers"]
 
 log = logging.getLogger(__name__)
@@ -160,12 +160,12 @@ def _logged(level: int, fn: Callable, args: tuple):
         root.setLevel(old_level)
 
 
-def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, wt, level: int):
-    """Task of a worker: (WindowPlan, the log records emitted while planning it)."""
-    from drakedeburr.plan.window import plan_window
-
+def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, fn: Callable,
+                    item, level: int):
+    """Task of a worker: (``fn(ctx, item)`` in the worker's context of the run, the log
+    records emitted while making it)."""
     ctx = _worker_context(recipe, fingerprint, config, options, q_refs)
-    return _logged(level, plan_window, (ctx, wt))
+    return _logged(level, fn, (ctx, item))
 
 
 def map_calls(n: int, call: Callable[[int], tuple], workers: int | None = None,
@@ -461,7 +461,18 @@ def plan_all_windows(ctx, windows: Sequence, workers: int | None,
     """
     from drakedeburr.plan.window import plan_window
 
-    n = len(windows)
+    return map_windows(ctx, plan_window, windows, workers, progress,
+                       name=lambda wt: f"window {wt.window_index}")
+
+
+def map_windows(ctx, fn: Callable, items: Sequence, workers: int | None,
+                progress: Callable[[int, int, str], None] | None = None, *,
+                name: Callable[[object], str]) -> list:
+    """``fn(ctx, item)`` for every item, in their order, on the pool's workers (each in its own
+    context of the run: the same cell, checked by its fingerprint) and here. ``fn`` is a
+    module-level function, so a worker can import it; its log records are emitted here.
+    ``name(item)`` labels the progress and the log."""
+    n = len(items)
     recipe = _recipe(ctx)
     level = logging.getLogger().getEffectiveLevel()
     count = [0]
@@ -469,25 +480,25 @@ def plan_all_windows(ctx, windows: Sequence, workers: int | None,
     def finished(k: int, res):
         count[0] += 1
         if progress is not None:
-            progress(count[0], n, f"window {windows[k].window_index}")
+            progress(count[0], n, name(items[k]))
         return res
 
     serial = recipe is None or worker_count(workers, n) == 1
 
     def here(k: int):
         if not serial:
-            return finished(k, plan_window(ctx, windows[k]))
+            return finished(k, fn(ctx, items[k]))
         if progress is not None:
-            progress(k, n, f"window {windows[k].window_index}")
-        return plan_window(ctx, windows[k])
+            progress(k, n, name(items[k]))
+        return fn(ctx, items[k])
 
     def remote(k: int) -> tuple:
         return _plan_in_worker, (recipe, cell_fingerprint(ctx.cell), ctx.config, ctx.options,
-                                 ctx.q_refs, windows[k], level)
+                                 ctx.q_refs, fn, items[k], level)
 
     def done(k: int, value):
         _replay(value[1])
         return finished(k, value[0])
 
     return map_tasks(n, here, None if recipe is None else remote, workers, done,
-                     name=lambda k: f"window {windows[k].window_index}")
+                     name=lambda k: name(items[k]))

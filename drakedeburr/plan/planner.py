@@ -36,7 +36,13 @@ from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions
-from drakedeburr.plan.parallel import map_calls, plan_all_windows, warm_pool, worker_count
+from drakedeburr.plan.parallel import (
+    map_calls,
+    map_windows,
+    plan_all_windows,
+    warm_pool,
+    worker_count,
+)
 from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
@@ -223,8 +229,8 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
 
 def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: float) -> Plan:
     """The hub with a milder recipe for each window the default could not cut
-    (:func:`drakedeburr.plan.relax.relax_windows`: the variants of all those windows planned
-    together), kept when it leaves fewer failure records than the default; every deviation
+    (:func:`drakedeburr.plan.relax.relax_windows`: each window's variants in turn, the windows
+    at once), kept when it leaves fewer failure records than the default; every deviation
     recorded in ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass
     plans (windows are planned independently); the hub's plan is assembled from them.
 
@@ -254,10 +260,12 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
             for k, r in zip(ks, done, strict=True):
                 results[k] = r
 
+    params = ctx.config.process
     accepted, tried = ({}, {}) if not failing else relax.relax_windows(
-        [edges[w] for w in failing], ctx.config.process, first,
-        lambda x: plan_all_windows(_opts(ctx, fail_fast=True), x,
-                                   ctx.options.workers, None))
+        [edges[w] for w in failing], params, first,
+        lambda es: map_windows(_opts(ctx, fail_fast=True), relax.plan_ladder,
+                               [(e, params) for e in es], ctx.options.workers,
+                               name=lambda item: f"window {item[0].index}'s milder recipes"))
     abandoned = {wt.window_index for wt, r in zip(wts, results, strict=True)
                  if r.status is WindowStatus.ABANDONED}
     in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),

@@ -23,11 +23,12 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    timing already slows wherever a limit binds), and a smaller head would cut another chamfer
    (a recipe change, the part's to make).
 
-The variants of all failing windows are planned together, one round per tilt step (in
-parallel where the planner has workers); a window keeps the first variant that plans without
-a failure record. Windows are planned independently (the same plan whichever process plans
-them), so the hub is not planned again: its plan is assembled anew (transitions, timing) from
-the first pass's windows and the relaxed ones.
+Each failing window's variants are planned in turn, milder each step, up to the first that
+plans without a failure record (its *ladder*, :func:`window_ladder`); the ladders of all
+failing windows are planned at once (one task each, in parallel where the planner has
+workers). Windows are planned independently (the same plan whichever process plans them), so
+the hub is not planned again: its plan is assembled anew (transitions, timing) from the first
+pass's windows and the relaxed ones.
 """
 
 from __future__ import annotations
@@ -39,8 +40,9 @@ from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "reach_may_help",
-           "choose_tool", "keep_standard", "failing_windows", "long_reach"]
+__all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
+           "plan_ladder", "reach_may_help", "choose_tool", "keep_standard", "failing_windows",
+           "long_reach"]
 
 log = logging.getLogger(__name__)
 
@@ -74,48 +76,68 @@ def _box(b: OrientationBounds) -> str:
     return f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"
 
 
-def relax_windows(edges, params, failed_reasons: dict, plan_many):
-    """Milder recipes for several windows, one round per tilt step: each round plans the
-    variant of every window still failing at once (``plan_many(list of WindowTargets)`` ->
-    one result with ``failures`` per window, e.g. in parallel); a window keeps the first
-    variant that plans without a failure record.
+def relax_windows(edges, params, failed_reasons: dict, ladders):
+    """Milder recipes for several windows: each window's variants planned in turn, milder each
+    step, up to the first that plans without a failure record (:func:`plan_ladder`); the
+    windows' ladders at once (``ladders(list of WindowEdge)`` -> per window its ladder, e.g.
+    :func:`plan_ladder` on the pool's workers). A window's plan depends only on its own
+    targets, so each ladder is what one batch per tilt step gave, and no window waits for the
+    slowest variant of a step.
 
     Args:
         edges: the failing windows' WindowEdges. params: the recipe's ProcessParameters.
         failed_reasons: window -> why the default failed (for the record).
-        plan_many: callable planning windows' targets.
+        ladders: callable planning the windows' ladders.
 
     Returns:
         (accepted: window -> (WindowTargets, result, Deviation), tried: window -> [(recipe
         item, the first failure it left)] per variant that failed).
     """
-    from drakedeburr.plan.planner import _tool_path
-    from drakedeburr.plan.window_targets import WindowTargets
-
-    pending = list(edges)
     accepted, tried = {}, {e.index: [] for e in edges}
-    for box in TILT_STEPS:
-        batch = []
-        for edge in pending:
-            default = params.bounds(edge.kind)
-            if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
-                continue  # not milder than the recipe's own box
-            p = replace(params, bounds_large=box, bounds_small=box)
-            batch.append((edge, WindowTargets.from_tool_path(_tool_path(edge, p))))
-        if not batch:
-            continue
-        results = plan_many([wt for _, wt in batch])
-        for (edge, wt), res in zip(batch, results, strict=True):
+    for edge, ladder in zip(edges, ladders(list(edges)), strict=True):
+        for box, wt, res in ladder:
             log.info("window %d: relaxed to %s: %d failure records", edge.index, _box(box),
                      len(res.failures))
             if not res.failures:
                 accepted[edge.index] = (wt, res, Deviation(
                     edge.index, "tool tilt", _box(params.bounds(edge.kind)), _box(box),
                     f"the recipe's box failed: {failed_reasons.get(edge.index, '')}"))
-                pending.remove(edge)
             else:
                 tried[edge.index].append((_box(box), str(res.failures[0])))
     return accepted, tried
+
+
+def window_ladder(edge, params, plan_one) -> list:
+    """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
+    box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
+    record -> [(box, WindowTargets, result)] in the order planned."""
+    from drakedeburr.plan.planner import _tool_path
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    out = []
+    default = params.bounds(edge.kind)
+    for box in TILT_STEPS:
+        if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
+            continue  # not milder than the recipe's own box
+        p = replace(params, bounds_large=box, bounds_small=box)
+        wt = WindowTargets.from_tool_path(_tool_path(edge, p))
+        res = plan_one(wt)
+        out.append((box, wt, res))
+        if not res.failures:
+            break
+    return out
+
+
+def plan_ladder(ctx, item) -> list:
+    """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters), each variant by
+    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` (a task for
+    :func:`drakedeburr.plan.parallel.map_windows`)."""
+    import functools
+
+    from drakedeburr.plan.window import plan_window
+
+    edge, params = item
+    return window_ladder(edge, params, functools.partial(plan_window, ctx))
 
 
 def long_reach():
