@@ -238,10 +238,10 @@ class _AtLeast(logging.Filter):
 
 
 def _quiet_drake(level: int) -> None:
-    """Drake's own log records (the ``drake`` logger, fed by its C++ spdlog) below ``level``
-    are dropped, whenever pydrake is imported. A filter, not the logger's level: importing
-    pydrake sets that logger's level to INFO (``pydrake.common`` ties it to spdlog), and the
-    CLI imports pydrake only once a command runs (so ``--help`` stays fast)."""
+    """Drop Drake's own log records (the ``drake`` logger, fed by its C++ spdlog) below
+    ``level``, whether pydrake is imported before or after this. A filter, not the logger's
+    level: importing pydrake sets that logger's level to INFO (``pydrake.common`` ties it to
+    spdlog), and the CLI imports pydrake only once a command runs (so ``--help`` stays fast)."""
     logger = logging.getLogger("drake")
     for f in [f for f in logger.filters if isinstance(f, _AtLeast)]:
         logger.removeFilter(f)

@@ -78,7 +78,7 @@ def _box(b: OrientationBounds) -> str:
 
 def relax_windows(edges, params, failed_reasons: dict, ladders):
     """Milder recipes for several windows: each window's variants planned in turn, milder each
-    step, up to the first that plans without a failure record (:func:`plan_ladder`); the
+    step, up to the first that plans without a failure record (:func:`window_ladder`); the
     windows' ladders at once (``ladders(list of WindowEdge)`` -> per window its ladder, e.g.
     :func:`plan_ladder` on the pool's workers). A window's plan depends only on its own
     targets, so each ladder is what one batch per tilt step gave, and no window waits for the
