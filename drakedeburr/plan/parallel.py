@@ -160,7 +160,7 @@ def _logged(level: int, fn: Callable, args: tuple):
         root.setLevel(old_level)
 
 
-def _plan_in_worker(recipe: dict, fingerprint: str, config, options, q_refs, fn: Callable,
+def _in_run_context(recipe: dict, fingerprint: str, config, options, q_refs, fn: Callable,
                     item, level: int):
     """Task of a worker: (``fn(ctx, item)`` in the worker's context of the run, the log
     records emitted while making it)."""
@@ -493,7 +493,7 @@ def map_windows(ctx, fn: Callable, items: Sequence, workers: int | None,
         return fn(ctx, items[k])
 
     def remote(k: int) -> tuple:
-        return _plan_in_worker, (recipe, cell_fingerprint(ctx.cell), ctx.config, ctx.options,
+        return _in_run_context, (recipe, cell_fingerprint(ctx.cell), ctx.config, ctx.options,
                                  ctx.q_refs, fn, items[k], level)
 
     def done(k: int, value):

@@ -522,9 +522,9 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     if home_moved is not None:  # the hub leaves the cell's home without clearance
         cell = load_cell(**{**cell._cache["load_args"], "q_home": q_home})
         ctx = _context(cell, config, options, q_refs)
-    # with relaxation on, a window is abandoned at its first failed IK target (it fails under
-    # this recipe whatever the rest does) and relaxed; _relax plans it in full if no
-    # relaxation is kept
+    # with relaxation on, a window is abandoned at its first failure (an IK target, or its cut
+    # under the clearance: it fails under this recipe whatever the rest does) and relaxed;
+    # _relax plans it in full if no relaxation is kept
     if only is not None:
         wts = [wt for wt in wts if wt.window_index in only]
     results = plan_all_windows(_opts(ctx, fail_fast=options.relax), wts,
