@@ -341,7 +341,7 @@ def _run_verify_all(args: argparse.Namespace) -> int:
         args.hubs, args.out, scenarios=scenarios, workers=args.workers,
         scheduler=args.scheduler, planner=args.planner, windows=_windows(args.windows),
         quick=args.quick, html=args.html,
-        grinding_speed=None if args.grinding_speed is None else args.grinding_speed * 1e-3,
+        grinding_speed=None if args.grinding_speed is None else m_from_mm(args.grinding_speed),
         progress=tqdm_progress("verify-all"))
     print(summary_markdown(summary), end="")
     return 0 if summary["passed"] else 1
