@@ -25,7 +25,7 @@ from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "rewound_start"]
+__all__ = ["plan_window", "needs_other_rule", "better_of", "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -49,31 +49,42 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring)."""
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from)
-    if ctx.options.report_only:
+    if ctx.options.report_only or not needs_other_rule(first, ctx.options.retry_in_band):
         return first
     other, ctx2 = _other_rule(ctx)
-    if first.status is WindowStatus.ABANDONED:  # fail-fast pass: is the other rule clean?
-        second = _plan_window_once(ctx2, wt, q_from)
+    if first.status.planned and not first.failures:  # clean but slow: the other rule may wind
+        log.debug("window %d: %.0f %% of the cut in the speed band; planning it again with "
+                  "the %r warm-start spin", wt.window_index,
+                  100 * first.stats.speed_in_band_fraction, other)
+    elif first.status is not WindowStatus.ABANDONED:
+        log.debug("window %d: %d failure records; planning it again with the %r warm-start "
+                  "spin", wt.window_index, len(first.failures), other)
+    return better_of(first, _plan_window_once(ctx2, wt, q_from))
+
+
+def needs_other_rule(first: WindowPlan, retry_in_band: float) -> bool:
+    """Whether a window planned with one warm-start spin rule is planned again with the other:
+    when it failed (a fail-fast pass: is the other rule clean?) or is clean but holds less than
+    ``retry_in_band`` of its cut in the speed band."""
+    if first.status.planned and not first.failures:
+        return first.stats.speed_in_band_fraction < retry_in_band
+    return True
+
+
+def better_of(first: WindowPlan, second: WindowPlan) -> WindowPlan:
+    """The window plan kept of a window's two (first rule, other rule): the faster clean one
+    (the first on a tie), else the one with fewer failure records."""
+    if first.status is WindowStatus.ABANDONED:
         return second if second.status.planned and not second.failures else first
     if first.status.planned and not first.failures:
-        band = first.stats.speed_in_band_fraction
-        if band >= ctx.options.retry_in_band:
-            return first
-        # clean but slow: the other rule may wind the wrist less (workpiece cell)
-        log.debug("window %d: %.0f %% of the cut in the speed band; planning it again with the "
-                 "%r warm-start spin", wt.window_index, 100 * band, other)
-        second = _plan_window_once(ctx2, wt, q_from)
         if (second.status.planned and not second.failures
                 and second.stats.cut_seconds < first.stats.cut_seconds):
             return second
         return first
-    log.debug("window %d: %d failure records; planning it again with the %r warm-start spin",
-             wt.window_index, len(first.failures), other)
-    second = _plan_window_once(ctx2, wt, q_from)
     if second.status is WindowStatus.ABANDONED:
         # fail-fast: the window fails either way; which rule fails less is decided by
         # planning it in full, if no relaxation is kept (planner._relax)
-        return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED, first.failures)
+        return WindowPlan.skipped(first.window, WindowStatus.ABANDONED, first.failures)
     if second.status.planned and (not first.status.planned
                                   or len(second.failures) < len(first.failures)):
         return second
