@@ -314,11 +314,20 @@ def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
             assert res["axis_bound"] <= bound + margin + 1e-12
 
 
-def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
+#: how close the forward IK from the tracked-back start arrives at the probe's pose [rad], per
+#: warm-start spin rule: measured 5e-5 (joint cost) and 2.9e-3 (frame: each target keeps the
+#: previous frame's spin, so the forward track is not the backward one's exact reverse; the
+#: first track arrived 1.8 rad off)
+ARRIVAL = {"joint_cost": 1e-3, "frame": 5e-3}
+
+
+@pytest.mark.parametrize("rule", sorted(ARRIVAL))
+def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet, rule):
     """When a window's IK fails at a target where its cone probe found an admissible pose, a
     start is tracked back from that pose to the first target (window._backward_seed): the
     start meets the first target (Drake's FK: position, cone, clearance), and the forward IK
-    from it reaches every target up to the failed one, arriving at the probe's pose (1 mrad)."""
+    from it reaches every target up to the failed one, arriving at the probe's pose
+    (:data:`ARRIVAL`), with either warm-start spin rule."""
     from dataclasses import replace
 
     from drakedeburr.plan.ik import cone_clearance_probe, solve_window_ik
@@ -328,6 +337,7 @@ def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
 
     cell, kin, checker, wt, p_HQ, lift = fillet
     options = PlanOptions()
+    options = replace(options, ik=replace(options.ik, seed_spin=rule))
     opts = options.ik
     ctx = PlanContext(cell=cell, kin=kin, checker=checker, free_checker=None, config=None,
                       options=options)
@@ -363,4 +373,4 @@ def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet):
     # the probe's pose is of another family than the one the first track arrived in (5e-5
     # rad from it when written, the first track 1.8 rad off)
     assert np.abs(trial.q[i] - probe["q"]).max() > opts.trust_region
-    assert np.abs(again.q[i] - probe["q"]).max() <= 1e-3
+    assert np.abs(again.q[i] - probe["q"]).max() <= ARRIVAL[rule]

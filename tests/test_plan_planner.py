@@ -319,9 +319,10 @@ def test_a_slow_window_is_planned_again_with_the_other_spin_rule_and_the_faster_
     from dataclasses import replace
 
     base = mut.PlanOptions(windows=(0,), retry_in_band=0.0)
+    assert base.ik.seed_spin == "frame"  # the default rule first, the other on a retry
     rule_a = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges", options=base)
     rule_b = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges",
-                          options=replace(base, ik=replace(base.ik, seed_spin="frame")))
+                          options=replace(base, ik=replace(base.ik, seed_spin="joint_cost")))
     forced = mut.plan_hub(load_config("tool_in_hand", "h5_straight"), source="edges",
                           options=replace(base, retry_in_band=1.01))
     assert rule_a.failures == () and rule_b.failures == () and forced.failures == ()
