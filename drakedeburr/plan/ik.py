@@ -105,8 +105,8 @@ class IkOptions:
             (within 0.5 rad of the previous frame's) minimising the program's joint cost. The
             planner tries the other rule on a window the first leaves failing or slow
             (:mod:`drakedeburr.plan.window`). ``"frame"`` first: on 4 bundled and 6 unseen hubs
-            in both cells it leaves as many windows clean, their cuts 5-7 % shorter and the
-            planning 7-13 % cheaper (docs/plan.md "Slow windows re-planned").
+            in both cells it leaves as many windows clean, their cuts 5-7 % shorter, and
+            fewer windows need the retry (docs/plan.md "Slow windows re-planned").
     """
 
     position_tolerance: float = 1e-6
