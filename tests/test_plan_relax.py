@@ -289,6 +289,40 @@ def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first
         assert out.status is WindowStatus.ABANDONED and out.failures
 
 
+@pytest.mark.parametrize(("band", "cut_first", "cut_second", "plans", "kept"), [
+    (0.75, 3.0, 2.0, 1, 0),  # in the band enough: planned once, whatever the other rule gives
+    (0.40, 3.0, 2.0, 2, 1),  # slow: the other rule planned, its faster clean plan kept
+    (0.40, 3.0, 3.0, 2, 0),  # a tie keeps the first
+    (0.40, 3.0, 4.0, 2, 0),
+])
+def test_a_clean_window_is_planned_with_the_frame_rule_and_again_only_when_slow(
+        monkeypatch, band, cut_first, cut_second, plans, kept):
+    """plan_window: the first plan uses the default warm-start spin rule (frame), the second
+    the other (joint cost) and only when the first holds less than ``retry_in_band`` of its cut
+    in the band; the faster clean plan is kept (needs_other_rule, better_of)."""
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.results import WindowPlan
+
+    made = iter([WindowPlan(0, WindowStatus.OK, stats=SimpleNamespace(
+        speed_in_band_fraction=band, cut_seconds=cut_first)),
+        WindowPlan(0, WindowStatus.OK, stats=SimpleNamespace(
+            speed_in_band_fraction=0.8, cut_seconds=cut_second))])
+    out_plans, rules = [], []
+
+    def once(ctx, wt, q):
+        rules.append(ctx.options.ik.seed_spin)
+        out_plans.append(next(made))
+        return out_plans[-1]
+
+    monkeypatch.setattr(mut, "_plan_window_once", once)
+    monkeypatch.setattr(mut, "window_reference", lambda ctx, wt: None)
+    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None, config=None,
+                      options=PlanOptions())
+    out = mut.plan_window(ctx, SimpleNamespace(window_index=0))
+    assert rules == ["frame", "joint_cost"][:plans]
+    assert out is out_plans[kept]
+
+
 
 @pytest.mark.parametrize("fail_fast", [True, False])
 @pytest.mark.parametrize("least_mm", [1.9, 2.1])
