@@ -21,6 +21,7 @@ import json
 import os
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 RULES = ("frame", "joint_cost")
 
@@ -81,7 +82,7 @@ class _Plan:
 
         self.s, self.window, self.failures = s, window, [None] * s["failures"]
         self.status = WindowStatus[s["status"]]
-        self.stats = (None if s["cut"] is None else argparse.Namespace(
+        self.stats = (None if s["cut"] is None else SimpleNamespace(
             speed_in_band_fraction=s["band"], cut_seconds=s["cut"]))
 
 

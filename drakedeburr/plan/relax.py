@@ -33,6 +33,7 @@ pass's windows and the relaxed ones.
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import dataclass, replace
 
@@ -132,8 +133,6 @@ def plan_ladder(ctx, item) -> list:
     """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters), each variant by
     :func:`drakedeburr.plan.window.plan_window` in ``ctx`` (a task for
     :func:`drakedeburr.plan.parallel.map_windows`)."""
-    import functools
-
     from drakedeburr.plan.window import plan_window
 
     edge, params = item
