@@ -5,7 +5,6 @@ reading (both cells)."""
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -13,7 +12,7 @@ import pytest
 import verify_support as vs
 
 import drakedeburr.verify.certificate as mut
-from drakedeburr.plan.types import JointTrajectory
+from drakedeburr.verify import faults
 from drakedeburr.verify.checks_distance import clearance, clearance_certificate
 from drakedeburr.verify.distances import DistanceProbe
 from drakedeburr.verify.sampling import sample_plan
@@ -23,25 +22,6 @@ def _clearance(probe, q) -> float:
     return probe.measure(q).clearance
 
 
-def _split_and_bump(traj, ta: float, tb: float, bump: np.ndarray) -> JointTrajectory:
-    """The same trajectory with knots added at ``ta``/``tb`` and ``bump`` (6,) [rad] added on
-    [ta, tb] as 16 s^2 (1 - s)^2 (zero value and slope at both ends, ``bump`` at the
-    middle): a C1 change confined to one new piece."""
-    t = np.unique(np.concatenate([traj.t, [ta, tb]]))
-    deg = max(np.asarray(traj.c).shape[0] - 1, 4)
-    c = np.zeros((deg + 1, len(t) - 1, 6))
-    for n in range(deg + 1):  # Taylor coefficients of the old pieces at the new starts
-        c[deg - n] = (traj.derivative(t[:-1], n) if n else traj.value(t[:-1])) / \
-            math.factorial(n)
-    k = int(np.flatnonzero(np.isclose(t, ta))[0])
-    w = tb - ta
-    # 16 s^2 (1 - s)^2 with s = tau / w: coefficients of tau^4, tau^3, tau^2
-    c[deg - 4, k] += 16.0 / w ** 4 * bump
-    c[deg - 3, k] += -32.0 / w ** 3 * bump
-    c[deg - 2, k] += 16.0 / w ** 2 * bump
-    return JointTrajectory(t=t, c=c)
-
-
 #: how far below the limit the graze goes [m]
 GRAZE = 0.1e-3
 
@@ -49,40 +29,16 @@ GRAZE = 0.1e-3
 @functools.cache
 def _grazing_case():
     """The good plan with the tool pushed toward the hub and back between two samples (of the
-    coarse smoke-test sampling: one every 2 mm of tool travel), until the burr shank comes
-    GRAZE closer than the limit: the tool travels ~1 mm there, the sampler sees nothing."""
-    from pydrake.multibody.tree import JacobianWrtVariable
-
+    coarse smoke-test sampling: one every 2 mm of tool travel) next to its closest approach,
+    until the burr shank comes GRAZE closer than the limit (``faults.graze_between_samples``;
+    what it did is checked below with a dense reading of its own)."""
     cell, hub = vs.cell_and_hub()
-    plan = vs.good_plan()
     config = vs.config(**vs.COARSE)
-    probe = DistanceProbe(cell, 0.02)
-    # 1 ms after the last sample before the good plan's closest approach: the next one comes
-    # ~1.9 mm of tool travel later
-    t_s = sample_plan(plan, config, cell=cell, hub_model=hub,
-                      expected_windows=list(vs.WINDOWS)).samples.t
     t_near = vs.good_report().item("clearance").time
-    ta = float(t_s[t_s <= t_near][-1]) + 1e-3
-    tb = ta + 3e-3
-    q_c = plan.trajectory.value(0.5 * (ta + tb))
-    ctx = cell.plant.CreateDefaultContext()
-    cell.plant.SetPositions(ctx, q_c)
-    J = cell.plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kQDot, cell.tool_frame,
-                                               np.zeros(3), cell.hub_frame, cell.hub_frame)
-    J_inv = np.linalg.pinv(J)
-    # the tool-point direction (of 26) that brings the shank nearest the hub, orientation kept
-    grid = np.array([u for u in np.ndindex(3, 3, 3) if u != (1, 1, 1)], float) - 1.0
-    grid /= np.linalg.norm(grid, axis=1, keepdims=True)
-    steps = [J_inv @ np.concatenate([np.zeros(3), 0.3e-3 * u]) / 0.3e-3 for u in grid]
-    dq = steps[int(np.argmin([_clearance(probe, q_c + 0.3e-3 * d) for d in steps]))]
-    target = config.tolerances.min_clearance - GRAZE
-    lo, hi = 0.0, 2e-3
-    for _ in range(40):  # how far along it [m of tool travel]
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _clearance(probe, q_c + mid * dq) > target else (lo, mid)
-    bumped = replace(plan, trajectory=_split_and_bump(plan.trajectory, ta, tb, hi * dq))
+    bumped, (ta, tb) = faults.graze_between_samples(vs.good_plan(), cell, config.tolerances,
+                                                    t_near, GRAZE)
     sp = sample_plan(bumped, config, cell=cell, hub_model=hub, expected_windows=list(vs.WINDOWS))
-    return sp, config, (ta, tb), probe
+    return sp, config, (ta, tb), DistanceProbe(cell, 0.02)
 
 
 def test_certificate_catches_a_graze_between_two_samples():

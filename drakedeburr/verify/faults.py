@@ -6,6 +6,7 @@ function returns a new Plan (plans are frozen); the original is untouched.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -13,7 +14,7 @@ import numpy as np
 from drakedeburr.plan.types import JointTrajectory, Plan
 
 __all__ = ["shift_knot_into_hub", "speed_up_segment", "slow_down_stretch", "drop_window",
-           "cut_knot_index"]
+           "cut_knot_index", "graze_between_samples"]
 
 
 def cut_knot_index(plan: Plan, window: int, fraction: float = 0.5) -> int:
@@ -125,3 +126,76 @@ def drop_window(plan: Plan, window: int) -> Plan:
                    trajectory=JointTrajectory.from_hermite(t=new_t, q=traj.q[keep].copy(),
                                               qd=traj.qd[keep].copy()),
                    tool_path={w: tp for w, tp in (plan.tool_path or {}).items() if w != window})
+
+
+def _bump(traj: JointTrajectory, ta: float, tb: float, bump: np.ndarray) -> JointTrajectory:
+    """The same trajectory with knots added at ``ta``/``tb`` and ``bump`` (6,) [rad] added on
+    [ta, tb] as 16 s^2 (1 - s)^2 (zero value and slope at both ends, ``bump`` at the
+    middle): a C1 change confined to one new piece."""
+    t = np.unique(np.concatenate([traj.t, [ta, tb]]))
+    deg = max(np.asarray(traj.c).shape[0] - 1, 4)
+    c = np.zeros((deg + 1, len(t) - 1, 6))
+    for n in range(deg + 1):  # Taylor coefficients of the old pieces at the new starts
+        c[deg - n] = (traj.derivative(t[:-1], n) if n else traj.value(t[:-1])) / \
+            math.factorial(n)
+    k = int(np.flatnonzero(np.isclose(t, ta))[0])
+    w = tb - ta
+    # 16 s^2 (1 - s)^2 with s = tau / w: coefficients of tau^4, tau^3, tau^2
+    c[deg - 4, k] += 16.0 / w ** 4 * bump
+    c[deg - 3, k] += -32.0 / w ** 3 * bump
+    c[deg - 2, k] += 16.0 / w ** 2 * bump
+    return JointTrajectory(t=t, c=c)
+
+
+def graze_between_samples(plan: Plan, cell, tolerances, t_near: float, depth: float
+                          ) -> tuple[Plan, tuple[float, float]]:
+    """Push the tool toward the hub and back between two of the verifier's samples, until the
+    closest pair counted by the clearance comes ``depth`` [m] nearer than
+    ``tolerances.min_clearance``: a graze that sampling with ``tolerances`` does not see.
+
+    The bump sits on a new piece [ta, tb] a tenth of the way into the gap after the last
+    sample at or before ``t_near`` [s] (pick the plan's closest approach) and an eighth of the
+    gap long; its direction is the tool-point step (of 26, orientation kept, through the
+    Jacobian's pseudo-inverse at the piece's middle) that brings the clearance down fastest,
+    its size found by bisection on the cell's own distance query. Returns the plan and
+    (ta, tb). The sampler places its samples by tool travel read on a time grid, so a bump
+    this short gets none inside (measured on the reference plan at 2 mm and at 0.5 mm
+    sampling; ``tests/test_verify_certificate.py`` checks it of the case it uses).
+
+    Raises:
+        ValueError: no step of up to 2 mm of tool travel comes that near.
+    """
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    from drakedeburr.verify.distances import DistanceProbe
+    from drakedeburr.verify.sampling import sample_times
+
+    t_s = np.sort(sample_times(plan, cell, tolerances))
+    k = int(np.searchsorted(t_s, t_near, side="right")) - 1
+    gap = float(t_s[k + 1] - t_s[k])
+    ta = float(t_s[k]) + 0.1 * gap
+    tb = ta + 0.125 * gap
+    q_c = plan.trajectory.value(0.5 * (ta + tb))
+    probe = DistanceProbe(cell, 0.02)
+
+    def clearance(q) -> float:
+        return probe.measure(q).clearance
+
+    ctx = cell.plant.CreateDefaultContext()
+    cell.plant.SetPositions(ctx, q_c)
+    J = cell.plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kQDot, cell.tool_frame,
+                                               np.zeros(3), cell.hub_frame, cell.hub_frame)
+    J_inv = np.linalg.pinv(J)
+    grid = np.array([u for u in np.ndindex(3, 3, 3) if u != (1, 1, 1)], float) - 1.0
+    grid /= np.linalg.norm(grid, axis=1, keepdims=True)
+    steps = [J_inv @ np.concatenate([np.zeros(3), u]) for u in grid]  # [rad per m of travel]
+    dq = steps[int(np.argmin([clearance(q_c + 0.3e-3 * d) for d in steps]))]
+    target = float(tolerances.min_clearance) - float(depth)
+    lo, hi = 0.0, 2e-3
+    if clearance(q_c + hi * dq) > target:
+        raise ValueError(f"no tool step of up to 2 mm at t = {0.5 * (ta + tb):.4f} s comes "
+                         f"within {target * 1e3:.3f} mm of the hub")
+    for _ in range(40):  # how far along it [m of tool travel]
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if clearance(q_c + mid * dq) > target else (lo, mid)
+    return replace(plan, trajectory=_bump(plan.trajectory, ta, tb, hi * dq)), (ta, tb)

@@ -32,7 +32,8 @@ from drakedeburr.verify.kinematics import VerifyKinematics
 from drakedeburr.verify.refs import LINEAR_KINDS, WindowRef, tool_paths_of, window_ref
 
 __all__ = ["KIND_CODE", "Samples", "ProgramReading", "Distances", "CutGeometry", "JointLimits",
-           "SampledPlan", "sample_plan", "validate_plan", "path_acceleration"]
+           "SampledPlan", "sample_plan", "sample_times", "validate_plan",
+           "path_acceleration"]
 
 #: integer code of each segment kind in :attr:`Samples.kind`
 KIND_CODE = {"home": 0, "transition": 1, "approach": 2, "cut": 3, "retract": 4}
@@ -285,6 +286,14 @@ def path_acceleration(traj, kin, t: np.ndarray, p: np.ndarray, h: float = 1e-5
     moving = speed > 1e-6
     return np.where(moving, np.einsum("ij,ij->i", v, a) / np.maximum(speed, 1e-12),
                     np.linalg.norm(a, axis=1))
+
+
+def sample_times(plan, cell, tolerances) -> np.ndarray:
+    """The times [s] the verifier samples ``plan`` at with ``tolerances`` (module docstring:
+    every ``dense_step``/``joint_move_step`` of tool travel, every ``time_step``, every knot),
+    in the order of :attr:`Samples.t`, without reading anything there."""
+    kin = VerifyKinematics(cell)
+    return np.concatenate([_segment_times(plan, kin, seg, tolerances) for seg in plan.segments])
 
 
 def _samples(plan, kin: VerifyKinematics, tol, progress: Progress) -> Samples:

@@ -9,7 +9,11 @@ Steps:
 3. write ``report.json`` (versioned, deterministic) and a self-contained ``report.html``
    (pass/fail table, plots, Meshcat replay);
 4. break the plan on purpose - a knot pushed into the hub, a transition run 4x too fast, a
-   dropped window - and read which check names the fault.
+   dropped window - and read which check names the fault;
+5. between the samples: push the tool 0.1 mm past the clearance limit and back *between* two
+   samples. The sampled ``clearance`` still passes; the ``clearance_certificate`` (a lower
+   bound of the clearance over the whole trajectory, from how far any point of the robot,
+   tool and hub can move between two samples) fails and names the reading between them.
 
 Run:  python tutorials/05_verify/tutorial.py --out /tmp/verify  [--test-mode]
 """
@@ -106,6 +110,21 @@ def main() -> None:
         show(title, r)
         caught[title] = {"expected": expected, "failed": r.failed,
                          "named": expected in r.failed}
+    # 5. a graze between two samples: only the continuous certificate can see it
+    t_near = report.item("clearance").time  # the plan's closest approach
+    grazed, (ta, tb) = faults.graze_between_samples(plan, cell, config.tolerances, t_near,
+                                                    depth=0.1e-3)
+    # (a bump this short also breaks the joint limits, which are certified on every
+    # polynomial piece too; what the samples' clearance misses, the certificate reads)
+    r = verify_plan(grazed, config, **common)
+    show(f"a graze between the samples at t = {ta:.4f}..{tb:.4f} s", r)
+    sampled, cert = r.item("clearance"), r.item("clearance_certificate")
+    print(f"   clearance at the samples: {sampled.value * 1e3:.3f} mm "
+          f"({'passes' if sampled.passed else 'FAILS'})")
+    print(f"   certificate: {'; '.join(cert.detail.split('; ')[:2])}")
+    caught["graze between two samples"] = {
+        "expected": "clearance_certificate", "failed": r.failed,
+        "named": not cert.passed and sampled.passed}
     (out / "faults.json").write_text(json.dumps(caught, indent=2))
     assert all(c["named"] for c in caught.values()), caught
 
