@@ -171,7 +171,7 @@ def graze_between_samples(plan: Plan, cell, tolerances, t_near: float, depth: fl
     from drakedeburr.verify.sampling import sample_times
 
     t_s = np.sort(sample_times(plan, cell, tolerances))
-    k = int(np.searchsorted(t_s, t_near, side="right")) - 1
+    k = min(max(int(np.searchsorted(t_s, t_near, side="right")) - 1, 0), len(t_s) - 2)
     gap = float(t_s[k + 1] - t_s[k])
     ta = float(t_s[k]) + 0.1 * gap
     tb = ta + 0.125 * gap
