@@ -170,7 +170,7 @@ def graze_between_samples(plan: Plan, cell, tolerances, t_near: float, depth: fl
     from drakedeburr.verify.distances import DistanceProbe
     from drakedeburr.verify.sampling import sample_times
 
-    t_s = np.sort(sample_times(plan, cell, tolerances))
+    t_s = np.unique(sample_times(plan, cell, tolerances))  # segments share their end times
     k = min(max(int(np.searchsorted(t_s, t_near, side="right")) - 1, 0), len(t_s) - 2)
     gap = float(t_s[k + 1] - t_s[k])
     ta = float(t_s[k]) + 0.1 * gap
