@@ -17,4 +17,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "virtual_tcp": (
         "contour_frames", "offset_contour", "part_contour_at_virtual", "virtual_tcp_poses",
     ),
+    "virtual_tcp_post": (
+        "VirtualTcpSetup", "post_cl_file_virtual_tcp", "solve_virtual_tcp",
+        "virtual_tcp_program_from_cl", "virtual_tcp_setup",
+    ),
 })

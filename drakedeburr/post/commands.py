@@ -54,6 +54,15 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
                         "spindle's TCP in the robot base (required), --wobj the part's CL "
                         "frame in the flange frame (default: the flange frame); the program "
                         "uses a stationary tool (ABB), an external TCP (KUKA), RTCP (FANUC)")
+    p.add_argument("--virtual-tcp", action="store_true",
+                   help="with --workpiece-in-hand: the paper's virtual-TCP program instead "
+                        "(source 000; no RTCP / external-TCP option): an ordinary TCP set "
+                        "at a reference pose, user frame = the spindle, targets = the CL "
+                        "points mirrored; the CL tool axis must be constant")
+    p.add_argument("--reference", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
+                   help="with --virtual-tcp: the part's CL frame in the spindle's TCP frame at "
+                        "the reference pose (mm, deg; default: on the TCP, the CL axis onto "
+                        "-Z, the spin about it chosen for reach and least joint travel)")
     p.add_argument("--wobj", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="work object (CL frame, after MSYS) in the robot base: mm, deg, "
                         "R = Rz Ry Rx (with --workpiece-in-hand: in the flange frame)")
@@ -129,6 +138,11 @@ def _check_args(args) -> None:
     if args.workpiece_in_hand and args.tool is None:
         raise InputError("--workpiece-in-hand: give the stationary spindle's TCP in the robot "
                          "base with --tool X,Y,Z,RX,RY,RZ (mm, deg)")
+    if getattr(args, "virtual_tcp", False) and not args.workpiece_in_hand:
+        raise InputError("--virtual-tcp: the virtual TCP is for a held part: add "
+                         "--workpiece-in-hand (and the spindle's TCP with --tool)")
+    if getattr(args, "reference", None) is not None and not getattr(args, "virtual_tcp", False):
+        raise InputError("--reference: only with --virtual-tcp")
     if args.max_moves is not None and args.max_moves < 1:
         raise InputError(f"--max-moves must be >= 1, got {args.max_moves}")
     out = Path(args.output)
@@ -214,13 +228,21 @@ def _run_post(args) -> int:
     if args.fmt is not None and args.fmt != own:
         raise InputError(f"--format {args.fmt}: {args.robot} has a {settings.robot.controller} "
                          f"controller, which runs {own.upper()} (--format {own})")
+    post, extra = post_cl_file, {}
+    if getattr(args, "virtual_tcp", False):
+        from drakedeburr.post.cl_post import pose_from_mm_deg
+        from drakedeburr.post.virtual_tcp_post import post_cl_file_virtual_tcp
+
+        post = post_cl_file_virtual_tcp
+        if args.reference is not None:
+            extra["X_OP"] = pose_from_mm_deg(args.reference, "--reference")
     try:
-        summary = post_cl_file(
+        summary = post(
             args.cl_file, args.output,
             args.fmt or format_for_controller(settings.robot.controller), name, settings,
             units=args.units,
             cutcom="ignore" if args.ignore_cutcom else "refuse",
-            max_moves=args.max_moves or MAX_MOVES, progress=_phase_progress())
+            max_moves=args.max_moves or MAX_MOVES, progress=_phase_progress(), **extra)
     except KeyboardInterrupt:
         log.error("interrupted: nothing new written")
         return 130

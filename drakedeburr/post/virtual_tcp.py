@@ -110,35 +110,100 @@ def _signed_area(p: np.ndarray, normal: np.ndarray) -> float:
     return 0.5 * float(np.sum(np.cross(p, np.roll(p, -1, 0)) @ normal))
 
 
+def _plane_basis(normal: np.ndarray) -> np.ndarray:
+    """(3, 3) rows u, v, n: a right-handed frame whose third axis is ``normal``."""
+    n = np.asarray(normal, float)
+    if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) < 1e-12:
+        raise InputError(f"contour plane normal: expected a finite non-zero 3-vector, got {n}")
+    n = n / np.linalg.norm(n)
+    a = np.eye(3)[int(np.argmin(np.abs(n)))]
+    u = np.cross(n, a)
+    u /= np.linalg.norm(u)
+    return np.stack([u, np.cross(n, u), n])
+
+
+def _quad_segs(radius: float, arc_tolerance: float) -> int:
+    """Segments per quarter circle so a chord stays within ``arc_tolerance`` of the arc."""
+    if radius <= arc_tolerance:
+        return 1
+    step = 2.0 * np.arccos(1.0 - arc_tolerance / radius)  # chord angle for that sagitta
+    return max(1, int(np.ceil((np.pi / 2) / step)))
+
+
 def offset_contour(p: np.ndarray, radius: float, side: str = "outward",
-                   normal: np.ndarray = (0.0, 0.0, 1.0), closed: bool = True) -> np.ndarray:
-    """Offset a planar contour by the tool radius.
+                   normal: np.ndarray = (0.0, 0.0, 1.0), closed: bool = True,
+                   arc_tolerance: float = 1e-6, planar_tolerance: float = 1e-6) -> np.ndarray:
+    """Offset a planar contour (a polygon through the points) by the tool radius.
+
+    The contour is taken as the polygon through its points (CAM vertex lists are sparse) and
+    offset exactly (shapely's buffer, GEOS): every point of the result lies at distance R
+    from the polygon. Outward, a convex corner becomes an arc of radius R about the corner
+    (the tool rolls round it) and a concave corner the intersection of the two offset edges,
+    at distance R from both edges; inward (holes) the other way round. The arcs are split
+    into chords within ``arc_tolerance``. (The earlier point-wise offset along the averaged
+    vertex normal under-offset a 90 deg corner by R (1 - 1/sqrt 2).)
 
     Args:
-        p: (N, 3) contour points in a plane normal to ``normal`` [m].
+        p: (N, 3) contour points in a plane normal to ``normal`` [m], either way round.
         radius: tool radius [m] (>= 0).
         side: "outward" (outer contour: away from the enclosed area) or "inward" (holes).
-        normal: (3,) plane normal; the contour may run either way round it.
+        normal: (3,) plane normal.
         closed: the contour is a loop (required for deciding outward/inward).
+        arc_tolerance: largest gap between a round corner and its chords [m].
+        planar_tolerance: largest distance of a point from the contour's plane [m]; a 3-D
+            contour (e.g. a parting line on a curved surface) is refused: offsetting it on
+            its surface is not implemented, and offsetting it as if planar would be wrong.
 
     Returns:
-        (N, 3) offset points [m].
+        (M, 3) offset polygon [m], running the same way round as ``p`` and starting near its
+        first point (M differs from N where corners became arcs).
+
+    Raises:
+        InputError: bad arguments, a contour that is not planar or crosses itself, or one
+            that the offset splits or closes (a hole smaller than the tool).
     """
+    from shapely.geometry import Polygon
+
     p = np.asarray(p, float)
-    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 3:
-        raise InputError(f"contour: expected (N >= 3, 3) points, got {p.shape}")
+    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 3 or not np.all(np.isfinite(p)):
+        raise InputError(f"contour: expected finite (N >= 3, 3) points, got {p.shape}")
     if side not in ("outward", "inward"):
         raise InputError(f"offset side {side!r}: outward or inward")
     if not radius >= 0:
         raise InputError(f"tool radius must be >= 0 m, got {radius}")
     if not closed:
         raise InputError("outward/inward needs a closed contour")
-    n = np.asarray(normal, float) / np.linalg.norm(normal)
-    t = _tangents(p, closed)
-    out = np.cross(t, n)  # outward for a contour counter-clockwise about n
-    if _signed_area(p - p.mean(0), n) < 0:
-        out = -out
-    return p + (radius if side == "outward" else -radius) * out
+    B = _plane_basis(normal)
+    c = p.mean(0)
+    local = (p - c) @ B.T
+    height = local[:, 2] - np.median(local[:, 2])
+    k = int(np.argmax(np.abs(height)))
+    if abs(height[k]) > planar_tolerance:
+        raise InputError(
+            f"contour point {k + 1} is {abs(height[k]) * 1e3:.3f} mm off the contour's plane "
+            f"(tolerance {planar_tolerance * 1e3:.3f} mm): offsetting a 3-D contour on its "
+            "surface is not implemented; give the tool-centre path (CL points) instead")
+    z0 = float(np.median(local[:, 2]))
+    poly = Polygon(local[:, :2])
+    if not poly.is_valid or poly.area <= 0:
+        raise InputError("contour: the polygon through the points crosses itself or has no "
+                         "area; cannot tell outward from inward")
+    if radius == 0:
+        return p.copy()
+    d = radius if side == "outward" else -radius
+    off = poly.buffer(d, quad_segs=_quad_segs(radius, arc_tolerance), join_style="round")
+    if off.is_empty or off.geom_type != "Polygon":
+        raise InputError(f"contour: offset {side} by {radius * 1e3:.3f} mm leaves "
+                         + ("nothing (the tool does not fit)" if off.is_empty else
+                            f"{len(off.geoms)} separate pieces (the tool does not pass "
+                            "a narrow part)"))
+    ring = np.asarray(off.exterior.coords)[:-1]
+    if (_signed_area(np.column_stack([ring, 0 * ring[:, 0]]), np.eye(3)[2]) > 0) != (
+            _signed_area(local, np.eye(3)[2]) > 0):
+        ring = ring[::-1]
+    ring = np.roll(ring, -int(np.argmin(np.linalg.norm(ring - local[0, :2], axis=1))), 0)
+    out = np.column_stack([ring, np.full(len(ring), z0)])
+    return out @ B + c
 
 
 def contour_frames(p: np.ndarray, normal: np.ndarray = (0.0, 0.0, 1.0),
