@@ -4,7 +4,10 @@ drakedeburr.programs), virtual TCP for workpiece-in-hand, cell calibration from 
 from drakedeburr._lazy import lazy_exports
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
-    "calibration": ("CalibrationFit", "calibrated_pose", "fit_touch_points", "scale_about"),
+    "calibration": (
+        "CalibrationFit", "ScaleCompensation", "calibrated_pose", "fit_machined_contour",
+        "fit_touch_points",
+    ),
     "cl_post": (
         "PostResult", "PostSettings", "PostSummary", "pose_from_mm_deg", "post_cl_file",
         "program_from_cl",

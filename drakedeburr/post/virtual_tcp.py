@@ -112,14 +112,12 @@ def _signed_area(p: np.ndarray, normal: np.ndarray) -> float:
 
 def _plane_basis(normal: np.ndarray) -> np.ndarray:
     """(3, 3) rows u, v, n: a right-handed frame whose third axis is ``normal``."""
+    from drakedeburr.frames.vectors import perpendicular_basis
+
     n = np.asarray(normal, float)
     if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) < 1e-12:
         raise InputError(f"contour plane normal: expected a finite non-zero 3-vector, got {n}")
-    n = n / np.linalg.norm(n)
-    a = np.eye(3)[int(np.argmin(np.abs(n)))]
-    u = np.cross(n, a)
-    u /= np.linalg.norm(u)
-    return np.stack([u, np.cross(n, u), n])
+    return perpendicular_basis(n).T
 
 
 def _quad_segs(radius: float, arc_tolerance: float) -> int:
