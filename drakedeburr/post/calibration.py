@@ -30,8 +30,9 @@ from scipy.spatial.transform import Rotation
 
 from drakedeburr.errors import InputError
 
-__all__ = ["CalibrationFit", "ScaleCompensation", "fit_touch_points", "fit_machined_contour",
-           "calibrated_pose"]
+__all__ = ["CalibrationFit", "PivotFit", "ScaleCompensation", "fit_touch_points",
+           "fit_machined_contour", "fit_pivot_tcp", "extrapolation_error", "calibrated_pose",
+           "COMPENSATION_MODELS"]
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,7 @@ class CalibrationFit:
         residuals_rigid: (N,) distances [m] between touched points and X_WT p_T, rigid fit.
         residuals_scaled: (N,) distances [m] after the scaled fit (= rigid when not estimated).
         n_points: number of touched points.
+        p_T, p_W: the points fitted (for :func:`extrapolation_error`).
     """
 
     X_WT: np.ndarray
@@ -53,6 +55,8 @@ class CalibrationFit:
     residuals_rigid: np.ndarray
     residuals_scaled: np.ndarray
     n_points: int
+    p_T: np.ndarray | None = None  # (N, 3) the nominal points fitted [m]
+    p_W: np.ndarray | None = None  # (N, 3) the touched points [m]
 
     @property
     def rms_rigid(self) -> float:
@@ -218,7 +222,8 @@ def fit_touch_points(p_T: np.ndarray, p_W: np.ndarray, estimate_scale: bool = Fa
         X[:3, 3] = cW - s * R @ cT
         res_scaled = np.linalg.norm(p_W - (s * p_T @ R.T + X[:3, 3]), axis=1)
     return CalibrationFit(X_WT=X, scale=s, residuals_rigid=res_rigid,
-                          residuals_scaled=res_scaled, n_points=p_T.shape[0])
+                          residuals_scaled=res_scaled, n_points=p_T.shape[0], p_T=p_T.copy(),
+                          p_W=p_W.copy())
 
 
 def calibrated_pose(fit: CalibrationFit, X_TH: np.ndarray) -> np.ndarray:
@@ -355,3 +360,90 @@ def fit_machined_contour(nominal: np.ndarray, measured: np.ndarray,
     L = E @ A @ E.T + np.outer(B[:, 2], B[:, 2])
     return ScaleCompensation(linear=L, offset=E @ t, plane_normal=B[:, 2].copy(), model=model,
                              deviations=deviations, residuals=residuals)
+
+
+@dataclass(frozen=True)
+class PivotFit:
+    """The calibration tool's own TCP from the pivot (4-point) method.
+
+    Attributes:
+        p_FT: (3,) the tip in the flange frame [m].
+        p_W: (3,) the fixed point the tip was held on, in the robot base [m].
+        residuals: (N,) distances [m] of each pose's tip from that point.
+    """
+
+    p_FT: np.ndarray
+    p_W: np.ndarray
+    residuals: np.ndarray
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residuals ** 2)))
+
+
+def fit_pivot_tcp(X_WF: np.ndarray, min_tilt: float = np.radians(15.0)) -> PivotFit:
+    """TCP by the pivot (4-point) method: the tip held on one fixed point in N >= 4 flange
+    orientations, R_i p_FT + p_i = p_W solved by linear least squares for p_FT and p_W.
+
+    Args:
+        X_WF: (N, 4, 4) flange poses in the robot base at the touches [m].
+        min_tilt: the orientations must differ by at least this much [rad] (largest angle
+            between any two), else the tip position along the flange axis is undetermined.
+
+    Raises:
+        InputError: fewer than 4 poses, non-finite, or orientations too alike.
+    """
+    X = np.asarray(X_WF, float)
+    if X.ndim != 3 or X.shape[1:] != (4, 4) or X.shape[0] < 4:
+        raise InputError(f"TCP pivot: at least 4 flange poses (N, 4, 4) are needed, got "
+                         f"{X.shape}")
+    bad = np.flatnonzero(~np.all(np.isfinite(X.reshape(len(X), -1)), 1))
+    if bad.size:
+        raise InputError(f"TCP pivot: pose {bad[0] + 1} is not finite")
+    rots = Rotation.from_matrix(X[:, :3, :3])
+    spread = max(float((rots[i].inv() * rots).magnitude().max()) for i in range(len(X)))
+    if spread < min_tilt:
+        raise InputError(f"TCP pivot: the tool orientations differ by at most "
+                         f"{np.degrees(spread):.1f} deg; tilt the tool by at least "
+                         f"{np.degrees(min_tilt):.0f} deg between touches of the point")
+    A = np.concatenate([X[:, :3, :3], -np.broadcast_to(np.eye(3), (len(X), 3, 3))], axis=2)
+    x, *_ = np.linalg.lstsq(A.reshape(-1, 6), -X[:, :3, 3].reshape(-1), rcond=None)
+    tips = X[:, :3, :3] @ x[:3] + X[:, :3, 3]
+    return PivotFit(p_FT=x[:3], p_W=x[3:], residuals=np.linalg.norm(tips - x[3:], axis=1))
+
+
+def extrapolation_error(fit: CalibrationFit, p_T: np.ndarray) -> np.ndarray:
+    """Predicted position error [m] of points placed through a touch-point calibration.
+
+    Two parts, added: the fit's statistical error at each point (the touches' noise sigma,
+    estimated from the residuals of a scaled fit with 3N - 7 degrees of freedom, through the
+    linearised
+    covariance of the rigid fit: sigma^2 (1/N + r^T-weighted rotation variance), growing with
+    the distance r from the touches' centroid), and the systematic error that grows with that
+    distance, |s - 1| |r|, with the scale s of a scaled fit of the same touches (robot zero and
+    geometry error: the paper's ~2 mm). A point far outside the touched region is off by
+    about |s - 1| times its distance.
+
+    Args:
+        fit: a :func:`fit_touch_points` result.
+        p_T: (M, 3) points in T [m] (e.g. the corners of the part's bounding box).
+
+    Returns:
+        (M,) predicted errors [m].
+    """
+    if fit.p_T is None:
+        raise InputError("extrapolation_error: the fit carries no touch points")
+    q = np.asarray(p_T, float).reshape(-1, 3)
+    a = fit.p_T - fit.p_T.mean(0)
+    b = fit.p_W - fit.p_W.mean(0)
+    R = fit.X_WT[:3, :3]
+    s = float(np.sum(b * (a @ R.T)) / np.sum(a * a))  # the touches' scale
+    n = len(a)
+    sigma2 = float(np.sum((b - s * a @ R.T) ** 2)) / max(3 * n - 7, 1)  # noise, scale removed
+    Minv = np.linalg.pinv(np.sum(a * a) * np.eye(3) - a.T @ a)
+    r = q - fit.p_T.mean(0)
+    var = np.empty(len(r))
+    for i, ri in enumerate(r):
+        K = np.array([[0, -ri[2], ri[1]], [ri[2], 0, -ri[0]], [-ri[1], ri[0], 0]])
+        var[i] = sigma2 * (3.0 / n + np.trace(K @ Minv @ K.T))
+    return np.sqrt(var) + abs(s - 1.0) * np.linalg.norm(r, axis=1)

@@ -107,6 +107,9 @@ def register(subparsers) -> None:
     add_cell_options(p)
     add_output_options(p)
     p.set_defaults(_run=_run_post)
+    from drakedeburr.post.calibrate_cmd import register as register_calibrate
+
+    register_calibrate(subparsers)
 
 
 def program_name(cl_file: str, name: str | None) -> str:

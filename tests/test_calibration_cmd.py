@@ -1,0 +1,213 @@
+"""``drakedeburr calibrate`` on a simulated cell with known frame errors (source 002).
+
+The simulated cell: the IRB1600 of the tool-in-hand scenario, its work table (the chuck top,
+weld ``fixture::chuck_top``) 2.5 / -1.8 / 1.2 mm and (0.3, -0.2, 0.8) deg off its design pose,
+the calibration tip 0.8 / -0.6 / +1.5 mm off the tool set on the controller. Every touch is
+simulated by the arm's forward kinematics: the tip (true TCP) put on the true feature point
+(plus 0.02 mm touch noise) by the analytic IK, the pose the controller reports = FK(q) times
+the tool it has set. The fitted frames are checked against the truth, the written scenario
+through Drake's own frame poses, the written program by a parser written here and FK.
+"""
+
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+
+from drakedeburr.cli import main
+from drakedeburr.post.calibration import extrapolation_error, fit_pivot_tcp, fit_touch_points
+from drakedeburr.robots import fk_opw, get_robot, ik_opw
+
+SIGMA = 0.02e-3  # touch noise [m]
+TOOL_SET = np.array([0.0, 0, 200, 0, 0, 0])  # mm, deg: the tool set on the controller
+TIP_TRUE = np.array([0.8, -0.6, 201.5]) * 1e-3  # the real tip in the flange [m]
+X_TABLE_NOMINAL = np.eye(4)
+X_TABLE_NOMINAL[:3, 3] = [0.75, 0.0, -0.46]  # models/scenarios/tool_in_hand.yaml
+
+
+def _X(xyz, rpy_deg):
+    X = np.eye(4)
+    X[:3, :3] = Rotation.from_euler("xyz", rpy_deg, degrees=True).as_matrix()
+    X[:3, 3] = xyz
+    return X
+
+
+X_TABLE_TRUE = X_TABLE_NOMINAL @ _X(np.array([2.5, -1.8, 1.2]) * 1e-3, [0.3, -0.2, 0.8])
+
+
+def _mm_deg(X):
+    rz, ry, rx = Rotation.from_matrix(X[:3, :3]).as_euler("ZYX", degrees=True)
+    return [float(v) for v in (*(X[:3, 3] * 1e3), rx, ry, rz)]
+
+
+def _touch(spec, p_B, R_BT, rng):
+    """The pose the controller reports when the real tip touches p_B with the tool axis
+    orientation R_BT: IK for the flange, FK back, times the tool it has set."""
+    X_BF = np.eye(4)
+    X_BF[:3, :3] = R_BT
+    X_BF[:3, 3] = p_B + rng.normal(0, SIGMA, 3) - R_BT @ TIP_TRUE
+    sols = ik_opw(spec.kinematics.opw, X_BF[None])
+    ok = np.flatnonzero(sols.valid[0] & spec.kinematics.limits.contains(sols.q[0]))
+    assert ok.size, p_B
+    q = sols.q[0, ok[0]]
+    from drakedeburr.post.cl_post import pose_from_mm_deg
+
+    X_report = np.linalg.inv(spec.X_BR) @ fk_opw(spec.kinematics.opw, q) @ pose_from_mm_deg(
+        TOOL_SET)
+    return _mm_deg(X_report)
+
+
+def _down(tilt_deg=0.0, about=0.0):
+    """Tool axis pointing down, tilted by tilt_deg in the direction ``about`` [deg]."""
+    return (Rotation.from_euler("z", about, degrees=True)
+            * Rotation.from_euler("y", tilt_deg, degrees=True)
+            * Rotation.from_euler("x", 180, degrees=True)).as_matrix()
+
+
+FEATURES = np.array([[-100, -140, 0], [100, -140, 0], [100, 140, 0], [-100, 140, 0],
+                     [0, 0, 0], [60, -40, 30], [-60, 70, 30], [0, 150, 0]], float)  # mm
+
+
+def _touch_file(path, spec, part=None, rng_seed=0):
+    rng = np.random.default_rng(rng_seed)
+    pivot_B = np.array([0.70, 0.20, -0.20])
+    tcp = [_touch(spec, pivot_B, _down(t, a), rng)
+           for t, a in ((0, 0), (25, 0), (25, 90), (25, 180), (25, 270), (35, 45))]
+    points = []
+    for i, f in enumerate(FEATURES):
+        p = X_TABLE_TRUE[:3, :3] @ (f * 1e-3) + X_TABLE_TRUE[:3, 3]
+        points.append({"feature": f.tolist(), "pose": _touch(spec, p, _down(8, 45 * i), rng)})
+    doc = {"robot": spec.name, "tool": TOOL_SET.tolist(), "tcp": tcp,
+           "table": {"points": points}}
+    if part is not None:
+        doc["table"]["part"] = part
+    path.write_text(yaml.safe_dump(doc))
+    return path
+
+
+@pytest.fixture(scope="module")
+def calibrated(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cal")
+    spec = get_robot("irb1600")
+    touches = _touch_file(d / "touches.yaml", spec, part=[[-90, -130, 0], [90, 130, 0]])
+    out = {k: d / n for k, n in (("report", "rep.yaml"), ("scenario", "cell.yaml"),
+                                  ("program", "check.mod"))}
+    rc = main(["calibrate", str(touches), "--report", str(out["report"]),
+               "--scenario", "tool_in_hand", "--scenario-out", str(out["scenario"]),
+               "--program", str(out["program"])])
+    return rc, out, spec
+
+
+def test_calibrate_recovers_the_known_frame_errors_within_the_noise(calibrated):
+    rc, out, _ = calibrated
+    assert rc == 0
+    rep = yaml.safe_load(out["report"].read_text())
+    assert rep["ok"]
+    tool = np.array(rep["tcp"]["tool_mm_deg"])
+    assert np.linalg.norm(tool[:3] * 1e-3 - TIP_TRUE) < 3 * SIGMA  # 0.8 / 0.6 / 1.5 mm off
+    assert np.allclose(tool[3:], 0, atol=1e-6)  # the pivot cannot see the tool's orientation
+    from drakedeburr.post.cl_post import pose_from_mm_deg
+
+    X = pose_from_mm_deg(rep["table"]["frame_mm_deg"])
+    f = FEATURES * 1e-3
+    err = np.linalg.norm(f @ (X[:3, :3] - X_TABLE_TRUE[:3, :3]).T + X[:3, 3]
+                         - X_TABLE_TRUE[:3, 3], axis=1)
+    assert err.max() < 3 * SIGMA  # the table placed within the noise at every feature
+    assert rep["table"]["rms_mm"] < 2 * SIGMA * 1e3
+
+
+def test_calibrated_scenario_places_the_table_where_it_is(calibrated):
+    """Drake's own frame pose of the written scenario's chuck top (and so the hub mount)."""
+    from drakedeburr.cell import load_cell
+
+    _, out, _ = calibrated
+    cell = load_cell(out["scenario"])
+    ctx = cell.plant.CreateDefaultContext()
+    frame = cell.plant.GetFrameByName("chuck_top")
+    X = frame.CalcPoseInWorld(ctx).GetAsMatrix4()
+    f = FEATURES * 1e-3
+    err = np.linalg.norm(f @ (X[:3, :3] - X_TABLE_TRUE[:3, :3]).T + X[:3, 3]
+                         - X_TABLE_TRUE[:3, 3], axis=1)
+    assert err.max() < 3 * SIGMA
+
+
+def test_check_program_puts_the_real_tip_on_the_nominal_points(calibrated):
+    """Parse the RAPID program (parser of tests/test_virtual_tcp_program.py, not ours),
+    compose wobj * target * tool^-1 = the flange the controller commands, joints by the
+    analytic IK, FK with the REAL tip: on the true feature within 0.1 mm."""
+    from test_virtual_tcp_program import _parse_rapid
+
+    _, out, spec = calibrated
+    X_FT, X_RU, targets = _parse_rapid(out["program"].read_text())
+    assert len(targets) == 3 * len(FEATURES)
+    errs = []
+    for i, X_UT in enumerate(targets[1::3]):  # the linear move onto each feature
+        X_BF = spec.X_BR @ X_RU @ X_UT @ np.linalg.inv(X_FT)
+        sols = ik_opw(spec.kinematics.opw, X_BF[None])
+        q = sols.q[0, np.flatnonzero(sols.valid[0])[0]]
+        X = fk_opw(spec.kinematics.opw, q)
+        tip = X[:3, :3] @ TIP_TRUE + X[:3, 3]
+        truth = X_TABLE_TRUE[:3, :3] @ (FEATURES[i] * 1e-3) + X_TABLE_TRUE[:3, 3]
+        errs.append(np.linalg.norm(tip - truth))
+    assert max(errs) < 0.1e-3, max(errs)
+
+
+def test_part_outside_the_touched_region_is_warned_and_quantified():
+    """A robot with a systematic error growing with distance (scale 1.0009: ~0.09 mm per
+    100 mm) touched over +-100 mm: a part point 350 mm outside is predicted off by about what
+    the fit really leaves there."""
+    rng = np.random.default_rng(5)
+    X = _X([0.8, -0.1, 0.3], [0.5, -0.4, 20])
+    p_T = np.column_stack([rng.uniform(-0.1, 0.1, 8), rng.uniform(-0.1, 0.1, 8),
+                           np.zeros(8)])
+    s = 1.0009
+    reach = lambda p: s * p @ X[:3, :3].T + X[:3, 3]  # noqa: E731 (where the robot goes)
+    fit = fit_touch_points(p_T, reach(p_T) + rng.normal(0, SIGMA, p_T.shape))
+    far = np.array([[0.45, 0.0, 0.0], [0.0, -0.45, 0.0]])  # ~350 mm outside
+    actual = np.linalg.norm(far @ fit.X_WT[:3, :3].T + fit.X_WT[:3, 3] - reach(far), axis=1)
+    predicted = extrapolation_error(fit, far)
+    assert actual.min() > 0.3e-3  # the issue's 0.30-0.35 mm
+    assert np.all(np.abs(predicted - actual) < 0.3 * actual)
+
+
+def test_calibrate_warns_and_fails_on_a_far_part(tmp_path, caplog):
+    """A part point 500 mm beyond the touches: warned with its predicted error (noise-only
+    cell: ~0.07 mm); over --max-error the result fails (exit 1): report, no scenario."""
+    spec = get_robot("irb1600")
+    touches = _touch_file(tmp_path / "t.yaml", spec, part=[[600, 0, 0]])
+    rep = tmp_path / "rep.yaml"
+    args = ["calibrate", str(touches), "--report", str(rep),
+            "--scenario", "tool_in_hand", "--scenario-out", str(tmp_path / "s.yaml")]
+    assert main(args) == 0 and "outside the touched region" in caplog.text
+    doc = yaml.safe_load(rep.read_text())
+    assert doc["table"]["part_outside_mm"] == pytest.approx(500, abs=0.5)
+    predicted = doc["table"]["part_predicted_error_mm"]
+    assert 0.02 < predicted < 0.1
+    (tmp_path / "s.yaml").unlink()
+    assert main(args + ["--max-error", f"{predicted / 2}"]) == 1
+    assert not (tmp_path / "s.yaml").exists() and not yaml.safe_load(rep.read_text())["ok"]
+
+
+def test_pivot_refuses_too_little_tilt():
+    from drakedeburr.errors import InputError
+
+    X = np.tile(np.eye(4), (5, 1, 1))
+    X[:, :3, 3] = np.arange(15).reshape(5, 3) * 1e-3
+    with pytest.raises(InputError, match="tilt the tool"):
+        fit_pivot_tcp(X)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("target,fx,fy,fz,x,y,z,rx,ry,rz\ntable,0,0,0,1,2,3,4,5\n", r"t\.csv:2: expected 10"),
+    ("target,fx,fy,fz,x,y,z,rx,ry,rz\nbench,0,0,0,1,2,3,4,5,6\n", r"t\.csv:2: target 'bench'"),
+    ("target,fx,fy,fz,x,y,z,rx,ry,rz\ntable,0,0,x,1,2,3,4,5,6\n", r"t\.csv:2: feature"),
+    ("x,y\n", r"t\.csv:1: expected the header"),
+])
+def test_calibrate_bad_input_is_one_line_exit_2(tmp_path, capsys, text, match):
+    import re
+
+    f = tmp_path / "t.csv"
+    f.write_text(text)
+    assert main(["calibrate", str(f), "--tool", "0,0,200,0,0,0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and re.search(match, err), err
