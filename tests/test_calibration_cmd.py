@@ -85,13 +85,16 @@ def _touch_file(path, spec, part=None, rng_seed=0):
     return path
 
 
-@pytest.fixture(scope="module")
-def calibrated(tmp_path_factory):
+@pytest.fixture(scope="module", params=["irb1600", "m10ia"])
+def calibrated(tmp_path_factory, request):
+    """The same cell calibrated with the IRB1600 (RAPID) and the M-10iA (LS; its controller's
+    robot frame is 0.45 m above the model's base, so the reported poses are in that frame)."""
     d = tmp_path_factory.mktemp("cal")
-    spec = get_robot("irb1600")
+    spec = get_robot(request.param)
     touches = _touch_file(d / "touches.yaml", spec, part=[[-90, -130, 0], [90, 130, 0]])
+    ext = ".mod" if spec.controller == "abb" else ".ls"
     out = {k: d / n for k, n in (("report", "rep.yaml"), ("scenario", "cell.yaml"),
-                                  ("program", "check.mod"))}
+                                  ("program", "check" + ext))}
     rc = main(["calibrate", str(touches), "--report", str(out["report"]),
                "--scenario", "tool_in_hand", "--scenario-out", str(out["scenario"]),
                "--program", str(out["program"])])
@@ -132,13 +135,14 @@ def test_calibrated_scenario_places_the_table_where_it_is(calibrated):
 
 
 def test_check_program_puts_the_real_tip_on_the_nominal_points(calibrated):
-    """Parse the RAPID program (parser of tests/test_virtual_tcp_program.py, not ours),
+    """Parse the RAPID / LS program (parsers of tests/test_virtual_tcp_program.py, not ours),
     compose wobj * target * tool^-1 = the flange the controller commands, joints by the
     analytic IK, FK with the REAL tip: on the true feature within 0.1 mm."""
-    from test_virtual_tcp_program import _parse_rapid
+    from test_virtual_tcp_program import _parse_ls, _parse_rapid
 
     _, out, spec = calibrated
-    X_FT, X_RU, targets = _parse_rapid(out["program"].read_text())
+    parse = _parse_rapid if spec.controller == "abb" else _parse_ls
+    X_FT, X_RU, targets = parse(out["program"].read_text())
     assert len(targets) == 3 * len(FEATURES)
     errs = []
     for i, X_UT in enumerate(targets[1::3]):  # the linear move onto each feature
