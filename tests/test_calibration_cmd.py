@@ -215,3 +215,34 @@ def test_calibrate_bad_input_is_one_line_exit_2(tmp_path, capsys, text, match):
     assert main(["calibrate", str(f), "--tool", "0,0,200,0,0,0"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and re.search(match, err), err
+
+
+def test_holder_calibration_moves_the_spindle_stand(tmp_path):
+    """The tool holder of the workpiece-in-hand cell (weld ``stand::stand``, design pose
+    (0.90, 0, -0.80)) 1.5 mm / 0.4 deg off: features touched round the spindle nose (1.2 m up
+    the stand); the written scenario's tool_tip, by Drake, is where the real one is."""
+    from drakedeburr.cell import load_cell
+
+    X_nom = np.eye(4)
+    X_nom[:3, 3] = [0.9, 0.0, -0.8]
+    X_true = X_nom @ _X(np.array([1.5, 0.8, -0.6]) * 1e-3, [0.2, -0.3, 0.4])
+    feats = np.array([[-60, -60, 1150], [60, -60, 1150], [60, 60, 1150], [-60, 60, 1150],
+                      [0, -80, 1100], [0, 0, 1200]], float)
+    rng = np.random.default_rng(11)
+    spec = get_robot("irb1600")
+    points = [{"feature": f.tolist(),
+               "pose": _touch(spec, X_true[:3, :3] @ (f * 1e-3) + X_true[:3, 3],
+                              _down(10, 60 * i), rng)} for i, f in enumerate(feats)]
+    touches = tmp_path / "holder.yaml"
+    tcp = [_touch(spec, np.array([0.70, 0.20, -0.20]), _down(t, a), rng)
+           for t, a in ((0, 0), (25, 0), (25, 120), (25, 240), (35, 60))]
+    touches.write_text(yaml.safe_dump({"tool": TOOL_SET.tolist(), "tcp": tcp,
+                                       "holder": {"points": points}}))
+    out = tmp_path / "wih.yaml"
+    assert main(["calibrate", str(touches), "--scenario", "workpiece_in_hand",
+                 "--scenario-out", str(out)]) == 0
+    cell = load_cell(out)
+    X = cell.plant.GetFrameByName("tool_tip").CalcPoseInWorld(
+        cell.plant.CreateDefaultContext()).GetAsMatrix4()
+    tip_true = X_true @ np.array([0, 0, 1.2 + 0.048, 1.0])  # spindle_stand.sdf tool_tip
+    assert np.linalg.norm(X[:3, 3] - tip_true[:3]) < 3 * SIGMA
