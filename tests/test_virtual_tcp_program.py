@@ -234,3 +234,33 @@ def test_offset_refuses_a_3d_contour_and_a_tool_that_does_not_fit():
     local = out @ R  # back in the square's plane
     assert np.allclose(local[:, 2], 0, atol=1e-12)
     assert np.allclose(np.sort(local[:, 0]), [0.004, 0.004, 0.046, 0.046], atol=1e-12)
+
+
+def test_virtual_tcp_reference_pose_sets_the_tool(extdata, tmp_path):
+    """--reference X_OP: the written tool data is the TCP that coincides with the spindle at
+    that reference pose, X_FT = X_FP X_OP^-1, and every CL point still meets the spindle."""
+    from drakedeburr.post.cl_reader import read_cl
+
+    out = tmp_path / "ref.mod"
+    spindle, part, ref = [700.0, 0, 500, 0, -90, 0], [0.0, 0, 100, 0, 0, 0], [5, -3, 2, 180, 0, 45]
+    assert main(["post", str(extdata / "cl_files" / CREO), "--workpiece-in-hand",
+                 "--virtual-tcp", "--tool", ",".join(map(str, spindle)),
+                 "--wobj", ",".join(map(str, part)), "--reference", ",".join(map(str, ref)),
+                 "-o", str(out)]) == 0
+    X_FT, X_RU, targets = _parse_rapid(out.read_text())
+    X_FP = _pose(part[:3], _zyx(part[5], part[4], part[3]))
+    X_OP = _pose(ref[:3], _zyx(ref[5], ref[4], ref[3]))
+    assert np.abs(X_FT - X_FP @ np.linalg.inv(X_OP)).max() < 1e-8
+    X_BS = _pose(spindle[:3], _zyx(spindle[5], spindle[4], spindle[3]))
+    assert np.abs(X_RU - X_BS).max() < 1e-8  # the user frame is the spindle frame
+    cl = read_cl(extdata / "cl_files" / CREO)
+    for X_UT, p in zip(targets, cl.p_C, strict=True):
+        X_BP = X_RU @ X_UT @ np.linalg.inv(X_FT) @ X_FP
+        assert np.linalg.norm(X_BP[:3, :3] @ p + X_BP[:3, 3] - X_BS[:3, 3]) < 0.01e-3
+    assert main(["post", str(extdata / "cl_files" / CREO), "--reference", "0,0,0,0,0,0",
+                 "--workpiece-in-hand", "--tool", "700,0,500,0,-90,0",
+                 "-o", str(tmp_path / "x.mod")]) == 2  # --reference without --virtual-tcp
+    assert main(["post", str(extdata / "cl_files" / CREO), "--reference", "0,0,0,0,0,0",
+                 "--workpiece-in-hand", "--virtual-tcp", "--tool", "700,0,500,0,-90,0",
+                 "-o", str(tmp_path / "x.mod")]) == 2  # CL axis not onto -Z of the spindle
+    assert not (tmp_path / "x.mod").exists()

@@ -131,11 +131,7 @@ def _run(args) -> int:
     data = read_touches(args.touches)
     robot = get_robot(args.robot or data.robot or "irb1600")
     tool = pose_from_mm_deg(args.tool, "--tool") if args.tool is not None else None
-    try:
-        cal = calibrate(data, np.asarray(robot.X_BR), tool)
-    except KeyboardInterrupt:
-        log.error("interrupted: nothing written")
-        return 130
+    cal = calibrate(data, np.asarray(robot.X_BR), tool)
     rep = _report(cal, robot.name)
     fails = []
     rms = [("TCP pivot", cal.pivot.rms)] if cal.pivot is not None else []
@@ -159,7 +155,8 @@ def _run(args) -> int:
         welds = {t.name: (args.table_weld if t.name == "table" else args.holder_weld)
                  for t in cal.targets}
         log.info("wrote %s", write_calibrated_scenario(args.scenario, args.scenario_out, cal,
-                                                       welds, note=Path(args.touches).name))
+                                                       welds, note=Path(args.touches).name,
+                                                       robot=robot))
     if args.program:
         from drakedeburr.programs.writers import format_for_controller, write_program
 

@@ -23,6 +23,7 @@ work object and tool (``drakedeburr calibrate``).
 from __future__ import annotations
 
 import csv
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,6 +41,8 @@ from drakedeburr.post.cl_post import pose_from_mm_deg
 
 __all__ = ["TouchTarget", "TouchData", "CellCalibration", "TargetResult", "read_touches",
            "calibrate", "write_calibrated_scenario", "check_program", "TARGETS"]
+
+log = logging.getLogger(__name__)
 
 TARGETS = ("table", "holder")
 _CSV_HEADER = ["target", "fx", "fy", "fz", "x", "y", "z", "rx", "ry", "rz"]
@@ -276,10 +279,12 @@ def _weld(items: list, child: str, scenario: Path):
 
 
 def write_calibrated_scenario(scenario: str | Path, out: str | Path, cal: CellCalibration,
-                              welds: dict[str, str], note: str = "") -> Path:
+                              welds: dict[str, str], note: str = "", robot=None) -> Path:
     """Copy a scenario (Drake model directives) with each calibrated target's weld to the world
     set to the fitted frame (``welds``: target name -> the weld's child frame, whose frame the
-    touch features are given in). The robot's own weld gives W -> B. Written atomically."""
+    touch features are given in). The robot's own weld gives W -> B. Written atomically.
+    ``robot`` (the arm that touched) is compared with the scenario's arm: a different one is
+    warned about (the frames are in the touching arm's base)."""
     from pydrake.common.schema import Transform
     from pydrake.common.yaml import yaml_dump_typed
     from pydrake.math import RigidTransform
@@ -287,7 +292,7 @@ def write_calibrated_scenario(scenario: str | Path, out: str | Path, cal: CellCa
 
     from drakedeburr._io import atomic_write_text
     from drakedeburr.resources import scenario_path
-    from drakedeburr.robots import BASE_FRAME_NAME, ROBOT_MODEL_NAME
+    from drakedeburr.robots import BASE_FRAME_NAME, ROBOT_MODEL_NAME, robot_for_model_url
 
     src = scenario_path(scenario)
     try:
@@ -296,6 +301,12 @@ def write_calibrated_scenario(scenario: str | Path, out: str | Path, cal: CellCa
         raise InputError(f"{src}: cannot load model directives: {exc}") from exc
     items = list(directives.directives)
     base = _weld(items, f"{ROBOT_MODEL_NAME}::{BASE_FRAME_NAME}", src)
+    arm = next((robot_for_model_url(d.add_model.file) for d in items
+                if d.add_model is not None and d.add_model.name == ROBOT_MODEL_NAME), None)
+    if robot is not None and arm is not None and arm.name != robot.name:
+        log.warning("%s places the %s, the touches were made with the %s: the frames are "
+                    "written relative to the scenario's robot base", src.name, arm.name,
+                    robot.name)
     X_WB = base.X_PC.GetDeterministicValue().GetAsMatrix4() if base.X_PC else np.eye(4)
     for name, child in welds.items():
         weld = _weld(items, child, src)

@@ -132,7 +132,13 @@ def virtual_tcp_setup(robot: RobotKinematics, X_BO: np.ndarray, X_FP: np.ndarray
     X_BO, X_FP = np.asarray(X_BO, float), np.asarray(X_FP, float)
     q0 = READY_POSE if q_start is None else np.asarray(q_start, float)
     if X_OP is not None:
-        return VirtualTcpSetup(X_BO, X_FP, np.asarray(X_OP, float))
+        X_OP = np.asarray(X_OP, float)
+        a_O = X_OP[:3, :3] @ (np.asarray(axis_P, float) / np.linalg.norm(axis_P))
+        if np.linalg.norm(a_O - [0.0, 0.0, -1.0]) > 1e-6:
+            raise InputError(f"--reference: it turns the CL tool axis to {a_O.round(4)} in the "
+                             "spindle's frame; the axis (tip -> spindle) must lie on -Z of "
+                             "the spindle's TCP")
+        return VirtualTcpSetup(X_BO, X_FP, X_OP)
     p_P = np.asarray(p_P, float)
     sample = p_P[np.unique(np.linspace(0, len(p_P) - 1, min(len(p_P), _SPIN_SAMPLE)).astype(int))]
     w = travel_weights(robot.opw)
