@@ -142,7 +142,12 @@ def test_check_program_puts_the_real_tip_on_the_nominal_points(calibrated):
 
     _, out, spec = calibrated
     parse = _parse_rapid if spec.controller == "abb" else _parse_ls
-    X_FT, X_RU, targets = parse(out["program"].read_text())
+    text = out["program"].read_text()
+    if spec.controller == "abb":
+        from test_programs_formats import rapidcheck  # third-party RAPID grammar checker
+
+        assert rapidcheck(text) == []
+    X_FT, X_RU, targets = parse(text)
     assert len(targets) == 3 * len(FEATURES)
     errs = []
     for i, X_UT in enumerate(targets[1::3]):  # the linear move onto each feature

@@ -129,6 +129,9 @@ def test_virtual_tcp_program_puts_every_cl_point_on_the_spindle(extdata, tmp_pat
                  "-o", str(out)]) == 0
     text = out.read_text()
     if suffix == ".mod":
+        from test_programs_formats import rapidcheck  # third-party RAPID grammar checker
+
+        assert rapidcheck(text) == []
         X_FT, X_RU, targets = _parse_rapid(text)
     elif suffix == ".src":
         X_FT, X_RU, targets = _parse_krl(text, out.with_suffix(".dat").read_text())
