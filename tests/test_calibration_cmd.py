@@ -251,3 +251,19 @@ def test_holder_calibration_moves_the_spindle_stand(tmp_path):
         cell.plant.CreateDefaultContext()).GetAsMatrix4()
     tip_true = X_true @ np.array([0, 0, 1.2 + 0.048, 1.0])  # spindle_stand.sdf tool_tip
     assert np.linalg.norm(X[:3, 3] - tip_true[:3]) < 3 * SIGMA
+
+
+def test_csv_touch_file_gives_the_same_frames(tmp_path):
+    spec = get_robot("irb1600")
+    doc = yaml.safe_load(_touch_file(tmp_path / "t.yaml", spec).read_text())
+    rows = ["target,fx,fy,fz,x,y,z,rx,ry,rz", "# the pivot, then the table"]
+    rows += ["tcp,,,," + ",".join(map(str, p)) for p in doc["tcp"]]
+    rows += ["table," + ",".join(map(str, t["feature"] + t["pose"]))
+             for t in doc["table"]["points"]]
+    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    reps = []
+    for name, extra in (("t.yaml", []), ("t.csv", ["--tool", "0,0,200,0,0,0"])):
+        rep = tmp_path / f"{name}.rep"
+        assert main(["calibrate", str(tmp_path / name), "--report", str(rep)] + extra) == 0
+        reps.append(yaml.safe_load(rep.read_text()))
+    assert reps[0]["tcp"] == reps[1]["tcp"] and reps[0]["table"] == reps[1]["table"]
