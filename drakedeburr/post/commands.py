@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import re
 from pathlib import Path
 
 __all__ = ["register", "add_input_options", "add_cell_options", "add_output_options",
@@ -100,19 +99,23 @@ def register(subparsers) -> None:
     p.set_defaults(_run=_run_post)
 
 
-def program_name(cl_file: str, name: str | None) -> str:
-    """A program name from --name or the file name: letters, digits, '_', <= 24 chars."""
-    from drakedeburr.errors import InputError
+def program_name(cl_file: str, name: str | None, fmt: str = "rapid") -> str:
+    """The program name: ``--name`` if it is an identifier of the format's language (else
+    refused, exit 2), otherwise the CL file's name cleaned into one (at most 24 characters;
+    :mod:`drakedeburr.programs.names`). KRL and LS programs take their output file's name when
+    written."""
+    from drakedeburr.programs.names import check_identifier, clean_identifier
 
     if name is not None:
-        if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,23}", name):
-            raise InputError(f"--name {name!r}: letters, digits, '_', starting with a letter, "
-                             "at most 24 characters")
+        check_identifier(name, fmt, "--name")
+        if len(name) > 24:
+            from drakedeburr.errors import InputError
+
+            raise InputError(f"--name {name!r}: at most 24 characters (a long program is "
+                             "written in parts named NAME_001, ...)")
         return name
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(cl_file).name.split(".")[0])
-    if not stem[:1].isalpha():
-        stem = "p" + stem
-    return stem[:24]
+    return clean_identifier(Path(cl_file).name.split(".")[0], fmt, fallback="Deburr",
+                            max_length=24)
 
 
 def _check_args(args) -> None:
@@ -208,12 +211,12 @@ def _run_post(args) -> int:
     from drakedeburr.programs.writers import format_for_controller
 
     _check_args(args)
-    name = program_name(args.cl_file, args.name)
     settings = settings_from_args(args)
     own = format_for_controller(settings.robot.controller)
     if args.fmt is not None and args.fmt != own:
         raise InputError(f"--format {args.fmt}: {args.robot} has a {settings.robot.controller} "
                          f"controller, which runs {own.upper()} (--format {own})")
+    name = program_name(args.cl_file, args.name, args.fmt or own)
     try:
         summary = post_cl_file(
             args.cl_file, args.output,
