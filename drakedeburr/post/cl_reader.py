@@ -1,7 +1,8 @@
 """Streaming reader for APT-style cutter-location files (NX CLSF, Creo Pro/CLfile, generic APT).
 
 The file is read line by line (never loaded whole): physical lines ending in ``$`` continue on
-the next line; ``$$`` starts a comment. Statements are ``WORD / arg, arg, ...`` or a bare
+the next line; ``$$`` starts a comment that runs to the end of the line, also after a statement
+(``GOTO/1,2,3 $$ 4,5,6`` is the GOTO to 1,2,3; the comment is kept). Statements are ``WORD / arg, arg, ...`` or a bare
 ``WORD``. What the reader does with each word:
 
 - moves: ``GOTO/x,y,z[,i,j,k]`` (tool tip and tool axis, tip -> spindle), ``GODLTA/dx,dy,dz``
@@ -88,6 +89,22 @@ class ClReadState:
     lines_read: int = 0
 
 
+_TEXT_WORDS = ("PPRINT", "PARTNO", "INSERT", "TPRINT")  # the rest of the line is literal text
+
+
+def _split_comment(text: str, continued: bool) -> tuple[str, str]:
+    """(statement text, ``$$`` comment) of one physical line: in APT ``$$`` starts a comment
+    that runs to the end of the line, also after a statement (``GOTO/1,2,3 $$ note``); a
+    line that is only a comment is returned whole as the comment. The text of PPRINT, PARTNO,
+    INSERT and TPRINT is literal and never split."""
+    at = text.find("$$")
+    if at < 0 or (not continued and text[:at].lstrip().upper().startswith(_TEXT_WORDS)):
+        return text, ""
+    if at == 0 or not text[:at].strip():
+        return ("", text.strip()) if continued else (text, "")
+    return text[:at].rstrip(), text[at:].strip()
+
+
 def _statements(lines: Iterable[str], source: str, counter: list[int],
                 progress: Callable[[int, int], None] | None) -> Iterator[tuple[int, str]]:
     """(first line number, joined text) per statement; ``$`` continues a line.
@@ -102,8 +119,14 @@ def _statements(lines: Iterable[str], source: str, counter: list[int],
         text = raw.rstrip("\r\n").strip()
         if not buf:
             start = lineno
-        if text.endswith("$") and not text.endswith("$$") and text != "$":
+        text, comment = _split_comment(text, bool(buf))
+        if buf and not text and comment:  # a comment line inside a continuation
+            yield lineno, comment
+            continue
+        if text.endswith("$") and text != "$":
             buf.append(text[:-1])
+            if comment:
+                yield lineno, comment
             continue
         if buf:
             buf.append(text)
@@ -111,6 +134,8 @@ def _statements(lines: Iterable[str], source: str, counter: list[int],
             buf = []
         if text:
             yield start, text
+        if comment:
+            yield lineno, comment
     counter[0], counter[1] = lineno, chars
     if buf:
         raise ClParseError(source, lineno, buf[-1][-20:] + "$",

@@ -64,7 +64,9 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
                    help="rule for the free rotation about the tool axis")
     p.add_argument("--zone", type=float, default=1.0, help="corner zone of feed moves [mm]")
     p.add_argument("--feed", type=float, default=None,
-                   help="feed-move TCP speed [mm/s] (default: the file's FEDRAT)")
+                   help="feed-move TCP speed [mm/s] (default: the file's FEDRAT); within what "
+                        "the arm can move and the language holds (RAPID 7000, KRL and LS "
+                        "2000 mm/s), else refused")
     p.add_argument("--force", action="store_true",
                    help="write the program even if points are unreachable (they are left out)")
 
@@ -125,8 +127,6 @@ def _check_args(args) -> None:
     cl = Path(args.cl_file)
     if not cl.is_file():
         raise InputError(f"{cl}: CL file not found" if not cl.exists() else f"{cl}: not a file")
-    if args.feed is not None and not args.feed > 0:
-        raise InputError(f"--feed must be > 0 mm/s, got {args.feed}")
     if not args.zone >= 0:
         raise InputError(f"--zone must be >= 0 mm, got {args.zone}")
     if args.workpiece_in_hand and args.tool is None:
@@ -217,6 +217,12 @@ def _run_post(args) -> int:
         raise InputError(f"--format {args.fmt}: {args.robot} has a {settings.robot.controller} "
                          f"controller, which runs {own.upper()} (--format {own})")
     name = program_name(args.cl_file, args.name, args.fmt or own)
+    if args.feed is not None:  # the arm's and the language's range, before any work
+        from drakedeburr.programs.speeds import check_speed
+        from drakedeburr.units import m_from_mm
+
+        check_speed(m_from_mm(args.feed), settings.robot, args.fmt or own, "--feed",
+                    settings.frames()[1])
     try:
         summary = post_cl_file(
             args.cl_file, args.output,

@@ -170,7 +170,7 @@ def clean_identifier(text: str, language: str, fallback: str = "Program",
     rule = _rule(language)
     limit = min(rule.max_length, max_length or rule.max_length)
     s = re.sub(r"[^A-Za-z0-9_]+", "_", _ascii(str(text)))
-    s = re.sub(r"_+", "_", s).strip("_") or fallback
+    s = s.strip("_") or fallback
     if not s[0].isalpha():
         s = "P_" + s
     s = s[:limit].rstrip("_")

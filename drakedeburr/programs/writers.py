@@ -73,10 +73,14 @@ def check_names(program: RobotProgram, fmt: str) -> None:
 
 
 def format_program(program: RobotProgram, fmt: str) -> dict[str, str]:
-    """Texts of a program in ``fmt``: {suffix: text} (KRL: ".src" and ".dat"); names are
-    checked first (:func:`check_names`)."""
+    """Texts of a program in ``fmt``: {suffix: text} (KRL: ".src" and ".dat"); names
+    (:func:`check_names`) and speeds (:func:`~drakedeburr.programs.speeds.check_program_speeds`)
+    are checked first."""
+    from drakedeburr.programs.speeds import check_program_speeds
+
     check_format(program, fmt)
     check_names(program, fmt)
+    check_program_speeds(program, fmt)
     if fmt == "rapid":
         from drakedeburr.programs.rapid import format_rapid
 
