@@ -2,8 +2,8 @@
 
 The file is read line by line (never loaded whole): physical lines ending in ``$`` continue on
 the next line; ``$$`` starts a comment that runs to the end of the line, also after a statement
-(``GOTO/1,2,3 $$ 4,5,6`` is the GOTO to 1,2,3; the comment is kept). Statements are ``WORD / arg, arg, ...`` or a bare
-``WORD``. What the reader does with each word:
+(``GOTO/1,2,3 $$ 4,5,6`` is the GOTO to 1,2,3; the comment is kept). Statements are
+``WORD / arg, arg, ...`` or a bare ``WORD``. What the reader does with each word:
 
 - moves: ``GOTO/x,y,z[,i,j,k]`` (tool tip and tool axis, tip -> spindle), ``GODLTA/dx,dy,dz``
   or ``GODLTA/d`` (along the tool axis), ``FROM`` (start point, reached by positioning),
