@@ -189,8 +189,8 @@ def comment_text(text: object, language: str) -> str:
 
     Line breaks, control and format characters become spaces, letters lose their accents
     (other non-ASCII characters become '?'), the comment and statement markers of the three
-    languages (``! ; " ' ` \\ { }``) become spaces, runs of spaces shrink to one; a KRL
-    comment never starts with FOLD / ENDFOLD (the editor's fold markers)."""
+    languages (``! ; " ' ` \\ { }``) become spaces, runs of spaces shrink to one; a comment
+    never starts with FOLD / ENDFOLD (the KRL editor's fold markers)."""
     _rule(language)
     out = []
     for ch in unicodedata.normalize("NFKD", str(text)):
@@ -204,6 +204,6 @@ def comment_text(text: object, language: str) -> str:
         else:
             out.append("?")
     s = re.sub(r" +", " ", "".join(out).translate(_MARKERS)).strip()
-    if language == "krl" and re.match(r"(?i)(END)?FOLD\b", s):
+    if re.match(r"(?i)(END)?FOLD\b", s):  # KRL's markers; the same text in every language
         s = "- " + s
     return s
