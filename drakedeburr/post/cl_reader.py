@@ -128,14 +128,14 @@ def _statements(lines: Iterable[str], source: str, counter: list[int],
             if comment:
                 yield lineno, comment
             continue
+        if comment:  # before the statement it follows: a comment on the FINI line is read
+            yield lineno, comment
         if buf:
             buf.append(text)
             text = " ".join(buf).strip()
             buf = []
         if text:
             yield start, text
-        if comment:
-            yield lineno, comment
     counter[0], counter[1] = lineno, chars
     if buf:
         raise ClParseError(source, lineno, buf[-1][-20:] + "$",
