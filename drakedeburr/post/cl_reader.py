@@ -25,8 +25,9 @@ the next line; ``$$`` starts a comment that runs to the end of the line, also af
   refused;
 - machine functions (SPINDL, COOLNT, DELAY, STOP, AUXFUN, INSERT, ...) and unknown words are
   listed once each with their count and first lines (:attr:`ClProgram.not_applied`); titles,
-  display and tool data (PARTNO, PAINT, TLDATA, ...) and the NX listing banner are read
-  silently; ``$$`` comments and PPRINT are kept.
+  display and tool data (PARTNO, PAINT, TLDATA, ...) are read and counted with the reason they
+  are not needed (:attr:`ClProgram.read_words`, logged by ``post``), the NX listing banner is
+  read as a comment; ``$$`` comments and PPRINT are kept.
 
 Malformed data raise :class:`ClParseError` (an :class:`~drakedeburr.errors.InputError`) naming
 the file, line and token. Output is SI: positions [m], feeds [m/s]; tool axes are unit vectors
@@ -86,6 +87,7 @@ class ClReadState:
     warnings: list[ClWarning] = field(default_factory=list)
     warning_counts: dict[str, int] = field(default_factory=dict)
     not_applied: tuple[ClWordCount, ...] = ()
+    read_words: tuple[ClWordCount, ...] = ()
     lines_read: int = 0
 
 
@@ -196,6 +198,7 @@ def iter_cl_moves(
         state_out.unit_changes = interp.unit_changes
         state_out.warnings, state_out.warning_counts = notes.warnings, notes.warning_counts
         state_out.not_applied = notes.word_counts()
+        state_out.read_words = notes.word_counts(read=True)
         state_out.lines_read = counter[0]
 
 
@@ -247,6 +250,8 @@ class ClProgram:
             ``warning_counts``).
         warning_counts: word -> number of warnings.
         not_applied: words not turned into robot motion, each listed once with its count.
+        read_words: words read that say nothing about the motion (PAINT, TLDATA, PARTNO, ...),
+            each once with its count and why it is not needed (``post`` logs them).
         comments: (line, text) of ``$$`` comments and PPRINT (the first 10000).
         units: length unit in effect at the end ('mm' or 'inch').
         unit_changes: (line, new unit, moves read before) of each UNITS statement that changed
@@ -269,6 +274,7 @@ class ClProgram:
     warnings: tuple[ClWarning, ...] = ()
     warning_counts: dict[str, int] = field(default_factory=dict)
     not_applied: tuple[ClWordCount, ...] = ()
+    read_words: tuple[ClWordCount, ...] = ()
     comments: tuple[tuple[int, str], ...] = ()
     units: str = "mm"
     unit_changes: tuple[tuple[int, str, int], ...] = ()
@@ -314,7 +320,8 @@ def _program(source: str, moves: Iterable[ClMove], state: ClReadState,
         cols.add(m)
     return ClProgram(source=source, **cols.columns(), paths=tuple(state.paths),
                      warnings=tuple(state.warnings), warning_counts=dict(state.warning_counts),
-                     not_applied=state.not_applied, comments=tuple(comments),
+                     not_applied=state.not_applied, read_words=state.read_words,
+                     comments=tuple(comments),
                      units=state.units, unit_changes=tuple(state.unit_changes),
                      end_line=state.end_line)
 

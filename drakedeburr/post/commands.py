@@ -183,6 +183,8 @@ def _report(summary, robot: str) -> None:
     for line in cl.summary():
         if not line.startswith("not applied:"):
             log.info("%s", line)
+    for w in cl.read_words:  # read, and not needed for the robot's motion
+        log.info("read, not needed: %s", w.describe())
     for line, unit, before in cl.mid_file_unit_changes:
         log.warning("%s:%d: UNITS switched to %s after %d moves: the following coordinates "
                     "are read in %s", Path(cl.source).name, line, unit, before, unit)
