@@ -426,3 +426,28 @@ def test_post_cl_feed_beyond_the_range_is_refused_naming_the_move(tmp_path, caps
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "out of range" in err and "source line" in err
     assert not out.exists()
+
+
+def test_demo_on_a_hostile_hub_folder_writes_a_clean_program(tmp_path, monkeypatch):
+    """``demo --hub <folder>`` where the folder's name carries a line break and a KRL motion:
+    the program (named after the cleaned hub name) holds the plan's moves and nothing else.
+    The CL table and the planning are replaced by the verify tests' reference plan (the
+    naming, verification and export are the demo's own)."""
+    import verify_support as vs
+
+    import drakedeburr.path
+    import drakedeburr.plan
+    from drakedeburr.demo import run_demo
+
+    hub = tmp_path / f"h5 evil\n{INJECT}; ! x"
+    hub.mkdir()
+    for f in (REPO / "models" / "hubs" / vs.HUB).iterdir():
+        (hub / f.name).symlink_to(f)
+    plan = replace(vs.good_plan(), hub=str(hub))
+    monkeypatch.setattr(drakedeburr.path, "cl_table", lambda h: {"windows": []})
+    monkeypatch.setattr(drakedeburr.plan, "plan_hub", lambda *a, **k: plan)
+    summary = run_demo(tmp_path / "out", hub=str(hub), test_mode=True, force=True)
+    program = Path(summary["outputs"]["program"])
+    assert program.parent == tmp_path / "out" and program.name.startswith("deburr_h5_evil_PTP")
+    assert parse_written(program) == list(range(1, len(plan.targets) + 1))
+    assert "PTP {A1" not in program.read_text()
