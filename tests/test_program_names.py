@@ -451,3 +451,11 @@ def test_demo_on_a_hostile_hub_folder_writes_a_clean_program(tmp_path, monkeypat
     assert program.parent == tmp_path / "out" and program.name.startswith("deburr_h5_evil_PTP")
     assert parse_written(program) == list(range(1, len(plan.targets) + 1))
     assert "PTP {A1" not in program.read_text()
+
+
+def test_post_name_of_a_krl_program_is_its_file_name_and_said_so(tmp_path, caplog):
+    cl = _cl_file(tmp_path, "part.cl")
+    out = tmp_path / "prog.src"
+    assert _post(cl, "krl", out, "--name", "Other") == 0
+    assert "DEF prog( )" in out.read_text()
+    assert any("takes its file's name (prog)" in r.getMessage() for r in caplog.records)

@@ -219,6 +219,11 @@ def _run_post(args) -> int:
         raise InputError(f"--format {args.fmt}: {args.robot} has a {settings.robot.controller} "
                          f"controller, which runs {own.upper()} (--format {own})")
     name = program_name(args.cl_file, args.name, args.fmt or own)
+    stem = Path(args.output).name.split(".")[0]
+    if args.name is not None and (args.fmt or own) != "rapid" and args.name.lower() != (
+            stem.lower()):
+        log.warning("--name %s: a %s program takes its file's name (%s)", args.name,
+                    (args.fmt or own).upper(), stem)
     if args.feed is not None:  # the arm's and the language's range, before any work
         from drakedeburr.programs.speeds import check_speed
         from drakedeburr.units import m_from_mm
