@@ -131,7 +131,7 @@ def _check_export_args(args: argparse.Namespace):
     if fmt in ("krl", "ls"):
         program_name_for(out, fmt)
     else:
-        check_identifier(args.name, "rapid", "--name")
+        check_identifier(args.name, "rapid", "--name", "module name")
     if fmt == "krl":
         argcheck.output_file(out.with_suffix(".dat"), "-o/--output (.dat beside the .src)")
     argcheck.free_space(out.parent, 400 * len(plan.targets), "-o/--output")

@@ -109,7 +109,7 @@ def program_name(cl_file: str, name: str | None, fmt: str = "rapid") -> str:
     from drakedeburr.programs.names import check_identifier, clean_identifier
 
     if name is not None:
-        check_identifier(name, fmt, "--name")
+        check_identifier(name, fmt, "--name", "program name")
         if len(name) > 24:
             from drakedeburr.errors import InputError
 
