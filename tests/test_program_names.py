@@ -459,3 +459,21 @@ def test_post_name_of_a_krl_program_is_its_file_name_and_said_so(tmp_path, caplo
     assert _post(cl, "krl", out, "--name", "Other") == 0
     assert "DEF prog( )" in out.read_text()
     assert any("takes its file's name (prog)" in r.getMessage() for r in caplog.records)
+
+
+@pytest.mark.parametrize("language", mut.LANGUAGES)
+def test_any_text_becomes_an_inert_remark_and_a_valid_name(language):
+    """Property: for any Unicode text (hypothesis, 400 cases per language) the remark is one
+    printable ASCII line without markers, and the cleaned name an identifier."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    @settings(max_examples=400, deadline=None, derandomize=True)
+    @given(st.text(max_size=80))
+    def check(text):
+        s = mut.comment_text(text, language)
+        assert s.isascii() and s.isprintable() and s.splitlines() == ([s] if s else [])
+        assert not set(s) & set("!;\"'`\\{}") and mut.comment_text(s, language) == s
+        assert mut.identifier_problem(mut.clean_identifier(text, language), language) is None
+
+    check()
