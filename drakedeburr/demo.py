@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["DEFAULT_SCENARIO", "register", "run_demo"]
+__all__ = ["DEFAULT_SCENARIO", "demo_program_path", "register", "run_demo"]
 
 log = logging.getLogger(__name__)
 
@@ -29,6 +29,18 @@ def _default_hub() -> str:
     from drakedeburr.hub import DEFAULT_HUB
 
     return DEFAULT_HUB
+
+
+def demo_program_path(out: Path, hub: str, program_format: str) -> tuple[str, Path]:
+    """(program name, file) of the demo's program: ``Deburr_<hub>`` in ``out/deburr_<hub>``,
+    the hub's folder name cleaned into an identifier of the format's language (a derived
+    name: :func:`drakedeburr.programs.names.clean_identifier`), so a hub folder's name never
+    becomes program code."""
+    from drakedeburr.programs.names import clean_identifier
+
+    name = clean_identifier(f"Deburr_{Path(str(hub)).name}", program_format, fallback="Deburr")
+    suffix = {"rapid": "mod", "krl": "src", "ls": "ls"}[program_format]
+    return name, Path(out) / f"d{name[1:]}.{suffix}"
 
 
 def run_demo(
@@ -101,10 +113,9 @@ def run_demo(
 
     t0 = time.perf_counter()
     program_format = program_format or plan_robot(plan).program_format
-    suffix = {"rapid": "mod", "krl": "src", "ls": "ls"}[program_format]
-    program_path = out / f"deburr_{hub}.{suffix}"
+    name, program_path = demo_program_path(out, hub, program_format)
     try:
-        done = export_plan(folder, program_path, program_format, name=f"Deburr_{hub}",
+        done = export_plan(folder, program_path, program_format, name=name,
                            force=force, plan=plan)
         outputs["program"] = str(done.paths[0])
         log.info("demo 4/4: %s program %s%s", program_format, done.paths[0],

@@ -167,6 +167,32 @@ def test_cli_fifteen_paths_named_in_each_format(fifteen, tmp_path, fmt, suffix, 
     assert len(re.findall(move[fmt], text, re.M)) == n_goto - left_out
 
 
+def test_fifteen_paths_with_trailing_comments_post_every_goto(fifteen, tmp_path):
+    """The 15-path NX listing with a '$$' comment after every GOTO (3-number GOTOs followed by
+    the next point's coordinates, as in issue 41's NX file) and after other statements: the
+    program holds one move per GOTO, counted by a plain scan of the file, each at the
+    position written before the '$$'."""
+    lines = fifteen.read_text().splitlines()
+    gotos = [k for k, ln in enumerate(lines) if ln.startswith("GOTO/")]
+    for a, b in zip(gotos, gotos[1:] + gotos[:1], strict=True):
+        lines[a] += " $$ " + ",".join(lines[b][5:].split(",")[:3])
+    lines = [ln + " $$ shown in NX" if ln.startswith("PAINT/") else ln for ln in lines]
+    commented = tmp_path / "fifteen_commented.cls"
+    commented.write_text("\r\n".join(lines) + "\r\n")
+    scan = [(n, [float(v) for v in raw.split("$$")[0].strip()[5:].split(",")])
+            for n, raw in enumerate(commented.read_text().splitlines(), start=1)
+            if raw.startswith("GOTO/")]
+    assert len(scan) > 5000 and all(len(v) in (3, 6) for _, v in scan)
+    cl = read_cl(commented, units="inch")
+    assert cl.lines.tolist() == [n for n, _ in scan] and len(cl.paths) == 15
+    plain = read_cl(fifteen, units="inch")  # the same file without the comments
+    assert np.array_equal(cl.p_C, plain.p_C) and np.array_equal(cl.axis_C, plain.axis_C)
+    out = tmp_path / "fifteen.mod"
+    assert main(["post", str(commented), "-o", str(out), "--units", "inch", "--wobj",
+                 ",".join(str(v) for v in NX_WOBJ)]) == 0
+    assert len(re.findall(r"^\s*Move[LJ] ", out.read_text(), re.M)) == len(scan)
+
+
 def test_creo_drilling_program(extdata):
     """The cycle's moves reach the program: straight (linear) rapids in and out of the holes,
     feed moves at the cycle feed down to the depth written in the file."""

@@ -326,3 +326,47 @@ def test_reader_streams():
     it = mut.iter_cl_moves(lines(), units="mm")
     first = next(it)
     assert first.p_C == pytest.approx((1e-3, 2e-3, 3e-3)) and len(read) <= 2
+
+
+def test_dollar_dollar_starts_a_comment_also_after_a_statement():
+    """APT: '$$' starts a comment that runs to the end of the line, wherever it stands (issue
+    41: NX wrote ``GOTO/1.9949,0.1148,1.4399 $$ 1.9949,0.0707,1.3611`` and the reader took the
+    comment for coordinates); '$' at the end of the statement part still continues it; the
+    text of PPRINT is literal."""
+    text = "\n".join([
+        "UNITS/INCHES", "GOTO/1.9949,0.1148,1.4399 $$ 1.9949,0.0707,1.3611",
+        "GOTO/1,2,$ $$ continued", "$$ a comment line inside the continuation",
+        "3,0,0,1 $$ tool axis up", "PAINT/COLOR,31 $$ display only", "$$ alone",
+        "PPRINT/ COST $$ 5", "GOTO/4,5,6$$no space", "FINI $$ the end"])
+    prog = mut.parse_cl_text(text)
+    assert np.allclose(prog.p_C / INCH_M, [[1.9949, 0.1148, 1.4399], [1, 2, 3], [4, 5, 6]],
+                       atol=1e-12)
+    assert prog.lines.tolist() == [2, 3, 9] and np.allclose(prog.axis_C[1], [0, 0, 1])
+    assert prog.comments == (
+        (2, "1.9949,0.0707,1.3611"), (3, "continued"),
+        (4, "a comment line inside the continuation"), (5, "tool axis up"),
+        (6, "display only"), (7, "alone"), (8, "COST $$ 5"), (9, "no space"), (10, "the end"))
+    assert prog.not_applied == () and prog.warnings == () and prog.end_line == 10
+
+
+@pytest.mark.parametrize("name, counts", [
+    ("MECH491_NX_CLSF__APT_code.txt", {"TLDATA": 1, "PAINT": 14}),
+    ("MECH491_NX_CLSF__APT_Variable_Axis.txt", {"TLDATA": 1, "PAINT": 31})])
+def test_nx_statements_other_than_motion_are_read_and_accounted_for(extdata, name, counts):
+    """Every statement of the real NX files is either a move, a setting the reader applies
+    (TOOL PATH, MSYS, LOAD/TOOL, FEDRAT, RAPID, END-OF-PATH), a comment, or a word read and
+    not needed with its reason (TLDATA, PAINT: counted here by a plain scan of the file)."""
+    path = extdata / CL / name
+    lines = path.read_text().splitlines()
+    words = {}
+    for ln in lines:
+        w = ln.split("/")[0].strip()
+        if w and not w.startswith("$$") and not w.startswith("Tool Path Listing"):
+            words[w] = words.get(w, 0) + 1
+    applied = {"GOTO", "TOOL PATH", "MSYS", "LOAD", "FEDRAT", "RAPID", "END-OF-PATH"}
+    assert set(words) - applied == set(counts)
+    prog = mut.read_cl(path, units="inch")
+    read = {w.word: w for w in prog.read_words}
+    assert {w: r.count for w, r in read.items()} == counts == {w: words[w] for w in counts}
+    assert "TCP comes from --tool" in read["TLDATA"].reason
+    assert read["TLDATA"].lines == (2,) and prog.not_applied == () and prog.warnings == ()

@@ -42,14 +42,10 @@ def _header(name: str, comment: str, n_lines: int, groups: str) -> list[str]:
 
 
 def _check_name(name: str) -> str:
-    from drakedeburr.errors import InputError
+    """The /PROG name: an LS identifier (:mod:`drakedeburr.programs.names`), upper case."""
+    from drakedeburr.programs.names import check_identifier
 
-    clean = name.upper()
-    if not clean or not clean[0].isalpha() or not all(c.isalnum() or c == "_" for c in clean) \
-            or len(clean) > 36:
-        raise InputError(f"FANUC program name {name!r}: letters, digits and _ only, starting "
-                         f"with a letter, at most 36 characters")
-    return clean
+    return check_identifier(str(name), "ls", "FANUC program name", "program name").upper()
 
 
 def wpr_deg_from_R(R: np.ndarray) -> tuple[float, float, float]:

@@ -108,7 +108,8 @@ def _check_export_args(args: argparse.Namespace):
     from drakedeburr.errors import InputError
     from drakedeburr.plan.io import load_plan
     from drakedeburr.programs import plan_robot
-    from drakedeburr.programs.common import _NAMES, SUFFIXES, program_name_for
+    from drakedeburr.programs.common import SUFFIXES, program_name_for
+    from drakedeburr.programs.names import check_identifier
     from drakedeburr.robots import get_robot
 
     out = argcheck.output_file(args.output, "-o/--output")
@@ -130,9 +131,7 @@ def _check_export_args(args: argparse.Namespace):
     if fmt in ("krl", "ls"):
         program_name_for(out, fmt)
     else:
-        pattern, rule = _NAMES["rapid"]
-        if not pattern.fullmatch(args.name):
-            raise InputError(f"--name {args.name!r}: a RAPID module name is {rule}")
+        check_identifier(args.name, "rapid", "--name", "module name")
     if fmt == "krl":
         argcheck.output_file(out.with_suffix(".dat"), "-o/--output (.dat beside the .src)")
     argcheck.free_space(out.parent, 400 * len(plan.targets), "-o/--output")

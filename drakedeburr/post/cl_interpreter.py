@@ -29,12 +29,19 @@ __all__ = ["ClInterpreter"]
 
 _ORTHO_TOL = 1e-3  # MSYS axes: unit length and orthogonality as printed with ~7 digits
 
-# words that say nothing about the robot's motion (titles, display, tolerances, tool data)
-_INFO = frozenset({
-    "PARTNO", "MACHIN", "TLDATA", "PAINT", "CUTTER", "CLRSRF", "DISPLY", "SEQNO", "TPRINT",
-    "INTOL", "OUTOL", "TOLER", "MODE", "TOOLNO", "REWIND", "END", "AUTOPS", "MULTAX",
-    "OPERATION NAME", "SELECT", "INDIRV", "ARCSLP",
-})
+# words that say nothing about the robot's motion (titles, display, tolerances, tool data):
+# read and counted (ClProgram.read_words, logged by post), not listed as "not applied"
+_TOOL_DATA = "tool geometry for the CAM display; the robot's TCP comes from --tool"
+_INFO = {
+    "PARTNO": "part title", "MACHIN": "NC machine selection", "TLDATA": _TOOL_DATA,
+    "PAINT": "CAM display colour/speed", "CUTTER": _TOOL_DATA, "CLRSRF": "clearance plane",
+    "DISPLY": "CAM display", "SEQNO": "NC sequence numbers", "TPRINT": "tool list print",
+    "INTOL": "CAM tolerance", "OUTOL": "CAM tolerance", "TOLER": "CAM tolerance",
+    "MODE": "NC mode", "TOOLNO": "tool number for the NC", "REWIND": "NC tape rewind",
+    "END": "NC program end", "AUTOPS": "APT part surface", "MULTAX": "multi-axis flag (the "
+    "GOTO arity is read)", "OPERATION NAME": "CAM operation name", "SELECT": "NC selection",
+    "INDIRV": "APT direction hint", "ARCSLP": "arc slope flag",
+}
 # machine functions a robot program does not carry: read, then listed as not written
 _MACHINE = {
     "SPINDL": "spindle on/off and speed are not written to the robot program",
@@ -145,6 +152,7 @@ class ClInterpreter:
             self._fail(line, word[:12], "NC drilling cycle call in a CL file is not supported: "
                                         "post the CYCLE/DRILL or CYCLE/DEEP form instead")
         if word in _INFO:
+            self.notes.read(line, word, _INFO[word])
             return
         if word in _MACHINE:
             self.notes.skip(line, word, _MACHINE[word])

@@ -1,8 +1,9 @@
 """Streaming reader for APT-style cutter-location files (NX CLSF, Creo Pro/CLfile, generic APT).
 
 The file is read line by line (never loaded whole): physical lines ending in ``$`` continue on
-the next line; ``$$`` starts a comment. Statements are ``WORD / arg, arg, ...`` or a bare
-``WORD``. What the reader does with each word:
+the next line; ``$$`` starts a comment that runs to the end of the line, also after a statement
+(``GOTO/1,2,3 $$ 4,5,6`` is the GOTO to 1,2,3; the comment is kept). Statements are
+``WORD / arg, arg, ...`` or a bare ``WORD``. What the reader does with each word:
 
 - moves: ``GOTO/x,y,z[,i,j,k]`` (tool tip and tool axis, tip -> spindle), ``GODLTA/dx,dy,dz``
   or ``GODLTA/d`` (along the tool axis), ``FROM`` (start point, reached by positioning),
@@ -24,8 +25,9 @@ the next line; ``$$`` starts a comment. Statements are ``WORD / arg, arg, ...`` 
   refused;
 - machine functions (SPINDL, COOLNT, DELAY, STOP, AUXFUN, INSERT, ...) and unknown words are
   listed once each with their count and first lines (:attr:`ClProgram.not_applied`); titles,
-  display and tool data (PARTNO, PAINT, TLDATA, ...) and the NX listing banner are read
-  silently; ``$$`` comments and PPRINT are kept.
+  display and tool data (PARTNO, PAINT, TLDATA, ...) are read and counted with the reason they
+  are not needed (:attr:`ClProgram.read_words`, logged by ``post``), the NX listing banner is
+  read as a comment; ``$$`` comments and PPRINT are kept.
 
 Malformed data raise :class:`ClParseError` (an :class:`~drakedeburr.errors.InputError`) naming
 the file, line and token. Output is SI: positions [m], feeds [m/s]; tool axes are unit vectors
@@ -85,7 +87,24 @@ class ClReadState:
     warnings: list[ClWarning] = field(default_factory=list)
     warning_counts: dict[str, int] = field(default_factory=dict)
     not_applied: tuple[ClWordCount, ...] = ()
+    read_words: tuple[ClWordCount, ...] = ()
     lines_read: int = 0
+
+
+_TEXT_WORDS = ("PPRINT", "PARTNO", "INSERT", "TPRINT")  # the rest of the line is literal text
+
+
+def _split_comment(text: str, continued: bool) -> tuple[str, str]:
+    """(statement text, ``$$`` comment) of one physical line: in APT ``$$`` starts a comment
+    that runs to the end of the line, also after a statement (``GOTO/1,2,3 $$ note``); a
+    line that is only a comment is returned whole as the comment. The text of PPRINT, PARTNO,
+    INSERT and TPRINT is literal and never split."""
+    at = text.find("$$")
+    if at < 0 or (not continued and text[:at].lstrip().upper().startswith(_TEXT_WORDS)):
+        return text, ""
+    if at == 0 or not text[:at].strip():
+        return ("", text.strip()) if continued else (text, "")
+    return text[:at].rstrip(), text[at:].strip()
 
 
 def _statements(lines: Iterable[str], source: str, counter: list[int],
@@ -102,9 +121,17 @@ def _statements(lines: Iterable[str], source: str, counter: list[int],
         text = raw.rstrip("\r\n").strip()
         if not buf:
             start = lineno
-        if text.endswith("$") and not text.endswith("$$") and text != "$":
-            buf.append(text[:-1])
+        text, comment = _split_comment(text, bool(buf))
+        if buf and not text and comment:  # a comment line inside a continuation
+            yield lineno, comment
             continue
+        if text.endswith("$") and text != "$":
+            buf.append(text[:-1])
+            if comment:
+                yield lineno, comment
+            continue
+        if comment:  # before the statement it follows: a comment on the FINI line is read
+            yield lineno, comment
         if buf:
             buf.append(text)
             text = " ".join(buf).strip()
@@ -171,6 +198,7 @@ def iter_cl_moves(
         state_out.unit_changes = interp.unit_changes
         state_out.warnings, state_out.warning_counts = notes.warnings, notes.warning_counts
         state_out.not_applied = notes.word_counts()
+        state_out.read_words = notes.word_counts(read=True)
         state_out.lines_read = counter[0]
 
 
@@ -222,6 +250,8 @@ class ClProgram:
             ``warning_counts``).
         warning_counts: word -> number of warnings.
         not_applied: words not turned into robot motion, each listed once with its count.
+        read_words: words read that say nothing about the motion (PAINT, TLDATA, PARTNO, ...),
+            each once with its count and why it is not needed (``post`` logs them).
         comments: (line, text) of ``$$`` comments and PPRINT (the first 10000).
         units: length unit in effect at the end ('mm' or 'inch').
         unit_changes: (line, new unit, moves read before) of each UNITS statement that changed
@@ -244,6 +274,7 @@ class ClProgram:
     warnings: tuple[ClWarning, ...] = ()
     warning_counts: dict[str, int] = field(default_factory=dict)
     not_applied: tuple[ClWordCount, ...] = ()
+    read_words: tuple[ClWordCount, ...] = ()
     comments: tuple[tuple[int, str], ...] = ()
     units: str = "mm"
     unit_changes: tuple[tuple[int, str, int], ...] = ()
@@ -289,7 +320,8 @@ def _program(source: str, moves: Iterable[ClMove], state: ClReadState,
         cols.add(m)
     return ClProgram(source=source, **cols.columns(), paths=tuple(state.paths),
                      warnings=tuple(state.warnings), warning_counts=dict(state.warning_counts),
-                     not_applied=state.not_applied, comments=tuple(comments),
+                     not_applied=state.not_applied, read_words=state.read_words,
+                     comments=tuple(comments),
                      units=state.units, unit_changes=tuple(state.unit_changes),
                      end_line=state.end_line)
 

@@ -123,6 +123,7 @@ class Notes:
     warnings: list[ClWarning] = field(default_factory=list)
     warning_counts: dict[str, int] = field(default_factory=dict)
     words: dict[str, list] = field(default_factory=dict)
+    read_words: dict[str, list] = field(default_factory=dict)
 
     def warn(self, line: int, word: str, message: str) -> None:
         n = self.warning_counts.get(word, 0)
@@ -139,9 +140,17 @@ class Notes:
         if len(entry[1]) < LINES_KEPT:
             entry[1].append(line)
 
-    def word_counts(self) -> tuple[ClWordCount, ...]:
+    def read(self, line: int, word: str, reason: str) -> None:
+        """A word read and not needed for the robot's motion (titles, display, tool data)."""
+        entry = self.read_words.setdefault(word, [0, [], reason])
+        entry[0] += 1
+        if len(entry[1]) < LINES_KEPT:
+            entry[1].append(line)
+
+    def word_counts(self, read: bool = False) -> tuple[ClWordCount, ...]:
+        """The words not applied (``read``: the words read and not needed)."""
         return tuple(ClWordCount(w, c, tuple(lines), why)
-                     for w, (c, lines, why) in self.words.items())
+                     for w, (c, lines, why) in (self.read_words if read else self.words).items())
 
 
 def number(source: str, line: int, token: str) -> float:

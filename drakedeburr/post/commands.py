@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import re
 from pathlib import Path
 
 __all__ = ["register", "add_input_options", "add_cell_options", "add_output_options",
@@ -74,7 +73,9 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
                    help="rule for the free rotation about the tool axis")
     p.add_argument("--zone", type=float, default=1.0, help="corner zone of feed moves [mm]")
     p.add_argument("--feed", type=float, default=None,
-                   help="feed-move TCP speed [mm/s] (default: the file's FEDRAT)")
+                   help="feed-move TCP speed [mm/s] (default: the file's FEDRAT); within what "
+                        "the arm can move and the language holds (RAPID 7000, KRL and LS "
+                        "2000 mm/s), else refused")
     p.add_argument("--force", action="store_true",
                    help="write the program even if points are unreachable (they are left out)")
 
@@ -112,19 +113,23 @@ def register(subparsers) -> None:
     register_calibrate(subparsers)
 
 
-def program_name(cl_file: str, name: str | None) -> str:
-    """A program name from --name or the file name: letters, digits, '_', <= 24 chars."""
-    from drakedeburr.errors import InputError
+def program_name(cl_file: str, name: str | None, fmt: str = "rapid") -> str:
+    """The program name: ``--name`` if it is an identifier of the format's language (else
+    refused, exit 2), otherwise the CL file's name cleaned into one (at most 24 characters;
+    :mod:`drakedeburr.programs.names`). KRL and LS programs take their output file's name when
+    written."""
+    from drakedeburr.programs.names import check_identifier, clean_identifier
 
     if name is not None:
-        if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,23}", name):
-            raise InputError(f"--name {name!r}: letters, digits, '_', starting with a letter, "
-                             "at most 24 characters")
+        check_identifier(name, fmt, "--name", "program name")
+        if len(name) > 24:
+            from drakedeburr.errors import InputError
+
+            raise InputError(f"--name {name!r}: at most 24 characters (a long program is "
+                             "written in parts named NAME_001, ...)")
         return name
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(cl_file).name.split(".")[0])
-    if not stem[:1].isalpha():
-        stem = "p" + stem
-    return stem[:24]
+    return clean_identifier(Path(cl_file).name.split(".")[0], fmt, fallback="Deburr",
+                            max_length=24)
 
 
 def _check_args(args) -> None:
@@ -134,8 +139,6 @@ def _check_args(args) -> None:
     cl = Path(args.cl_file)
     if not cl.is_file():
         raise InputError(f"{cl}: CL file not found" if not cl.exists() else f"{cl}: not a file")
-    if args.feed is not None and not args.feed > 0:
-        raise InputError(f"--feed must be > 0 mm/s, got {args.feed}")
     if not args.zone >= 0:
         raise InputError(f"--zone must be >= 0 mm, got {args.zone}")
     if args.workpiece_in_hand and args.tool is None:
@@ -197,6 +200,8 @@ def _report(summary, robot: str) -> None:
     for line in cl.summary():
         if not line.startswith("not applied:"):
             log.info("%s", line)
+    for w in cl.read_words:  # read, and not needed for the robot's motion
+        log.info("read, not needed: %s", w.describe())
     for line, unit, before in cl.mid_file_unit_changes:
         log.warning("%s:%d: UNITS switched to %s after %d moves: the following coordinates "
                     "are read in %s", Path(cl.source).name, line, unit, before, unit)
@@ -225,7 +230,6 @@ def _run_post(args) -> int:
     from drakedeburr.programs.writers import format_for_controller
 
     _check_args(args)
-    name = program_name(args.cl_file, args.name)
     settings = settings_from_args(args)
     own = format_for_controller(settings.robot.controller)
     if args.fmt is not None and args.fmt != own:
@@ -239,6 +243,18 @@ def _run_post(args) -> int:
         post = post_cl_file_virtual_tcp
         if args.reference is not None:
             extra["X_OP"] = pose_from_mm_deg(args.reference, "--reference")
+    name = program_name(args.cl_file, args.name, args.fmt or own)
+    stem = Path(args.output).name.split(".")[0]
+    if args.name is not None and (args.fmt or own) != "rapid" and args.name.lower() != (
+            stem.lower()):
+        log.warning("--name %s: a %s program takes its file's name (%s)", args.name,
+                    (args.fmt or own).upper(), stem)
+    if args.feed is not None:  # the arm's and the language's range, before any work
+        from drakedeburr.programs.speeds import check_speed
+        from drakedeburr.units import m_from_mm
+
+        check_speed(m_from_mm(args.feed), settings.robot, args.fmt or own, "--feed",
+                    settings.frames()[1])
     try:
         summary = post(
             args.cl_file, args.output,

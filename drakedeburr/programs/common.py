@@ -107,12 +107,11 @@ def program_name_for(path: str | Path, fmt: str) -> str:
     Raises:
         InputError: the stem breaks the format's naming rules.
     """
+    from drakedeburr.programs.names import check_identifier
+
     stem = Path(path).name.split(".")[0]
-    pattern, rule = _NAMES[fmt]
-    if not pattern.fullmatch(stem):
-        raise InputError(f"{path}: {stem!r} is not a valid {fmt.upper()} program name ({rule}); "
-                         "the controller needs the program to carry its file's name")
-    return stem
+    return check_identifier(stem, fmt, f"{path} (the program takes its file's name)",
+                            "program name")
 
 
 def speed_written(fmt: str, speed: float) -> float:
@@ -151,8 +150,14 @@ def joint_percent(fraction: float) -> int:
     return int(max(1, min(100, math.floor(100.0 * fraction + 1e-9))))
 
 
+_LANGUAGE_OF = {"ABB RAPID": "rapid", "KUKA KRL": "krl", "FANUC LS": "ls"}
+
+
 def header_lines(program, fmt: str, extra: tuple[str, ...] = ()) -> list[str]:
-    """Header comment lines (text only, without the comment marker)."""
+    """Header comment lines (text only, without the comment marker), each one cleaned by
+    :func:`~drakedeburr.programs.names.comment_text` (hub, file and tool names are inputs)."""
+    from drakedeburr.programs.names import comment_text
+
     p = program
     spec = p.spec
     arm = f"{spec.title} ({spec.controller_model})" if spec else (p.kinematics.name or "robot")
@@ -164,9 +169,10 @@ def header_lines(program, fmt: str, extra: tuple[str, ...] = ()) -> list[str]:
         lines.append(f"source: {p.source}")
     lines.append(f"moves: {len(p.moves)}")
     if p.flag:
-        lines += ["!" * 30, f"{p.flag.upper()}: {p.flag_reason}".rstrip(": "),
-                  f"{p.flag.upper()}: check this program before running it", "!" * 30]
-    return lines + list(p.notes) + list(extra)
+        lines += ["*" * 30, f"{p.flag.upper()}: {p.flag_reason}".rstrip(": "),
+                  f"{p.flag.upper()}: check this program before running it", "*" * 30]
+    language = _LANGUAGE_OF.get(fmt, "ls")  # unknown label: the strictest remark rules
+    return [comment_text(h, language) for h in lines + list(p.notes) + list(extra)]
 
 
 def wrap_remarks(lines: list[str], width: int = LS_REMARK_MAX) -> list[str]:

@@ -30,6 +30,7 @@ from drakedeburr.programs.common import (
     speed_written,
     zone_written,
 )
+from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number, split_top_level
 from drakedeburr.robots import joints_from_configuration, kuka_status_turn
@@ -94,7 +95,7 @@ def _motion_lines(p: RobotProgram) -> list[str]:
     v_prev = z_prev = pct_prev = None
     for i, m in enumerate(p.moves):
         if m.comment:
-            out.append(f"{_IND}; {m.comment}")
+            out.append(f"{_IND}; {comment_text(m.comment, 'krl')}")
         if m.zone > 0 and zone_written("krl", m.zone) != z_prev:
             z_prev = zone_written("krl", m.zone)
             out.append(f"{_IND}$APO.CDIS = {fnum(mm_from_m(z_prev), 3)}")

@@ -34,6 +34,7 @@ from drakedeburr.programs.common import (
     wrap_remarks,
     zone_from_cnt,
 )
+from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number
 from drakedeburr.units import mm_from_m
@@ -74,7 +75,8 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
     mn += [f"UFRAME_NUM={uframe}", f"UTOOL_NUM={utool}", f"PAYLOAD[{payload}]"]
     for i, m in enumerate(p.moves):
         if m.comment:
-            mn += [f"!{c}" for c in wrap_remarks([m.comment], LS_REMARK_MAX)]
+            mn += [f"!{c}" for c in wrap_remarks([comment_text(m.comment, "ls")],
+                                                 LS_REMARK_MAX)]
         cnt = cnt_from_zone(m.zone)
         term = "FINE" if cnt == 0 else f"CNT{cnt}"
         if m.move_type == JOINT:

@@ -36,6 +36,7 @@ from drakedeburr.programs.common import (
     speed_written,
     zone_written,
 )
+from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number, split_top_level
 from drakedeburr.units import mm_from_m
@@ -127,7 +128,7 @@ def format_rapid(program: RobotProgram) -> str:
         out.append(f"{_IND * 2}GripLoad {p.wobj_name}Load;")
     for i, m in enumerate(p.moves):
         if m.comment:
-            out.append(f"{_IND * 2}! {m.comment}")
+            out.append(f"{_IND * 2}! {comment_text(m.comment, 'rapid')}")
         instr = "MoveJ" if m.move_type == JOINT else "MoveL"
         out.append(f"{_IND * 2}{instr} p{i + 1}, {speed_name(m.speed)}, {zone_name(m.zone)}, "
                    f"{p.tool_name} \\WObj:={p.wobj_name};")

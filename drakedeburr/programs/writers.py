@@ -19,7 +19,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.programs.common import FORMATS, SUFFIXES, program_name_for
 from drakedeburr.programs.program import RobotProgram
 
-__all__ = ["FORMATS", "format_for_controller", "check_format", "format_program",
+__all__ = ["FORMATS", "format_for_controller", "check_format", "check_names", "format_program",
            "write_program"]
 
 log = logging.getLogger(__name__)
@@ -48,9 +48,39 @@ def check_format(program: RobotProgram, fmt: str) -> None:
                          f"(--format {want})")
 
 
+def check_names(program: RobotProgram, fmt: str) -> None:
+    """Refuse a program whose name or data names are not identifiers of ``fmt``'s language
+    (:mod:`drakedeburr.programs.names`), or clash with each other.
+
+    Raises:
+        ProgramNameError: naming the item.
+    """
+    from drakedeburr.programs.names import ProgramNameError, check_identifier
+
+    what = {"rapid": "module name", "krl": "program name", "ls": "program name"}[fmt]
+    check_identifier(program.name, fmt, "program", what)
+    if fmt == "ls":  # the TP program names no data
+        return
+    data = [program.tool_name, program.wobj_name]
+    if fmt == "rapid" and program.stationary_tool:
+        data.append(program.wobj_name + "Load")
+    for label in data:
+        check_identifier(label, fmt, "program data", "data name")
+    if program.name.lower() in {d.lower() for d in data} or len(
+            {d.lower() for d in data}) < len(data):
+        raise ProgramNameError(f"program: {what} {program.name!r} clashes with the data names "
+                               f"{', '.join(data)} of the program")
+
+
 def format_program(program: RobotProgram, fmt: str) -> dict[str, str]:
-    """Texts of a program in ``fmt``: {suffix: text} (KRL: ".src" and ".dat")."""
+    """Texts of a program in ``fmt``: {suffix: text} (KRL: ".src" and ".dat"); names
+    (:func:`check_names`) and speeds (:func:`~drakedeburr.programs.speeds.check_program_speeds`)
+    are checked first."""
+    from drakedeburr.programs.speeds import check_program_speeds
+
     check_format(program, fmt)
+    check_names(program, fmt)
+    check_program_speeds(program, fmt)
     if fmt == "rapid":
         from drakedeburr.programs.rapid import format_rapid
 
