@@ -338,3 +338,70 @@ def test_workpiece_in_hand_needs_the_spindle(extdata, tmp_path, capsys):
     assert main(["post", str(extdata / "cl_files" / CREO), "--workpiece-in-hand",
                  "-o", str(out)]) == 2
     assert "--tool" in capsys.readouterr().err and not out.exists()
+
+
+def _written_feeds_mm_s(text: str, fmt: str) -> list[float]:
+    """TCP speeds [mm/s] of the linear moves, read from the program text with plain regexes
+    (not the project's readers): LS ``L P[n] 40cm/min``, RAPID ``MoveL p, vdd..`` resolved by
+    its ``speeddata`` declaration or the predefined ``vNNN``, KRL ``$VEL.CP`` [m/s] before
+    ``LIN``."""
+    if fmt == "ls":
+        per = {"mm/sec": 1.0, "cm/min": 10.0 / 60.0}
+        return [int(v) * per[u] for v, u in
+                re.findall(r"^\s*\d+:\s+L P\[\d+\] (\d+)(mm/sec|cm/min) ", text, re.M)]
+    if fmt == "rapid":
+        declared = dict(re.findall(r"CONST speeddata (\w+) := \[([\d.]+),", text))
+        names = re.findall(r"^\s*MoveL \w+, (\w+),", text, re.M)
+        return [float(declared[n]) if n in declared else float(n[1:]) for n in names]
+    feeds, v = [], None
+    for line in text.splitlines():
+        m = re.match(r"\s*\$VEL\.CP = ([\d.]+)", line)
+        if m:
+            v = float(m[1]) * 1000.0
+        elif re.match(r"\s*LIN ", line):
+            feeds.append(v)
+    return feeds
+
+
+@pytest.mark.parametrize("fmt, suffix, robot, wobj", [
+    ("rapid", ".mod", "irb1600", WOBJ), ("krl", ".src", "kr6_r700", [450.0, 0, 100, 0, 0, 30]),
+    ("ls", ".ls", "m10ia", WOBJ)])
+def test_written_feeds_are_the_files_fedrat(extdata, tmp_path, fmt, suffix, robot, wobj):
+    """Creo's ``FEDRAT / 400.000000, MMPM`` (a real CAM file) comes out of every writer at
+    400 mm/min: LS as ``40cm/min`` (FANUC TP takes whole cm/min, 1-12000; whole mm/sec
+    could only say 6 = -10 %), RAPID to 0.001 mm/s, KRL to 1e-6 m/s. The feed is read from
+    the CL file by a plain scan and the written feeds by regexes on the program text."""
+    src = extdata / "cl_files" / CREO
+    fedrat = {float(v) for v in re.findall(r"FEDRAT / ([\d.]+),\s*MMPM", src.read_text())}
+    assert fedrat == {400.0}
+    out = tmp_path / f"creo{suffix}"
+    assert main(["post", str(src), "--robot", robot, "-o", str(out), "--wobj",
+                 ",".join(map(str, wobj)), "--spin", "greedy"]) == 0
+    text = out.read_text()
+    feeds = np.array(_written_feeds_mm_s(text, fmt))
+    n_feed = sum(1 for m in read_cl(src).moves if not m.rapid)
+    assert feeds.size == n_feed
+    want = 400.0 / 60.0
+    tol = {"ls": 1e-12, "rapid": 1e-3 / 2 + 1e-12, "krl": 1e-3 / 2 + 1e-12}[fmt]
+    assert np.abs(feeds - want).max() <= tol
+    if fmt == "ls":
+        assert "mm/sec" not in text and "40cm/min" in text
+
+
+def test_ls_feed_never_faster_and_within_a_sixth_mm_s():
+    """Over 1 mm/min .. 120 m/min the LS speed written is at most the plan and at most
+    1/6 mm/s (one cm/min) below it; exact mm/sec and cm/min values are written as such."""
+    from drakedeburr.programs.common import ls_speed
+
+    per = {"mm/sec": 1.0, "cm/min": 1.0 / 6.0}
+    for mm_min in np.r_[np.linspace(10.0, 120000.0, 4001), 254.0, 400.0, 9000.0]:
+        v_plan = mm_min / 60.0
+        value, unit = ls_speed(v_plan / 1000.0)
+        v = value * per[unit]
+        assert isinstance(value, int) and v <= v_plan + 1e-9
+        assert v_plan - v < 1.0 / 6.0 + 1e-9, mm_min
+        if unit == "mm/sec":
+            assert 1 <= value <= 2000
+        else:
+            assert 1 <= value <= 12000
+    assert ls_speed(0.15) == (150, "mm/sec") and ls_speed(0.4 / 60.0) == (40, "cm/min")

@@ -3,7 +3,8 @@
 Written (FANUC R-30iA/R-30iB HandlingTOOL Operator's Manual: program header, motion
 instructions, position data, frame instructions, PAYLOAD; Remote TCP option): /PROG = the
 file's name; /MN with ``UFRAME_NUM``, ``UTOOL_NUM``, ``PAYLOAD[n]``, ``L P[n] 150mm/sec CNT10``
-(whole mm/sec, rounded down so the program is never faster than planned; FINE for zone 0,
+(whole mm/sec or whole cm/min, whichever is closer below the plan: 400 mm/min is
+``40cm/min``; rounded down so the program is never faster than planned; FINE for zone 0,
 ``CNTn`` for a zone: see docs/post.md for what CNT means), ``J P[n] 25%``; with a stationary
 tool every L move carries ``RTCP`` (the remote TCP is the user frame); /POS with CONFIG from
 the planned joints. The frame and payload values cannot be set from a TP program: they are
@@ -29,8 +30,8 @@ from drakedeburr.programs.common import (
     fnum,
     header_lines,
     joint_percent,
+    ls_speed,
     pose_from_mm,
-    speed_written,
     wrap_remarks,
     zone_from_cnt,
 )
@@ -80,8 +81,8 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
         if m.move_type == JOINT:
             mn.append(f"J P[{i + 1}] {joint_percent(p.joint_fraction(i))}% {term}")
         else:
-            v = int(round(mm_from_m(speed_written("ls", m.speed))))
-            mn.append(f"L P[{i + 1}] {v}mm/sec {term}" + (" RTCP" if p.stationary_tool else ""))
+            v, unit = ls_speed(m.speed)
+            mn.append(f"L P[{i + 1}] {v}{unit} {term}" + (" RTCP" if p.stationary_tool else ""))
     return mn
 
 
@@ -288,10 +289,12 @@ def _move(k, kind, n, speed_text, term, options, frames, pos, file) -> ReadMove:
             raise ProgramFormatError(f"{file}:{k}: J speed {speed_text!r} (1..100%)")
         speed, pct = None, int(m.group(1))
     else:
-        m = re.fullmatch(r"(\d+)mm/sec", speed_text)
+        m = re.fullmatch(r"(\d+)(mm/sec|cm/min)", speed_text)
         if not m:
-            raise ProgramFormatError(f"{file}:{k}: L speed {speed_text!r} (whole mm/sec)")
-        speed, pct = int(m.group(1)) / 1000.0, None
+            raise ProgramFormatError(f"{file}:{k}: L speed {speed_text!r} (whole mm/sec or "
+                                     "cm/min)")
+        speed = int(m.group(1)) / (1000.0 if m.group(2) == "mm/sec" else 6000.0)
+        pct = None
     cnt = 0 if term == "FINE" else int(term[3:])
     if cnt > 100:
         raise ProgramFormatError(f"{file}:{k}: {term} (CNT 0..100)")
