@@ -4,9 +4,9 @@ Syntax follows the FANUC ASCII programs in extdata (``/PROG``, ``/ATTR``, ``/MN`
 Two program kinds:
 
 * hole by the Cutting Tool: the tool is motion group 2 (two extended axes J1, J2 in deg);
-  the robot (group 1) holds still. Each target is a joint move timed in seconds from the
-  TOPP-RA trajectory (``J P[i] 0.012sec CNT100``), preceded by ``AO[n]=counts`` with the
-  laser command at that point.
+  the robot (group 1) holds still. Each target is a joint move of one interpolation period
+  (``J P[i] 8msec CNT100``: :mod:`drakedeburr.laser.itp`), preceded by ``AO[n]=counts``
+  with the segment's command (planned energy / period).
 * contour by the robot: group 1 Cartesian targets (X, Y, Z [mm], W, P, R [deg], fixed-axis
   x-y-z angles as on FANUC) with linear moves at the planned speed and ``AO[n]`` per point.
 
@@ -63,20 +63,36 @@ def wpr_deg_from_R(R: np.ndarray) -> tuple[float, float, float]:
 
 def hole_program_ls(prog: HoleProgram, name: str, laser_do: int = 1, uframe: int = 0,
                     utool: int = 1) -> str:
-    """FANUC .ls text of a hole cut by the Cutting Tool (group 2) with TCP-speed AO."""
+    """FANUC .ls text of a hole cut by the Cutting Tool (group 2), as the controller runs it.
+
+    One joint move per interpolation period (``J P[i] 8msec CNT100``; FINE at the stops), each
+    preceded by ``AO[n]=counts`` with the segment's re-planned command, so command x time per
+    segment is the planned energy (:mod:`drakedeburr.laser.itp`). Timed motion in msec:
+    1-32000 msec (FANUC HandlingTool Operator's Manual, motion instruction feed rate).
+    """
+    from drakedeburr.errors import InputError
+    from drakedeburr.laser.itp import ControllerTiming, TP_MSEC_MAX, quantise
+
     name = _check_name(name)
-    q_deg = np.rad2deg(prog.q)
-    counts = prog.power.counts(prog.command)
+    seg = prog.segments
+    if seg is None:
+        seg = quantise(prog.timed, prog.geometry, prog.power, ControllerTiming())
+    ms = seg.ticks * seg.timing.period_ms
+    if ms.max() > TP_MSEC_MAX:
+        raise InputError(f"{name}: a segment of {int(ms.max())} msec exceeds the TP limit "
+                         f"{TP_MSEC_MAX} msec")
+    q_deg = np.rad2deg(seg.q)
+    counts = prog.power.counts(seg.command)
     ch = prog.power.channel
     mn = [f"UFRAME_NUM={uframe} ;", f"UTOOL_NUM={utool} ;",
           f"!{prog.contour.name} {prog.contour.perimeter * 1e3:.3f}mm "
-          f"{prog.duration:.3f}s ;",
+          f"{seg.duration:.3f}s ;",
+          f"!ITP {seg.timing.period_ms}ms feed {prog.limits.feed * 60:.3f}m/min ;",
           "J P[1] 100% FINE ;", f"AO[{ch}]={counts[0]} ;", f"DO[{laser_do}]=ON ;"]
     for i in range(1, len(q_deg)):
-        dt = max(float(prog.t[i] - prog.t[i - 1]), 0.001)
-        term = "FINE" if (prog.contour.corner[i] or i == len(q_deg) - 1) else "CNT100"
-        mn.append(f"AO[{ch}]={counts[i]} ;")
-        mn.append(f"J P[{i + 1}] {dt:.3f}sec {term} ;")
+        term = "FINE" if seg.stop[i] else "CNT100"
+        mn.append(f"AO[{ch}]={counts[i - 1]} ;")
+        mn.append(f"J P[{i + 1}] {int(ms[i - 1])}msec {term} ;")
     mn += [f"DO[{laser_do}]=OFF ;", f"AO[{ch}]=0 ;"]
     pos = []
     for i, (a, b) in enumerate(q_deg):
