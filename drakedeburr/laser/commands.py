@@ -1,6 +1,8 @@
 """CLI: ``drakedeburr laser shape KIND ... -o prog.ls`` and ``drakedeburr laser tool``.
 
 Sizes on the command line are millimetres and degrees (converted with drakedeburr.units).
+The Cutting Tool's link lengths come from ``--links L0,L1,L2,L3,L4`` [mm] or a YAML file
+(``--tool-file``: the keys ``laser tool`` prints, :data:`TOOL_KEYS`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,67 @@ from drakedeburr.argcheck import number
 
 _POS = number(0, lo_open=True)
 _NONNEG = number(0)
+#: --tool-file keys [mm] -> FiveBarGeometry fields [m]; working/assembly modes are signs
+TOOL_KEYS = {"l0_mm": "l0", "l1_mm": "l1", "l2_mm": "l2", "l3_mm": "l3", "l4_mm": "l4",
+             "home_x_mm": "home_x", "work_radius_mm": "work_radius"}
+_MODE_KEYS = ("working_mode", "assembly_mode")
+
+
+def _links(text: str) -> tuple[float, ...]:
+    try:
+        v = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected L0,L1,L2,L3,L4 in mm, got {text!r}") from None
+    if len(v) != 5 or not all(x > 0 and x < 1e4 for x in v):
+        raise argparse.ArgumentTypeError(f"expected 5 lengths L0,L1,L2,L3,L4 > 0 mm, got {text!r}")
+    return v
+
+
+def geometry_from_args(args):
+    """The Cutting Tool of ``--tool-file`` and/or ``--links`` (the defaults otherwise)."""
+    import yaml
+
+    from drakedeburr.errors import InputError
+    from drakedeburr.laser.kinematics import FiveBarGeometry
+    from drakedeburr.units import m_from_mm
+
+    fields: dict = {}
+    path = getattr(args, "tool_file", None)
+    if path is not None:
+        from drakedeburr.argcheck import input_file
+
+        input_file(path, "--tool-file")
+        try:
+            data = yaml.safe_load(Path(path).read_text()) or {}
+        except yaml.YAMLError as exc:
+            raise InputError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+        if not isinstance(data, dict):
+            raise InputError(f"{path}: expected a mapping of {sorted(TOOL_KEYS)}")
+        for key, value in data.items():
+            if key in TOOL_KEYS:
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    raise InputError(f"{path}: {key}: expected a length in mm, got {value!r}")
+                fields[TOOL_KEYS[key]] = m_from_mm(float(value))
+            elif key in _MODE_KEYS:
+                fields[key] = tuple(value) if key == "working_mode" else value
+            else:
+                raise InputError(f"{path}: unknown key {key!r}; known: "
+                                 f"{sorted([*TOOL_KEYS, *_MODE_KEYS])}")
+    if getattr(args, "links", None) is not None:
+        fields.update(zip(("l0", "l1", "l2", "l3", "l4"),
+                          (m_from_mm(x) for x in args.links), strict=True))
+    try:
+        return FiveBarGeometry(**fields)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{path or '--links'}: {exc}") from exc
+
+
+def _tool_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--links", type=_links, default=None, metavar="L0,L1,L2,L3,L4",
+                   help="Cutting Tool link lengths [mm]: servo spacing, cranks 1/2, links 1/2")
+    p.add_argument("--tool-file", type=Path, default=None,
+                   help="Cutting Tool YAML (keys as 'laser tool' prints: l0_mm .. l4_mm, "
+                        "home_x_mm, work_radius_mm; working_mode, assembly_mode)")
 
 _SIZES = {
     "circle": [("diameter", "hole diameter [mm]")],
@@ -50,6 +113,7 @@ def register(subparsers) -> None:
 
     tool = sub.add_parser("tool", help="show the Cutting Tool geometry and workspace figures")
     tool.add_argument("--sdf", type=Path, help="also write the tool's SDF model here")
+    _tool_options(tool)
     tool.set_defaults(_run=_run_tool)
 
 
@@ -80,6 +144,12 @@ def _common(p: argparse.ArgumentParser) -> None:
                    help="laser command ceiling [V], > the floor")
     p.add_argument("--ao", type=number(1, integer=True), default=1,
                    help="analogue output port, >= 1")
+    p.add_argument("--itp", type=number(1, 100, integer=True), default=8,
+                   help="controller interpolation period [ms] (FANUC 8; 16 if selected at "
+                        "Controlled Start): every hole move lasts one period")
+    p.add_argument("--chord-tolerance", type=_POS, default=0.01,
+                   help="largest chord error of one period's step [mm] (caps the hole feed)")
+    _tool_options(p)
     p.add_argument("--name", default=None, help="FANUC program name (default: from -o)")
     p.add_argument("-o", "--output", type=Path, required=True, help="output .ls file")
     p.add_argument("--summary", type=Path, help="also write a JSON summary here")
@@ -119,7 +189,8 @@ def _run_shape(args) -> int:
     from drakedeburr.laser import fanuc_ls
     from drakedeburr.laser.feature import FeatureSettings, plan_contour
     from drakedeburr.laser.hole import ServoLimits, plan_hole
-    from drakedeburr.laser.kinematics import FiveBarGeometry, check_reach
+    from drakedeburr.laser.itp import ControllerTiming
+    from drakedeburr.laser.kinematics import check_reach
     from drakedeburr.laser.power import PowerMap
     from drakedeburr.laser.shapes import build_contour
     from drakedeburr.units import m_from_mm, rad_from_deg
@@ -137,7 +208,7 @@ def _run_shape(args) -> int:
     power = PowerMap(nominal_speed=feed, min_command=args.min_command,
                      max_command=args.max_command, channel=args.ao)
     name = args.name or args.output.stem
-    g = FiveBarGeometry()
+    g = geometry_from_args(args)
     mode = args.mode
     if mode == "auto":
         probe = build_contour(shape, m_from_mm(0.5 if args.spacing is None else args.spacing))
@@ -145,12 +216,15 @@ def _run_shape(args) -> int:
     if mode == "tool":
         limits = ServoLimits(velocity=args.servo_velocity,
                              acceleration=args.servo_acceleration, feed=feed)
+        timing = ControllerTiming(period=args.itp * 1e-3,
+                                  chord_tolerance=m_from_mm(args.chord_tolerance))
         prog = plan_hole(shape, m_from_mm(0.2 if args.spacing is None else args.spacing), g,
-                         limits, power)
+                         limits, power, timing)
         text = fanuc_ls.hole_program_ls(prog, name)
-        summary = {"mode": "tool", "shape": shape.kind, "points": len(prog.q),
+        summary = {"mode": "tool", "shape": shape.kind, "points": len(prog.segments.q),
                    "perimeter_mm": prog.contour.perimeter * 1e3,
                    "area_mm2": prog.contour.area * 1e6, "cycle_time_s": prog.duration,
+                   "itp_ms": args.itp, "feed_m_min": prog.limits.feed * 60,
                    "max_speed_m_min": float(prog.v_tcp.max() * 60)}
     else:
         if args.feed <= 0:
@@ -178,19 +252,20 @@ def _run_tool(args) -> int:
 
     from drakedeburr._io import atomic_write_text
     from drakedeburr.argcheck import output_file
-    from drakedeburr.laser.kinematics import FiveBarGeometry, inverse_kinematics
+    from drakedeburr.laser.kinematics import inverse_kinematics
     from drakedeburr.laser.kinematics import singularity_measures as sm
     from drakedeburr.laser.model import five_bar_sdf
 
     output_file(args.sdf, "--sdf")
-    g = FiveBarGeometry()
+    g = geometry_from_args(args)
     a = np.linspace(0, 2 * np.pi, 181)
     rr = np.linspace(0, g.work_radius, 11)
     p = np.array([g.p_CHome + r * np.array([np.cos(x), np.sin(x)]) for r in rr for x in a])
     q, ok = inverse_kinematics(g, p)
     m = sm(g, q)
     out = {"l0_mm": g.l0 * 1e3, "l1_mm": g.l1 * 1e3, "l2_mm": g.l2 * 1e3, "l3_mm": g.l3 * 1e3,
-           "l4_mm": g.l4 * 1e3, "home_mm": (g.p_CHome * 1e3).tolist(),
+           "l4_mm": g.l4 * 1e3, "home_x_mm": g.home_x * 1e3,
+           "work_radius_mm": g.work_radius * 1e3, "home_mm": (g.p_CHome * 1e3).tolist(),
            "working_disc_mm": 2e3 * g.work_radius, "reachable": bool(ok.all()),
            "max_condition": float(m["condition"].max()),
            "min_serial_sine": float(min(m["serial_1"].min(), m["serial_2"].min())),
