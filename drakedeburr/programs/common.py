@@ -37,7 +37,7 @@ __all__ = [
     "speed_written", "zone_written", "joint_percent", "cnt_from_zone", "zone_from_cnt",
     "header_lines", "ABB_SPEEDS", "ABB_ZONES", "LS_REMARK_MAX", "LS_COMMENT_MAX",
     "CNT_PER_MM", "wrap_remarks", "check_writable", "ls_speed", "LS_MM_SEC_MAX",
-    "LS_CM_MIN_MAX",
+    "LS_CM_MIN_MAX", "io_lines",
 ]
 
 FORMATS = ("rapid", "krl", "ls")
@@ -142,6 +142,36 @@ def speed_written(fmt: str, speed: float) -> float:
         return round(float(speed), 6)
     v, unit = ls_speed(speed)
     return v / 1000.0 if unit == "mm/sec" else v / 6000.0
+
+
+def io_lines(actions, fmt: str) -> list[str]:
+    """Instructions (without indent or terminator where the writer adds them) setting the
+    outputs of :class:`~drakedeburr.programs.program.IoAction` s: RAPID ``SetDO name, 1;``
+    / ``SetAO name, value;`` (RAPID reference: SetDO, SetAO); KRL ``$OUT[n] = TRUE`` /
+    ``$ANOUT[n] = value`` after ``WAIT SEC 0`` (writing $OUT does not stop the advance run,
+    the WAIT does: the output switches when the robot is at the previous point; KSS
+    programming manual); LS ``DO[n]=ON`` / ``AO[n]=value`` (HandlingTool manual, I/O
+    instructions)."""
+    out: list[str] = []
+    if not actions:
+        return out
+    if fmt == "krl":
+        out.append("WAIT SEC 0")
+    for a in actions:
+        if fmt == "rapid":
+            v = int(a.value) if a.kind == "do" else fnum(a.written("rapid"), 4)
+            out.append(f"Set{a.kind.upper()} {a.name}, {v};")
+        elif fmt == "krl":
+            if a.kind == "do":
+                out.append(f"$OUT[{a.port}] = {'TRUE' if a.value else 'FALSE'}")
+            else:
+                out.append(f"$ANOUT[{a.port}] = {fnum(a.written('krl'), 6)}")
+        else:
+            if a.kind == "do":
+                out.append(f"DO[{a.port}]={'ON' if a.value else 'OFF'}")
+            else:
+                out.append(f"AO[{a.port}]={int(a.written('ls'))}")
+    return out
 
 
 def cnt_from_zone(zone: float) -> int:

@@ -29,6 +29,7 @@ from drakedeburr.programs.common import (
     euler_zyx_deg,
     fnum,
     header_lines,
+    io_lines,
     joint_percent,
     ls_speed,
     pose_from_mm,
@@ -76,6 +77,7 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
     for i, m in enumerate(p.moves):
         if m.comment:
             mn += [f"!{c}" for c in wrap_remarks([m.comment], LS_REMARK_MAX)]
+        mn += io_lines(m.io, "ls")
         cnt = cnt_from_zone(m.zone)
         term = "FINE" if cnt == 0 else f"CNT{cnt}"
         if m.move_type == JOINT:
@@ -83,7 +85,7 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
         else:
             v, unit = ls_speed(m.speed)
             mn.append(f"L P[{i + 1}] {v}{unit} {term}" + (" RTCP" if p.stationary_tool else ""))
-    return mn
+    return mn + io_lines(p.io_end, "ls")
 
 
 def format_ls(program: RobotProgram, uframe: int = 1, utool: int = 1, payload: int = 1) -> str:
@@ -130,6 +132,7 @@ class _MnState:
         self.lines: dict = {}
         self.motions: list = []
         self.header: list = []
+        self.io: list = []
 
 
 def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
@@ -155,11 +158,18 @@ def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
         if m.group(1):
             st.frames[m.group(1)] = int(m.group(2))
         return
+    m = re.fullmatch(r"DO\[(\d+)\]\s*=\s*(ON|OFF)|AO\[(\d+)\]\s*=\s*(\d+)", text)
+    if m:
+        if m.group(1):
+            st.io.append((k, "do", int(m.group(1)), 1.0 if m.group(2) == "ON" else 0.0))
+        else:
+            st.io.append((k, "ao", int(m.group(3)), float(m.group(4))))
+        return
     m = _MOTION.fullmatch(text)
     if not m:
         raise ProgramFormatError(f"{file}:{k}: /MN line {n} {text!r} is outside the motion "
                                  "subset this reader accepts (J/L P[n], UFRAME_NUM, UTOOL_NUM, "
-                                 "PAYLOAD[n], remarks)")
+                                 "PAYLOAD[n], DO[n]=ON/OFF, AO[n]=value, remarks)")
     options = tuple(m.group(5).split())
     for o in options:
         if not _OPTIONS.fullmatch(o):
@@ -321,4 +331,4 @@ def _program(name: str, file: str, st: _MnState, pos: dict) -> ReadProgram:
     return ReadProgram(format="ls", files=(file,), name=name, moves=moves,
                        stationary_tool=bool(rtcp) and all(rtcp), X_FT=X_FT, X_RO=X_RO,
                        frame_lines=lines, load_mass=mass, load_cog=cog,
-                       header=tuple(st.header))
+                       header=tuple(st.header), io=tuple(st.io))
