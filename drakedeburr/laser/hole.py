@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.laser.itp import ControllerTiming, ItpSegments, quantise
+from drakedeburr.laser.itp import FANUC_TIMING, ControllerTiming, ItpSegments, quantise
 from drakedeburr.laser.kinematics import FiveBarGeometry, check_reach, forward_kinematics, jacobian
 from drakedeburr.laser.power import PowerMap, PowerProfile, power_profile
 from drakedeburr.laser.shapes import Contour, ShapeBase, build_contour
@@ -119,7 +119,8 @@ def tool_path_points(g: FiveBarGeometry, contour: Contour) -> np.ndarray:
 def plan_hole(shape: ShapeBase, spacing: float = 0.2e-3,
               geometry: FiveBarGeometry | None = None, limits: ServoLimits | None = None,
               power: PowerMap | None = None,
-              timing: ControllerTiming | None = ControllerTiming()) -> HoleProgram:
+              timing: ControllerTiming | None = FANUC_TIMING,
+              mirror_y: bool = False) -> HoleProgram:
     """Plan a hole cut by the Cutting Tool alone.
 
     Args:
@@ -129,6 +130,9 @@ def plan_hole(shape: ShapeBase, spacing: float = 0.2e-3,
         timing: the controller's interpolation period and chord tolerance: the feed is
             capped so one period's chord keeps the tolerance and the program is cut into
             whole periods (``segments``); None = the continuous plan only.
+        mirror_y: the shape is given in the plate frame and the tool looks into the plate
+            (its y = the plate's -y, :mod:`drakedeburr.laser.robot_job`): the contour is
+            mirrored (y -> -y) into the tool's plane.
 
     Returns:
         HoleProgram.
@@ -141,6 +145,9 @@ def plan_hole(shape: ShapeBase, spacing: float = 0.2e-3,
     limits = limits or ServoLimits()
     power = power or PowerMap()
     contour = build_contour(shape, spacing)
+    if mirror_y:
+        flip = np.array([1.0, -1.0])
+        contour = replace(contour, p_P=contour.p_P * flip, t_P=contour.t_P * flip)
     p = tool_path_points(g, contour)
     reach = check_reach(g, p)
     k = reach.first_failure

@@ -34,7 +34,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = ["ControllerTiming", "ItpSegments", "quantise", "min_curve_radius",
-           "FANUC_ITP", "TP_MSEC_MAX"]
+           "FANUC_ITP", "FANUC_TIMING", "TP_MSEC_MAX"]
 
 FANUC_ITP = 0.008  # [s] FANUC R-30iA/R-30iB interpolation period (default)
 TP_MSEC_MAX = 32000  # FANUC TP timed motion: 1 .. 32000 msec per instruction
@@ -76,6 +76,10 @@ class ControllerTiming:
         if not math.isfinite(r):
             return float(feed)
         return float(min(feed, math.sqrt(8.0 * r * self.chord_tolerance) / self.period))
+
+
+#: the FANUC default: 8 ms, 0.01 mm chord
+FANUC_TIMING = ControllerTiming()
 
 
 def min_curve_radius(p: np.ndarray, corner: np.ndarray) -> float:

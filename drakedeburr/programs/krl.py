@@ -25,9 +25,9 @@ from drakedeburr.programs.common import (
     euler_zyx_deg,
     fnum,
     header_lines,
+    io_lines,
     joint_percent,
     pose_from_mm,
-    io_lines,
     speed_written,
     zone_written,
 )

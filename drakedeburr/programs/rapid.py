@@ -32,9 +32,9 @@ from drakedeburr.programs.common import (
     check_writable,
     fnum,
     header_lines,
+    io_lines,
     pose_from_mm,
     quat_wxyz,
-    io_lines,
     speed_written,
     zone_written,
 )
