@@ -32,6 +32,9 @@ from drakedeburr.laser.kinematics import FiveBarGeometry
 __all__ = ["LaserCell", "LaserJob", "RobotMotion", "plan_job", "solve_robot", "hole_pose",
            "X_FT_of", "HOLE_R"]
 
+#: largest joint step between two points of one cut [rad] (beyond: the short way round is
+#: outside the joint range, the wrist would unwind)
+_MAX_STEP = np.pi  # a corner turns the wrist < 180 deg; an unwind turns it ~360 deg
 #: rotation of the hole frame H in P: beam (H z) into the plate, H x = P x
 HOLE_R = np.diag([1.0, -1.0, -1.0])
 
@@ -129,14 +132,34 @@ def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str
     X_PT = np.asarray(X_PT, float).reshape(-1, 4, 4)
     X_FT = X_FT_of(cell, g)
     X_BF = spec.X_BR @ cell.X_RP @ X_PT @ np.linalg.inv(X_FT)
-    q0 = cell.q_start if q_start is None else q_start
-    res = solve_path(spec.kinematics, X_BF, q_start=q0)
+    q0 = np.zeros(6) if (cell.q_start if q_start is None else q_start) is None else \
+        np.asarray(cell.q_start if q_start is None else q_start, float)
+    # a contour turns the tool about its beam (a rectangle: once around): start J6 on the
+    # turn that keeps the whole path inside the joint range, so the wrist never unwinds
+    # in the middle of a cut
+    best = None
+    for shift in (0.0, -2 * np.pi, 2 * np.pi):
+        qs = q0.copy()
+        qs[5] += shift
+        res = solve_path(spec.kinematics, X_BF, q_start=qs)
+        if res.failed:
+            best = best or res
+            continue
+        step = float(np.abs(np.diff(res.q, axis=0)).max()) if len(res.q) > 1 else 0.0
+        if best is None or best.failed or step < best_step:
+            best, best_step = res, step
+    res = best
     if res.failed:
         k = res.failed[0]
         x, y, z = X_PT[k, :3, 3] * 1e3
         raise InputError(f"{what}: point {k} of {len(X_PT)} at ({x:.1f}, {y:.1f}, {z:.1f}) mm "
                          f"in the plate frame is out of reach of {spec.title} ({len(res.failed)} "
                          "points fail): move the plate (UFRAME) or the tool mounting")
+    if len(res.q) > 1 and best_step > _MAX_STEP:
+        k = int(np.argmax(np.abs(np.diff(res.q, axis=0)).max(axis=1)))
+        raise InputError(f"{what}: between points {k} and {k + 1} the arm must turn a joint by "
+                         f"{np.rad2deg(best_step):.0f} deg (its range ends there): rotate the "
+                         "plate (UFRAME) or start the contour elsewhere")
     config = tuple(configuration_of(spec.kinematics, q, "fanuc") for q in res.q)
     return RobotMotion(X_PT=X_PT, q=res.q, config=config,
                        configuration_changes=res.configuration_changes)
