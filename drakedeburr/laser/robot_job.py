@@ -119,8 +119,9 @@ class RobotMotion:
 
 
 def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str,
-                q_start: np.ndarray | None = None) -> RobotMotion:
-    """Joints of the TCP poses X_PT (N, 4, 4) in P by the arm's analytic IK.
+                q_start: np.ndarray | None = None, continuous: bool = True) -> RobotMotion:
+    """Joints of the TCP poses X_PT (N, 4, 4) in P by the arm's analytic IK; ``continuous``:
+    the poses are one cut (no joint may step by more than 180 deg between two of them).
 
     Raises:
         InputError: a pose out of reach or outside the joint limits (names ``what``, the
@@ -132,12 +133,12 @@ def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str
     X_PT = np.asarray(X_PT, float).reshape(-1, 4, 4)
     X_FT = X_FT_of(cell, g)
     X_BF = spec.X_BR @ cell.X_RP @ X_PT @ np.linalg.inv(X_FT)
-    q0 = np.zeros(6) if (cell.q_start if q_start is None else q_start) is None else \
-        np.asarray(cell.q_start if q_start is None else q_start, float)
+    q0 = q_start if q_start is not None else cell.q_start
+    q0 = np.zeros(6) if q0 is None else np.asarray(q0, float)
     # a contour turns the tool about its beam (a rectangle: once around): start J6 on the
     # turn that keeps the whole path inside the joint range, so the wrist never unwinds
     # in the middle of a cut
-    best = None
+    best, best_step = None, np.inf
     for shift in (0.0, -2 * np.pi, 2 * np.pi):
         qs = q0.copy()
         qs[5] += shift
@@ -155,7 +156,7 @@ def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str
         raise InputError(f"{what}: point {k} of {len(X_PT)} at ({x:.1f}, {y:.1f}, {z:.1f}) mm "
                          f"in the plate frame is out of reach of {spec.title} ({len(res.failed)} "
                          "points fail): move the plate (UFRAME) or the tool mounting")
-    if len(res.q) > 1 and best_step > _MAX_STEP:
+    if continuous and len(res.q) > 1 and best_step > _MAX_STEP:
         k = int(np.argmax(np.abs(np.diff(res.q, axis=0)).max(axis=1)))
         raise InputError(f"{what}: between points {k} and {k + 1} the arm must turn a joint by "
                          f"{np.rad2deg(best_step):.0f} deg (its range ends there): rotate the "
@@ -218,7 +219,7 @@ def plan_job(cell: LaserCell, contour_shape=None, holes=(), geometry: FiveBarGeo
     hole_motion = None
     if progs:
         hole_motion = solve_robot(cell, np.array([hole_pose(c) for c in centers_a]), g,
-                                  "holes")
+                                  "holes", continuous=False)
     targets = motion = None
     if contour_shape is not None:
         targets = plan_contour(contour_shape, None, settings, power)
