@@ -127,7 +127,7 @@ def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str
         InputError: a pose out of reach or outside the joint limits (names ``what``, the
             point and its plate coordinates in mm).
     """
-    from drakedeburr.robots import configuration_of, solve_path
+    from drakedeburr.robots import configuration_of, ik_opw, joint_candidates, solve_path
 
     spec = cell.spec
     X_PT = np.asarray(X_PT, float).reshape(-1, 4, 4)
@@ -135,19 +135,20 @@ def solve_robot(cell: LaserCell, X_PT: np.ndarray, g: FiveBarGeometry, what: str
     X_BF = spec.X_BR @ cell.X_RP @ X_PT @ np.linalg.inv(X_FT)
     q0 = q_start if q_start is not None else cell.q_start
     q0 = np.zeros(6) if q0 is None else np.asarray(q0, float)
-    # a contour turns the tool about its beam (a rectangle: once around): start J6 on the
-    # turn that keeps the whole path inside the joint range, so the wrist never unwinds
-    # in the middle of a cut
+    # a contour turns the tool about its beam (a rectangle: once around): start on the IK
+    # solution (branch and joint turn) from which the whole path stays inside the joint
+    # range with the smallest joint step, so the wrist never unwinds in the middle of a cut;
+    # ties go to the solution nearest q0
+    first = joint_candidates(ik_opw(spec.kinematics.opw, X_BF[:1]).q[0], spec.kinematics.limits)
+    starts = sorted(first, key=lambda c: float(np.abs(c - q0).max())) or [q0]
     best, best_step = None, np.inf
-    for shift in (0.0, -2 * np.pi, 2 * np.pi):
-        qs = q0.copy()
-        qs[5] += shift
+    for qs in starts if continuous else [q0]:
         res = solve_path(spec.kinematics, X_BF, q_start=qs)
         if res.failed:
             best = best or res
             continue
         step = float(np.abs(np.diff(res.q, axis=0)).max()) if len(res.q) > 1 else 0.0
-        if best is None or best.failed or step < best_step:
+        if best is None or best.failed or step < best_step - 1e-9:
             best, best_step = res, step
     res = best
     if res.failed:
