@@ -526,3 +526,20 @@ def test_spindle_above_the_ao_full_scale_is_refused_with_its_line(extdata, tmp_p
                "--wobj", ",".join(map(str, WOBJ)), "--io", str(io)])
     err = capsys.readouterr().err
     assert rc == 2 and ":13: SPINDL 15915.5 rpm is above" in err
+
+
+def test_spindle_on_without_a_speed(tmp_path, capsys):
+    """``SPINDL/ON`` before any speed switches the spindle DO on; with a speed AO configured
+    it is refused (the AO value is unknown) naming the CL line."""
+    cl = tmp_path / "on.apt"
+    cl.write_text("UNITS/MM\nSPINDL/ON\nFEDRAT/600,MMPM\nGOTO/0,0,0\nGOTO/10,0,0\nFINI\n")
+    io = tmp_path / "io.yaml"
+    io.write_text("spindle_do: 5\n")
+    out = tmp_path / "on.ls"
+    base = ["post", str(cl), "--robot", "m10ia", "-o", str(out), "--wobj",
+            ",".join(map(str, WOBJ)), "--spin", "greedy", "--io", str(io)]
+    assert main(base) == 0
+    assert _io_sequence(out.read_text(), "ls")[0] == [(0, "do", 5, 1.0)]
+    io.write_text("spindle_do: 5\nspindle_ao: 1\n")
+    assert main(base) == 2
+    assert "on.apt:2: SPINDL/ON without a speed" in capsys.readouterr().err

@@ -105,7 +105,8 @@ class ClInterpreter:
         self.path_open = False
         self.unit_changes: list[tuple[int, str, int]] = []  # (line, unit, moves before)
         # SPINDL / COOLNT state changes: (line, word, value, moves before); SPINDL value =
-        # signed rpm (0 = off), COOLNT 1 = on (ON, FLOOD, MIST, THRU, AIR...), 0 = off
+        # signed rpm (0 = off, NaN = on at an unknown speed), COOLNT 1 = on (ON, FLOOD, MIST,
+        # THRU, AIR...), 0 = off
         self.machine_events: list[tuple[int, str, float, int]] = []
         self.coolant = 0.0
         self.n_moves = 0
@@ -346,9 +347,8 @@ class ClInterpreter:
             self.rpm = sign * abs(number(self.source, line, nums[0]))
         elif "ON" not in words:
             self._fail(line, ",".join(args), "SPINDL without a speed")
-        elif self.rpm == 0:
-            self._fail(line, ",".join(args), "SPINDL/ON before any spindle speed")
-        self._event(line, word, self.rpm)
+        # SPINDL/ON before any speed: on, speed unknown (NaN)
+        self._event(line, word, self.rpm if self.rpm != 0 else math.nan)
 
     def _coolnt(self, line: int, word: str, args: list[str]) -> None:
         self.notes.skip(line, word, _MACHINE[word])

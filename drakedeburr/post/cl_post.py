@@ -162,6 +162,12 @@ def io_actions(io: PostIO, word: str, value: float, line: int, source: str = "CL
                                 comment=why))
         return tuple(out)
     rpm = float(value)
+    if np.isnan(rpm):  # SPINDL/ON before any speed
+        if io.spindle_ao is not None:
+            raise InputError(f"{source}:{line}: SPINDL/ON without a speed: the speed output "
+                             "(spindle_ao) cannot be set")
+        return () if io.spindle_do is None else (
+            IoAction("do", io.spindle_do, io.spindle_do_name, 1, comment=why),)
     if rpm < 0 and io.spindle_ccw_do is None and (io.spindle_do or io.spindle_ao):
         raise InputError(f"{source}:{line}: SPINDL counter-clockwise (CCLW) but the I/O "
                          "settings have no spindle_ccw_do")

@@ -230,7 +230,8 @@ class ClProgram:
             the unit; a switch with moves before it is a mid-file switch.
         end_line: line of FINI (or of the last END-OF-PATH).
         machine_events: (line, word, value, moves read before) of each SPINDL (value =
-            signed rpm, 0 = off) and COOLNT (1 on, 0 off) statement, in file order.
+            signed rpm, 0 = off, NaN = on before any speed) and COOLNT (1 on, 0 off)
+            statement, in file order.
     """
 
     source: str
