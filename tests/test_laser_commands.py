@@ -111,3 +111,24 @@ def test_bad_tool_file_is_exit_2_naming_the_key(tmp_path, capsys):
     assert main(["laser", "tool", "--tool-file", str(f)]) == 2
     assert "l1 must be > 0" in capsys.readouterr().err
     assert main(["laser", "tool", "--links", "30,40,40"]) == 2
+
+
+def test_robot_mode_writes_the_plate_as_uframe_and_the_arms_config(tmp_path, capsys):
+    import re
+
+    out = tmp_path / "r.ls"
+    assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
+                 "--corner-radius", "10", "--plate", "750,-50,150,0,0,45", "--robot",
+                 "lrmate200ic", "-o", str(out)]) == 2  # the LR Mate cannot reach 750 mm out
+    assert "out of reach of FANUC LR Mate 200iC" in capsys.readouterr().err
+    assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
+                 "--corner-radius", "10", "--plate", "750,-50,150,0,0,45", "-o",
+                 str(out)]) == 0
+    text = out.read_text()
+    uf = dict(re.findall(r"!UFRAME\[1\] ([XYZWPR])=(-?[\d.]+) ;", text))
+    assert [float(uf[k]) for k in "XYZWPR"] == pytest.approx([750, -50, 150, 0, 0, 45])
+    configs = set(re.findall(r"CONFIG : '([^']*)'", text))
+    assert len(configs) >= 2  # J6's turn changes as the tool goes once around
+    assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
+                 "--robot", "irb1600", "-o", str(out)]) == 2
+    assert "abb controller" in capsys.readouterr().err
