@@ -156,3 +156,26 @@ def test_hole_program_runs_in_whole_periods_at_the_planned_energy(diameter_mm, p
     assert np.max(np.abs(np.diff(q, axis=0)) / dt[:, None]) <= prog.limits.velocity * 1.02
     assert v.max() <= prog.feed_requested * 1.001
     assert fine[-1] and fine.sum() >= 2
+
+
+@pytest.mark.parametrize("shape", [
+    shapes.Rectangle(width=0.016, height=0.010, lead_in=0.003),  # four sharp corners: stops
+    shapes.Keyhole(head_diameter=0.012, slot_width=0.005, slot_length=0.010, lead_in=0.003),
+    shapes.Hexagon(across_flats=0.025, lead_in=0.004)], ids=lambda s: s.kind)
+def test_corner_shapes_run_in_whole_periods_at_the_planned_energy(shape):
+    """Shapes with corners (the tool stops at each, the command clamps at its floor): the
+    same read-back check as for circles, segment by segment."""
+    prog = mut.plan_hole(shape, spacing=0.2e-3)
+    counts, ms, fine, pos = _read_hole_ls(fanuc_ls.hole_program_ls(prog, "h"))
+    assert np.all(ms % 8 == 0) and np.all(ms >= 8)
+    p = forward_kinematics_circles(prog.geometry, np.deg2rad(pos))
+    L = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    e_per_m = counts / prog.power.counts_per_volt * ms / 1000.0 / L
+    gain = prog.power.nominal_command / prog.power.nominal_speed
+    at_stop = fine | np.r_[True, fine[:-1]]
+    v = L / (ms / 1000.0)
+    free = ~at_stop & (v * gain > 1.2 * prog.power.min_command)
+    assert free.sum() > 0.5 * len(free) and fine.sum() >= 4
+    assert np.max(np.abs(e_per_m[free] / gain - 1)) < 0.05
+    plan = prog.segments.energy / prog.segments.length
+    assert np.max(np.abs(e_per_m / plan - 1)) < 0.05
