@@ -13,9 +13,9 @@ Vendor limits enforced here (sources in docs/post.md):
 * FANUC TP: program name = file name: a letter, then letters, digits, '_'; at most 36
   characters (R-30iA and later; R-J3iB: 8); remark (``!``) text at most 32 characters;
   /ATTR COMMENT at most 16 characters; linear speeds are whole numbers of mm/sec (1..2000)
-  or of cm/min (1..12000) (R-30iA/R-30iB HandlingTool Operator's Manual, "Motion
-  instruction: feed rate": mm/sec 1-2000, cm/min 1-12000, inch/min 0.1-4724.4, sec 0.1-3200,
-  msec 1-32000); CNT 0..100; J speed 1..100 %.
+  or of cm/min (1..12000) (FANUC HandlingTool Operator's Manual, motion instruction speed:
+  mm/sec 1-2000, cm/min 1-12000, sec 0.1-3200, msec 1-32000, as quoted in docs/post.md);
+  CNT 0..100; J speed 1..100 %.
 """
 
 from __future__ import annotations
