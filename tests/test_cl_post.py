@@ -364,3 +364,208 @@ def test_workpiece_in_hand_needs_the_spindle(extdata, tmp_path, capsys):
     assert main(["post", str(extdata / "cl_files" / CREO), "--workpiece-in-hand",
                  "-o", str(out)]) == 2
     assert "--tool" in capsys.readouterr().err and not out.exists()
+
+
+def _written_feeds_mm_s(text: str, fmt: str) -> list[float]:
+    """TCP speeds [mm/s] of the linear moves, read from the program text with plain regexes
+    (not the project's readers): LS ``L P[n] 40cm/min``, RAPID ``MoveL p, vdd..`` resolved by
+    its ``speeddata`` declaration or the predefined ``vNNN``, KRL ``$VEL.CP`` [m/s] before
+    ``LIN``."""
+    if fmt == "ls":
+        per = {"mm/sec": 1.0, "cm/min": 10.0 / 60.0}
+        return [int(v) * per[u] for v, u in
+                re.findall(r"^\s*\d+:\s+L P\[\d+\] (\d+)(mm/sec|cm/min) ", text, re.M)]
+    if fmt == "rapid":
+        declared = dict(re.findall(r"CONST speeddata (\w+) := \[([\d.]+),", text))
+        names = re.findall(r"^\s*MoveL \w+, (\w+),", text, re.M)
+        return [float(declared[n]) if n in declared else float(n[1:]) for n in names]
+    feeds, v = [], None
+    for line in text.splitlines():
+        m = re.match(r"\s*\$VEL\.CP = ([\d.]+)", line)
+        if m:
+            v = float(m[1]) * 1000.0
+        elif re.match(r"\s*LIN ", line):
+            feeds.append(v)
+    return feeds
+
+
+@pytest.mark.parametrize("fmt, suffix, robot, wobj", [
+    ("rapid", ".mod", "irb1600", WOBJ), ("krl", ".src", "kr6_r700", [450.0, 0, 100, 0, 0, 30]),
+    ("ls", ".ls", "m10ia", WOBJ)])
+def test_written_feeds_are_the_files_fedrat(extdata, tmp_path, fmt, suffix, robot, wobj):
+    """Creo's ``FEDRAT / 400.000000, MMPM`` (a real CAM file) comes out of every writer at
+    400 mm/min: LS as ``40cm/min`` (FANUC TP takes whole cm/min, 1-12000; whole mm/sec
+    could only say 6 = -10 %), RAPID to 0.001 mm/s, KRL to 1e-6 m/s. The feed is read from
+    the CL file by a plain scan and the written feeds by regexes on the program text."""
+    src = extdata / "cl_files" / CREO
+    fedrat = {float(v) for v in re.findall(r"FEDRAT / ([\d.]+),\s*MMPM", src.read_text())}
+    assert fedrat == {400.0}
+    out = tmp_path / f"creo{suffix}"
+    assert main(["post", str(src), "--robot", robot, "-o", str(out), "--wobj",
+                 ",".join(map(str, wobj)), "--spin", "greedy"]) == 0
+    text = out.read_text()
+    feeds = np.array(_written_feeds_mm_s(text, fmt))
+    n_feed = sum(1 for m in read_cl(src).moves if not m.rapid)
+    assert feeds.size == n_feed
+    want = 400.0 / 60.0
+    tol = {"ls": 1e-12, "rapid": 1e-3 / 2 + 1e-12, "krl": 1e-3 / 2 + 1e-12}[fmt]
+    assert np.abs(feeds - want).max() <= tol
+    if fmt == "ls":
+        assert "mm/sec" not in text and "40cm/min" in text
+
+
+def test_ls_feed_never_faster_and_within_a_sixth_mm_s():
+    """Over 1 mm/min .. 120 m/min the LS speed written is at most the plan and at most
+    1/6 mm/s (one cm/min) below it; exact mm/sec and cm/min values are written as such."""
+    from drakedeburr.programs.common import ls_speed
+
+    per = {"mm/sec": 1.0, "cm/min": 1.0 / 6.0}
+    for mm_min in np.r_[np.linspace(10.0, 120000.0, 4001), 254.0, 400.0, 9000.0]:
+        v_plan = mm_min / 60.0
+        value, unit = ls_speed(v_plan / 1000.0)
+        v = value * per[unit]
+        assert isinstance(value, int) and v <= v_plan + 1e-9
+        assert v_plan - v < 1.0 / 6.0 + 1e-9, mm_min
+        if unit == "mm/sec":
+            assert 1 <= value <= 2000
+        else:
+            assert 1 <= value <= 12000
+    assert ls_speed(0.15) == (150, "mm/sec") and ls_speed(0.4 / 60.0) == (40, "cm/min")
+
+
+IO_YAML = ("spindle_do: 1\nspindle_ao: 2\nspindle_rpm_full_scale: 24000\ncoolant_do: 3\n"
+           "spindle_ccw_do: 4\n")
+FULL = {"rapid": 10.0, "krl": 1.0, "ls": 4095.0}  # the PostIO defaults
+_IO_RE = {  # (regex, kind, port group, value group) on the written text
+    "rapid": [(r"^\s*SetDO (\w+), ([01]);", "do"), (r"^\s*SetAO (\w+), ([\d.]+);", "ao")],
+    "krl": [(r"^\s*\$OUT\[(\d+)\] = (TRUE|FALSE)", "do"), (r"^\s*\$ANOUT\[(\d+)\] = ([\d.]+)",
+                                                           "ao")],
+    "ls": [(r"^\s*\d+:\s+DO\[(\d+)\]=(ON|OFF) ;", "do"), (r"^\s*\d+:\s+AO\[(\d+)\]=(\d+) ;",
+                                                           "ao")],
+}
+_MOVE_RE = {"rapid": r"^\s*Move[LJ] ", "krl": r"^\s*(LIN|PTP) ", "ls": r"^\s*\d+:\s+[LJ] P\["}
+_PORT = {"doSpindle": 1, "aoSpindle": 2, "doCoolant": 3, "doSpindleCcw": 4}
+
+
+def _io_sequence(text, fmt):
+    """[(moves written before, kind, port, value)] read with regexes from the program text."""
+    out, n_moves = [], 0
+    for line in text.splitlines():
+        if re.match(_MOVE_RE[fmt], line):
+            n_moves += 1
+            continue
+        for pattern, kind in _IO_RE[fmt]:
+            m = re.match(pattern, line)
+            if m:
+                port = _PORT[m[1]] if fmt == "rapid" else int(m[1])
+                v = m[2]
+                value = {"TRUE": 1.0, "ON": 1.0, "FALSE": 0.0, "OFF": 0.0}.get(v)
+                out.append((n_moves, kind, port, float(v) if value is None else value))
+    return out, n_moves
+
+
+@pytest.mark.parametrize("fmt, suffix, robot, wobj", [
+    ("rapid", ".mod", "irb1600", WOBJ), ("krl", ".src", "kr6_r700", [450.0, 0, 100, 0, 0, 30]),
+    ("ls", ".ls", "m10ia", WOBJ)])
+def test_spindle_of_the_creo_file_on_the_configured_outputs(extdata, tmp_path, fmt, suffix,
+                                                            robot, wobj):
+    """Creo's ``SPINDL / RPM, 15915.507752, CLW`` (before the first GOTO) and ``SPINDL / OFF``
+    (after the last) become: speed AO then spindle DO on before the first move, DO off then
+    AO 0 after the last one, in RAPID SetAO/SetDO, KRL $ANOUT/$OUT and LS AO[]/DO[]. The AO
+    read back from the text gives the file's rpm within one step of the output."""
+    src = extdata / "cl_files" / CREO
+    rpm = [float(v) for v in re.findall(r"SPINDL / RPM, ([\d.]+)", src.read_text())]
+    assert rpm == [15915.507752] and "SPINDL / OFF" in src.read_text()
+    io = tmp_path / "io.yaml"
+    io.write_text(IO_YAML)
+    out = tmp_path / f"creo{suffix}"
+    assert main(["post", str(src), "--robot", robot, "-o", str(out), "--wobj",
+                 ",".join(map(str, wobj)), "--spin", "greedy", "--io", str(io)]) == 0
+    seq, n = _io_sequence(out.read_text(), fmt)
+    ccw = (0, "do", 4, 0.0)  # CLW: the direction output off
+    assert seq[:3] == [ccw, (0, "ao", 2, pytest.approx(seq[1][3])), (0, "do", 1, 1.0)]
+    step = FULL[fmt] * (1e-4 if fmt == "rapid" else 1e-6 if fmt == "krl" else 1.0)
+    assert abs(seq[1][3] / FULL[fmt] * 24000 - rpm[0]) <= 24000 * step / FULL[fmt] / 2 + 1e-9
+    assert seq[3:] == [(n, "do", 1, 0.0), (n, "ao", 2, 0.0)]
+    # the project's reader reads the same outputs back
+    from drakedeburr.programs.reading import read_program
+
+    back = read_program(out)
+    assert [(k, p if fmt != "rapid" else _PORT[p], v) for _, k, p, v in back.io] == \
+        [(k, p, v) for _, k, p, v in seq]
+    if fmt == "rapid":  # a third-party RAPID grammar accepts SetDO / SetAO as written
+        from rapidchecker.check import check_format
+
+        assert list(check_format(out.read_text())) == []
+
+
+def test_coolant_and_counter_clockwise_spindle(tmp_path):
+    """COOLNT/FLOOD .. COOLNT/OFF and SPINDL/.., CCLW in an APT file (the real CAM files here
+    have no COOLNT): the coolant DO is on for exactly the moves between the two statements,
+    the direction DO is on for CCLW; without --io nothing is written and the words are
+    listed as not applied."""
+    cl = tmp_path / "cool.apt"
+    cl.write_text("UNITS/MM\nSPINDL/RPM,12000,CCLW\nRAPID\nGOTO/0,0,20\nCOOLNT/FLOOD\n"
+                  "FEDRAT/600,MMPM\nGOTO/0,0,0\nGOTO/30,0,0\nGOTO/30,30,0\nCOOLNT/OFF\n"
+                  "RAPID\nGOTO/30,30,20\nSPINDL/OFF\nFINI\n")
+    io = tmp_path / "io.yaml"
+    io.write_text(IO_YAML)
+    out = tmp_path / "cool.ls"
+    base = ["post", str(cl), "--robot", "m10ia", "-o", str(out), "--wobj",
+            ",".join(map(str, WOBJ)), "--spin", "greedy"]
+    assert main([*base, "--io", str(io)]) == 0
+    text = out.read_text()
+    seq, n = _io_sequence(text, "ls")
+    assert n == 5
+    assert (0, "do", 4, 1.0) in seq and (0, "do", 1, 1.0) in seq  # CCLW, on
+    assert (0, "ao", 2, float(round(12000 / 24000 * 4095))) in seq
+    assert (1, "do", 3, 1.0) in seq and (4, "do", 3, 0.0) in seq  # coolant moves 2..4
+    assert (5, "do", 1, 0.0) in seq
+    # the move before an output switches is a stop point (FINE), so the output switches there
+    mn = [ln for ln in text.splitlines() if re.match(_MOVE_RE["ls"], ln)]
+    assert mn[3].endswith("FINE ;") and mn[0].endswith("FINE ;")
+    assert main(base) == 0
+    assert _io_sequence(out.read_text(), "ls")[0] == []
+    assert "COOLNT" in out.read_text() and "not applied" in out.read_text()
+
+
+@pytest.mark.parametrize("yaml_text, expected", [
+    ("spindle_do: 0\n", "spindle_do must be an output number >= 1"),
+    ("spindel_do: 1\n", "unknown PostIO field 'spindel_do'"),
+    ("spindle_do: 1\ncoolant_do: 1\n", "must differ"),
+    ("spindle_ao: 1\nao_full_scale_krl: 10\n", "ao_full_scale_krl must be in (0, 1]"),
+])
+def test_bad_io_settings_exit_2_naming_the_file(extdata, tmp_path, capsys, yaml_text,
+                                                expected):
+    io = tmp_path / "io.yaml"
+    io.write_text(yaml_text)
+    rc = main(["post", str(extdata / "cl_files" / CREO), "-o", str(tmp_path / "c.mod"),
+               "--wobj", ",".join(map(str, WOBJ)), "--io", str(io)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "io.yaml" in err and expected in err and len(err.splitlines()) == 1
+
+
+def test_spindle_above_the_ao_full_scale_is_refused_with_its_line(extdata, tmp_path, capsys):
+    io = tmp_path / "io.yaml"
+    io.write_text("spindle_ao: 1\nspindle_rpm_full_scale: 12000\n")
+    rc = main(["post", str(extdata / "cl_files" / CREO), "-o", str(tmp_path / "c.mod"),
+               "--wobj", ",".join(map(str, WOBJ)), "--io", str(io)])
+    err = capsys.readouterr().err
+    assert rc == 2 and ":13: SPINDL 15915.5 rpm is above" in err
+
+
+def test_spindle_on_without_a_speed(tmp_path, capsys):
+    """``SPINDL/ON`` before any speed switches the spindle DO on; with a speed AO configured
+    it is refused (the AO value is unknown) naming the CL line."""
+    cl = tmp_path / "on.apt"
+    cl.write_text("UNITS/MM\nSPINDL/ON\nFEDRAT/600,MMPM\nGOTO/0,0,0\nGOTO/10,0,0\nFINI\n")
+    io = tmp_path / "io.yaml"
+    io.write_text("spindle_do: 5\n")
+    out = tmp_path / "on.ls"
+    base = ["post", str(cl), "--robot", "m10ia", "-o", str(out), "--wobj",
+            ",".join(map(str, WOBJ)), "--spin", "greedy", "--io", str(io)]
+    assert main(base) == 0
+    assert _io_sequence(out.read_text(), "ls")[0] == [(0, "do", 5, 1.0)]
+    io.write_text("spindle_do: 5\nspindle_ao: 1\n")
+    assert main(base) == 2
+    assert "on.apt:2: SPINDL/ON without a speed" in capsys.readouterr().err

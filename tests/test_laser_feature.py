@@ -58,11 +58,16 @@ def test_speed_profile_and_command():
 
 
 def test_contour_ls_program(tmp_path):
+    from drakedeburr.laser.robot_job import LaserCell
+
     tg = mut.plan_contour(shapes.Hexagon(across_flats=0.1, lead_in=0.01),
-                          X_WP=_X([np.pi, 0, 0], [1.0, 0.0, 0.5]),
                           settings=mut.FeatureSettings(travel_angle=0.1))
-    text = fanuc_ls.contour_program_ls(tg, "hex100")
+    X_RP = _X([np.pi, 0, 0], [1.0, 0.0, 0.5])  # the plate: the program's UFRAME
+    text = fanuc_ls.contour_program_ls(tg, "hex100", LaserCell("m10ia", X_RP))
     assert "DEFAULT_GROUP\t= 1,*,*,*,*;" in text
+    uf = dict(re.findall(r"!UFRAME\[1\] ([XYZWPR])=(-?[\d.]+) ;", text))
+    assert np.allclose([float(uf[k]) for k in "XYZ"], [1000.0, 0.0, 500.0], atol=1e-3)
+    assert "UFRAME_NUM=1 ;" in text and "UF : 1, UT : 1" in text
     xyz = np.array(re.findall(r"X =\t(-?[\d.]+)\tmm,\tY =\t(-?[\d.]+)\tmm,\tZ =\t(-?[\d.]+)",
                               text), float)
     assert np.allclose(xyz / 1e3, tg.p_WT, atol=1e-9)
@@ -77,7 +82,9 @@ def test_contour_ls_program(tmp_path):
         Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
         Rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
         assert np.allclose(Rz @ Ry @ Rx, tg.R_WT[k], atol=1e-6)
-    speeds = np.array(re.findall(r"L P\[\d+\] (\d+)mm/sec", text), int)
+    per = {"mm/sec": 1.0, "cm/min": 1 / 6}
+    speeds = np.array([int(v) * per[u] for v, u in
+                       re.findall(r"L P\[\d+\] (\d+)(mm/sec|cm/min)", text)])
     assert len(speeds) == len(tg) - 1 and speeds.max() == 100
 
 

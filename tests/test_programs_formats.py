@@ -59,7 +59,8 @@ def test_each_move_carries_its_own_speed_and_zone(tmp_path, fmt, arm, stationary
     speeds = {round(r.speed, 6) for _, r in lin}
     assert len(speeds) >= 6  # not collapsed onto one standard speed
     for m, r in lin:
-        resolution = 1e-3 if fmt == "ls" else 1e-6  # LS: whole mm/sec, rounded down
+        # LS: whole mm/sec or cm/min (1/6 mm/s), rounded down
+        resolution = 1e-3 / 6 if fmt == "ls" else 1e-6
         assert m.speed - resolution - 1e-12 <= r.speed <= m.speed + 1e-6
     text = path.read_text()
     if fmt == "rapid":
@@ -72,7 +73,8 @@ def test_each_move_carries_its_own_speed_and_zone(tmp_path, fmt, arm, stationary
         assert "$VEL.CP = 0.023457" in text and "BAS (#VEL_PTP, 33)" in text
         assert "BAS (#VEL_PTP, 12)" in text  # the last joint move at its own 12.5 %
     if fmt == "ls":
-        assert "L P[2] 23mm/sec CNT10" in text and "J P[1] 33% FINE" in text
+        # 23.457 mm/s: 140 cm/min = 23.333 mm/s is closer below than 23 mm/sec
+        assert "L P[2] 140cm/min CNT10" in text and "J P[1] 33% FINE" in text
         assert "L P[3] 600mm/sec CNT3" in text
 
 
@@ -107,12 +109,12 @@ EDITS = {
         "move order": (r"LIN XP3\b", "LIN XP4"),
     },
     "ls": {
-        "speed": (r"(L P\[4\] )\d+mm/sec", r"\g<1>1500mm/sec"),
-        "zone": (r"(L P\[2\] 23mm/sec )CNT10", r"\1CNT100"),
+        "speed": (r"(L P\[4\] )\d+(mm/sec|cm/min)", r"\g<1>1500mm/sec"),
+        "zone": (r"(L P\[2\] 140cm/min )CNT10", r"\1CNT100"),
         "pose": (r"(P\[5\]\{\n   GP1:\n.*\n\tX = )(-?\d+\.\d+)", lambda m: m.group(1) + _plus(m)),
         "configuration": (r"(P\[6\]\{\n   GP1:\n.*CONFIG : ')([NF])", lambda m: m.group(1) + (
             "F" if m.group(2) == "N" else "N")),
-        "move order": (r"L P\[3\] (\d+)mm/sec", r"L P[4] \1mm/sec"),
+        "move order": (r"L P\[3\] (\d+)(mm/sec|cm/min)", r"L P[4] \1\2"),
     },
 }
 

@@ -8,6 +8,9 @@
 * :mod:`~drakedeburr.laser.hole` - holes by the tool alone (servo trajectory)
 * :mod:`~drakedeburr.laser.feature` - larger contours by the robot ("Feature" settings)
 * :mod:`~drakedeburr.laser.power` - TCP speed -> analogue laser command
+* :mod:`~drakedeburr.laser.itp` - hole programs in whole interpolation periods (8 ms)
+* :mod:`~drakedeburr.laser.robot_job` - plate frame (UFRAME), the arm's IK and CONFIG, one
+  job for a part's holes and contour
 * :mod:`~drakedeburr.laser.fanuc_ls` - FANUC .ls programs with the analogue output
 """
 
@@ -16,6 +19,8 @@ from drakedeburr._lazy import lazy_exports
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "feature": ("FeatureSettings", "LaserTargets", "plan_contour"),
     "hole": ("HoleProgram", "ServoLimits", "plan_hole"),
+    "itp": ("ControllerTiming", "ItpSegments"),
+    "robot_job": ("LaserCell", "LaserJob", "plan_job"),
     "kinematics": (
         "FiveBarGeometry", "check_reach", "forward_kinematics", "inverse_kinematics", "jacobian",
         "singularity_measures",

@@ -4,11 +4,15 @@ Syntax follows the FANUC ASCII programs in extdata (``/PROG``, ``/ATTR``, ``/MN`
 Two program kinds:
 
 * hole by the Cutting Tool: the tool is motion group 2 (two extended axes J1, J2 in deg);
-  the robot (group 1) holds still. Each target is a joint move timed in seconds from the
-  TOPP-RA trajectory (``J P[i] 0.012sec CNT100``), preceded by ``AO[n]=counts`` with the
-  laser command at that point.
-* contour by the robot: group 1 Cartesian targets (X, Y, Z [mm], W, P, R [deg], fixed-axis
-  x-y-z angles as on FANUC) with linear moves at the planned speed and ``AO[n]`` per point.
+  the robot (group 1) holds still. Each target is a joint move of one interpolation period
+  (``J P[i] 8msec CNT100``: :mod:`drakedeburr.laser.itp`), preceded by ``AO[n]=counts``
+  with the segment's command (planned energy / period).
+* contour by the robot: group 1 Cartesian targets in the plate frame (UFRAME; X, Y, Z [mm],
+  W, P, R [deg], fixed-axis x-y-z angles as on FANUC) with the CONFIG of the arm's IK
+  joints, linear moves at the planned speed (whole mm/sec or cm/min) and ``AO[n]`` per
+  point;
+* a job: the robot's program positions the tool over each hole and CALLs the hole's
+  group-2 program, then cuts the contour (:func:`job_programs_ls`).
 
 The general RAPID/KRL/LS writers live in ``drakedeburr.post``; this module stays small so the
 laser stage does not depend on them (see docs/laser.md).
@@ -23,8 +27,10 @@ import numpy as np
 from drakedeburr._io import atomic_write_text
 from drakedeburr.laser.feature import LaserTargets
 from drakedeburr.laser.hole import HoleProgram
+from drakedeburr.laser.robot_job import LaserJob
 
-__all__ = ["hole_program_ls", "contour_program_ls", "write_ls", "wpr_deg_from_R"]
+__all__ = ["hole_program_ls", "contour_program_ls", "job_programs_ls", "write_ls",
+           "wpr_deg_from_R"]
 
 _TCD = """TCD:  STACK_SIZE		= 0,
       TASK_PRIORITY		= 50,
@@ -59,20 +65,36 @@ def wpr_deg_from_R(R: np.ndarray) -> tuple[float, float, float]:
 
 def hole_program_ls(prog: HoleProgram, name: str, laser_do: int = 1, uframe: int = 0,
                     utool: int = 1) -> str:
-    """FANUC .ls text of a hole cut by the Cutting Tool (group 2) with TCP-speed AO."""
+    """FANUC .ls text of a hole cut by the Cutting Tool (group 2), as the controller runs it.
+
+    One joint move per interpolation period (``J P[i] 8msec CNT100``; FINE at the stops), each
+    preceded by ``AO[n]=counts`` with the segment's re-planned command, so command x time per
+    segment is the planned energy (:mod:`drakedeburr.laser.itp`). Timed motion in msec:
+    1-32000 msec (FANUC HandlingTool Operator's Manual, motion instruction feed rate).
+    """
+    from drakedeburr.errors import InputError
+    from drakedeburr.laser.itp import TP_MSEC_MAX, ControllerTiming, quantise
+
     name = _check_name(name)
-    q_deg = np.rad2deg(prog.q)
-    counts = prog.power.counts(prog.command)
+    seg = prog.segments
+    if seg is None:
+        seg = quantise(prog.timed, prog.geometry, prog.power, ControllerTiming())
+    ms = seg.ticks * seg.timing.period_ms
+    if ms.max() > TP_MSEC_MAX:
+        raise InputError(f"{name}: a segment of {int(ms.max())} msec exceeds the TP limit "
+                         f"{TP_MSEC_MAX} msec")
+    q_deg = np.rad2deg(seg.q)
+    counts = prog.power.counts(seg.command)
     ch = prog.power.channel
     mn = [f"UFRAME_NUM={uframe} ;", f"UTOOL_NUM={utool} ;",
           f"!{prog.contour.name} {prog.contour.perimeter * 1e3:.3f}mm "
-          f"{prog.duration:.3f}s ;",
+          f"{seg.duration:.3f}s ;",
+          f"!ITP {seg.timing.period_ms}ms feed {prog.limits.feed * 60:.3f}m/min ;",
           "J P[1] 100% FINE ;", f"AO[{ch}]={counts[0]} ;", f"DO[{laser_do}]=ON ;"]
     for i in range(1, len(q_deg)):
-        dt = max(float(prog.t[i] - prog.t[i - 1]), 0.001)
-        term = "FINE" if (prog.contour.corner[i] or i == len(q_deg) - 1) else "CNT100"
-        mn.append(f"AO[{ch}]={counts[i]} ;")
-        mn.append(f"J P[{i + 1}] {dt:.3f}sec {term} ;")
+        term = "FINE" if seg.stop[i] else "CNT100"
+        mn.append(f"AO[{ch}]={counts[i - 1]} ;")
+        mn.append(f"J P[{i + 1}] {int(ms[i - 1])}msec {term} ;")
     mn += [f"DO[{laser_do}]=OFF ;", f"AO[{ch}]=0 ;"]
     pos = []
     for i, (a, b) in enumerate(q_deg):
@@ -81,30 +103,95 @@ def hole_program_ls(prog: HoleProgram, name: str, laser_do: int = 1, uframe: int
     return _assemble(name, prog.contour.name, mn, pos, "*,1,*,*,*")
 
 
-def contour_program_ls(targets: LaserTargets, name: str, laser_do: int = 1, uframe: int = 0,
-                       utool: int = 1, config: str = "N U T, 0, 0, 0") -> str:
-    """FANUC .ls text of a contour cut by the robot (group 1) with TCP-speed AO."""
-    name = _check_name(name)
+def _frame_remarks(label: str, X: np.ndarray) -> list[str]:
+    """``!UFRAME[1] X=...`` remarks (<= 32 characters) of a frame [m] in mm / deg."""
+    x, y, z = X[:3, 3] * 1e3
+    w, p, r = wpr_deg_from_R(X[:3, :3])
+    from drakedeburr.programs.common import fnum
+
+    return [f"!{label} {k}={fnum(v, 3)} ;" for k, v in zip("XYZWPR", (x, y, z, w, p, r),
+                                                           strict=True)]
+
+
+def _gp1(i: int, uframe: int, utool: int, config: str, X: np.ndarray) -> str:
+    x, y, z = X[:3, 3] * 1e3
+    w, p, r = wpr_deg_from_R(X[:3, :3])
+    return (f"P[{i}]{{\n   GP1:\n\tUF : {uframe}, UT : {utool},\t\tCONFIG : '{config}',\n"
+            f"\tX =\t{x:.6f}\tmm,\tY =\t{y:.6f}\tmm,\tZ =\t{z:.6f}\tmm,\n"
+            f"\tW =\t{w:.6f}\tdeg,\tP =\t{p:.6f}\tdeg,\tR =\t{r:.6f}\tdeg\n}};")
+
+
+def _speed_text(v: float) -> str:
+    from drakedeburr.programs.common import ls_speed
+
+    value, unit = ls_speed(v)
+    return f"{value}{unit}"
+
+
+def _contour_lines(targets: LaserTargets, first: int, laser_do: int) -> list[str]:
     counts = targets.power.counts(targets.command)
     ch = targets.power.channel
-    mn = [f"UFRAME_NUM={uframe} ;", f"UTOOL_NUM={utool} ;", "J P[1] 100% FINE ;",
-          f"AO[{ch}]={counts[0]} ;", f"DO[{laser_do}]=ON ;"]
     n = len(targets)
+    mn = [f"!contour {targets.name} ;", f"J P[{first}] 20% FINE ;", f"AO[{ch}]={counts[0]} ;",
+          f"DO[{laser_do}]=ON ;"]
     for i in range(1, n):
-        v = max(0.5 * (targets.speed[i - 1] + targets.speed[i]), 1e-3) * 1e3
+        v = max(0.5 * (targets.speed[i - 1] + targets.speed[i]), 1e-3)
         term = "FINE" if (targets.contour.corner[i] or i == n - 1) else "CNT100"
         mn.append(f"AO[{ch}]={counts[i]} ;")
-        mn.append(f"L P[{i + 1}] {max(1, round(v))}mm/sec {term} ;")
-    mn += [f"DO[{laser_do}]=OFF ;", f"AO[{ch}]=0 ;"]
-    pos = []
-    for i in range(n):
-        x, y, z = targets.p_WT[i] * 1e3
-        w, p, r = wpr_deg_from_R(targets.R_WT[i])
-        pos.append(f"P[{i + 1}]{{\n   GP1:\n"
-                   f"\tUF : {uframe}, UT : {utool},\t\tCONFIG : '{config}',\n"
-                   f"\tX =\t{x:.6f}\tmm,\tY =\t{y:.6f}\tmm,\tZ =\t{z:.6f}\tmm,\n"
-                   f"\tW =\t{w:.6f}\tdeg,\tP =\t{p:.6f}\tdeg,\tR =\t{r:.6f}\tdeg\n}};")
-    return _assemble(name, targets.name, mn, pos, "1,*,*,*,*")
+        mn.append(f"L P[{first + i}] {_speed_text(v)} {term} ;")
+    return mn + [f"DO[{laser_do}]=OFF ;", f"AO[{ch}]=0 ;"]
+
+
+def job_programs_ls(job: LaserJob, name: str, laser_do: int = 1) -> dict[str, str]:
+    """FANUC .ls texts of a laser job, {program name: text}: the robot's program ``name``
+    (group 1: the UFRAME / UTOOL values as remarks, ``UFRAME_NUM``/``UTOOL_NUM``, a FINE
+    joint move over each hole and ``CALL <name>_Hnn``, then the contour with the laser on)
+    and one Cutting Tool program per hole (group 2, :func:`hole_program_ls`). Every robot
+    point carries the CONFIG of its joints (:mod:`drakedeburr.laser.robot_job`).
+    """
+    from drakedeburr.laser.robot_job import X_FT_of
+
+    name = _check_name(name)
+    cell = job.cell
+    out: dict[str, str] = {}
+    mn = _frame_remarks(f"UFRAME[{cell.uframe}]", cell.X_RP)
+    mn += _frame_remarks(f"UTOOL[{cell.utool}]", X_FT_of(cell, job.geometry))
+    mn += [f"UFRAME_NUM={cell.uframe} ;", f"UTOOL_NUM={cell.utool} ;"]
+    pos: list[str] = []
+    k = 0
+    for h, prog in enumerate(job.holes):
+        sub = _check_name(f"{name[:32]}_H{h + 1:02d}")
+        out[sub] = hole_program_ls(prog, sub)
+        k += 1
+        mn += [f"!hole {h + 1} {prog.contour.name} ;", f"J P[{k}] 20% FINE ;", f"CALL {sub} ;"]
+        pos.append(_gp1(k, cell.uframe, cell.utool, job.hole_motion.config[h],
+                        job.hole_motion.X_PT[h]))
+    if job.contour is not None:
+        mn += _contour_lines(job.contour, k + 1, laser_do)
+        for i in range(len(job.contour)):
+            pos.append(_gp1(k + 1 + i, cell.uframe, cell.utool, job.contour_motion.config[i],
+                            job.contour_motion.X_PT[i]))
+    out = {name: _assemble(name, "laser job", mn, pos, "1,*,*,*,*"), **out}
+    return out
+
+
+def contour_program_ls(targets: LaserTargets, name: str, cell=None, geometry=None,
+                       laser_do: int = 1) -> str:
+    """FANUC .ls text of a contour cut by the robot (group 1) with TCP-speed AO: the targets
+    are in the plate frame P (the UFRAME ``cell.X_RP``); CONFIG per point from the arm's IK.
+    """
+    from drakedeburr.laser.kinematics import FiveBarGeometry
+    from drakedeburr.laser.robot_job import LaserCell, LaserJob, solve_robot
+
+    cell = cell or LaserCell()
+    g = geometry or FiveBarGeometry()
+    X_PT = np.tile(np.eye(4), (len(targets), 1, 1))
+    X_PT[:, :3, :3] = targets.R_WT
+    X_PT[:, :3, 3] = targets.p_WT
+    motion = solve_robot(cell, X_PT, g, f"contour {targets.name}")
+    job = LaserJob(cell=cell, geometry=g, holes=(), hole_centers=np.zeros((0, 2)),
+                   hole_motion=None, contour=targets, contour_motion=motion)
+    return job_programs_ls(job, name, laser_do)[_check_name(name)]
 
 
 def _assemble(name: str, comment: str, mn: list[str], pos: list[str], groups: str) -> str:

@@ -44,8 +44,9 @@ _INFO = {
 }
 # machine functions a robot program does not carry: read, then listed as not written
 _MACHINE = {
-    "SPINDL": "spindle on/off and speed are not written to the robot program",
-    "COOLNT": "coolant is not written to the robot program",
+    "SPINDL": "spindle on/off and speed: written only to the outputs of the post's I/O "
+              "settings (--io)",
+    "COOLNT": "coolant: written only to the output of the post's I/O settings (--io)",
     "AIR": "air blast is not written to the robot program",
     "DELAY": "a dwell is not written (the robot programs carry no waits)",
     "DWELL": "a dwell is not written (the robot programs carry no waits)",
@@ -110,6 +111,11 @@ class ClInterpreter:
         self.paths: list[ClToolPath] = []
         self.path_open = False
         self.unit_changes: list[tuple[int, str, int]] = []  # (line, unit, moves before)
+        # SPINDL / COOLNT state changes: (line, word, value, moves before); SPINDL value =
+        # signed rpm (0 = off, NaN = on at an unknown speed), COOLNT 1 = on (ON, FLOOD, MIST,
+        # THRU, AIR...), 0 = off
+        self.machine_events: list[tuple[int, str, float, int]] = []
+        self.coolant = 0.0
         self.n_moves = 0
         self._handlers = {
             "GOTO": self._goto, "GODLTA": self._godlta, "FROM": self._from,
@@ -119,7 +125,7 @@ class ClInterpreter:
             "LOADTL": self._loadtl, "LOAD": self._loadtl, "PPRINT": self._pprint,
             "FINI": self._fini, "END-OF-PATH": self._end_of_path, "TOOL PATH": self._tool_path,
             "MSYS": self._msys, "CYCLE": self._cycle, "CUTCOM": self._cutcom,
-            "TLCOMP": self._cutcom,
+            "TLCOMP": self._cutcom, "COOLNT": self._coolnt,
         }
 
     # ---- dispatch
@@ -332,11 +338,15 @@ class ClInterpreter:
             self.notes.warn(line, "FEDRAT", "feed in inch/min but coordinates read as mm (no "
                                             "UNITS statement?): check the units argument")
 
+    def _event(self, line: int, word: str, value: float) -> None:
+        self.machine_events.append((line, word, float(value), self.n_moves))
+
     def _spindl(self, line: int, word: str, args: list[str]) -> None:
         self.notes.skip(line, word, _MACHINE[word])
         words = [a.upper() for a in args if a]
         if "OFF" in words:
             self.rpm = 0.0
+            self._event(line, word, 0.0)
             return
         sign = -1.0 if "CCLW" in words else 1.0
         nums = [a for a in args if a and a.upper() not in (
@@ -345,6 +355,20 @@ class ClInterpreter:
             self.rpm = sign * abs(number(self.source, line, nums[0]))
         elif "ON" not in words:
             self._fail(line, ",".join(args), "SPINDL without a speed")
+        # SPINDL/ON before any speed: on, speed unknown (NaN)
+        self._event(line, word, self.rpm if self.rpm != 0 else math.nan)
+
+    def _coolnt(self, line: int, word: str, args: list[str]) -> None:
+        self.notes.skip(line, word, _MACHINE[word])
+        words = {a.upper() for a in args if a}
+        if words & {"OFF", "NOMORE"}:
+            value = 0.0
+        elif words & {"ON", "FLOOD", "MIST", "THRU", "TAPKUL", "AIR", "SPRAY"} or not words:
+            value = 1.0
+        else:
+            self._fail(line, ",".join(args), "COOLNT must be ON, FLOOD, MIST, THRU, AIR or OFF")
+        self.coolant = value
+        self._event(line, word, value)
 
     # ---- motion
     def _move(self, line: int, p: tuple[float, float, float], rapid: bool, *,

@@ -36,12 +36,12 @@ from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import ClProgram, read_cl
 from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
-from drakedeburr.programs.program import JOINT, LINEAR, ProgramMove, RobotProgram
+from drakedeburr.programs.program import JOINT, LINEAR, IoAction, ProgramMove, RobotProgram
 from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
-__all__ = ["PostResult", "PostSettings", "PostSummary", "program_from_cl", "post_cl_file",
-           "pose_from_mm_deg", "robot_kinematics", "MAX_MOVES"]
+__all__ = ["PostResult", "PostSettings", "PostSummary", "PostIO", "program_from_cl",
+           "post_cl_file", "pose_from_mm_deg", "robot_kinematics", "io_actions", "MAX_MOVES"]
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +72,125 @@ def pose_from_mm_deg(values: tuple[float, ...] | list[float], what: str = "pose"
 
 
 @dataclass(frozen=True)
+class PostIO:
+    """Which controller outputs the CL file's SPINDL and COOLNT statements set (``--io``
+    YAML with these fields). A port left None writes nothing for that function (the word is
+    then listed as not applied, as without I/O settings).
+
+    Attributes:
+        spindle_do: DO number that runs the spindle (KRL ``$OUT[n]``, LS ``DO[n]``).
+        spindle_do_name: its RAPID signal name (``SetDO doSpindle, 1;``).
+        spindle_ccw_do: DO selecting counter-clockwise rotation (SPINDL/.., CCLW); None =
+            the spindle turns one way only (CCLW is then refused).
+        spindle_ccw_do_name: its RAPID signal name.
+        spindle_ao: AO number of the speed command (KRL ``$ANOUT[n]``, LS ``AO[n]``).
+        spindle_ao_name: its RAPID signal name (``SetAO aoSpindle, value;``).
+        spindle_rpm_full_scale: spindle speed at the AO's full scale [1/min]; the AO value is
+            rpm / this x the format's full scale (linear, 0 at standstill).
+        ao_full_scale_rapid: RAPID logical value of the AO at full scale (e.g. 10 for a
+            0-10 V output scaled in volts).
+        ao_full_scale_krl: KRL ``$ANOUT`` at full scale (KSS: -1.0 .. 1.0, so 1.0).
+        ao_full_scale_ls: FANUC AO value at full scale (counts of the analogue board, 4095
+            for a 12-bit output).
+        coolant_do: DO number that switches the coolant (COOLNT/ON, FLOOD, MIST ... OFF).
+        coolant_do_name: its RAPID signal name.
+    """
+
+    spindle_do: int | None = None
+    spindle_do_name: str = "doSpindle"
+    spindle_ccw_do: int | None = None
+    spindle_ccw_do_name: str = "doSpindleCcw"
+    spindle_ao: int | None = None
+    spindle_ao_name: str = "aoSpindle"
+    spindle_rpm_full_scale: float = 24000.0
+    ao_full_scale_rapid: float = 10.0
+    ao_full_scale_krl: float = 1.0
+    ao_full_scale_ls: float = 4095.0
+    coolant_do: int | None = None
+    coolant_do_name: str = "doCoolant"
+
+    def __post_init__(self) -> None:
+        for name in ("spindle_do", "spindle_ccw_do", "spindle_ao", "coolant_do"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+                raise InputError(f"I/O settings: {name} must be an output number >= 1, got "
+                                 f"{v!r}")
+        for name in ("spindle_rpm_full_scale", "ao_full_scale_rapid", "ao_full_scale_ls"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+                raise InputError(f"I/O settings: {name} must be > 0, got {v!r}")
+        if not (isinstance(self.ao_full_scale_krl, (int, float))
+                and 0 < self.ao_full_scale_krl <= 1.0):
+            raise InputError(f"I/O settings: ao_full_scale_krl must be in (0, 1] ($ANOUT is "
+                             f"-1.0 .. 1.0), got {self.ao_full_scale_krl!r}")
+        dos = [p for p in (self.spindle_do, self.spindle_ccw_do, self.coolant_do) if p]
+        if len(dos) != len(set(dos)):
+            raise InputError(f"I/O settings: the spindle, direction and coolant DOs must "
+                             f"differ, got {dos}")
+        names = (self.spindle_do_name, self.spindle_ccw_do_name, self.spindle_ao_name,
+                 self.coolant_do_name)
+        for n in names:  # validated as IoAction names
+            IoAction("do", 1, n, 0)
+
+    @property
+    def any(self) -> bool:
+        return any(p is not None for p in (self.spindle_do, self.spindle_ao, self.coolant_do))
+
+    @property
+    def words(self) -> frozenset[str]:
+        """The CL words these settings write."""
+        out = set()
+        if self.spindle_do is not None or self.spindle_ao is not None:
+            out.add("SPINDL")
+        if self.coolant_do is not None:
+            out.add("COOLNT")
+        return frozenset(out)
+
+
+def io_actions(io: PostIO, word: str, value: float, line: int, source: str = "CL"
+               ) -> tuple[IoAction, ...]:
+    """The outputs a SPINDL (value = signed rpm, 0 = off) or COOLNT (1/0) statement sets.
+
+    Raises:
+        InputError: a speed above the AO's full scale, or CCLW without a direction output.
+    """
+    out: list[IoAction] = []
+    why = f"{word} CL line {line}"
+    if word == "COOLNT":
+        if io.coolant_do is not None:
+            out.append(IoAction("do", io.coolant_do, io.coolant_do_name, int(value > 0),
+                                comment=why))
+        return tuple(out)
+    rpm = float(value)
+    if np.isnan(rpm):  # SPINDL/ON before any speed
+        if io.spindle_ao is not None:
+            raise InputError(f"{source}:{line}: SPINDL/ON without a speed: the speed output "
+                             "(spindle_ao) cannot be set")
+        return () if io.spindle_do is None else (
+            IoAction("do", io.spindle_do, io.spindle_do_name, 1, comment=why),)
+    if rpm < 0 and io.spindle_ccw_do is None and (io.spindle_do or io.spindle_ao):
+        raise InputError(f"{source}:{line}: SPINDL counter-clockwise (CCLW) but the I/O "
+                         "settings have no spindle_ccw_do")
+    if io.spindle_ccw_do is not None and rpm != 0:
+        out.append(IoAction("do", io.spindle_ccw_do, io.spindle_ccw_do_name, int(rpm < 0),
+                            comment=why))
+    if io.spindle_ao is not None:
+        if abs(rpm) > io.spindle_rpm_full_scale * (1 + 1e-12):
+            raise InputError(f"{source}:{line}: SPINDL {abs(rpm):g} rpm is above the AO's full "
+                             f"scale spindle_rpm_full_scale = {io.spindle_rpm_full_scale:g}")
+        out.append(IoAction("ao", io.spindle_ao, io.spindle_ao_name,
+                            abs(rpm) / io.spindle_rpm_full_scale,
+                            (io.ao_full_scale_rapid, io.ao_full_scale_krl,
+                             io.ao_full_scale_ls), comment=why))
+    if io.spindle_do is not None:
+        out.append(IoAction("do", io.spindle_do, io.spindle_do_name, int(rpm != 0),
+                            comment=why))
+    if rpm == 0:  # switch off first, then zero the speed command
+        out.reverse()
+    return tuple(out)
+
+
+@dataclass(frozen=True)
 class PostSettings:
     """How a CL file becomes robot motion (see :func:`program_from_cl` for each field).
 
@@ -89,6 +208,7 @@ class PostSettings:
         q_start: (6,) joints the robot starts from [rad]; None = tool_axis.READY_POSE.
         process: process parameters for the defaults.
         stationary_tool: workpiece in hand (module docstring).
+        io: the outputs SPINDL / COOLNT set (None: they are not written).
     """
 
     robot: RobotKinematics = IRB1600_10_120_ROBOT
@@ -102,6 +222,7 @@ class PostSettings:
     q_start: np.ndarray | None = None
     process: ProcessParameters | None = None
     stationary_tool: bool = False
+    io: PostIO | None = None
 
     def frames(self) -> tuple[np.ndarray, np.ndarray]:
         if self.stationary_tool and self.X_WO is None:
@@ -155,10 +276,18 @@ def _solve(cl: ClProgram, s: PostSettings,
                                 q_start=s.q_start, progress=progress)
 
 
-def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...]) -> list[str]:
-    """Header lines: the spin rule, tool paths, UNITS switches, cycles, words not applied."""
+def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...],
+               io: PostIO | None = None) -> list[str]:
+    """Header lines: the spin rule, tool paths, UNITS switches, cycles, words not applied
+    (SPINDL / COOLNT are applied when ``io`` writes them)."""
     notes = [f"spin about the tool axis: {spin_mode}"]
-    lines = cl.summary()[1:]
+    written = io.words if io is not None else frozenset()
+    lines = [ln for ln in cl.summary()[1:]
+             if not any(ln.startswith(f"not applied: {w} x") for w in written)]
+    for w in sorted(written):
+        n = sum(1 for e in cl.machine_events if e[1] == w)
+        if n:
+            notes.append(f"{w} x{n}: written to the outputs of the I/O settings")
     if len(lines) > _NOTE_LINES:
         lines = lines[:_NOTE_LINES] + [f"... {len(lines) - _NOTE_LINES} more lines"]
     notes += lines
@@ -171,10 +300,30 @@ def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...]) -> 
     return notes
 
 
+def _io_before(cl: ClProgram, s: PostSettings, keep: np.ndarray
+               ) -> tuple[dict[int, list[IoAction]], list[IoAction]]:
+    """The outputs set before each kept move (index -> actions) and after the last one: an
+    event before CL move k goes before the first kept move >= k."""
+    before: dict[int, list[IoAction]] = {}
+    end: list[IoAction] = []
+    if s.io is None or not s.io.any or keep.size == 0:
+        return before, end
+    for line, word, value, n_before in cl.machine_events:
+        acts = io_actions(s.io, word, value, line, Path(cl.source).name)
+        j = int(np.searchsorted(keep, n_before))
+        if j < keep.size:
+            before.setdefault(int(keep[j]), []).extend(acts)
+        else:
+            end.extend(acts)
+    return before, end
+
+
 def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: PostSettings,
-                   last_index: int) -> list[ProgramMove]:
+                   last_index: int, io_before: dict[int, list[IoAction]] | None = None
+                   ) -> list[ProgramMove]:
     """ProgramMoves of the CL moves ``keep`` (indices, increasing); the move ``last_index``
-    ends the whole program (a stop point)."""
+    ends the whole program (a stop point); ``io_before`` the outputs set before moves."""
+    io_before = io_before or {}
     process = s.process or ProcessParameters()
     rapid_speed = process.window_switch_speed if s.rapid_speed is None else s.rapid_speed
     n_paths = len(cl.paths)
@@ -196,9 +345,19 @@ def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: 
             X_WT=res.X_WT[i], q=res.q[i],
             move_type=JOINT if rapid and not cl.cycle[i] else LINEAR,
             speed=rapid_speed if rapid else v,
-            zone=0.0 if last or rapid or cl.cycle[i] else s.zone,  # holes: to full depth
-            comment=comment, source_line=line))
+            # holes: to full depth; a move before outputs switch: a stop point
+            zone=0.0 if (last or rapid or cl.cycle[i] or _io_next(io_before, keep, i))
+            else s.zone,
+            comment=comment, source_line=line, io=tuple(io_before.get(i, ()))))
     return moves
+
+
+def _io_next(io_before: dict, keep: np.ndarray, i: int) -> bool:
+    """True when outputs switch before the kept move after ``i`` (so move i is a stop)."""
+    if not io_before:
+        return False
+    j = int(np.searchsorted(keep, i)) + 1
+    return j < keep.size and int(keep[j]) in io_before
 
 
 def _names(s: PostSettings) -> dict:
@@ -230,6 +389,7 @@ def program_from_cl(
     q_start: np.ndarray | None = None,
     progress: Callable[[int, int, str], None] | None = None,
     stationary_tool: bool = False,
+    io: PostIO | None = None,
 ) -> PostResult:
     """Post-process a read CL file for a robot.
 
@@ -250,13 +410,14 @@ def program_from_cl(
             the first point's configuration is the one closest to it.
         progress: optional callback (done, total, label).
         stationary_tool: workpiece in hand (module docstring).
+        io: the outputs SPINDL / COOLNT set (:class:`PostIO`; None: not written).
     """
     s = PostSettings(robot, X_WO, X_FT, spin_mode, zone, feed, rapid_speed, force, q_start,
-                     process, stationary_tool)
+                     process, stationary_tool, io)
     res = _solve(cl, s, progress)
     bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
-    notes = tuple(file_notes(cl, spin_mode, changes))
+    notes = tuple(file_notes(cl, spin_mode, changes, io))
     if bad and not force:
         log.warning("%d CL point(s) unreachable, first at line(s) %s", len(bad),
                     ", ".join(map(str, bad[:10])))
@@ -266,10 +427,11 @@ def program_from_cl(
         return PostResult(None, bad, changes, res, notes)
     X_WO_, X_FT_ = s.frames()
     flag, reason = _flag(bad)
+    before, end = _io_before(cl, s, keep)
     program = RobotProgram(
-        name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]))),
+        name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]), before)),
         X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
-        flag_reason=reason, notes=notes, **_names(s))
+        flag_reason=reason, notes=notes, io_end=tuple(end), **_names(s))
     return PostResult(program, bad, changes, res, notes)
 
 
@@ -334,22 +496,24 @@ def post_cl_file(
     res = _solve(cl, settings, progress)
     bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
-    notes = tuple(file_notes(cl, settings.spin_mode, changes))
+    notes = tuple(file_notes(cl, settings.spin_mode, changes, settings.io))
     keep = np.flatnonzero(res.reachable)
     if (bad and not settings.force) or keep.size == 0:
         return PostSummary((), 0, bad, changes, notes, cl)
     X_WO, X_FT = settings.frames()
     flag, reason = _flag(bad)
     parts = [keep[a:a + max_moves] for a in range(0, keep.size, max_moves)]
+    before, end = _io_before(cl, settings, keep)
     files: list[Path] = []
     for k, part in enumerate(parts):
         extra = (f"part {k + 1} of {len(parts)}: CL lines {int(cl.lines[part[0]])}-"
                  f"{int(cl.lines[part[-1]])}",) if len(parts) > 1 else ()
         program = RobotProgram(
             name=name if len(parts) == 1 else f"{name[:20]}_{k + 1:03d}",
-            moves=tuple(_program_moves(cl, res, part, settings, int(keep[-1]))),
+            moves=tuple(_program_moves(cl, res, part, settings, int(keep[-1]), before)),
             X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
-            flag=flag, flag_reason=reason, notes=notes + extra, **_names(settings))
+            flag=flag, flag_reason=reason, notes=notes + extra,
+            io_end=tuple(end) if k == len(parts) - 1 else (), **_names(settings))
         files += write_program(program, _part_path(Path(out), k, len(parts)), fmt)
         del program
         if progress is not None:

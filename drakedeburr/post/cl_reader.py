@@ -84,6 +84,7 @@ class ClReadState:
     end_line: int = 0
     paths: list[ClToolPath] = field(default_factory=list)
     unit_changes: list[tuple[int, str, int]] = field(default_factory=list)
+    machine_events: list[tuple[int, str, float, int]] = field(default_factory=list)
     warnings: list[ClWarning] = field(default_factory=list)
     warning_counts: dict[str, int] = field(default_factory=dict)
     not_applied: tuple[ClWordCount, ...] = ()
@@ -196,6 +197,7 @@ def iter_cl_moves(
         state_out.units, state_out.end_line = interp.units, end_line
         state_out.paths = interp.paths
         state_out.unit_changes = interp.unit_changes
+        state_out.machine_events = interp.machine_events
         state_out.warnings, state_out.warning_counts = notes.warnings, notes.warning_counts
         state_out.not_applied = notes.word_counts()
         state_out.read_words = notes.word_counts(read=True)
@@ -257,6 +259,9 @@ class ClProgram:
         unit_changes: (line, new unit, moves read before) of each UNITS statement that changed
             the unit; a switch with moves before it is a mid-file switch.
         end_line: line of FINI (or of the last END-OF-PATH).
+        machine_events: (line, word, value, moves read before) of each SPINDL (value =
+            signed rpm, 0 = off, NaN = on before any speed) and COOLNT (1 on, 0 off)
+            statement, in file order.
     """
 
     source: str
@@ -279,6 +284,7 @@ class ClProgram:
     units: str = "mm"
     unit_changes: tuple[tuple[int, str, int], ...] = ()
     end_line: int = 0
+    machine_events: tuple[tuple[int, str, float, int], ...] = ()
 
     def __len__(self) -> int:
         return int(self.lines.shape[0])
@@ -323,7 +329,7 @@ def _program(source: str, moves: Iterable[ClMove], state: ClReadState,
                      not_applied=state.not_applied, read_words=state.read_words,
                      comments=tuple(comments),
                      units=state.units, unit_changes=tuple(state.unit_changes),
-                     end_line=state.end_line)
+                     end_line=state.end_line, machine_events=tuple(state.machine_events))
 
 
 def _comment_sink(comments: list[tuple[int, str]]) -> Callable[[int, str], None]:

@@ -78,6 +78,10 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
                         "2000 mm/s), else refused")
     p.add_argument("--force", action="store_true",
                    help="write the program even if points are unreachable (they are left out)")
+    p.add_argument("--io", type=Path, default=None, metavar="YAML",
+                   help="outputs for the file's SPINDL / COOLNT (PostIO fields: spindle_do, "
+                        "spindle_ao, spindle_rpm_full_scale, coolant_do, RAPID signal names, "
+                        "AO full scales; docs/post.md); without it they are not written")
 
 
 def add_output_options(p: argparse.ArgumentParser) -> None:
@@ -174,11 +178,19 @@ def settings_from_args(args):
         X_WO = wobj
         X_FT = pose_from_mm_deg(args.tool if args.tool is not None else [0, 0, 200, 0, 0, 0],
                                 "--tool")
+    io = None
+    if getattr(args, "io", None) is not None:
+        from drakedeburr.argcheck import input_file
+        from drakedeburr.config import dataclass_from_yaml
+        from drakedeburr.post.cl_post import PostIO
+
+        input_file(args.io, "--io")
+        io = dataclass_from_yaml(PostIO, args.io)  # names the file and the field
     return PostSettings(
         robot=robot_kinematics(args.robot), X_WO=X_WO, X_FT=X_FT,
         spin_mode=args.spin, zone=m_from_mm(args.zone),
         feed=None if args.feed is None else m_from_mm(args.feed), force=args.force,
-        stationary_tool=stationary)
+        stationary_tool=stationary, io=io)
 
 
 def _phase_progress():
@@ -195,7 +207,7 @@ def _phase_progress():
     return update
 
 
-def _report(summary, robot: str) -> None:
+def _report(summary, robot: str, io=None) -> None:
     cl = summary.cl
     for line in cl.summary():
         if not line.startswith("not applied:"):
@@ -205,7 +217,11 @@ def _report(summary, robot: str) -> None:
     for line, unit, before in cl.mid_file_unit_changes:
         log.warning("%s:%d: UNITS switched to %s after %d moves: the following coordinates "
                     "are read in %s", Path(cl.source).name, line, unit, before, unit)
-    words = cl.not_applied
+    written = io.words if io is not None else frozenset()
+    words = [w for w in cl.not_applied if w.word not in written]
+    for w in cl.not_applied:
+        if w.word in written:
+            log.info("%s x%d written to the outputs of --io", w.word, w.count)
     if words:
         log.warning("%d word(s) of the file are not in the program:", len(words))
         for w in words[:_WORDS_SHOWN]:
@@ -269,7 +285,7 @@ def _run_post(args) -> int:
         if isinstance(exc, FileNotFoundError) and Path(args.cl_file).exists():
             raise InputError(f"{args.output}: cannot write: {exc}") from exc
         raise InputError(f"{exc.filename or args.output}: {exc.strerror or exc}") from exc
-    _report(summary, args.robot)
+    _report(summary, args.robot, settings.io)
     if not summary.files:
         log.error("no program written%s", "" if args.force else " (use --force to write the "
                   "reachable part, flagged FORCED)")

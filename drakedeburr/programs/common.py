@@ -12,8 +12,10 @@ Vendor limits enforced here (sources in docs/post.md):
   characters; the .src/.dat file name must equal the DEF/DEFDAT name.
 * FANUC TP: program name = file name: a letter, then letters, digits, '_'; at most 36
   characters (R-30iA and later; R-J3iB: 8); remark (``!``) text at most 32 characters;
-  /ATTR COMMENT at most 16 characters; mm/sec speeds are whole numbers; CNT 0..100; J speed
-  1..100 %.
+  /ATTR COMMENT at most 16 characters; linear speeds are whole numbers of mm/sec (1..2000)
+  or of cm/min (1..12000) (FANUC HandlingTool Operator's Manual, motion instruction speed:
+  mm/sec 1-2000, cm/min 1-12000, sec 0.1-3200, msec 1-32000, as quoted in docs/post.md);
+  CNT 0..100; J speed 1..100 %.
 """
 
 from __future__ import annotations
@@ -34,7 +36,8 @@ __all__ = [
     "R_from_quat_wxyz", "R_from_euler_zyx_deg", "pose_from_mm", "program_name_for",
     "speed_written", "zone_written", "joint_percent", "cnt_from_zone", "zone_from_cnt",
     "header_lines", "ABB_SPEEDS", "ABB_ZONES", "LS_REMARK_MAX", "LS_COMMENT_MAX",
-    "CNT_PER_MM", "wrap_remarks", "check_writable",
+    "CNT_PER_MM", "wrap_remarks", "check_writable", "ls_speed", "LS_MM_SEC_MAX",
+    "LS_CM_MIN_MAX", "io_lines",
 ]
 
 FORMATS = ("rapid", "krl", "ls")
@@ -44,6 +47,8 @@ ABB_SPEEDS = (5, 10, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 400, 500, 600, 
               1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000)
 ABB_ZONES = (0, 1, 5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200)
 LS_REMARK_MAX = 32
+LS_MM_SEC_MAX = 2000  # FANUC TP linear speed limits (module docstring)
+LS_CM_MIN_MAX = 12000
 LS_COMMENT_MAX = 16
 #: FANUC CNT per mm of zone radius (CNT is a rounding degree, not a distance: docs/post.md)
 CNT_PER_MM = 10.0
@@ -114,14 +119,58 @@ def program_name_for(path: str | Path, fmt: str) -> str:
                             "program name")
 
 
+def ls_speed(speed: float) -> tuple[int, str]:
+    """FANUC TP linear speed (value, unit) of a TCP speed [m/s]: whole mm/sec or whole cm/min,
+    whichever comes closest without exceeding the plan (rounded *down*, never faster; mm/sec
+    on a tie). 400 mm/min is ``40cm/min`` (exact) where mm/sec could only hold 6 (-10 %); the
+    resolution is 1/6 mm/s. At least 1 cm/min; at most 2000 mm/sec."""
+    mm_s = mm_from_m(float(speed))
+    v_mm = int(min(LS_MM_SEC_MAX, math.floor(mm_s + 1e-9)))
+    v_cm = int(min(LS_CM_MIN_MAX, math.floor(6.0 * mm_s + 1e-9)))
+    if v_mm >= 1 and v_mm * 6 >= v_cm:
+        return v_mm, "mm/sec"
+    return max(1, v_cm), "cm/min"
+
+
 def speed_written(fmt: str, speed: float) -> float:
     """TCP speed [m/s] as the format holds it: RAPID 0.001 mm/s, KRL $VEL.CP 1e-6 m/s, LS whole
-    mm/sec rounded *down* (never faster than planned), at least 1 mm/sec."""
+    mm/sec or whole cm/min rounded *down* (never faster than planned: :func:`ls_speed`)."""
     if fmt == "rapid":
         return round(mm_from_m(speed), 3) / 1000.0
     if fmt == "krl":
         return round(float(speed), 6)
-    return max(1, math.floor(mm_from_m(speed) + 1e-6)) / 1000.0
+    v, unit = ls_speed(speed)
+    return v / 1000.0 if unit == "mm/sec" else v / 6000.0
+
+
+def io_lines(actions, fmt: str) -> list[str]:
+    """Instructions (without indent or terminator where the writer adds them) setting the
+    outputs of :class:`~drakedeburr.programs.program.IoAction` s: RAPID ``SetDO name, 1;``
+    / ``SetAO name, value;`` (RAPID reference: SetDO, SetAO); KRL ``$OUT[n] = TRUE`` /
+    ``$ANOUT[n] = value`` after ``WAIT SEC 0`` (writing $OUT does not stop the advance run,
+    the WAIT does: the output switches when the robot is at the previous point; KSS
+    programming manual); LS ``DO[n]=ON`` / ``AO[n]=value`` (HandlingTool manual, I/O
+    instructions)."""
+    out: list[str] = []
+    if not actions:
+        return out
+    if fmt == "krl":
+        out.append("WAIT SEC 0")
+    for a in actions:
+        if fmt == "rapid":
+            v = int(a.value) if a.kind == "do" else fnum(a.written("rapid"), 4)
+            out.append(f"Set{a.kind.upper()} {a.name}, {v};")
+        elif fmt == "krl":
+            if a.kind == "do":
+                out.append(f"$OUT[{a.port}] = {'TRUE' if a.value else 'FALSE'}")
+            else:
+                out.append(f"$ANOUT[{a.port}] = {fnum(a.written('krl'), 6)}")
+        else:
+            if a.kind == "do":
+                out.append(f"DO[{a.port}]={'ON' if a.value else 'OFF'}")
+            else:
+                out.append(f"AO[{a.port}]={int(a.written('ls'))}")
+    return out
 
 
 def cnt_from_zone(zone: float) -> int:

@@ -25,6 +25,7 @@ from drakedeburr.programs.common import (
     euler_zyx_deg,
     fnum,
     header_lines,
+    io_lines,
     joint_percent,
     pose_from_mm,
     speed_written,
@@ -96,6 +97,7 @@ def _motion_lines(p: RobotProgram) -> list[str]:
     for i, m in enumerate(p.moves):
         if m.comment:
             out.append(f"{_IND}; {comment_text(m.comment, 'krl')}")
+        out += [f"{_IND}{x}" for x in io_lines(m.io, "krl")]
         if m.zone > 0 and zone_written("krl", m.zone) != z_prev:
             z_prev = zone_written("krl", m.zone)
             out.append(f"{_IND}$APO.CDIS = {fnum(mm_from_m(z_prev), 3)}")
@@ -111,6 +113,7 @@ def _motion_lines(p: RobotProgram) -> list[str]:
             v_prev = speed_written("krl", m.speed)
             out.append(f"{_IND}$VEL.CP = {fnum(v_prev, 6)}")
         out.append(f"{_IND}LIN XP{i + 1}{approx}")
+    out += [f"{_IND}{x}" for x in io_lines(p.io_end, "krl")]
     return out
 
 
@@ -242,6 +245,7 @@ class _SrcState:
         self.cdis: tuple[float, int] | None = None
         self.vel_ptp: tuple[int, int] | None = None
         self.frames: dict[str, tuple[object, int]] = {}
+        self.io: list[tuple[int, str, int, float]] = []
 
 
 def _assignment(s: str, k: int, file: str, st: _SrcState) -> None:
@@ -261,10 +265,23 @@ def _assignment(s: str, k: int, file: str, st: _SrcState) -> None:
         st.vel_cp = (parse_number(value, file, k, "$VEL.CP"), k)
     elif key == "$APO.CDIS":
         st.cdis = (parse_number(value, file, k, "$APO.CDIS") / 1000.0, k)
+    elif re.fullmatch(r"\$(OUT|ANOUT)\[\d+\]", key):
+        port = int(key[key.index("[") + 1:-1])
+        if key.startswith("$OUT"):
+            if value.upper() not in ("TRUE", "FALSE"):
+                raise ProgramFormatError(f"{file}:{k}: {target} must be TRUE or FALSE, got "
+                                         f"{value!r}")
+            st.io.append((k, "do", port, 1.0 if value.upper() == "TRUE" else 0.0))
+        else:
+            v = parse_number(value, file, k, target)
+            if not -1.0 <= v <= 1.0:
+                raise ProgramFormatError(f"{file}:{k}: {target} must be -1.0 .. 1.0, got "
+                                         f"{value!r}")
+            st.io.append((k, "ao", port, v))
     else:
         raise ProgramFormatError(f"{file}:{k}: assignment to {target!r} is outside the motion "
                                  "subset this reader accepts ($BASE, $TOOL, $LOAD, $IPO_MODE, "
-                                 "$ADVANCE, $VEL.CP, $APO.CDIS)")
+                                 "$ADVANCE, $VEL.CP, $APO.CDIS, $OUT[n], $ANOUT[n])")
 
 
 def _motion(s: str, k: int, file: str, st: _SrcState, decls: dict, dat_file: str) -> ReadMove:
@@ -302,7 +319,7 @@ def _motion(s: str, k: int, file: str, st: _SrcState, decls: dict, dat_file: str
 def _src_statement(s: str, k: int, file: str, st: _SrcState, decls: dict, dat_file: str,
                    moves: list) -> None:
     compact = s.upper().replace(" ", "")
-    if compact in _STANDARD_INI:
+    if compact in _STANDARD_INI or compact == "WAITSEC0":
         return
     m = re.fullmatch(r"BAS\(#VEL_PTP,(\d+)\)", compact)
     if m:
@@ -372,4 +389,4 @@ def _program(name: str, files: tuple[str, str], moves: list, st: _SrcState) -> R
                        stationary_tool=ipo == "#TCP",
                        X_FT=st.frames.get("$TOOL", (None, 0))[0],
                        X_RO=st.frames.get("$BASE", (None, 0))[0], frame_lines=lines,
-                       load_mass=mass, load_cog=cog)
+                       load_mass=mass, load_cog=cog, io=tuple(st.io))

@@ -3,7 +3,8 @@
 Written (FANUC R-30iA/R-30iB HandlingTOOL Operator's Manual: program header, motion
 instructions, position data, frame instructions, PAYLOAD; Remote TCP option): /PROG = the
 file's name; /MN with ``UFRAME_NUM``, ``UTOOL_NUM``, ``PAYLOAD[n]``, ``L P[n] 150mm/sec CNT10``
-(whole mm/sec, rounded down so the program is never faster than planned; FINE for zone 0,
+(whole mm/sec or whole cm/min, whichever is closer below the plan: 400 mm/min is
+``40cm/min``; rounded down so the program is never faster than planned; FINE for zone 0,
 ``CNTn`` for a zone: see docs/post.md for what CNT means), ``J P[n] 25%``; with a stationary
 tool every L move carries ``RTCP`` (the remote TCP is the user frame); /POS with CONFIG from
 the planned joints. The frame and payload values cannot be set from a TP program: they are
@@ -28,9 +29,10 @@ from drakedeburr.programs.common import (
     euler_zyx_deg,
     fnum,
     header_lines,
+    io_lines,
     joint_percent,
+    ls_speed,
     pose_from_mm,
-    speed_written,
     wrap_remarks,
     zone_from_cnt,
 )
@@ -77,14 +79,15 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
         if m.comment:
             mn += [f"!{c}" for c in wrap_remarks([comment_text(m.comment, "ls")],
                                                  LS_REMARK_MAX)]
+        mn += io_lines(m.io, "ls")
         cnt = cnt_from_zone(m.zone)
         term = "FINE" if cnt == 0 else f"CNT{cnt}"
         if m.move_type == JOINT:
             mn.append(f"J P[{i + 1}] {joint_percent(p.joint_fraction(i))}% {term}")
         else:
-            v = int(round(mm_from_m(speed_written("ls", m.speed))))
-            mn.append(f"L P[{i + 1}] {v}mm/sec {term}" + (" RTCP" if p.stationary_tool else ""))
-    return mn
+            v, unit = ls_speed(m.speed)
+            mn.append(f"L P[{i + 1}] {v}{unit} {term}" + (" RTCP" if p.stationary_tool else ""))
+    return mn + io_lines(p.io_end, "ls")
 
 
 def format_ls(program: RobotProgram, uframe: int = 1, utool: int = 1, payload: int = 1) -> str:
@@ -131,6 +134,7 @@ class _MnState:
         self.lines: dict = {}
         self.motions: list = []
         self.header: list = []
+        self.io: list = []
 
 
 def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
@@ -156,11 +160,18 @@ def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
         if m.group(1):
             st.frames[m.group(1)] = int(m.group(2))
         return
+    m = re.fullmatch(r"DO\[(\d+)\]\s*=\s*(ON|OFF)|AO\[(\d+)\]\s*=\s*(\d+)", text)
+    if m:
+        if m.group(1):
+            st.io.append((k, "do", int(m.group(1)), 1.0 if m.group(2) == "ON" else 0.0))
+        else:
+            st.io.append((k, "ao", int(m.group(3)), float(m.group(4))))
+        return
     m = _MOTION.fullmatch(text)
     if not m:
         raise ProgramFormatError(f"{file}:{k}: /MN line {n} {text!r} is outside the motion "
                                  "subset this reader accepts (J/L P[n], UFRAME_NUM, UTOOL_NUM, "
-                                 "PAYLOAD[n], remarks)")
+                                 "PAYLOAD[n], DO[n]=ON/OFF, AO[n]=value, remarks)")
     options = tuple(m.group(5).split())
     for o in options:
         if not _OPTIONS.fullmatch(o):
@@ -290,10 +301,12 @@ def _move(k, kind, n, speed_text, term, options, frames, pos, file) -> ReadMove:
             raise ProgramFormatError(f"{file}:{k}: J speed {speed_text!r} (1..100%)")
         speed, pct = None, int(m.group(1))
     else:
-        m = re.fullmatch(r"(\d+)mm/sec", speed_text)
+        m = re.fullmatch(r"(\d+)(mm/sec|cm/min)", speed_text)
         if not m:
-            raise ProgramFormatError(f"{file}:{k}: L speed {speed_text!r} (whole mm/sec)")
-        speed, pct = int(m.group(1)) / 1000.0, None
+            raise ProgramFormatError(f"{file}:{k}: L speed {speed_text!r} (whole mm/sec or "
+                                     "cm/min)")
+        speed = int(m.group(1)) / (1000.0 if m.group(2) == "mm/sec" else 6000.0)
+        pct = None
     cnt = 0 if term == "FINE" else int(term[3:])
     if cnt > 100:
         raise ProgramFormatError(f"{file}:{k}: {term} (CNT 0..100)")
@@ -320,4 +333,4 @@ def _program(name: str, file: str, st: _MnState, pos: dict) -> ReadProgram:
     return ReadProgram(format="ls", files=(file,), name=name, moves=moves,
                        stationary_tool=bool(rtcp) and all(rtcp), X_FT=X_FT, X_RO=X_RO,
                        frame_lines=lines, load_mass=mass, load_cog=cog,
-                       header=tuple(st.header))
+                       header=tuple(st.header), io=tuple(st.io))

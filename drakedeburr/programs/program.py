@@ -35,7 +35,7 @@ from drakedeburr.robots import (
     fk_opw,
 )
 
-__all__ = ["ProgramMove", "RobotProgram", "LINEAR", "JOINT", "check_pose",
+__all__ = ["ProgramMove", "RobotProgram", "IoAction", "LINEAR", "JOINT", "check_pose",
            "DEFAULT_JOINT_SPEED_FRACTION"]
 
 LINEAR = "linear"
@@ -62,6 +62,48 @@ def check_pose(X: np.ndarray, what: str, tol: float = 1e-6) -> np.ndarray:
     return X
 
 
+@dataclass(frozen=True)
+class IoAction:
+    """Set a digital or analogue output (RAPID ``SetDO``/``SetAO``, KRL ``$OUT[n]``/
+    ``$ANOUT[n]``, FANUC ``DO[n]=ON``/``AO[n]=value``).
+
+    Attributes:
+        kind: "do" or "ao".
+        port: the output's number (KRL, LS).
+        name: the signal's name (RAPID; signals are named in the controller's I/O setup).
+        value: DO: 0 or 1; AO: fraction of full scale, 0..1.
+        full_scale: the AO value at full scale per format (RAPID logical value, KRL
+            ``$ANOUT`` 1.0, LS counts).
+        comment: why (e.g. "SPINDL CL line 13").
+    """
+
+    kind: str
+    port: int
+    name: str
+    value: float
+    full_scale: tuple[float, float, float] = (10.0, 1.0, 4095.0)
+    comment: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("do", "ao"):
+            raise InputError(f"I/O action kind {self.kind!r} (do|ao)")
+        if not (isinstance(self.port, int) and self.port >= 1):
+            raise InputError(f"I/O port must be an integer >= 1, got {self.port!r}")
+        if not _NAME.fullmatch(self.name):
+            raise InputError(f"I/O signal name {self.name!r}: letters, digits, '_', start with "
+                             "a letter, at most 24 characters")
+        ok = self.value in (0, 1) if self.kind == "do" else 0.0 <= self.value <= 1.0
+        if not ok:
+            raise InputError(f"I/O {self.kind} {self.name}: value {self.value!r} (DO 0/1, AO "
+                             "0..1 of full scale)")
+
+    def written(self, fmt: str) -> float:
+        """The AO value as ``fmt`` writes it (LS: whole counts)."""
+        k = ("rapid", "krl", "ls").index(fmt)
+        v = self.value * self.full_scale[k]
+        return float(round(v)) if fmt == "ls" else round(v, 6)
+
+
 @dataclass(frozen=True, eq=False)
 class ProgramMove:
     """One robot motion.
@@ -77,6 +119,7 @@ class ProgramMove:
         source_line: e.g. the CL line number the move came from (for messages), or None.
         joint_fraction: joint moves: fraction (0, 1] of every axis' top speed (KRL
             BAS(#VEL_PTP), LS J %); None = the program's ``joint_speed_fraction``.
+        io: outputs set before the move (spindle, coolant), in order.
     """
 
     X_WT: np.ndarray
@@ -87,6 +130,7 @@ class ProgramMove:
     comment: str = ""
     source_line: int | None = None
     joint_fraction: float | None = None
+    io: tuple[IoAction, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +156,7 @@ class RobotProgram:
         flag: prominent header warning, e.g. ``"FORCED"`` or ``"UNVERIFIED"`` ("" = none).
         flag_reason: one line explaining the flag.
         notes: further header comment lines.
+        io_end: outputs set after the last move (e.g. spindle off at the end of the file).
     """
 
     name: str
@@ -132,6 +177,7 @@ class RobotProgram:
     flag: str = ""
     flag_reason: str = ""
     notes: tuple[str, ...] = ()
+    io_end: tuple[IoAction, ...] = ()
 
     def __post_init__(self) -> None:
         if not _PROGRAM_NAME.fullmatch(self.name):

@@ -18,6 +18,7 @@ MoveL, MoveJ, GripLoad, ConfL/ConfJ):
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,7 @@ from drakedeburr.programs.common import (
     check_writable,
     fnum,
     header_lines,
+    io_lines,
     pose_from_mm,
     quat_wxyz,
     speed_written,
@@ -129,9 +131,11 @@ def format_rapid(program: RobotProgram) -> str:
     for i, m in enumerate(p.moves):
         if m.comment:
             out.append(f"{_IND * 2}! {comment_text(m.comment, 'rapid')}")
+        out += [f"{_IND * 2}{x}" for x in io_lines(m.io, "rapid")]
         instr = "MoveJ" if m.move_type == JOINT else "MoveL"
         out.append(f"{_IND * 2}{instr} p{i + 1}, {speed_name(m.speed)}, {zone_name(m.zone)}, "
                    f"{p.tool_name} \\WObj:={p.wobj_name};")
+    out += [f"{_IND * 2}{x}" for x in io_lines(p.io_end, "rapid")]
     if p.stationary_tool:
         out.append(f"{_IND * 2}GripLoad load0;")
     out += [f"{_IND}ENDPROC", "ENDMODULE", ""]
@@ -240,12 +244,13 @@ def _statements(path: Path):
     return module, out
 
 
-def _parse(stmts, file: str) -> tuple[dict, list, list]:
+def _parse(stmts, file: str) -> tuple[dict, list, list, list]:
     """In file order: data declarations {name: (type, value, line)}, motion statements
-    [(line, instr, target, speed, zone, tool, wobj)] and GripLoads; the first line outside the
-    subset raises."""
+    [(line, instr, target, speed, zone, tool, wobj)], GripLoads and SetDO/SetAO; the first
+    line outside the subset raises."""
     data: dict = {}
     moves, grips, procs = [], [], 0
+    io: list = []
     for k, s, where in stmts:
         if where == "unterminated":
             raise ProgramFormatError(f"{file}:{k}: {s!r} is a construct this reader does not "
@@ -267,6 +272,16 @@ def _parse(stmts, file: str) -> tuple[dict, list, list]:
         if word == "GripLoad" and len(s.split()) == 2:
             grips.append((k, s.split()[1]))
             continue
+        if word in ("SetDO", "SetAO"):
+            args = split_top_level(s[len(word):])
+            if len(args) != 2 or not re.fullmatch(r"[A-Za-z]\w*", args[0].strip()):
+                raise ProgramFormatError(f"{file}:{k}: expected '{word} <signal>, <value>', "
+                                         f"got {s!r}")
+            value = parse_number(args[1].strip(), file, k, f"{word} value")
+            if word == "SetDO" and value not in (0, 1):
+                raise ProgramFormatError(f"{file}:{k}: SetDO value must be 0 or 1, got {s!r}")
+            io.append((k, word[3:].lower(), args[0].strip(), value))
+            continue
         if word in ("MoveL", "MoveJ"):
             args = split_top_level(s[len(word):])
             if len(args) != 4 or not args[3].replace(" ", "").count("\\WObj:=") == 1:
@@ -277,8 +292,8 @@ def _parse(stmts, file: str) -> tuple[dict, list, list]:
             continue
         raise ProgramFormatError(f"{file}:{k}: instruction {word!r} is outside the motion "
                                  "subset this reader accepts (MoveL, MoveJ, ConfL, ConfJ, "
-                                 "GripLoad)")
-    return data, moves, grips
+                                 "GripLoad, SetDO, SetAO)")
+    return data, moves, grips, io
 
 
 def _speed(name: str, data: dict, file: str, k: int) -> tuple[float, int]:
@@ -335,7 +350,8 @@ def read_rapid(path: str | Path) -> ReadProgram:
     path = Path(path)
     file = str(path)
     name, stmts = _statements(path)
-    data, moves_raw, grips = _parse(stmts, file)
+    data, moves_raw, grips, io_raw = _parse(stmts, file)
+    io = tuple(io_raw)
     if not moves_raw:
         raise ProgramFormatError(f"{file}: no MoveL/MoveJ in PROC main()")
     tools = {(t, w) for *_, t, w in moves_raw}
@@ -371,4 +387,4 @@ def read_rapid(path: str | Path) -> ReadProgram:
     return ReadProgram(format="rapid", files=(file,), name=name, moves=tuple(moves),
                        stationary_tool=stationary, X_FT=X_FT, X_RO=X_RO, frame_lines=lines,
                        load_mass=mass, load_cog=cog,
-                       declarations={n: d[0] for n, d in data.items()})
+                       declarations={n: d[0] for n, d in data.items()}, io=io)

@@ -87,6 +87,8 @@ class ReadProgram:
         load_cog: (3,) its centre of gravity in F [m] (None if not stated).
         declarations: other data the reader understood (name -> value), for the record.
         header: comment lines of the header.
+        io: outputs set, in order: (line, "do"|"ao", port number (KRL, LS) or signal name
+            (RAPID), value (DO 0/1, AO as written)).
     """
 
     format: str
@@ -101,6 +103,7 @@ class ReadProgram:
     load_cog: np.ndarray | None = None
     declarations: dict = field(default_factory=dict)
     header: tuple[str, ...] = ()
+    io: tuple[tuple[int, str, int | str, float], ...] = ()
 
 
 _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")

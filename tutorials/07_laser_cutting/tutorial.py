@@ -125,16 +125,30 @@ def main() -> None:
           f"{power.energy_per_length[free].max():.3f} V s/m")
     write_ls(out / "hole_rectangle_sharp.ls", hole_program_ls(prog, "hole_rect_sharp"))
 
-    # 4. A larger contour by the robot ("Feature" settings) ------------------------------------
-    X_WP = np.eye(4)
-    X_WP[:3, 3] = [1.0, 0.0, 0.4]  # plate frame 1 m in front of the robot, 0.4 m high
-    X_WP[:3, :3] = np.diag([1.0, -1.0, -1.0])  # plate normal pointing down at the robot
+    # 4. A larger contour by the robot ("Feature" settings), in the plate frame (UFRAME) -----
+    from drakedeburr.laser.fanuc_ls import job_programs_ls
+    from drakedeburr.laser.robot_job import LaserCell, plan_job
+
+    X_RP = np.eye(4)
+    X_RP[:3, 3] = [0.8, 0.0, 0.2]  # the plate 0.8 m in front of the M-10iA, 0.2 m up
+    cell = LaserCell(robot="m10ia", X_RP=X_RP)
     feature = FeatureSettings(travel_angle=np.deg2rad(5.0), work_angle=0.0,
                               point_spacing=2e-3, speed=0.10, acceleration=3.0)
     targets = plan_contour(Rectangle(width=0.12, height=0.08, corner_radius=0.01,
-                                     lead_in=0.005), X_WP, feature)
-    write_ls(out / "contour_rectangle.ls", contour_program_ls(targets, "contour_rect"))
+                                     lead_in=0.005), None, feature)
+    write_ls(out / "contour_rectangle.ls",
+             contour_program_ls(targets, "contour_rect", cell, g))
     print(f"  robot contour: {len(targets)} poses, {targets.t[-1]:.2f} s")
+    # ... and one job: two holes by the Cutting Tool, then the contour by the robot
+    job = plan_job(cell, Rectangle(width=0.12, height=0.08, corner_radius=0.01,
+                                   lead_in=0.005),
+                   [((0.03, 0.01), Circle(diameter=0.008, lead_in=0.002)),
+                    ((-0.03, -0.01), Slot(length=0.015, width=0.005, lead_in=0.002))],
+                   g, feature)
+    for name, text in job_programs_ls(job, "part_a").items():
+        write_ls(out / f"{name.lower()}.ls", text)
+    print(f"  job: {len(job.holes)} holes (CALLed), contour CONFIGs "
+          f"{sorted(set(job.contour_motion.config))}")
 
     # 5. Meshcat animation ------------------------------------------------------------------
     from pydrake.geometry import Meshcat
