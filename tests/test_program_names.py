@@ -153,7 +153,7 @@ _KRL_DAT = ["&ACCESS RVP", "&REL 1", r"DEFDAT [A-Za-z]\w* PUBLIC", r"   ;[ -~]*"
             r"DECL E6POS XP\d+=\{[-\w ,.]*\}", "ENDDAT"]
 _LS_MN = [r"![ -:<-~]{0,32}", r"UFRAME_NUM=\d+", r"UTOOL_NUM=\d+", r"PAYLOAD\[\d+\]",
           r"J P\[(?P<n>\d+)\] \d+% (FINE|CNT\d+)",
-          r"L P\[(?P<n>\d+)\] \d+mm/sec (FINE|CNT\d+)( RTCP)?"]
+          r"L P\[(?P<n>\d+)\] \d+(mm/sec|cm/min) (FINE|CNT\d+)( RTCP)?"]
 
 
 def _motions(lines: list[str], grammar: list[str], where: str) -> list[int]:
@@ -245,7 +245,7 @@ _CL = ["UNITS/MM", "TOOL PATH/{path},TOOL,T1", "FEDRAT/MMPM,3000", "{word}/1",
 WOBJ = {"rapid": "600,0,300,0,0,0", "krl": "450,0,250,0,0,0", "ls": "700,0,300,0,0,0"}
 
 
-def _cl_file(folder: Path, name: str, path_name: str = "OP1", word: str = "COOLNT") -> Path:
+def _cl_file(folder: Path, name: str, path_name: str = "OP1", word: str = "PAINT") -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     f = folder / name
     f.write_text("\n".join(_CL).format(path=path_name, word=word) + "\n", newline="\n")
