@@ -58,6 +58,7 @@ __all__ = [
     "Cell",
     "load_cell",
     "load_plan_cell",
+    "bundled_cell_name",
     "resolve_hub_sdf",
     "TOOL_FRAME_NAME",
     "HUB_MOUNT_FRAME_NAME",
@@ -309,10 +310,14 @@ def _unique_frame(plant, name: str, scenario: Path):
     return frames[0]
 
 
-def _bundled_cell_name(scenario_file: Path) -> str | None:
+def bundled_cell_name(scenario_file: str | Path) -> str | None:
     """The bundled cell name of a scenario file (``tool_in_hand``), None for a user file."""
+    scenario_file = Path(scenario_file)
     bundled = models_dir() / "scenarios"
     return scenario_file.stem if scenario_file.parent.resolve() == bundled.resolve() else None
+
+
+_bundled_cell_name = bundled_cell_name
 
 
 def _robot_directive(items: list, scenario_file: Path):

@@ -176,8 +176,9 @@ def register(subparsers) -> None:
                         "auto (orientation stage when usable)")
     p.add_argument("-o", "--output", default=None, help="plan folder (default plan_<hub>_<mode>)")
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help="registered arm (drakedeburr robots) or an arm file (*.yaml, "
+                        "docs/robots.md); default: the scenario's")
     add_tool_argument(p)
     p.add_argument("--fillets", choices=("program", "kto", "off"), default="program",
                    help="where a cut slows below the feed band at a fillet, re-plan the tool "
@@ -203,7 +204,7 @@ def register(subparsers) -> None:
                    help="program file (.mod, .src (+ .dat), .ls); KRL and LS programs are named "
                         "after the file")
     e.add_argument("--name", default="Deburr", help="RAPID module name")
-    e.add_argument("--robot", default=None, metavar="NAME",
+    e.add_argument("--robot", default=None, metavar="NAME|FILE",
                    help="check that the plan was made for this arm (the arm comes from the plan)")
     e.add_argument("--force", action="store_true",
                    help="write even when the gate refuses (the header says why)")

@@ -384,8 +384,9 @@ def register(subparsers) -> None:
     from drakedeburr.hub.commands import _add_front_and_burr
 
     _add_front_and_burr(p)  # mesh target: --front, --burr-mm, --clearance-mm, ...
-    p.add_argument("--robot", metavar="NAME", default=None,
-                   help="hub or mesh target: the arm to plan for (drakedeburr robots; default "
+    p.add_argument("--robot", metavar="NAME|FILE", default=None,
+                   help="hub or mesh target: the arm to plan for (drakedeburr robots, or an "
+                        "arm file *.yaml; default "
                         "the scenario's); a plan is verified for the arm it was made for")
     from drakedeburr.plan.commands import add_tool_argument
 
