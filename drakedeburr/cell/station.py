@@ -580,7 +580,8 @@ _PAYLOAD_WARNED: set = set()
 
 def _check_payload(cell: Cell) -> None:
     """Warn when what the arm carries (every moving body that is not an arm link) exceeds the
-    arm's rated payload; planning is kinematic and goes on."""
+    arm's rated payload; planning is kinematic and goes on, the verifier's required ``payload``
+    item fails (drakedeburr.verify.checks_payload: no program)."""
     plant = cell.plant
     carried = 0.0
     for instance in cell.moving_model_instances:
@@ -591,4 +592,5 @@ def _check_payload(cell: Cell) -> None:
     if carried > cell.arm.payload_kg and key not in _PAYLOAD_WARNED:
         _PAYLOAD_WARNED.add(key)  # once per process: planning loads the cell many times
         log.warning("%s: the arm %s carries %.1f kg (tool/gripper/hub models) but is rated for "
-                    "%.1f kg", cell.scenario.name, cell.arm.name, carried, cell.arm.payload_kg)
+                    "%.1f kg: the payload check will fail (docs/robots.md)", cell.scenario.name,
+                    cell.arm.name, carried, cell.arm.payload_kg)

@@ -65,10 +65,18 @@ def payload(sp, cfg) -> CheckItem:
     if over:
         from drakedeburr.cell.station import bundled_cell_name
 
-        rated = arms_rated_for(load, bundled_cell_name(cell.scenario))
-        detail = (f"{head}: over its rating: {'; '.join(map(str, over))}. Arms rated for this "
-                  f"load{' with a mount in this cell' if rated else ''}: "
-                  f"{', '.join(rated) or 'none registered'} (--robot NAME)")
+        cell_name = bundled_cell_name(cell.scenario)
+        mounted = arms_rated_for(load, cell_name) if cell_name else []
+        others = [n for n in arms_rated_for(load, None) if n not in mounted]
+        detail = f"{head}: over its rating: {'; '.join(map(str, over))}. "
+        if mounted:
+            detail += f"Arms rated for this load with a mount in this cell: " \
+                      f"{', '.join(mounted)} (--robot NAME)"
+        else:
+            detail += "No registered arm rated for this load has a mount in this cell"
+        if others:
+            detail += (f"; rated{' too' if mounted else ''}, placed by a scenario of yours: "
+                       f"{', '.join(others)}")
     else:
         detail = f"{head}: within its rating: {'; '.join(map(str, figures))}"
     if unrated:
