@@ -1,8 +1,9 @@
 """drakedeburr.robots: the arm registry, a neutral room used by cell, plan, verify and post.
 
-One :class:`RobotSpec` per arm, read from its arm file (YAML, :mod:`.arm_file`; OPW parameters, joint limits, vendor joint conventions,
-configuration data, Drake model, mounts in the bundled cells), the OPW forward map and
-analytic inverse, and the vendors' configuration data (ABB confdata, KUKA S/T, FANUC CONFIG).
+One :class:`RobotSpec` per arm, read from its arm file (YAML, :mod:`.arm_file`: OPW
+parameters, joint limits, vendor joint conventions, payload ratings, Drake model, mounts in the
+bundled cells), the OPW forward map and analytic inverse, the payload figures
+(:mod:`.payload`) and the vendors' configuration data (ABB confdata, KUKA S/T, FANUC CONFIG).
 """
 
 from drakedeburr._lazy import lazy_exports
@@ -15,6 +16,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
         "robot_names",
     ),
     "arm_file": ("SCHEMA", "arm_file_text", "is_arm_file", "load_arm"),
+    "payload": ("CarriedLoad", "PayloadFigure", "carried_load", "payload_figures",
+                "within_rating"),
     "configuration": (
         "abb_confdata", "configuration_of", "fanuc_config", "joints_from_configuration",
         "kuka_status_turn",
