@@ -119,3 +119,19 @@ def test_irb2600_wrist_inertia_decides_the_deep_dish(hub, ok):
     assert f["mass"].ok and f["J6 inertia"].ok
     assert f["J5 inertia"].ok is ok
     assert f["J5 inertia"].value == pytest.approx(1.951 if ok else 2.109, abs=1e-3)
+
+
+def test_the_workpiece_in_hand_default_is_an_arm_rated_for_the_hub():
+    """No --robot: the scenario's arm where it is rated (tool in hand: the 3 kg spindle on the
+    IRB 1600-10), else the first registered arm rated for the load with a mount in the cell
+    (h5_straight on the gripper: the IRB 2600-20/1.65), else the scenario's own, whose payload
+    item then fails naming the arms that would carry it (h5_deepdish: over the IRB 2600's J5
+    inertia, and no other rated arm has a mount in this cell)."""
+    from drakedeburr.cell.loads import rated_default_arm
+    from drakedeburr.robots import ROBOTS
+
+    assert rated_default_arm("tool_in_hand", "h5_straight") is None
+    assert rated_default_arm("workpiece_in_hand", "h5_straight") == "irb2600"
+    mounted = [n for n, s in ROBOTS.items() if "workpiece_in_hand" in s.cells]
+    expected = next((n for n in mounted if n in ("kr20_r1810", "m20ia", "m710ic50")), None)
+    assert rated_default_arm("workpiece_in_hand", "h5_deepdish") == expected

@@ -148,3 +148,36 @@ def test_cli_robot_file_bad_field_exits_2_with_one_line(tmp_path, capsys):
     assert code == 2 and len(err) == 1, err
     assert f"{path.resolve()}: field payload.mass_kg: must be > 0" in err[0]
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_an_arm_file_plans_verifies_and_exports_like_the_builtin_arm(tmp_path):
+    """A copy of kr6_r700.yaml loaded by path: window 0 of h5_straight, tool in hand. The plan
+    is the built-in arm's (every array, every meta value but the arm's name: the file's path);
+    it verifies (exit 0, the plan names its arm file) and exports the same program."""
+    from drakedeburr.cli import main
+    from drakedeburr.programs import compare_programs, read_program
+
+    arm = tmp_path / "cell_kr6.yaml"
+    shutil.copy(arm_file_path("kr6_r700"), arm)
+    folders = {}
+    for key, robot in (("file", str(arm)), ("name", "kr6_r700")):
+        folders[key] = tmp_path / f"plan_{key}"
+        assert main(["-q", "plan", "tool_in_hand", "--hub", "h5_straight", "--windows", "0",
+                     "--robot", robot, "-o", str(folders[key])]) == 0
+    a, b = (np.load(folders[k] / "arrays.npz") for k in ("file", "name"))
+    assert a.files == b.files
+    for k in a.files:
+        assert np.array_equal(a[k], b[k], equal_nan=True), k
+    import json
+
+    ja, jb = (json.loads((folders[k] / "plan.json").read_text()) for k in ("file", "name"))
+    assert ja["meta"].pop("robot") == str(arm.resolve()) and jb["meta"].pop("robot") == "kr6_r700"
+    ja["meta"]["config"].pop("robot")
+    jb["meta"]["config"].pop("robot")
+    assert ja == jb
+    assert main(["-q", "verify", str(folders["file"]), "--windows", "0"]) == 0
+    out_file, out_name = tmp_path / "file.src", tmp_path / "name.src"
+    assert main(["-q", "export", str(folders["file"]), "-o", str(out_file)]) == 0
+    assert main(["-q", "export", str(folders["name"]), "-o", str(out_name), "--force"]) == 0
+    assert compare_programs(read_program(out_name), read_program(out_file)) == []

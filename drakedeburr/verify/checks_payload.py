@@ -7,47 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from drakedeburr.robots.payload import CarriedLoad, carried_load, payload_figures
+from drakedeburr.cell.loads import arms_rated_for, cell_load
+from drakedeburr.robots.payload import payload_figures
 from drakedeburr.verify.report import CheckItem
 
 __all__ = ["cell_load", "payload", "arms_rated_for"]
-
-
-def cell_load(cell) -> CarriedLoad:
-    """The load on the flange of ``cell``'s arm: every body that moves with the arm and is not
-    one of its links (the tool or gripper models, and the hub when it is held), from the cell's
-    models (mass, centre of mass, rotational inertia), in the flange frame."""
-    plant = cell.plant
-    context = cell.create_context()
-    ctx = plant.GetMyContextFromRoot(context)
-    X_FW = cell.flange_frame.CalcPoseInWorld(ctx).inverse()
-    parts = []
-    for instance in cell.moving_model_instances:
-        if instance == cell.robot:
-            continue
-        for index in plant.GetBodyIndices(instance):
-            body = plant.get_body(index)
-            M_BBo_B = body.CalcSpatialInertiaInBodyFrame(ctx)
-            m = M_BBo_B.get_mass()
-            if m <= 0:
-                continue
-            p_BoBcm = M_BBo_B.get_com()
-            I_Bcm_B = M_BBo_B.Shift(p_BoBcm).CalcRotationalInertia().CopyToFullMatrix3()
-            X_FB = X_FW.multiply(body.EvalPoseInWorld(ctx))
-            R = X_FB.rotation().matrix()
-            parts.append((f"{plant.GetModelInstanceName(instance)}::{body.name()}", m,
-                          X_FB.multiply(p_BoBcm), R @ I_Bcm_B @ R.T))
-    return carried_load(parts)
-
-
-def arms_rated_for(load: CarriedLoad, cell_name: str | None) -> list[str]:
-    """Registered arms rated for ``load`` (every figure) with a mount in the bundled cell
-    ``cell_name`` (every rated arm when None)."""
-    from drakedeburr.robots import ROBOTS
-
-    return [s.name for s in ROBOTS.values()
-            if (cell_name is None or cell_name in s.cells)
-            and all(f.ok for f in payload_figures(s, load))]
 
 
 def payload(sp, cfg) -> CheckItem:

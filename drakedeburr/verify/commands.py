@@ -145,8 +145,13 @@ def _config(args: argparse.Namespace, scenario: str, hub: str):
     from drakedeburr.config import load_config
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+    robot = getattr(args, "robot", None)
+    if robot is None:  # the scenario's arm, or one rated for what it carries (workpiece)
+        from drakedeburr.cell.loads import rated_default_arm
+
+        robot = rated_default_arm(scenario, hub)
     return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed,
-                       robot=getattr(args, "robot", None), tool=getattr(args, "tool", None))
+                       robot=robot, tool=getattr(args, "tool", None))
 
 
 def _same_robot(plan, robot: str | None) -> None:
