@@ -181,3 +181,22 @@ def test_an_arm_file_plans_verifies_and_exports_like_the_builtin_arm(tmp_path):
     assert main(["-q", "export", str(folders["file"]), "-o", str(out_file)]) == 0
     assert main(["-q", "export", str(folders["name"]), "-o", str(out_name), "--force"]) == 0
     assert compare_programs(read_program(out_name), read_program(out_file)) == []
+
+
+def test_post_with_a_renamed_fanuc_arm_file_writes_the_builtins_program(tmp_path, extdata):
+    """post --robot FILE: a renamed copy of m20ia.yaml writes the LS program of --robot m20ia
+    (positions in the FANUC world frame 0.525 m above the foot, CONFIG, speeds): the program
+    finds the file's robot frame, not an identity."""
+    from drakedeburr.cli import main
+
+    cl = str(extdata / "cl_files" / "CreoPost__profilfraesen_2.ncl.2")
+    arm = _copy("m20ia", tmp_path, _set("name", "cell3_m20ia"))
+    common = ["--wobj", "900,0,200,0,0,0", "--spin", "greedy"]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    a, b = tmp_path / "a" / "prog.ls", tmp_path / "b" / "prog.ls"
+    assert main(["-q", "post", cl, "--robot", "m20ia", "-o", str(a), *common]) == 0
+    assert main(["-q", "post", cl, "--robot", str(arm), "-o", str(b), *common]) == 0
+    body = [ln for ln in a.read_text().splitlines() if "m20ia" not in ln.lower()]
+    assert body == [ln for ln in b.read_text().splitlines() if "m20ia" not in ln.lower()]
+    assert "P[1]" in a.read_text()

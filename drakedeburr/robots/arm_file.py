@@ -53,7 +53,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.robots.opw import OpwParameters
 from drakedeburr.robots.spec import CONTROLLERS, CellMount, RobotSpec
 
-__all__ = ["SCHEMA", "load_arm", "is_arm_file", "arm_file_text"]
+__all__ = ["SCHEMA", "load_arm", "is_arm_file", "arm_file_text", "loaded_spec_for"]
 
 SCHEMA = "drakedeburr.arm/1"
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
@@ -287,10 +287,23 @@ def _read(path: Path) -> dict:
     return data
 
 
+#: id(spec.kinematics) -> spec of every arm file read (the cache below keeps them alive)
+_BY_KINEMATICS: dict[int, RobotSpec] = {}
+
+
 @functools.lru_cache(maxsize=64)
 def _load_cached(path: str, _stamp: tuple, check_model: bool) -> RobotSpec:
     p = Path(path)
-    return _spec_from_doc(_Doc(p, _read(p), check_model))
+    spec = _spec_from_doc(_Doc(p, _read(p), check_model))
+    _BY_KINEMATICS[id(spec.kinematics)] = spec
+    return spec
+
+
+def loaded_spec_for(kinematics) -> RobotSpec | None:
+    """The arm file's spec whose kinematics object this is (a program made from an arm file's
+    kinematics finds its robot frame and conventions), None if none."""
+    spec = _BY_KINEMATICS.get(id(kinematics))
+    return spec if spec is not None and spec.kinematics is kinematics else None
 
 
 def load_arm(path: str | Path, *, builtin: bool = False) -> RobotSpec:
