@@ -124,14 +124,50 @@ def test_irb2600_wrist_inertia_decides_the_deep_dish(hub, ok):
 def test_the_workpiece_in_hand_default_is_an_arm_rated_for_the_hub():
     """No --robot: the scenario's arm where it is rated (tool in hand: the 3 kg spindle on the
     IRB 1600-10), else the first registered arm rated for the load with a mount in the cell
-    (h5_straight on the gripper: the IRB 2600-20/1.65), else the scenario's own, whose payload
-    item then fails naming the arms that would carry it (h5_deepdish: over the IRB 2600's J5
-    inertia, and no other rated arm has a mount in this cell)."""
+    (h5_straight on the gripper: the IRB 2600-20/1.65; h5_deepdish, over the IRB 2600's J5
+    inertia: the M-710iC/50), else the scenario's own, whose payload item then fails naming the
+    arms that would carry it."""
     from drakedeburr.cell.loads import rated_default_arm
     from drakedeburr.robots import ROBOTS
 
     assert rated_default_arm("tool_in_hand", "h5_straight") is None
     assert rated_default_arm("workpiece_in_hand", "h5_straight") == "irb2600"
-    mounted = [n for n, s in ROBOTS.items() if "workpiece_in_hand" in s.cells]
-    expected = next((n for n in mounted if n in ("kr20_r1810", "m20ia", "m710ic50")), None)
-    assert rated_default_arm("workpiece_in_hand", "h5_deepdish") == expected
+    # the deep dish: rated by mass on the KR 20 R1810-2 (its wrist ratings unpublished) and by
+    # mass, moments and inertias on the M-710iC/50: a wrist-rated arm is taken first
+    assert {"kr20_r1810", "m710ic50"} <= {n for n, s in ROBOTS.items()
+                                          if "workpiece_in_hand" in s.cells}
+    assert rated_default_arm("workpiece_in_hand", "h5_deepdish") == "m710ic50"
+
+
+@pytest.mark.slow
+def test_workpiece_in_hand_overload_fails_and_a_rated_arm_passes(tmp_path):
+    """Issue 41 "checked by": window 0 of h5_straight held on the gripper (16.1 kg).
+    IRB 1600-10 (--robot irb1600): verify exit 1 with the payload item failing (mass and
+    rating named), export exit 1 and no program. No --robot: the default is the rated
+    IRB 2600-20/1.65; verify exit 0 (every required item) and export writes its RAPID program
+    with the 16.1 kg load."""
+    import json
+
+    from drakedeburr.cli import main
+
+    runs = {"small": ["--robot", "irb1600"], "default": []}
+    for key, extra in runs.items():
+        folder = tmp_path / key
+        assert main(["-q", "plan", "workpiece_in_hand", "--hub", "h5_straight", "--windows",
+                     "0", "-o", str(folder), *extra]) == 0
+        code = main(["-q", "verify", str(folder), "--windows", "0", "--no-replay"])
+        report = json.loads((folder / "report.json").read_text())
+        item = next(i for i in report["items"] if i["name"] == "payload")
+        out = tmp_path / f"{key}.mod"
+        if key == "small":
+            assert code == 1 and report["summary"]["failed"] == ["payload"]
+            assert not item["passed"] and item["limit"] == 10.0
+            assert "mass 16.111 kg (rated 10)" in item["detail"] and "irb2600" in item["detail"]
+            assert main(["-q", "export", str(folder), "-o", str(out)]) == 1
+            assert not out.exists()
+        else:
+            assert json.loads((folder / "plan.json").read_text())["meta"]["robot"] == "irb2600"
+            assert code == 0 and report["passed"] and item["passed"]
+            assert main(["-q", "export", str(folder), "-o", str(out)]) == 0
+            text = out.read_text()
+            assert "ABB IRB 2600-20/1.65" in text and "loaddata" in text

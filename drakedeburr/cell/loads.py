@@ -52,8 +52,9 @@ def arms_rated_for(load: CarriedLoad, cell_name: str | None) -> list[str]:
 
 def rated_default_arm(scenario, hub=None) -> str | None:
     """The arm to use when none is named: None (the scenario's own) when that arm is rated for
-    what it carries in this cell with this hub, else the first registered arm rated for it
-    that has a mount in this bundled cell (logged), else None (the scenario's own: the
+    what it carries in this cell with this hub, else the registered arm rated for it that has a
+    mount in this bundled cell, one with a wrist rating (moments or inertias published) before
+    one rated by mass only, then in listing order (logged), else None (the scenario's own: the
     verifier's payload item then fails and names the arms that would carry it)."""
     from drakedeburr.cell.station import bundled_cell_name, load_cell
     from drakedeburr.resources import scenario_path
@@ -66,6 +67,12 @@ def rated_default_arm(scenario, hub=None) -> str | None:
     rated = arms_rated_for(load, cell_name) if cell_name else []
     if not rated:
         return None
+    from drakedeburr.robots import ROBOTS
+
+    # an arm whose wrist is rated too (moments or inertias published) before one rated by mass
+    # only, then the registry's order
+    rated.sort(key=lambda n: ROBOTS[n].wrist_moment_Nm is None
+               and ROBOTS[n].wrist_inertia_kgm2 is None)
     log.warning("%s: the scenario's arm %s is not rated for the %.1f kg it carries here; "
                 "using %s (rated, mounted in this cell; --robot NAME to choose)",
                 cell.scenario.name, cell.arm.name, load.mass, rated[0])
