@@ -69,11 +69,9 @@ def run_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     hub = hub or _default_hub()
-    if robot is None:  # the scenario's arm, or one rated for what it carries (workpiece)
-        from drakedeburr.cell.loads import rated_default_arm
+    from drakedeburr.cell.loads import arm_or_rated_default
 
-        robot = rated_default_arm(scenario, hub)
-    config = load_config(scenario, hub, robot=robot)
+    config = load_config(scenario, hub, robot=arm_or_rated_default(robot, scenario, hub))
     outputs: dict[str, str] = {}
     timings: dict[str, float] = {}
 

@@ -8,7 +8,7 @@ import logging
 
 from drakedeburr.robots.payload import CarriedLoad, carried_load, payload_figures
 
-__all__ = ["cell_load", "arms_rated_for", "rated_default_arm"]
+__all__ = ["cell_load", "arms_rated_for", "rated_default_arm", "arm_or_rated_default"]
 
 log = logging.getLogger(__name__)
 
@@ -77,3 +77,8 @@ def rated_default_arm(scenario, hub=None) -> str | None:
                 "using %s (rated, mounted in this cell; --robot NAME to choose)",
                 cell.scenario.name, cell.arm.name, load.mass, rated[0])
     return rated[0]
+
+
+def arm_or_rated_default(robot, scenario, hub=None):
+    """``robot`` when one is named (``--robot``), else :func:`rated_default_arm`."""
+    return robot if robot is not None else rated_default_arm(scenario, hub)

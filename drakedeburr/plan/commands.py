@@ -78,11 +78,10 @@ def _run_plan(args: argparse.Namespace) -> int:
         options = replace(options, fillets=None)
     elif args.fillets == "kto":
         options = replace(options, fillets=replace(options.fillets, method="kto"))
-    robot = args.robot
-    if robot is None:  # the scenario's arm, or one rated for what it carries (workpiece)
-        from drakedeburr.cell.loads import rated_default_arm
+    from drakedeburr.cell.loads import arm_or_rated_default
 
-        robot = rated_default_arm(scenario, hub)
+    # no --robot: the scenario's arm, or one rated for what it carries (workpiece in hand)
+    robot = arm_or_rated_default(args.robot, scenario, hub)
     config = load_config(scenario, hub, robot=robot, tool=args.tool)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
     save_plan(plan, out)

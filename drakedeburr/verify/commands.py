@@ -145,11 +145,10 @@ def _config(args: argparse.Namespace, scenario: str, hub: str):
     from drakedeburr.config import load_config
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
-    robot = getattr(args, "robot", None)
-    if robot is None:  # the scenario's arm, or one rated for what it carries (workpiece)
-        from drakedeburr.cell.loads import rated_default_arm
+    from drakedeburr.cell.loads import arm_or_rated_default
 
-        robot = rated_default_arm(scenario, hub)
+    # no --robot: the scenario's arm, or one rated for what it carries (workpiece in hand)
+    robot = arm_or_rated_default(getattr(args, "robot", None), scenario, hub)
     return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed,
                        robot=robot, tool=getattr(args, "tool", None))
 
