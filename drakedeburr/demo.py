@@ -81,7 +81,9 @@ def run_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     hub = hub or _default_hub()
-    config = load_config(scenario, hub, robot=robot)
+    from drakedeburr.cell.loads import arm_or_rated_default
+
+    config = load_config(scenario, hub, robot=arm_or_rated_default(robot, scenario, hub))
     outputs: dict[str, str] = {}
     timings: dict[str, float] = {}
 
@@ -185,8 +187,9 @@ def register(subparsers) -> None:
     p.add_argument("--scenario", default=DEFAULT_SCENARIO,
                    help="bundled scenario or YAML path (default %(default)s)")
     p.add_argument("-o", "--out", default="out/demo", help="output folder (default %(default)s)")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help="registered arm (drakedeburr robots) or an arm file (*.yaml, "
+                        "docs/robots.md); default: the scenario's")
     p.add_argument("--format", default=None, choices=("rapid", "krl", "ls"),
                    help="robot program format (default: the arm's: RAPID for ABB, KRL for KUKA, "
                         "LS for FANUC)")

@@ -23,6 +23,7 @@ __all__ = [
     "scenario_names",
     "add_package_to",
     "resolve_package_url",
+    "arm_file_path",
     "extdata_dir",
 ]
 
@@ -112,6 +113,14 @@ def resolve_package_url(url: str) -> Path:
     if not url.startswith(prefix):
         raise ValueError(f"not a {prefix} URL: {url!r}")
     return models_dir() / url[len(prefix):]
+
+
+def arm_file_path(name: str) -> Path:
+    """The bundled arm file of a registry arm: ``models/robots/<name>.yaml``."""
+    path = models_dir() / "robots" / f"{name}.yaml"
+    if not path.is_file():
+        raise FileNotFoundError(f"no bundled arm file {path}")
+    return path
 
 
 def extdata_dir() -> Path | None:

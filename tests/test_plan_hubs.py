@@ -66,8 +66,17 @@ def _independently_verified(plan, hub):
 
     report = verify_plan(plan, config_for_plan(plan))
     failed = [str(it) for it in report.items if it.required and not it.passed]
-    assert not failed, failed
-    assert report.passed
+    if plan.mode == "workpiece":
+        # the reference arm (IRB 1600-10, 10 kg) is not rated for a 15-16 kg hub + gripper:
+        # every other required item passes, the payload item fails and names the arms that
+        # would carry it (issue 41 item 4; docs/robots.md)
+        payload = report.item("payload")
+        assert [it.name for it in report.items if it.required and not it.passed] == [
+            "payload"], failed
+        assert payload.value > payload.limit == 10.0 and "m710ic50" in payload.detail
+    else:
+        assert not failed, failed
+        assert report.passed
     band = report.item("tcp_speed_band")
     assert not band.required
     assert band.value >= 0.5

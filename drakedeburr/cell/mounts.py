@@ -54,6 +54,10 @@ PEDESTALS: dict[str, Pedestal] = {
     "kr6_r700": Pedestal(column=0.20, plate=(0.32, 0.32)),
     "lrmate200ic": Pedestal(column=0.16, plate=(0.24, 0.20)),
     "m10ia": Pedestal(column=0.30, plate=(0.45, 0.45)),
+    "irb2600": Pedestal(column=0.40, plate=(0.68, 0.51)),
+    "kr20_r1810": Pedestal(column=0.40, plate=(0.53, 0.53)),
+    "m20ia": Pedestal(column=0.40, plate=(0.56, 0.56)),
+    "m710ic50": Pedestal(column=0.50, plate=(0.72, 0.72)),
 }
 
 

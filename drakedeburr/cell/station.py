@@ -58,6 +58,7 @@ __all__ = [
     "Cell",
     "load_cell",
     "load_plan_cell",
+    "bundled_cell_name",
     "resolve_hub_sdf",
     "TOOL_FRAME_NAME",
     "HUB_MOUNT_FRAME_NAME",
@@ -309,10 +310,14 @@ def _unique_frame(plant, name: str, scenario: Path):
     return frames[0]
 
 
-def _bundled_cell_name(scenario_file: Path) -> str | None:
+def bundled_cell_name(scenario_file: str | Path) -> str | None:
     """The bundled cell name of a scenario file (``tool_in_hand``), None for a user file."""
+    scenario_file = Path(scenario_file)
     bundled = models_dir() / "scenarios"
     return scenario_file.stem if scenario_file.parent.resolve() == bundled.resolve() else None
+
+
+_bundled_cell_name = bundled_cell_name
 
 
 def _robot_directive(items: list, scenario_file: Path):
@@ -575,7 +580,8 @@ _PAYLOAD_WARNED: set = set()
 
 def _check_payload(cell: Cell) -> None:
     """Warn when what the arm carries (every moving body that is not an arm link) exceeds the
-    arm's rated payload; planning is kinematic and goes on."""
+    arm's rated payload; planning is kinematic and goes on, the verifier's required ``payload``
+    item fails (drakedeburr.verify.checks_payload: no program)."""
     plant = cell.plant
     carried = 0.0
     for instance in cell.moving_model_instances:
@@ -586,4 +592,5 @@ def _check_payload(cell: Cell) -> None:
     if carried > cell.arm.payload_kg and key not in _PAYLOAD_WARNED:
         _PAYLOAD_WARNED.add(key)  # once per process: planning loads the cell many times
         log.warning("%s: the arm %s carries %.1f kg (tool/gripper/hub models) but is rated for "
-                    "%.1f kg", cell.scenario.name, cell.arm.name, carried, cell.arm.payload_kg)
+                    "%.1f kg: the payload check will fail (docs/robots.md)", cell.scenario.name,
+                    cell.arm.name, carried, cell.arm.payload_kg)

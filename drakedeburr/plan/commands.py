@@ -78,7 +78,11 @@ def _run_plan(args: argparse.Namespace) -> int:
         options = replace(options, fillets=None)
     elif args.fillets == "kto":
         options = replace(options, fillets=replace(options.fillets, method="kto"))
-    config = load_config(scenario, hub, robot=args.robot, tool=args.tool)
+    from drakedeburr.cell.loads import arm_or_rated_default
+
+    # no --robot: the scenario's arm, or one rated for what it carries (workpiece in hand)
+    robot = arm_or_rated_default(args.robot, scenario, hub)
+    config = load_config(scenario, hub, robot=robot, tool=args.tool)
     plan = plan_hub(config, source=args.source, options=options, progress=tqdm_progress("plan"))
     save_plan(plan, out)
     if args.html:
@@ -175,8 +179,9 @@ def register(subparsers) -> None:
                         "auto (orientation stage when usable)")
     p.add_argument("-o", "--output", default=None, help="plan folder (default plan_<hub>_<mode>)")
     p.add_argument("--html", default=None, help="also write a static Meshcat replay (HTML)")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="registered arm (drakedeburr robots; default: the scenario's, irb1600)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help="registered arm (drakedeburr robots) or an arm file (*.yaml, "
+                        "docs/robots.md); default: the scenario's")
     add_tool_argument(p)
     p.add_argument("--fillets", choices=("program", "kto", "off"), default="program",
                    help="where a cut slows below the feed band at a fillet, re-plan the tool "
@@ -202,7 +207,7 @@ def register(subparsers) -> None:
                    help="program file (.mod, .src (+ .dat), .ls); KRL and LS programs are named "
                         "after the file")
     e.add_argument("--name", default="Deburr", help="RAPID module name")
-    e.add_argument("--robot", default=None, metavar="NAME",
+    e.add_argument("--robot", default=None, metavar="NAME|FILE",
                    help="check that the plan was made for this arm (the arm comes from the plan)")
     e.add_argument("--force", action="store_true",
                    help="write even when the gate refuses (the header says why)")

@@ -244,7 +244,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
             cands.append((n, margin, -k, -abs(off), X, per, period * k / turns, off))
     cands.sort(key=lambda c: c[:4], reverse=True)
     top = cands[:checked]
-    recipes = [cell_recipe(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.name,
+    recipes = [cell_recipe(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.ref,
                            tool=cell.tool, hub_pose=c[4]) for c in top]
     tol = config.tolerances
     built: dict[int, object] = {}

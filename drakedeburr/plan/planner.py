@@ -203,7 +203,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         contact_radius_m=r_c,
         contact_lift_m=lift,
         X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
-        robot=cell.arm.name, X_WB=kin.X_WB.tolist(),
+        robot=cell.arm.ref, X_WB=kin.X_WB.tolist(),
         windows=window_stats,
         window_sources=[w.source for w in windows],
         depth_of_cut={str(w.window_index): w.depth_of_cut for w in windows},

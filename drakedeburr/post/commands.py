@@ -45,9 +45,10 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
 def add_cell_options(p: argparse.ArgumentParser) -> None:
     from drakedeburr.robots import robot_names
 
-    p.add_argument("--robot", default="irb1600", choices=robot_names(),
-                   help="registered arm (drakedeburr robots); its controller's format is "
-                        "the default --format")
+    p.add_argument("--robot", default="irb1600", metavar="NAME|FILE",
+                   help=f"registered arm ({', '.join(robot_names())}; drakedeburr robots) or "
+                        "an arm file (*.yaml, docs/robots.md); its controller's format is the "
+                        "default --format")
     p.add_argument("--workpiece-in-hand", action="store_true",
                    help="the robot holds the part against a stationary spindle: --tool is the "
                         "spindle's TCP in the robot base (required), --wobj the part's CL "

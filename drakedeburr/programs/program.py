@@ -213,7 +213,11 @@ class RobotProgram:
         if isinstance(self.robot, RobotSpec):
             return self.robot
         spec = ROBOTS.get(self.robot.name)
-        return spec if spec is not None and spec.opw == self.robot.opw else None
+        if spec is not None and spec.opw == self.robot.opw:
+            return spec
+        from drakedeburr.robots.arm_file import loaded_spec_for
+
+        return loaded_spec_for(self.robot)  # an arm file's (--robot FILE)
 
     @property
     def controller(self) -> str:

@@ -8,8 +8,9 @@ model's forward kinematics equals :func:`~drakedeburr.robots.opw.fk_opw` by cons
 cylinders, boxes) enveloping each link as drawn in the vendor's data sheet: estimated
 envelopes, not vendor CAD; masses and inertias are plausible estimates, not vendor data.
 
-The ABB IRB1600 model (``irb1600_10_120.sdf``) is hand-written (older); the KUKA and FANUC ones
-are generated here. All link frames are parallel to the base at q = 0 and sit on their joint
+The ABB IRB1600 model (``irb1600_10_120.sdf``) is hand-written (older); every other arm of the
+registry is generated here (numbers rounded to :data:`DIGITS` decimals: the same text on every
+machine). All link frames are parallel to the base at q = 0 and sit on their joint
 axes, as in the IRB1600 file.
 """
 
@@ -24,7 +25,7 @@ import numpy as np
 from drakedeburr.robots.opw import fk_opw
 from drakedeburr.robots.spec import RobotSpec
 
-__all__ = ["ArmEnvelope", "ENVELOPES", "JointPoints", "joint_points", "arm_sdf",
+__all__ = ["DIGITS", "ArmEnvelope", "ENVELOPES", "JointPoints", "joint_points", "arm_sdf",
            "write_arm_models"]
 
 
@@ -61,7 +62,10 @@ class ArmEnvelope:
 
 
 # data sheet envelopes (rounded up): KR 6 R700 sixx foot 320 x 320 mm, total ~50 kg;
-# LR Mate 200iC foot ~ 240 x 190 mm, ~27 kg; M-10iA foot ~ 450 x 450 mm, ~130 kg
+# LR Mate 200iC foot ~ 240 x 190 mm, ~27 kg; M-10iA foot ~ 450 x 450 mm, ~130 kg;
+# IRB 2600 foot ~ 680 x 510 mm, ~280 kg; KR 20 R1810-2 foot ~ 530 x 530 mm, ~250 kg;
+# M-20iA foot ~ 560 x 560 mm, ~250 kg; M-710iC/50 foot ~ 720 x 720 mm, ~560 kg (ESTIMATES of
+# the data sheets' outline drawings, not vendor CAD)
 ENVELOPES: dict[str, ArmEnvelope] = {
     "kr6_r700": ArmEnvelope(
         foot=(0.32, 0.32, 0.13), turret_radius=0.10, shoulder_radius=0.085, shoulder_width=0.20,
@@ -78,7 +82,28 @@ ENVELOPES: dict[str, ArmEnvelope] = {
         upper_arm_radius=0.09, elbow_radius=0.11, elbow_width=0.24, forearm_radius=0.075,
         wrist_radius=0.06, wrist_width=0.14, flange_radius=0.04,
         masses=(40.0, 35.0, 22.0, 15.0, 10.0, 4.0, 0.5), color="0.95 0.85 0.1 1"),
+    "irb2600": ArmEnvelope(
+        foot=(0.68, 0.51, 0.20), turret_radius=0.22, shoulder_radius=0.15, shoulder_width=0.36,
+        upper_arm_radius=0.11, elbow_radius=0.14, elbow_width=0.32, forearm_radius=0.09,
+        wrist_radius=0.065, wrist_width=0.16, flange_radius=0.04,
+        masses=(90.0, 70.0, 45.0, 35.0, 20.0, 6.0, 1.0), color="0.95 0.45 0.0 1"),
+    "kr20_r1810": ArmEnvelope(
+        foot=(0.53, 0.53, 0.20), turret_radius=0.22, shoulder_radius=0.15, shoulder_width=0.36,
+        upper_arm_radius=0.11, elbow_radius=0.14, elbow_width=0.32, forearm_radius=0.09,
+        wrist_radius=0.07, wrist_width=0.16, flange_radius=0.04,
+        masses=(80.0, 65.0, 40.0, 30.0, 20.0, 6.0, 1.0), color="0.95 0.45 0.0 1"),
+    "m20ia": ArmEnvelope(
+        foot=(0.56, 0.56, 0.20), turret_radius=0.22, shoulder_radius=0.15, shoulder_width=0.36,
+        upper_arm_radius=0.11, elbow_radius=0.14, elbow_width=0.32, forearm_radius=0.09,
+        wrist_radius=0.07, wrist_width=0.16, flange_radius=0.045,
+        masses=(80.0, 65.0, 40.0, 30.0, 20.0, 6.0, 1.0), color="0.95 0.85 0.1 1"),
+    "m710ic50": ArmEnvelope(
+        foot=(0.72, 0.72, 0.22), turret_radius=0.26, shoulder_radius=0.18, shoulder_width=0.44,
+        upper_arm_radius=0.14, elbow_radius=0.17, elbow_width=0.40, forearm_radius=0.11,
+        wrist_radius=0.09, wrist_width=0.20, flange_radius=0.065,
+        masses=(180.0, 140.0, 90.0, 70.0, 50.0, 15.0, 3.0), color="0.95 0.85 0.1 1"),
 }
+
 
 
 @dataclass(frozen=True)
@@ -126,9 +151,21 @@ def joint_points(spec: RobotSpec) -> JointPoints:
                        axes=axes, R_BF0=X0[:3, :3])
 
 
-def _f(x: float) -> str:
-    x = float(x)
+#: decimals of the geometry written (poses, axes, sizes, inertias): 1e-10 m / rad is far below
+#: every tolerance (the FK test's 1e-9 m) and far above the last-bit differences of
+#: sin/cos/atan2 between machines, so the text is the same everywhere
+#: (tests/test_robots_arms.py::test_generated_arm_models_are_committed). Joint limits are the
+#: spec's numbers written exactly (they come from the arm file by exact arithmetic).
+DIGITS = 10
+
+
+def _f(x: float, digits: int | None = DIGITS) -> str:
+    x = float(x) if digits is None else round(float(x), digits) + 0.0  # + 0.0: no "-0"
     return "0" if x == 0.0 else (str(int(x)) if x.is_integer() else repr(x))
+
+
+def _exact(x: float) -> str:
+    return _f(x, None)
 
 
 def _v(v) -> str:
@@ -222,9 +259,10 @@ def _joints(spec: RobotSpec, jp: JointPoints) -> str:
         out += (f'    <joint name="joint_{i + 1}" type="revolute">\n'
                 f"      <parent>{parents[i]}</parent><child>link_{i + 1}</child>\n"
                 f"      <axis><xyz>{_v(jp.axes[i])}</xyz>\n"
-                f"        <limit><lower>{_f(spec.q_lower[i])}</lower><upper>{_f(spec.q_upper[i])}"
-                f"</upper>\n          <velocity>{_f(spec.v_max[i])}</velocity><effort>0</effort>\n"
-                f"          <drake:acceleration>{_f(spec.a_max[i])}</drake:acceleration>"
+                f"        <limit><lower>{_exact(spec.q_lower[i])}</lower><upper>"
+                f"{_exact(spec.q_upper[i])}</upper>\n          <velocity>{_exact(spec.v_max[i])}"
+                "</velocity><effort>0</effort>\n"
+                f"          <drake:acceleration>{_exact(spec.a_max[i])}</drake:acceleration>"
                 "</limit></axis>\n    </joint>\n")
     return out
 

@@ -1,4 +1,5 @@
-"""CLI: ``drakedeburr robots``: the registered arms (``--robot NAME`` on plan, demo, export)."""
+"""CLI: ``drakedeburr robots``: the registered arms (``--robot NAME`` on plan, demo, export;
+``--robot FILE`` takes an arm file of the same schema, docs/robots.md)."""
 
 from __future__ import annotations
 
@@ -10,9 +11,11 @@ __all__ = ["register", "robots_table"]
 
 def robots_table() -> list[dict]:
     """One row per registered arm: name, title, controller, program format, reach [m] (axis 1
-    to the wrist centre, the data sheets' figure), payload [kg], cells with a mount, model."""
+    to the wrist centre, the data sheets' figure), payload [kg] and wrist ratings (J4-J6 [N m],
+    [kg m^2], None where not published), cells with a mount, model, arm file."""
     import numpy as np
 
+    from drakedeburr.resources import arm_file_path
     from drakedeburr.robots import ROBOTS
 
     rows = []
@@ -21,8 +24,9 @@ def robots_table() -> list[dict]:
         reach = p.a1 + p.c2 + float(np.hypot(p.a2, p.c3))  # arm stretched, to the wrist centre
         rows.append(dict(name=spec.name, title=spec.title, controller=spec.controller_model,
                          format=spec.program_format, reach_m=round(reach, 3),
-                         payload_kg=spec.payload_kg, cells=list(spec.cells),
-                         model=spec.model_url))
+                         payload_kg=spec.payload_kg, wrist_moment_Nm=spec.wrist_moment_Nm,
+                         wrist_inertia_kgm2=spec.wrist_inertia_kgm2, cells=list(spec.cells),
+                         model=spec.model_url, arm_file=str(arm_file_path(spec.name))))
     return rows
 
 

@@ -79,12 +79,18 @@ class RobotSpec:
         a_max_note: where ``a_max`` comes from.
         j23_coupling: controller J3 = model J3 - ``j23_coupling`` * model J2 (FANUC: 1).
         X_BR: (4, 4) the controller's robot frame R in the model base B [m].
-        payload_kg: rated payload [kg].
+        payload_kg: rated payload [kg] (everything on the flange: tool, gripper, part).
         flange: the mechanical interface (e.g. ISO 9409-1 designation).
         model_url: ``package://drakedeburr/robots/...`` Drake model written by us.
         mounts: ``(scenario name, CellMount)`` for the bundled cells.
         conventions: zero pose and positive directions in words (vendor documentation).
         sources: where each number comes from.
+        wrist_moment_Nm: (3,) allowable static load moments about J4, J5, J6 [N m] where the
+            vendor publishes them (None: not published / not found).
+        wrist_inertia_kgm2: (3,) allowable load inertias about J4, J5, J6 [kg m^2] (None: not
+            published / not found).
+        source_file: the arm file it was read from (``--robot FILE``); "" for a spec made in
+            code.
     """
 
     name: str
@@ -106,6 +112,9 @@ class RobotSpec:
     mounts: tuple[tuple[str, CellMount], ...] = ()
     conventions: str = ""
     sources: tuple[str, ...] = ()
+    wrist_moment_Nm: tuple[float, float, float] | None = None
+    wrist_inertia_kgm2: tuple[float, float, float] | None = None
+    source_file: str = ""
     kinematics: RobotKinematics = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -118,9 +127,24 @@ class RobotSpec:
         if np.any(self.q_lower >= self.q_upper) or np.any(self.v_max <= 0) or np.any(
                 self.a_max <= 0):
             raise InputError(f"robot {self.name}: limits must satisfy lower < upper, v, a > 0")
+        if not (np.isfinite(self.payload_kg) and self.payload_kg > 0):
+            raise InputError(f"robot {self.name}: payload_kg must be > 0, got {self.payload_kg}")
+        for key in ("wrist_moment_Nm", "wrist_inertia_kgm2"):
+            v = getattr(self, key)
+            if v is not None:
+                arr = _frozen(v, (3,), f"{self.name}.{key}")
+                if np.any(arr <= 0):
+                    raise InputError(f"robot {self.name}: {key} must be > 0, got {v}")
+                object.__setattr__(self, key, tuple(float(x) for x in arr))
         object.__setattr__(self, "kinematics", RobotKinematics(
             opw=self.opw, limits=JointLimits(tuple(self.q_lower), tuple(self.q_upper)),
             controller=self.controller, name=self.name))
+
+    @property
+    def ref(self) -> str:
+        """How a plan names this arm so that :func:`~drakedeburr.robots.get_robot` finds it
+        again: the arm file's absolute path for an arm read from a file, else its name."""
+        return self.source_file or self.name
 
     @property
     def program_format(self) -> str:

@@ -145,8 +145,12 @@ def _config(args: argparse.Namespace, scenario: str, hub: str):
     from drakedeburr.config import load_config
 
     speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
+    from drakedeburr.cell.loads import arm_or_rated_default
+
+    # no --robot: the scenario's arm, or one rated for what it carries (workpiece in hand)
+    robot = arm_or_rated_default(getattr(args, "robot", None), scenario, hub)
     return load_config(scenario, hub, tolerances=_tolerances(args), grinding_speed=speed,
-                       robot=getattr(args, "robot", None), tool=getattr(args, "tool", None))
+                       robot=robot, tool=getattr(args, "tool", None))
 
 
 def _same_robot(plan, robot: str | None) -> None:
@@ -384,8 +388,9 @@ def register(subparsers) -> None:
     from drakedeburr.hub.commands import _add_front_and_burr
 
     _add_front_and_burr(p)  # mesh target: --front, --burr-mm, --clearance-mm, ...
-    p.add_argument("--robot", metavar="NAME", default=None,
-                   help="hub or mesh target: the arm to plan for (drakedeburr robots; default "
+    p.add_argument("--robot", metavar="NAME|FILE", default=None,
+                   help="hub or mesh target: the arm to plan for (drakedeburr robots, or an "
+                        "arm file *.yaml; default "
                         "the scenario's); a plan is verified for the arm it was made for")
     from drakedeburr.plan.commands import add_tool_argument
 

@@ -21,6 +21,7 @@ from typing import Literal
 from drakedeburr.verify import checks_distance as dist
 from drakedeburr.verify import checks_motion as motion
 from drakedeburr.verify import checks_path as path
+from drakedeburr.verify import checks_payload as load
 from drakedeburr.verify import checks_plan as plan
 from drakedeburr.verify import checks_process as process
 from drakedeburr.verify.report import CheckItem
@@ -82,6 +83,9 @@ CHECKS: tuple[Check, ...] = (
           "joint velocities inside the limits (exact on the spline)"),
     Check("joint_acceleration", motion.joint_acceleration, "required",
           "joint accelerations inside the limits (exact on the spline)"),
+    Check("payload", load.payload, "required",
+          "tool + gripper + part within the arm's rated payload (mass; wrist moments and "
+          "inertias where the vendor publishes them)"),
     Check("rest_at_ends", motion.rest_at_ends, "required", "at rest at start and end"),
     Check("start_end_home", motion.start_end_home, "info", "starts and ends at home"),
     Check("configuration", motion.configuration, "required",

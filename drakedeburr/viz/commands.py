@@ -110,8 +110,9 @@ def register(subparsers) -> None:
     p.add_argument("--hub", default=None,
                    help="hub for a scenario: bundled name, folder or hub.sdf (default: the "
                         "default bundled hub)")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help="registered arm for a bundled cell (drakedeburr robots)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help="registered arm (drakedeburr robots) or an arm file (*.yaml) for a "
+                        "bundled cell")
     p.add_argument("--html", type=Path, default=None, help="write a static HTML snapshot here")
     p.add_argument("--q", type=number(), nargs="+", default=None, metavar="DEG",
                    help="robot joints J1..J6 in degrees (default: the scenario's home)")
