@@ -118,3 +118,69 @@ def test_writer_writes_and_reader_reads_the_reference_configuration(vendor, case
         assert f"S {e[0]},T {e[1]}" in text.replace(", ", ",")
     back = read_program(path)
     assert back.moves[0].configuration == e
+
+
+# ------------------------------------------------------------------ zones the controller keeps
+def _line_program(robot, zone, speed, n=6, step=0.002, stationary=False):
+    """n linear moves ``step`` apart along the base's y axis, all with ``zone`` and ``speed``."""
+    spec = get_robot(robot)
+    q0 = {"irb1600": [0.3, 0.3, 0.2, 0.4, 0.8, 0.5], "kr6_r700": [0.3, -1.4, 1.6, 0.4, 0.9, 0.5],
+          "m10ia": [0.3, 0.2, -0.3, 0.4, -0.8, 0.5]}[robot]
+    X0 = fk_opw(spec.opw, np.array(q0))
+    X, q = [], []
+    for k in range(n):
+        Xk = X0.copy()
+        Xk[1, 3] += step * k
+        X.append(Xk)
+        q.append(joints_from_configuration(spec.kinematics, Xk, spec.controller,
+                                           configuration_of(spec.kinematics, np.array(q0),
+                                                            spec.controller)))
+    return RobotProgram.from_poses("zones", X, q, speed=speed, zone=zone, robot=spec,
+                                   stationary_tool=stationary)
+
+
+def test_a_zone_over_half_a_move_is_refused_and_the_builder_cuts_it():
+    from drakedeburr.errors import InputError
+    from drakedeburr.programs import zones_within_half_moves
+    from drakedeburr.programs.common import check_writable
+
+    prog = _line_program("irb1600", zone=0.005, speed=0.05)
+    with pytest.raises(InputError, match="more than half an adjacent move"):
+        check_writable(prog)
+    cut = zones_within_half_moves(prog)
+    check_writable(cut)
+    assert [m.zone for m in cut.moves] == [0.001] * 6  # half of the 2 mm steps
+
+
+@pytest.mark.parametrize("robot, suffix", [("irb1600", ".mod"), ("kr6_r700", ".src")])
+def test_no_written_zone_exceeds_half_an_adjacent_move_as_read_back(robot, suffix, tmp_path):
+    from drakedeburr.programs import zones_within_half_moves
+
+    prog = zones_within_half_moves(_line_program(robot, zone=0.005, speed=0.05, step=0.003))
+    path = write_program(prog, tmp_path / f"zones{suffix}")[0]
+    back = read_program(path)
+    p = np.array([m.X_OT[:3, 3] for m in back.moves])  # the file's own positions
+    d = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    z = np.array([m.zone for m in back.moves])
+    assert z.max() == pytest.approx(0.0015)
+    assert np.all(z[1:-1] <= 0.5 * np.minimum(d[:-1], d[1:]) + 1e-9)
+    assert z[0] <= 0.5 * d[0] + 1e-9 and z[-1] <= 0.5 * d[-1] + 1e-9
+
+
+def test_fanuc_cnt_only_where_the_acceleration_bound_fits_the_zone(tmp_path):
+    from drakedeburr.programs.common import LS_ACCEL_TIME
+
+    # 10 mm/s: a CNT corner stays within 10 * 0.384 / 2 = 1.92 mm of its point
+    assert LS_ACCEL_TIME == pytest.approx(0.384)
+    slow = _line_program("m10ia", zone=0.002, speed=0.010, step=0.005)
+    text = write_program(slow, tmp_path / "slow.ls")[0].read_text()
+    assert text.count("mm/sec CNT20") == 5 and text.count("mm/sec FINE") == 1  # last: FINE
+    fast = _line_program("m10ia", zone=0.002, speed=0.050, step=0.005)  # 9.6 mm > 2 mm zone
+    text = write_program(fast, tmp_path / "fast.ls")[0].read_text()
+    assert text.count("mm/sec CNT") == 0 and text.count("mm/sec FINE") == 6
+    assert "acceleration time <= 384 ms" in text.replace("!", "").replace(" ;\n", "")
+    from drakedeburr.programs import zones_within_half_moves
+
+    short = zones_within_half_moves(  # zones cut to 1.5 mm < 1.92 mm
+        _line_program("m10ia", zone=0.002, speed=0.010, step=0.003))
+    assert write_program(short, tmp_path / "short.ls")[0].read_text().count("mm/sec FINE") == 6

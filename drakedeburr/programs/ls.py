@@ -24,7 +24,8 @@ from drakedeburr.programs.common import (
     ProgramFormatError,
     R_from_euler_zyx_deg,
     check_writable,
-    cnt_from_zone,
+    LS_ACCEL_TIME,
+    ls_cnts,
     euler_zyx_deg,
     fnum,
     header_lines,
@@ -66,16 +67,21 @@ def _payload_remarks(p: RobotProgram, n: int) -> list[str]:
 
 
 def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
-    mn = [f"!{h}" for h in wrap_remarks(header_lines(p, "FANUC LS"), LS_REMARK_MAX)]
+    extra = (f"CNT corners assume an ACC100 acceleration time <= {LS_ACCEL_TIME * 1e3:.0f} ms "
+             "($PARAM_GROUP[1].$ACCEL_TIME1 + $ACCEL_TIME2)",)
+    if p.stationary_tool:
+        extra += ("needs the Remote TCP option (RTCP): the user frame is the stationary tool",)
+    mn = [f"!{h}" for h in wrap_remarks(header_lines(p, "FANUC LS", extra), LS_REMARK_MAX)]
     X_RO = np.linalg.solve(p.X_BR, p.X_WO)
     mn += ["!" + r for r in _frame_remarks(f"UTOOL[{utool}]", p.X_FT)]
     mn += ["!" + r for r in _frame_remarks(f"UFRAME[{uframe}]", X_RO)]
     mn += ["!" + r for r in _payload_remarks(p, payload)]
     mn += [f"UFRAME_NUM={uframe}", f"UTOOL_NUM={utool}", f"PAYLOAD[{payload}]"]
+    cnts = ls_cnts(p)
     for i, m in enumerate(p.moves):
         if m.comment:
             mn += [f"!{c}" for c in wrap_remarks([m.comment], LS_REMARK_MAX)]
-        cnt = cnt_from_zone(m.zone)
+        cnt = int(cnts[i])
         term = "FINE" if cnt == 0 else f"CNT{cnt}"
         if m.move_type == JOINT:
             mn.append(f"J P[{i + 1}] {joint_percent(p.joint_fraction(i))}% {term}")

@@ -24,7 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.programs.program import JOINT, LINEAR, ProgramMove, RobotProgram
+from drakedeburr.programs.program import (
+    JOINT,
+    LINEAR,
+    ProgramMove,
+    RobotProgram,
+    zones_within_half_moves,
+)
 from drakedeburr.robots import DEFAULT_ROBOT, RobotSpec, get_robot
 
 __all__ = ["FlangeLoads", "program_from_plan", "plan_robot", "joint_fractions"]
@@ -153,8 +159,8 @@ def program_from_plan(
     tool = plan.meta.get("tool") if isinstance(plan.meta, dict) else None
     if tool:  # not the standard burr: the operator mounts this one (the TCP is its)
         notes += (f"burr: {plan.meta.get('tool_title') or tool}: mount it before running",)
-    return RobotProgram(
+    return zones_within_half_moves(RobotProgram(
         name=name, moves=moves, X_FT=X_Fc, X_WO=X_BO, robot=spec,
         stationary_tool=plan.mode == "workpiece", tool_name=tool_name, wobj_name="wobjHub",
         source=f"drakedeburr plan {plan.hub}", flag=flag, flag_reason=flag_reason,
-        notes=notes, **extra)
+        notes=notes, **extra))
