@@ -19,17 +19,17 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr.programs.common import (
+    LS_ACCEL_TIME,
     LS_COMMENT_MAX,
     LS_REMARK_MAX,
     ProgramFormatError,
     R_from_euler_zyx_deg,
     check_writable,
-    LS_ACCEL_TIME,
-    ls_cnts,
     euler_zyx_deg,
     fnum,
     header_lines,
     joint_percent,
+    ls_cnts,
     pose_from_mm,
     speed_written,
     wrap_remarks,
