@@ -184,3 +184,49 @@ def test_fanuc_cnt_only_where_the_acceleration_bound_fits_the_zone(tmp_path):
     short = zones_within_half_moves(  # zones cut to 1.5 mm < 1.92 mm
         _line_program("m10ia", zone=0.002, speed=0.010, step=0.003))
     assert write_program(short, tmp_path / "short.ls")[0].read_text().count("mm/sec FINE") == 6
+
+
+# ------------------------------------------------------------------ programs set up their frames
+def test_ls_sets_its_tool_and_user_frame_from_values_and_reads_them_back(tmp_path):
+    import re
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from program_support import random_program
+
+    from drakedeburr.programs import compare_programs
+
+    prog = random_program("m10ia", stationary=True, n=4, name="frames")
+    path = write_program(prog, tmp_path / "frames.ls")[0]
+    text = path.read_text()
+    assert "UTOOL[1]=PR[10] ;" in text and "UFRAME[1]=PR[10] ;" in text
+    assert "!UTOOL[1] X=" not in text  # values are statements, not remarks
+    assert "Remote TCP option" in text.replace("!", "").replace(" ;\n", " ")
+    back = read_program(path)
+    X_RO = np.linalg.solve(prog.X_BR, prog.X_WO)
+    assert np.abs(back.X_FT - prog.X_FT).max() < 1e-8 and np.abs(back.X_RO - X_RO).max() < 1e-8
+    assert compare_programs(prog, back) == []
+    # the tool's X changed in the program: named at the UTOOL statement's line
+    lines = text.splitlines()
+    k = next(i for i, s in enumerate(lines) if "PR[10,1]=" in s)
+    lines[k] = re.sub(r"=(-?[\d.]+)", lambda m: f"={float(m[1]) + 1.0:.6f}", lines[k])
+    path.write_text("\n".join(lines) + "\n")
+    found = compare_programs(prog, read_program(path))
+    utool = next(i for i, s in enumerate(lines) if "UTOOL[1]=PR[10]" in s) + 1
+    assert [(d.item, d.line) for d in found] == [("tool", utool)]
+
+
+def test_krl_comments_name_the_stationary_tool_and_the_held_work_object(tmp_path):
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from program_support import random_program
+
+    prog = random_program("kr6_r700", stationary=True, n=4, name="wp", tool_name="tSpindle",
+                          wobj_name="wobjHub")
+    src = write_program(prog, tmp_path / "wp.src")[0].read_text()
+    assert "; $BASE: stationary tool tSpindle (external TCP)" in src
+    assert "; $TOOL: work object wobjHub held on the flange" in src
+    tool = random_program("kr6_r700", n=4, name="t", tool_name="tBurr", wobj_name="wobjHub")
+    src = write_program(tool, tmp_path / "t.src")[0].read_text()
+    assert "; $BASE: work object wobjHub" in src and "; $TOOL: tool tBurr" in src
