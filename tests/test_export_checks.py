@@ -25,8 +25,8 @@ def verified(tmp_path_factory):
 
 
 def test_the_exported_program_passes_its_controller_check(verified, tmp_path):
+    from drakedeburr.post.program_check import program_items
     from drakedeburr.programs import read_program
-    from drakedeburr.verify.program_check import program_items
 
     out = tmp_path / "deburr.mod"
     assert main(["-q", "export", str(verified), "--format", "rapid", "-o", str(out)]) == 0

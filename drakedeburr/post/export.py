@@ -4,7 +4,7 @@ cell, unless forced; a forced program's header says FORCED or UNVERIFIED and why
 ``export`` and ``demo`` both come here.
 
 Export checks what it wrote: the program is written into a staging folder beside the output,
-read back and checked as the controller runs it (:mod:`drakedeburr.verify.program_check`: the
+read back and checked as the controller runs it (:mod:`drakedeburr.post.program_check`: the
 file equals the plan's program, the controller's joints, path, clearance and zones are the
 verified ones); only then are its files moved into place. A failing check refuses the export
 (nothing written) unless forced (the header then says FORCED and why)."""
@@ -110,14 +110,14 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
 
 def _write_checked(program, output: Path, fmt, plan, cell, check: bool = True):
     """Write ``program`` into a staging folder beside ``output``, check it as read back
-    (:func:`drakedeburr.verify.program_check.program_items`), and move the files into place
+    (:func:`drakedeburr.post.program_check.program_items`), and move the files into place
     only when every required item passed. Returns (paths, failed items)."""
     import os
     import tempfile
 
     from drakedeburr.config import default_tolerances
+    from drakedeburr.post.program_check import program_items
     from drakedeburr.programs import read_program, write_program
-    from drakedeburr.verify.program_check import program_items
 
     with tempfile.TemporaryDirectory(dir=output.parent, prefix=".export-") as tmp:
         staged = write_program(program, Path(tmp) / output.name, fmt)

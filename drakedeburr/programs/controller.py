@@ -81,6 +81,54 @@ def _corner(C, u_in, u_out, r, dist, incoming: bool):
     return (1 - s) ** 2 * E + 2 * s * (1 - s) * C + s ** 2 * X
 
 
+def _frames(read, X_FT, X_RO, problems: list) -> tuple[dict, dict]:
+    """The tool and fixed frame: the program's, else the cell's (noted), else identity (a
+    problem)."""
+    used, frames = {}, {}
+    for item, got, cell in (("tool", read.X_FT, X_FT), ("work object", read.X_RO, X_RO)):
+        if got is not None:
+            frames[item], used[item] = np.asarray(got, float), "program"
+        elif cell is not None:
+            frames[item], used[item] = np.asarray(cell, float), "cell"
+        else:
+            frames[item], used[item] = np.eye(4), "none"
+            problems.append(f"{read.files[0]}: the {item} is neither in the program nor given")
+    return frames, used
+
+
+def _line_poses(X_I, zone, linear, i, samples, step):
+    """Sample poses (4, 4) of linear move i in the interpolated frame: the straight line from
+    target i-1 to i, orientation slerped, the corners at both ends blended by their zones."""
+    n = len(X_I)
+    A, B = X_I[i - 1][:3, 3], X_I[i][:3, 3]
+    L = float(np.linalg.norm(B - A))
+    u = (B - A) / L if L > 0 else np.zeros(3)
+    slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([X_I[i - 1][:3, :3],
+                                                               X_I[i][:3, :3]])))
+    r_in = zone[i - 1] if i >= 2 and linear[i - 1] and zone[i - 1] > 0 else 0.0
+    r_out = zone[i] if i + 1 < n and linear[i + 1] and zone[i] > 0 else 0.0
+
+    def unit(d):
+        return d / max(float(np.linalg.norm(d)), 1e-15)
+
+    u_prev = unit(A - X_I[i - 2][:3, 3]) if r_in else None
+    u_next = unit(X_I[i + 1][:3, 3] - B) if r_out else None
+    k_n = max(samples, int(np.ceil(L / step)))
+    out = []
+    for k in range(1, k_n + 1):
+        f = k / k_n
+        p = A + f * (B - A)
+        if r_in and f * L < r_in:
+            p = _corner(A, u_prev, u, r_in, f * L, incoming=False)
+        elif r_out and (1 - f) * L < r_out:
+            p = _corner(B, u, u_next, r_out, (1 - f) * L, incoming=True)
+        X = np.eye(4)
+        X[:3, :3] = slerp([f]).as_matrix()[0]
+        X[:3, 3] = p
+        out.append((f, X))
+    return out
+
+
 def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
                       X_RO: np.ndarray | None = None, samples: int = 4,
                       step: float = 2.5e-4) -> ControllerMotion:
@@ -104,16 +152,7 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
     vendor = _VENDOR[read.format]
     kin = spec.kinematics
     problems: list[str] = []
-    used = {}
-    frames = {}
-    for item, got, cell in (("tool", read.X_FT, X_FT), ("work object", read.X_RO, X_RO)):
-        if got is not None:
-            frames[item], used[item] = np.asarray(got, float), "program"
-        elif cell is not None:
-            frames[item], used[item] = np.asarray(cell, float), "cell"
-        else:
-            frames[item], used[item] = np.eye(4), "none"
-            problems.append(f"{read.files[0]}: the {item} is neither in the program nor given")
+    frames, used = _frames(read, X_FT, X_RO, problems)
     X_BO = np.asarray(spec.X_BR) @ frames["work object"]
     X_FTm = frames["tool"]
     X_TF = np.linalg.inv(X_FTm)
@@ -153,32 +192,9 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
             move += [i] * len(qs)
             q_prev = q_conf
             continue
-        A, B = X_I[i - 1][:3, 3], X_I[i][:3, 3]
-        L = float(np.linalg.norm(B - A))
-        u = (B - A) / L if L > 0 else np.zeros(3)
-        slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([X_I[i - 1][:3, :3],
-                                                                   X_I[i][:3, :3]])))
-        r_in = zone[i - 1] if i >= 2 and linear[i - 1] and zone[i - 1] > 0 else 0.0
-        r_out = zone[i] if i + 1 < n and linear[i + 1] and zone[i] > 0 else 0.0
-        u_prev = u_next = None
-        if r_in:
-            d0 = X_I[i - 1][:3, 3] - X_I[i - 2][:3, 3]
-            u_prev = d0 / max(float(np.linalg.norm(d0)), 1e-15)
-        if r_out:
-            d1 = X_I[i + 1][:3, 3] - B
-            u_next = d1 / max(float(np.linalg.norm(d1)), 1e-15)
-        k_n = max(samples, int(np.ceil(L / step)))
+        poses = _line_poses(X_I, zone, linear, i, samples, step)
         qs, Xs, q_run = [], [], q_prev
-        for k in range(1, k_n + 1):
-            f = k / k_n
-            p = A + f * (B - A)
-            if r_in and f * L < r_in:
-                p = _corner(A, u_prev, u, r_in, f * L, incoming=False)
-            elif r_out and (1 - f) * L < r_out:
-                p = _corner(B, u, u_next, r_out, (1 - f) * L, incoming=True)
-            X = np.eye(4)
-            X[:3, :3] = slerp([f]).as_matrix()[0]
-            X[:3, 3] = p
+        for f, X in poses:
             q = _nearest(spec, flange(X), q_run)
             if q is None:
                 problems.append(f"{where}: the straight line to the target leaves the arm's "
@@ -192,7 +208,7 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
             qs.append(q)
             Xs.append(flange(X))
             q_run = q
-        if len(qs) < k_n:
+        if len(qs) < len(poses):
             break
         q_exact = _nearest(spec, X_target, q_prev)
         q_t[i] = q_exact if q_exact is not None else np.nan

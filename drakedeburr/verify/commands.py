@@ -180,8 +180,8 @@ def _read_program_file(path: str | None):
 
 
 def _program_item(plan, actual):
-    """The program_file item (kept for callers; :mod:`drakedeburr.verify.program_check`)."""
-    from drakedeburr.verify.program_check import program_file_item
+    """The program_file item (kept for callers; :mod:`drakedeburr.post.program_check`)."""
+    from drakedeburr.post.program_check import program_file_item
 
     return program_file_item(plan, actual)
 
@@ -260,7 +260,7 @@ def _run_verify(args: argparse.Namespace) -> int:
     if import_notes:  # what the mesh import changed (a tyre dropped) goes with the report
         report = replace(report, plan_info={**report.plan_info, "import_notes": import_notes})
     if program is not None:
-        from drakedeburr.verify.program_check import program_items
+        from drakedeburr.post.program_check import program_items
 
         items = (*report.items, *program_items(plan, program, cell, config.tolerances))
         report = replace(report, items=items,

@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["program_file_item", "controller_items", "program_items"]
 
 
-def program_file_item(plan, actual):
+def program_file_item(plan, actual, cell=None):
     """A required report item: the program (a file, or as read by :func:`_read_program_file`)
     compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
     every difference named by line."""
@@ -28,7 +28,7 @@ def program_file_item(plan, actual):
 
         actual = read_program(str(actual))
     path = actual.files[0]
-    expected = plan_program(plan, actual.name)
+    expected = plan_program(plan, actual.name, cell=cell)
     found = compare_programs(expected, actual)
     lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
     return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
@@ -69,44 +69,14 @@ def _cell_values(expected, actual) -> str:
     return "the cell must hold: " + "; ".join(out)
 
 
-def controller_items(plan, actual, cell=None, tol=None) -> list:
-    """Report items of the program as the controller runs it
-    (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
-    poses and configuration equal the verified ones, no stop or jump on the way, the straight
-    lines it runs within the path tolerance of the verified motion, clearance at its samples,
-    zones the controller keeps, and (information) every value the cell must hold."""
-    from drakedeburr.config import default_tolerances
-    from drakedeburr.post.export import plan_program
-    from drakedeburr.programs.common import ls_cnts
-    from drakedeburr.programs.controller import controller_motion
+def _path_item(plan, expected, actual, n, tol):
+    """The straight lines the controller runs on cuts vs the verified motion: every point of
+    a cut move within the path tolerance of the verified path, or within the zone the plan
+    verified around a target (where the plan blends and the controller may run the corner)."""
     from drakedeburr.programs.program import JOINT
+    from drakedeburr.robots import fk_opw
     from drakedeburr.verify.geometry import point_segment
     from drakedeburr.verify.report import CheckItem
-
-    tol = tol or default_tolerances()
-    expected = plan_program(plan, actual.name)
-    X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
-    motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
-                               step=tol.dense_step)
-    n = min(len(expected.moves), len(actual.moves))
-    q_plan = np.array([m.q for m in expected.moves[:n]])
-    err = np.abs(motion.q[:n] - q_plan).max(axis=1)
-    err = np.where(np.isnan(err), np.inf, err)
-    worst = int(np.argmax(err)) if n else 0
-    items = [CheckItem(
-        "program_joints", bool(n) and float(err.max()) <= 1e-4, float(err.max()) if n else None,
-        1e-4, "rad", "<=",
-        detail=(f"joints the controller solves from the written pose and configuration vs the "
-                f"verified ones; worst move {worst + 1} ({actual.moves[worst].name}, "
-                f"{actual.moves[worst].configuration})") if n else "no moves")]
-    items.append(CheckItem(
-        "program_motion", not motion.problems, float(len(motion.problems)), 0.0, "count", "<=",
-        detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
-        "runs it: no stop, jump or unreachable point"))
-    # the straight lines the controller runs vs the verified motion on cuts: every point of
-    # a cut move within the path tolerance of the verified path, or within the zone the plan
-    # verified around a target (where the plan blends and the controller may run the corner)
-    from drakedeburr.robots import fk_opw
 
     X_OB = np.linalg.inv(expected.X_WO)
     targ = np.array([m.X_OT for m in actual.moves])  # flange-carried frame in the fixed one
@@ -139,11 +109,72 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
         d = point_segment(c, p_plan[:-1], p_plan[1:])
         d = d[0] if isinstance(d, tuple) else d
         dev = float(np.max(d - al))
-    items.append(CheckItem(
+    return CheckItem(
         "program_path", dev is not None and dev <= 0.0, dev, 0.0, "m", "<=",
         detail="the straight lines the controller runs on cuts vs the verified motion, less "
         f"the path tolerance ({pd * 1e3:.3f} mm; the verified zone near a target)"
-        if dev is not None else "no linear cut moves to compare"))
+        if dev is not None else "no linear cut moves to compare")
+
+
+def _zones_item(expected, actual, n):
+    """Zones the controller keeps: each within half the adjacent moves as written (FANUC: CNT
+    only where its bound holds)."""
+    from drakedeburr.programs.common import ls_cnts
+    from drakedeburr.verify.report import CheckItem
+
+    p_read = np.array([m.X_OT[:3, 3] for m in actual.moves])
+    if actual.stationary_tool:
+        p_read = np.linalg.inv(np.array([m.X_OT for m in actual.moves]))[:, :3, 3]
+    dd = np.linalg.norm(np.diff(p_read, axis=0), axis=1)
+    half = np.zeros(len(p_read))
+    if len(p_read) >= 2:
+        half[0], half[-1] = 0.5 * dd[0], 0.5 * dd[-1]
+        half[1:-1] = 0.5 * np.minimum(dd[:-1], dd[1:])
+    z = np.array([m.zone for m in actual.moves])
+    if actual.format == "ls":  # CNT: the bound, not the nominal label, must fit
+        bad = np.flatnonzero((z > 0) & (ls_cnts(expected)[:len(z)] == 0)) if n == len(z) else \
+            np.flatnonzero(z > 0)
+    else:
+        bad = np.flatnonzero(z > half + 1e-9)
+    return CheckItem(
+        "program_zones", not bad.size, float(bad.size), 0.0, "count", "<=",
+        detail=(f"{bad.size} corner(s) the controller would make otherwise, first "
+                f"{actual.moves[bad[0]].file}:{actual.moves[bad[0]].zone_line}") if bad.size else
+        "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)")
+
+
+def controller_items(plan, actual, cell=None, tol=None) -> list:
+    """Report items of the program as the controller runs it
+    (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
+    poses and configuration equal the verified ones, no stop or jump on the way, the straight
+    lines it runs within the path tolerance of the verified motion, clearance at its samples,
+    zones the controller keeps, and (information) every value the cell must hold."""
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.post.export import plan_program
+    from drakedeburr.programs.controller import controller_motion
+    from drakedeburr.verify.report import CheckItem
+
+    tol = tol or default_tolerances()
+    expected = plan_program(plan, actual.name, cell=cell)
+    X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
+    motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
+                               step=tol.dense_step)
+    n = min(len(expected.moves), len(actual.moves))
+    q_plan = np.array([m.q for m in expected.moves[:n]])
+    err = np.abs(motion.q[:n] - q_plan).max(axis=1)
+    err = np.where(np.isnan(err), np.inf, err)
+    worst = int(np.argmax(err)) if n else 0
+    items = [CheckItem(
+        "program_joints", bool(n) and float(err.max()) <= 1e-4, float(err.max()) if n else None,
+        1e-4, "rad", "<=",
+        detail=(f"joints the controller solves from the written pose and configuration vs the "
+                f"verified ones; worst move {worst + 1} ({actual.moves[worst].name}, "
+                f"{actual.moves[worst].configuration})") if n else "no moves")]
+    items.append(CheckItem(
+        "program_motion", not motion.problems, float(len(motion.problems)), 0.0, "count", "<=",
+        detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
+        "runs it: no stop, jump or unreachable point"))
+    items.append(_path_item(plan, expected, actual, n, tol))
     if cell is not None and len(motion.q_path):
         from drakedeburr.verify.distances import DistanceProbe
 
@@ -159,26 +190,7 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
             "m", ">=", pair=where[1] if where and where[1] != ("", "") else None,
             detail=f"at {len(motion.q_path)} samples of the controller's motion (not the "
             f"certificate); closest on move {mv + 1}"))
-    # zones the controller keeps: each within half the adjacent moves as written
-    p_read = np.array([m.X_OT[:3, 3] for m in actual.moves])
-    if actual.stationary_tool:
-        p_read = np.linalg.inv(np.array([m.X_OT for m in actual.moves]))[:, :3, 3]
-    dd = np.linalg.norm(np.diff(p_read, axis=0), axis=1)
-    half = np.zeros(len(p_read))
-    if len(p_read) >= 2:
-        half[0], half[-1] = 0.5 * dd[0], 0.5 * dd[-1]
-        half[1:-1] = 0.5 * np.minimum(dd[:-1], dd[1:])
-    z = np.array([m.zone for m in actual.moves])
-    if actual.format == "ls":  # CNT: the bound, not the nominal label, must fit
-        bad = np.flatnonzero((z > 0) & (ls_cnts(expected)[:len(z)] == 0)) if n == len(z) else \
-            np.flatnonzero(z > 0)
-    else:
-        bad = np.flatnonzero(z > half + 1e-9)
-    items.append(CheckItem(
-        "program_zones", not bad.size, float(bad.size), 0.0, "count", "<=",
-        detail=(f"{bad.size} corner(s) the controller would make otherwise, first "
-                f"{actual.moves[bad[0]].file}:{actual.moves[bad[0]].zone_line}") if bad.size else
-        "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)"))
+    items.append(_zones_item(expected, actual, n))
     used = ", ".join(f"{k} from the {v}" for k, v in motion.frames_used.items())
     items.append(CheckItem("program_setup", True, None, None, "-", "info", required=False,
                            detail=f"{_cell_values(expected, actual)} ({used})"))
@@ -191,4 +203,4 @@ def program_items(plan, actual, cell=None, tol=None) -> list:
         from drakedeburr.programs import read_program
 
         actual = read_program(str(actual))
-    return [program_file_item(plan, actual), *controller_items(plan, actual, cell, tol)]
+    return [program_file_item(plan, actual, cell), *controller_items(plan, actual, cell, tol)]
