@@ -32,11 +32,11 @@ def test_the_exported_program_passes_its_controller_check(verified, tmp_path):
     assert main(["-q", "export", str(verified), "--format", "rapid", "-o", str(out)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["deburr.mod"]  # no staging left
     items = {i.name: i for i in program_items(load_plan(verified), read_program(out))}
-    for name in ("program_file", "program_joints", "program_motion", "program_path",
-                 "program_zones"):
+    for name in ("program_file", "controller_joints", "controller_motion", "controller_path",
+                 "controller_zones"):
         assert items[name].passed, (name, items[name].detail)
-    assert items["program_joints"].value < 1e-6  # rad, from the file's 6 decimals
-    setup = items["program_setup"].detail
+    assert items["controller_joints"].value < 1e-6  # rad, from the file's 6 decimals
+    setup = items["controller_setup"].detail
     assert "the cell must hold: tool (TCP) in the flange frame" in setup and " kg at " in setup
 
 

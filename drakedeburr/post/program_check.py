@@ -110,7 +110,7 @@ def _path_item(plan, expected, actual, n, tol):
         d = d[0] if isinstance(d, tuple) else d
         dev = float(np.max(d - al))
     return CheckItem(
-        "program_path", dev is not None and dev <= 0.0, dev, 0.0, "m", "<=",
+        "controller_path", dev is not None and dev <= 0.0, dev, 0.0, "m", "<=",
         detail="the straight lines the controller runs on cuts vs the verified motion, less "
         f"the path tolerance ({pd * 1e3:.3f} mm; the verified zone near a target)"
         if dev is not None else "no linear cut moves to compare")
@@ -137,7 +137,7 @@ def _zones_item(expected, actual, n):
     else:
         bad = np.flatnonzero(z > half + 1e-9)
     return CheckItem(
-        "program_zones", not bad.size, float(bad.size), 0.0, "count", "<=",
+        "controller_zones", not bad.size, float(bad.size), 0.0, "count", "<=",
         detail=(f"{bad.size} corner(s) the controller would make otherwise, first "
                 f"{actual.moves[bad[0]].file}:{actual.moves[bad[0]].zone_line}") if bad.size else
         "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)")
@@ -165,13 +165,13 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
     err = np.where(np.isnan(err), np.inf, err)
     worst = int(np.argmax(err)) if n else 0
     items = [CheckItem(
-        "program_joints", bool(n) and float(err.max()) <= 1e-4, float(err.max()) if n else None,
+        "controller_joints", bool(n) and float(err.max()) <= 1e-4, float(err.max()) if n else None,
         1e-4, "rad", "<=",
         detail=(f"joints the controller solves from the written pose and configuration vs the "
                 f"verified ones; worst move {worst + 1} ({actual.moves[worst].name}, "
                 f"{actual.moves[worst].configuration})") if n else "no moves")]
     items.append(CheckItem(
-        "program_motion", not motion.problems, float(len(motion.problems)), 0.0, "count", "<=",
+        "controller_motion", not motion.problems, float(len(motion.problems)), 0.0, "count", "<=",
         detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
         "runs it: no stop, jump or unreachable point"))
     items.append(_path_item(plan, expected, actual, n, tol))
@@ -186,13 +186,13 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
                 best, where = r.clearance, (k, r.clearance_pair)
         mv = int(motion.move[where[0]]) if where else 0
         items.append(CheckItem(
-            "program_clearance", best >= tol.min_clearance, float(best), tol.min_clearance,
+            "controller_clearance", best >= tol.min_clearance, float(best), tol.min_clearance,
             "m", ">=", pair=where[1] if where and where[1] != ("", "") else None,
             detail=f"at {len(motion.q_path)} samples of the controller's motion (not the "
             f"certificate); closest on move {mv + 1}"))
     items.append(_zones_item(expected, actual, n))
     used = ", ".join(f"{k} from the {v}" for k, v in motion.frames_used.items())
-    items.append(CheckItem("program_setup", True, None, None, "-", "info", required=False,
+    items.append(CheckItem("controller_setup", True, None, None, "-", "info", required=False,
                            detail=f"{_cell_values(expected, actual)} ({used})"))
     return items
 

@@ -64,6 +64,14 @@ def kuka_status_turn(robot: RobotKinematics, q: np.ndarray) -> tuple[int, int]:
     return s, t
 
 
+#: joint offsets [rad] within which a solution on a configuration boundary still counts as
+#: having the written configuration (J1, J4, J5, J6 by +-1e-6 rad: a pose written with 6
+#: decimals moves an exact 0 or 90 deg joint by about that)
+_NUDGES = [np.array([a, 0.0, 0.0, b, c, d]) * 1e-6
+           for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) for d in (-1, 0, 1)
+           if (a, b, c, d) != (0, 0, 0, 0)]
+
+
 def _turn(q: float) -> int:
     """FANUC turn number: floor((q + 180 deg) / 360 deg) for q >= 0, mirrored for q < 0 (as
     RoboDK's FANUC post writes it), so the turn is 0 strictly inside (-180, 180) deg."""
@@ -117,6 +125,9 @@ def joints_from_configuration(robot: RobotKinematics, X_BF: np.ndarray, vendor: 
     sols = ik_opw(robot.opw, X_BF)
     cand = joint_candidates(sols.q[0], robot.limits)
     match = [c for c in cand if configuration_of(robot, c, vendor) == config]
+    if not match:  # a joint on a boundary (0, +-90 deg, ...) within round-off of the pose read
+        match = [c for c in cand if any(configuration_of(robot, c + d, vendor) == config
+                                        for d in _NUDGES)]
     if not match:
         raise InputError(f"no IK solution with {vendor} configuration {config!r}")
     match_arr = np.array(match)

@@ -196,7 +196,7 @@ def _print_report(report) -> None:
             f", t={it.time:.3f} s" if it.time is not None else "") + "]"
         pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
         print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
-        if (it.name in ("program_file", "windows") or it.name.startswith("program_")) and (
+        if (it.name in ("program_file", "windows") or it.name.startswith("controller_")) and (
                 not it.passed or it.comparison == "info") and it.detail:
             print(f"      {it.detail}")
     print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
