@@ -120,7 +120,12 @@ def _write_checked(program, output: Path, fmt, plan, cell, check: bool = True):
     from drakedeburr.programs import read_program, write_program
 
     with tempfile.TemporaryDirectory(dir=output.parent, prefix=".export-") as tmp:
-        staged = write_program(program, Path(tmp) / output.name, fmt)
+        try:
+            staged = write_program(program, Path(tmp) / output.name, fmt)
+        except OSError as exc:  # name the output, not its staging copy
+            if exc.errno is None:
+                raise
+            raise OSError(exc.errno, exc.strerror, str(output)) from None
         failed = []
         if check:
             items = program_items(plan, read_program(staged[0]), cell, default_tolerances())
