@@ -3,10 +3,10 @@ program is written only when the folder's verification report passed for this ve
 cell, unless forced; a forced program's header says FORCED or UNVERIFIED and why. The CLI's
 ``export`` and ``demo`` both come here.
 
-Export checks what it wrote: the program is written into a staging folder beside the output,
-read back and checked as the controller runs it (:mod:`drakedeburr.post.program_check`: the
-file equals the plan's program, the controller's joints, path, clearance and zones are the
-verified ones); only then are its files moved into place. A failing check refuses the export
+Export checks what it wrote: the program is written into a staging folder, read back and
+checked as the controller runs it (:mod:`drakedeburr.post.program_check`: the file equals the
+plan's program, the controller's joints, path, clearance and zones are the verified ones);
+only then are the same bytes written to the output. A failing check refuses the export
 (nothing written) unless forced (the header then says FORCED and why)."""
 
 from __future__ import annotations
@@ -100,8 +100,9 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
             raise ExportRefused(f"{folder}: refusing to export: the program as the controller "
                                 f"runs it fails {', '.join(i.name for i in failed)} ({what}); "
                                 "nothing written (use --force to write it anyway)")
-        flag, reason = "FORCED", (f"written with --force although the program check fails "
-                                  f"{', '.join(i.name for i in failed)}")
+        also = f"the program check fails {', '.join(i.name for i in failed)}"
+        flag = flag or "FORCED"
+        reason = (f"{reason}; {also}" if reason else f"written with --force although {also}")
         program = plan_program(plan, name, flag=flag, flag_reason=reason, verified=False,
                                robot=robot, cell=cell)
         paths, _ = _write_checked(program, Path(output), fmt, plan, cell, check=False)
@@ -109,32 +110,31 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
 
 
 def _write_checked(program, output: Path, fmt, plan, cell, check: bool = True):
-    """Write ``program`` into a staging folder beside ``output``, check it as read back
-    (:func:`drakedeburr.post.program_check.program_items`), and move the files into place
-    only when every required item passed. Returns (paths, failed items)."""
-    import os
+    """Write ``program`` into a staging folder, check it as read back
+    (:func:`drakedeburr.post.program_check.program_items`), and write the same bytes to
+    ``output`` (atomically, :func:`drakedeburr.programs.write_program`) only when every
+    required item passed. Returns (paths, failed items)."""
     import tempfile
 
     from drakedeburr.config import default_tolerances
     from drakedeburr.post.program_check import program_items
     from drakedeburr.programs import read_program, write_program
 
-    with tempfile.TemporaryDirectory(dir=output.parent, prefix=".export-") as tmp:
-        try:
-            staged = write_program(program, Path(tmp) / output.name, fmt)
-        except OSError as exc:  # name the output, not its staging copy
-            if exc.errno is None:
-                raise
-            raise OSError(exc.errno, exc.strerror, str(output)) from None
-        failed = []
-        if check:
+    failed = []
+    if check:
+        with tempfile.TemporaryDirectory(prefix="drakedeburr-export-") as tmp:
+            try:
+                staged = write_program(program, Path(tmp) / output.name, fmt)
+            except OSError as exc:  # name the output, not its staging copy
+                if exc.errno is None:
+                    raise
+                raise OSError(exc.errno, exc.strerror, str(output)) from None
+            texts = [p.read_bytes() for p in staged]
             items = program_items(plan, read_program(staged[0]), cell, default_tolerances())
             failed = [i for i in items if i.required and not i.passed]
-            if failed:
-                return [], failed
-        paths = []
-        for f in staged:
-            target = output.parent / f.name
-            os.replace(f, target)
-            paths.append(target)
+        if failed:
+            return [], failed
+    paths = write_program(program, output, fmt)
+    if check and [p.read_bytes() for p in paths] != texts:  # deterministic writers
+        raise RuntimeError(f"{output}: the program written differs from the one checked")
     return paths, []
