@@ -34,9 +34,14 @@ def test_demo_writes_outputs_and_gates_the_program_on_verification(tmp_path):
     from drakedeburr.programs import read_program
 
     plan = load_plan(folder)
+    from drakedeburr.post.export import plan_program
+    from drakedeburr.post.program_check import _target_moves
+
     moves = read_program(program).moves
-    assert len(moves) == len(plan.targets)  # one move per target, home included
-    cut = [(m, t) for m, t in zip(moves, plan.targets, strict=True) if t.segment == "cut"]
+    # one move per target, home included, plus via points where a joint move bends
+    move_of = _target_moves(plan, plan_program(plan, "x"))
+    assert len(move_of) == len(plan.targets) and len(moves) >= len(plan.targets)
+    cut = [(moves[move_of[k]], t) for k, t in enumerate(plan.targets) if t.segment == "cut"]
     assert all(abs(m.speed - t.speed) <= 1e-6 for m, t in cut)
     assert len({round(t.speed, 4) for _, t in cut}) > 10
     assert min(t.speed for _, t in cut) < 0.5 * summary_speed(plan)

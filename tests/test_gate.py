@@ -66,9 +66,11 @@ def _edit(text: str, item: str) -> tuple[str, int]:
     import re
 
     lines = text.splitlines()
-    k = next(i for i, s in enumerate(lines) if s.strip().startswith("MoveL p3,"))
+    # the second linear move (the program numbers via points of bent joint moves too)
+    k = [i for i, s in enumerate(lines) if s.strip().startswith("MoveL p")][1]
+    name = lines[k].split()[1].rstrip(",")
     if item == "pose":
-        k = next(i for i, s in enumerate(lines) if re.search(r"robtarget p3\b", s))
+        k = next(i for i, s in enumerate(lines) if re.search(rf"robtarget {name}\b", s))
         lines[k] = re.sub(r"\[\[(-?[\d.]+)", lambda m: f"[[{float(m[1]) + 1.0:.3f}",
                           lines[k], count=1)
     elif item == "speed":

@@ -73,9 +73,11 @@ def test_each_move_carries_its_own_speed_and_zone(tmp_path, fmt, arm, stationary
         assert "$VEL.CP = 0.023457" in text and "BAS (#VEL_PTP, 33)" in text
         assert "BAS (#VEL_PTP, 12)" in text  # the last joint move at its own 12.5 %
     if fmt == "ls":
-        # 23.457 mm/s: 140 cm/min = 23.333 mm/s is closer below than 23 mm/sec
-        assert "L P[2] 140cm/min CNT10" in text and "J P[1] 33% FINE" in text
-        assert "L P[3] 600mm/sec CNT3" in text
+        # 23.457 mm/s: 140 cm/min = 23.333 mm/s is closer below than 23 mm/sec; CNT only where
+        # speed * LS_ACCEL_TIME / 2 fits the zone (docs/post.md): the corner would round within
+        # 4.5 mm of the point, more than its 1 mm zone -> FINE
+        assert "L P[2] 140cm/min FINE" in text and "J P[1] 33% FINE" in text
+        assert "L P[3] 600mm/sec FINE" in text
 
 
 def _edit(path, pattern, repl, count=1):
@@ -110,7 +112,7 @@ EDITS = {
     },
     "ls": {
         "speed": (r"(L P\[4\] )\d+(mm/sec|cm/min)", r"\g<1>1500mm/sec"),
-        "zone": (r"(L P\[2\] 140cm/min )CNT10", r"\1CNT100"),
+        "zone": (r"(L P\[2\] 140cm/min )FINE", r"\1CNT100"),
         "pose": (r"(P\[5\]\{\n   GP1:\n.*\n\tX = )(-?\d+\.\d+)", lambda m: m.group(1) + _plus(m)),
         "configuration": (r"(P\[6\]\{\n   GP1:\n.*CONFIG : ')([NF])", lambda m: m.group(1) + (
             "F" if m.group(2) == "N" else "N")),

@@ -49,7 +49,10 @@ def _plan(robot="irb1600", mode="tool", failures=(), X_WB=None):
 def test_targets_become_moves_with_their_own_speed_and_zone():
     plan = _plan()
     loads = mut.FlangeLoads(3.05, (-0.018, 0.0, 0.127), source="cell models (spindle)")
-    prog = mut.program_from_plan(plan, "hub1", loads=loads)
+    full = mut.program_from_plan(plan, "hub1", loads=loads)
+    # the targets' moves (the bent joint path home also gets via points: next test)
+    moves = [m for m in full.moves if any(np.array_equal(m.q, t.q) for t in plan.targets)]
+    prog = replace(full, moves=tuple(moves))
     assert [m.move_type for m in prog.moves] == ["joint"] + ["linear"] * 5 + ["joint"]
     assert [m.speed for m in prog.moves] == SPEEDS and [m.zone for m in prog.moves] == ZONES
     assert [m.comment for m in prog.moves] == ["home", "approach window 0", "cut window 0", "",
@@ -67,6 +70,32 @@ def test_targets_become_moves_with_their_own_speed_and_zone():
         assert np.abs(q - t.q).max() < 1e-9
     assert mut.program_from_plan(plan, "hub1", verified=True).flag == ""
     assert mut.program_from_plan(_plan(failures=({"point": 3},)), "h").flag == "FORCED"
+
+
+def test_a_bent_joint_path_is_written_as_via_points_the_controller_interpolates():
+    """PTP/MoveJ/J interpolate the joints linearly: the plan's home move bends (its knots
+    have speed), so the program carries via points; the joint-space polyline they make stays
+    within VIA_TOLERANCE of the plan's path (checked densely here), the targets in order."""
+    plan = _plan()
+    prog = mut.program_from_plan(plan, "hub1")
+    Q = np.array([m.q for m in prog.moves])
+    last = len(prog.moves) - 1
+    assert np.array_equal(Q[last], plan.targets[-1].q)
+    k0 = next(i for i in range(last) if np.array_equal(Q[i], plan.targets[-2].q))
+    vias = Q[k0 + 1:last]
+    assert len(vias) >= 1 and all(m.move_type == "joint" for m in prog.moves[k0 + 1:])
+    t = np.linspace(5.0, 6.0, 2001)
+    path = plan.trajectory.value(t)
+    poly = np.vstack([Q[k0], vias, Q[last]])
+    # distance of each dense plan sample to the polyline, joint by joint (max norm)
+    best = np.full(len(path), np.inf)
+    for a, b in zip(poly[:-1], poly[1:], strict=True):
+        f = np.linspace(0, 1, 2001)[:, None]
+        seg = a + f * (b - a)
+        d = np.abs(path[:, None, :] - seg[None, ::20, :]).max(axis=2).min(axis=1)
+        best = np.minimum(best, d)
+    assert best.max() <= mut.VIA_TOLERANCE + 2e-4  # + the 1/100 sampling of the chords
+    assert prog.consistency_error().max() < 1e-9
 
 
 def test_the_arm_and_its_mount_come_from_the_plan(tmp_path):

@@ -36,7 +36,14 @@ from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import ClProgram, read_cl
 from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
-from drakedeburr.programs.program import JOINT, LINEAR, IoAction, ProgramMove, RobotProgram
+from drakedeburr.programs.program import (
+    JOINT,
+    LINEAR,
+    IoAction,
+    ProgramMove,
+    RobotProgram,
+    zones_within_half_moves,
+)
 from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
@@ -428,10 +435,10 @@ def program_from_cl(
     X_WO_, X_FT_ = s.frames()
     flag, reason = _flag(bad)
     before, end = _io_before(cl, s, keep)
-    program = RobotProgram(
+    program = zones_within_half_moves(RobotProgram(
         name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]), before)),
         X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
-        flag_reason=reason, notes=notes, io_end=tuple(end), **_names(s))
+        flag_reason=reason, notes=notes, io_end=tuple(end), **_names(s)))
     return PostResult(program, bad, changes, res, notes)
 
 
@@ -504,13 +511,18 @@ def post_cl_file(
     flag, reason = _flag(bad)
     parts = [keep[a:a + max_moves] for a in range(0, keep.size, max_moves)]
     before, end = _io_before(cl, settings, keep)
+    # zones within half of the adjacent moves over the whole sequence (parts run on)
+    every = zones_within_half_moves(RobotProgram(
+        name="cl", moves=tuple(_program_moves(cl, res, keep, settings, int(keep[-1]), before)),
+        X_FT=X_FT, X_WO=X_WO, robot=settings.robot, io_end=tuple(end),
+        **_names(settings))).moves
     files: list[Path] = []
     for k, part in enumerate(parts):
         extra = (f"part {k + 1} of {len(parts)}: CL lines {int(cl.lines[part[0]])}-"
                  f"{int(cl.lines[part[-1]])}",) if len(parts) > 1 else ()
         program = RobotProgram(
             name=name if len(parts) == 1 else f"{name[:20]}_{k + 1:03d}",
-            moves=tuple(_program_moves(cl, res, part, settings, int(keep[-1]), before)),
+            moves=every[k * max_moves:k * max_moves + len(part)],
             X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
             flag=flag, flag_reason=reason, notes=notes + extra,
             io_end=tuple(end) if k == len(parts) - 1 else (), **_names(settings))

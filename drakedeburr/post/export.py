@@ -1,7 +1,13 @@
 """A plan folder -> a robot program, through the gate (:mod:`drakedeburr.verify.gate`): the
 program is written only when the folder's verification report passed for this very plan and
 cell, unless forced; a forced program's header says FORCED or UNVERIFIED and why. The CLI's
-``export`` and ``demo`` both come here."""
+``export`` and ``demo`` both come here.
+
+Export checks what it wrote: the program is written into a staging folder, read back and
+checked as the controller runs it (:mod:`drakedeburr.post.program_check`: the file equals the
+plan's program, the controller's joints, path, clearance and zones are the verified ones);
+only then are the same bytes written to the output. A failing check refuses the export
+(nothing written) unless forced (the header then says FORCED and why)."""
 
 from __future__ import annotations
 
@@ -27,14 +33,15 @@ class Exported:
 
 
 def plan_program(plan, name: str, *, flag: str = "", flag_reason: str = "",
-                 verified: bool = False, robot: str | None = None):
-    """The plan's program with the loads of its cell's tool (and workpiece) models."""
+                 verified: bool = False, robot: str | None = None, cell=None):
+    """The plan's program with the loads of its cell's tool (and workpiece) models (``cell``:
+    the plan's cell already loaded, else it is loaded here)."""
     from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.errors import InputError
     from drakedeburr.programs import program_from_plan
 
     try:  # the plan's own cell: its arm, burr and hub pose (the workpiece's centre of mass)
-        cell = load_plan_cell(plan)
+        cell = cell if cell is not None else load_plan_cell(plan)
     except FileNotFoundError as exc:
         raise InputError(f"the plan's cell ({plan.scenario}, hub {plan.hub}) is needed for the "
                          f"tool's mass and centre of gravity: {exc}") from exc
@@ -62,7 +69,6 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
         InputError: the folder is not a plan, or the format does not suit the arm.
     """
     from drakedeburr.plan.io import load_plan
-    from drakedeburr.programs import write_program
     from drakedeburr.verify.gate import gate
 
     folder = Path(folder)
@@ -79,6 +85,56 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
             raise ExportRefused(f"{folder}: refusing to export: {verdict.reason} (use --force "
                                 "to write it anyway; its header then says so)")
         flag, reason = verdict.flag, f"written with --force although {verdict.reason}"
+    from drakedeburr.cell.station import load_plan_cell
+
+    try:
+        cell = load_plan_cell(plan)
+    except FileNotFoundError:
+        cell = None  # plan_program names the missing cell
     program = plan_program(plan, name, flag=flag, flag_reason=reason, verified=verdict.ok,
-                           robot=robot)
-    return Exported(tuple(write_program(program, output, fmt)), flag, reason)
+                           robot=robot, cell=cell)
+    paths, failed = _write_checked(program, Path(output), fmt, plan, cell)
+    if failed:
+        what = "; ".join(f"{i.name}: {i.detail}" for i in failed)
+        if not force:
+            raise ExportRefused(f"{folder}: refusing to export: the program as the controller "
+                                f"runs it fails {', '.join(i.name for i in failed)} ({what}); "
+                                "nothing written (use --force to write it anyway)")
+        also = f"the program check fails {', '.join(i.name for i in failed)}"
+        flag = flag or "FORCED"
+        reason = (f"{reason}; {also}" if reason else f"written with --force although {also}")
+        program = plan_program(plan, name, flag=flag, flag_reason=reason, verified=False,
+                               robot=robot, cell=cell)
+        paths, _ = _write_checked(program, Path(output), fmt, plan, cell, check=False)
+    return Exported(tuple(paths), flag, reason)
+
+
+def _write_checked(program, output: Path, fmt, plan, cell, check: bool = True):
+    """Write ``program`` into a staging folder, check it as read back
+    (:func:`drakedeburr.post.program_check.program_items`), and write the same bytes to
+    ``output`` (atomically, :func:`drakedeburr.programs.write_program`) only when every
+    required item passed. Returns (paths, failed items)."""
+    import tempfile
+
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.post.program_check import program_items
+    from drakedeburr.programs import read_program, write_program
+
+    failed = []
+    if check:
+        with tempfile.TemporaryDirectory(prefix="drakedeburr-export-") as tmp:
+            try:
+                staged = write_program(program, Path(tmp) / output.name, fmt)
+            except OSError as exc:  # name the output, not its staging copy
+                if exc.errno is None:
+                    raise
+                raise OSError(exc.errno, exc.strerror, str(output)) from None
+            texts = [p.read_bytes() for p in staged]
+            items = program_items(plan, read_program(staged[0]), cell, default_tolerances())
+            failed = [i for i in items if i.required and not i.passed]
+        if failed:
+            return [], failed
+    paths = write_program(program, output, fmt)
+    if check and [p.read_bytes() for p in paths] != texts:  # deterministic writers
+        raise RuntimeError(f"{output}: the program written differs from the one checked")
+    return paths, []

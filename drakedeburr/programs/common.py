@@ -37,7 +37,7 @@ __all__ = [
     "speed_written", "zone_written", "joint_percent", "cnt_from_zone", "zone_from_cnt",
     "header_lines", "ABB_SPEEDS", "ABB_ZONES", "LS_REMARK_MAX", "LS_COMMENT_MAX",
     "CNT_PER_MM", "wrap_remarks", "check_writable", "ls_speed", "LS_MM_SEC_MAX",
-    "LS_CM_MIN_MAX", "io_lines",
+    "LS_CM_MIN_MAX", "io_lines", "LS_ACCEL_TIME", "ls_cnts",
 ]
 
 FORMATS = ("rapid", "krl", "ls")
@@ -52,6 +52,11 @@ LS_CM_MIN_MAX = 12000
 LS_COMMENT_MAX = 16
 #: FANUC CNT per mm of zone radius (CNT is a rounding degree, not a distance: docs/post.md)
 CNT_PER_MM = 10.0
+#: FANUC: the longest acceleration/deceleration time [s] the LS writer assumes for a linear
+#: move at ACC100 (the sum of the controller's two acceleration filters); a CNT corner stays
+#: within speed * LS_ACCEL_TIME / 2 of its point. The header names it as a value the cell must
+#: hold (docs/post.md "FANUC CNT").
+LS_ACCEL_TIME = 0.384
 _NAMES = {
     "rapid": (re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}"), "a letter, then letters, digits, '_', "
               "at most 32 characters"),
@@ -185,6 +190,30 @@ def zone_from_cnt(cnt: int) -> float:
     return cnt / CNT_PER_MM / 1000.0
 
 
+def ls_cnts(program) -> np.ndarray:
+    """(N,) the CNT value the LS writer gives each move; 0 = FINE.
+
+    CNT n is a degree of rounding, not a distance (FANUC's corner depends on speed, the
+    acceleration profile and the load). A bound holds for a linear move into a linear move:
+    the blend starts no earlier than the deceleration, so the corner stays within
+    ``d = max(v_in, v_out) * LS_ACCEL_TIME / 2`` of the point, for any n. CNT (n =
+    :func:`cnt_from_zone`) is written only where ``d`` is within the planned zone and within
+    half of both adjacent moves (the blend stays inside them); everywhere else FINE.
+    """
+    moves = program.moves
+    n = len(moves)
+    out = np.zeros(n, dtype=int)
+    limits = program.zone_limits()
+    for i in range(n - 1):
+        m, nxt = moves[i], moves[i + 1]
+        if m.zone <= 0 or m.move_type != "linear" or nxt.move_type != "linear":
+            continue
+        d = max(speed_written("ls", m.speed), speed_written("ls", nxt.speed)) * LS_ACCEL_TIME / 2
+        if d <= m.zone + 1e-12 and d <= limits[i] + 1e-12:
+            out[i] = cnt_from_zone(m.zone)
+    return out
+
+
 def zone_written(fmt: str, zone: float) -> float:
     """Zone radius [m] as the format holds it: RAPID/KRL 0.001 mm (0 = fine / exact stop), LS
     the nominal radius of its CNT value."""
@@ -234,7 +263,8 @@ def wrap_remarks(lines: list[str], width: int = LS_REMARK_MAX) -> list[str]:
 
 def check_writable(program, tol: float = 1e-6) -> None:
     """Refuse a program whose joints do not reach their poses (FK(q) X_FT vs X_WT, ``tol`` in
-    m + rad) or leave the joint limits.
+    m + rad), whose zones the controller would shrink (more than half an adjacent move), or
+    whose joints leave the joint limits.
 
     Raises:
         InputError: naming the first moves and the error.
@@ -246,6 +276,14 @@ def check_writable(program, tol: float = 1e-6) -> None:
         raise InputError(f"program {program.name}: move(s) {moves} have joints that do not "
                          f"reach their pose (error {err[bad].max():.3g}); the writers need "
                          "consistent q and X_WT")
+    zones = np.array([m.zone for m in program.moves])
+    over = np.flatnonzero(zones > program.zone_limits() + 1e-9)
+    if over.size:
+        i = int(over[0])
+        raise InputError(f"program {program.name}: move {i + 1} zone {zones[i] * 1e3:.3f} mm is "
+                         f"more than half an adjacent move ({program.zone_limits()[i] * 1e3:.3f} "
+                         f"mm, {over.size} move(s)): the controller would shrink it; build the "
+                         "program with programs.zones_within_half_moves")
     inside = program.kinematics.limits.contains(np.array([m.q for m in program.moves]))
     if not np.all(inside):
         i = int(np.flatnonzero(~inside)[0])

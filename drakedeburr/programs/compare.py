@@ -15,7 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drakedeburr.programs.common import joint_percent, speed_written, zone_written
+from drakedeburr.programs.common import (
+    joint_percent,
+    ls_cnts,
+    speed_written,
+    zone_from_cnt,
+    zone_written,
+)
 from drakedeburr.programs.program import JOINT, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram
 from drakedeburr.robots import configuration_of
@@ -81,6 +87,7 @@ class _Expected:
 def expected_values(program: RobotProgram, fmt: str) -> list[_Expected]:
     """Per move, the values ``fmt`` holds for ``program`` (the writers' quantisation)."""
     out = []
+    cnts = ls_cnts(program) if fmt == "ls" else None
     for i, m in enumerate(program.moves):
         joint_pct = fmt != "rapid" and m.move_type == JOINT
         out.append(_Expected(
@@ -88,7 +95,7 @@ def expected_values(program: RobotProgram, fmt: str) -> list[_Expected]:
             configuration=configuration_of(program.kinematics, m.q, _CONTROLLER[fmt]),
             speed=None if joint_pct else speed_written(fmt, m.speed),
             joint_percent=joint_percent(program.joint_fraction(i)) if joint_pct else None,
-            zone=zone_written(fmt, m.zone)))
+            zone=zone_from_cnt(int(cnts[i])) if cnts is not None else zone_written(fmt, m.zone)))
     return out
 
 

@@ -133,9 +133,11 @@ def format_krl(program: RobotProgram) -> tuple[str, str]:
     hdr = [f"{_IND}; {h}".rstrip() for h in header_lines(p, "KUKA KRL", extra)]
     X_RO = np.linalg.solve(p.X_BR, p.X_WO)
     src = ["&ACCESS RVP", "&REL 1", f"DEF {p.name}( )", *hdr, *_INI, "",
-           f"{_IND}; {'stationary tool' if p.stationary_tool else 'work object'} {p.wobj_name}",
+           (f"{_IND}; $BASE: stationary tool {p.tool_name} (external TCP)" if p.stationary_tool
+            else f"{_IND}; $BASE: work object {p.wobj_name}"),
            f"{_IND}$BASE = {frame_text(X_RO)}",
-           f"{_IND}; {'workpiece on the flange' if p.stationary_tool else 'tool'} {p.tool_name}",
+           (f"{_IND}; $TOOL: work object {p.wobj_name} held on the flange" if p.stationary_tool
+            else f"{_IND}; $TOOL: tool {p.tool_name}"),
            f"{_IND}$TOOL = {frame_text(p.X_FT)}",
            f"{_IND}$LOAD = {_load(p)}",
            f"{_IND}$IPO_MODE = {'#TCP' if p.stationary_tool else '#BASE'}",

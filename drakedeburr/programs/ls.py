@@ -6,10 +6,14 @@ file's name; /MN with ``UFRAME_NUM``, ``UTOOL_NUM``, ``PAYLOAD[n]``, ``L P[n] 15
 (whole mm/sec or whole cm/min, whichever is closer below the plan: 400 mm/min is
 ``40cm/min``; rounded down so the program is never faster than planned; FINE for zone 0,
 ``CNTn`` for a zone: see docs/post.md for what CNT means), ``J P[n] 25%``; with a stationary
-tool every L move carries ``RTCP`` (the remote TCP is the user frame); /POS with CONFIG from
-the planned joints. The frame and payload values cannot be set from a TP program: they are
-written as remarks (``!UTOOL[1] X=...``) for the controller's setup screens, and read back from
-them. Remarks are at most 32 characters.
+tool every L move carries ``RTCP`` (the remote TCP is the user frame; the header names the
+Remote TCP option); /POS with CONFIG from the planned joints. The tool and user frame are set
+by the program from their values: ``PR[10]=LPOS`` (a Cartesian register), ``PR[10,1..6]=``
+X, Y, Z, W, P, R, ``UTOOL[1]=PR[10]``, the same for UFRAME (RoboDK's FANUC post writes them
+so); the payload schedule's values cannot be set from a TP program: ``PAYLOAD[n]`` selects it
+and remarks list the values it must hold (``verify --program`` names them). The reader takes
+the frames from those statements (or from ``!UTOOL[1] X=...`` remarks of older files).
+Remarks are at most 32 characters.
 """
 
 from __future__ import annotations
@@ -20,18 +24,19 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr.programs.common import (
+    LS_ACCEL_TIME,
     LS_COMMENT_MAX,
     LS_REMARK_MAX,
     ProgramFormatError,
     R_from_euler_zyx_deg,
     check_writable,
-    cnt_from_zone,
     euler_zyx_deg,
     fnum,
     header_lines,
     io_lines,
     joint_percent,
     ls_speed,
+    ls_cnts,
     pose_from_mm,
     wrap_remarks,
     zone_from_cnt,
@@ -51,11 +56,19 @@ _ATTR = ["OWNER\t\t= MNEDITOR;", "PROG_SIZE\t= 0;", "VERSION\t\t= 0;", "MEMORY_S
 _KEYS = ("X", "Y", "Z", "W", "P", "R")
 
 
-def _frame_remarks(label: str, X: np.ndarray) -> list[str]:
+#: the position register the LS program loads its tool and user frame values through
+FRAME_PR = 10
+
+
+def _frame_statements(label: str, n: int, X: np.ndarray, pr: int) -> list[str]:
+    """``PR[pr]`` set to the frame's X, Y, Z [mm], W, P, R [deg] and ``UTOOL[n]=PR[pr]`` (or
+    UFRAME): the controller takes the values from the program, not from its setup screens
+    (HandlingTOOL Operator's Manual, frame instructions; RoboDK's FANUC post does the same)."""
     xyz = mm_from_m(X[:3, 3])
     r, p, w = euler_zyx_deg(X[:3, :3])
     values = (*xyz, w, p, r)
-    return [f"{label} {k}={fnum(v)}" for k, v in zip(_KEYS, values, strict=True)]
+    return ([f"PR[{pr}]=LPOS"] + [f"PR[{pr},{k + 1}]={fnum(v)}" for k, v in enumerate(values)]
+            + [f"{label}[{n}]=PR[{pr}]"])
 
 
 def _payload_remarks(p: RobotProgram, n: int) -> list[str]:
@@ -69,18 +82,25 @@ def _payload_remarks(p: RobotProgram, n: int) -> list[str]:
 
 
 def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
-    mn = [f"!{h}" for h in wrap_remarks(header_lines(p, "FANUC LS"), LS_REMARK_MAX)]
+    extra = (f"CNT corners assume an ACC100 acceleration time <= {LS_ACCEL_TIME * 1e3:.0f} ms "
+             "($PARAM_GROUP[1].$ACCEL_TIME1 + $ACCEL_TIME2)",)
+    if p.stationary_tool:
+        extra += ("needs the Remote TCP option (RTCP): the user frame is the stationary tool",)
+    mn = [f"!{h}" for h in wrap_remarks(header_lines(p, "FANUC LS", extra), LS_REMARK_MAX)]
     X_RO = np.linalg.solve(p.X_BR, p.X_WO)
-    mn += ["!" + r for r in _frame_remarks(f"UTOOL[{utool}]", p.X_FT)]
-    mn += ["!" + r for r in _frame_remarks(f"UFRAME[{uframe}]", X_RO)]
+    mn += [f"!sets UTOOL[{utool}], UFRAME[{uframe}]", f"!through PR[{FRAME_PR}] (overwritten)"]
+    mn += _frame_statements("UTOOL", utool, p.X_FT, FRAME_PR)
+    mn += _frame_statements("UFRAME", uframe, X_RO, FRAME_PR)
+    mn += [f"!the cell must hold PAYLOAD[{payload}]:"]
     mn += ["!" + r for r in _payload_remarks(p, payload)]
     mn += [f"UFRAME_NUM={uframe}", f"UTOOL_NUM={utool}", f"PAYLOAD[{payload}]"]
+    cnts = ls_cnts(p)
     for i, m in enumerate(p.moves):
         if m.comment:
             mn += [f"!{c}" for c in wrap_remarks([comment_text(m.comment, "ls")],
                                                  LS_REMARK_MAX)]
         mn += io_lines(m.io, "ls")
-        cnt = cnt_from_zone(m.zone)
+        cnt = int(cnts[i])
         term = "FINE" if cnt == 0 else f"CNT{cnt}"
         if m.move_type == JOINT:
             mn.append(f"J P[{i + 1}] {joint_percent(p.joint_fraction(i))}% {term}")
@@ -135,6 +155,7 @@ class _MnState:
         self.motions: list = []
         self.header: list = []
         self.io: list = []
+        self.pr: dict = {}
 
 
 def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
@@ -167,11 +188,31 @@ def _mn_line(n: int, text: str, k: int, file: str, st: _MnState) -> None:
         else:
             st.io.append((k, "ao", int(m.group(3)), float(m.group(4))))
         return
+    m = re.fullmatch(r"PR\[(\d+)\]\s*=\s*LPOS", text)
+    if m:
+        st.pr[int(m.group(1))] = {}
+        return
+    m = re.fullmatch(r"PR\[(\d+),([1-6])\]\s*=\s*(\S+)", text)
+    if m:
+        st.pr.setdefault(int(m.group(1)), {})[int(m.group(2))] = parse_number(
+            m.group(3), file, k, f"PR[{m.group(1)},{m.group(2)}]")
+        return
+    m = re.fullmatch(r"(UTOOL|UFRAME)\[(\d+)\]\s*=\s*PR\[(\d+)\]", text)
+    if m:
+        vals = st.pr.get(int(m.group(3)), {})
+        if sorted(vals) != [1, 2, 3, 4, 5, 6]:
+            raise ProgramFormatError(f"{file}:{k}: {text}: PR[{m.group(3)}] is not set (X, Y, "
+                                     "Z, W, P, R) before it is used")
+        for j, key in enumerate(_KEYS):
+            st.remarks[(m.group(1), key)] = vals[j + 1]
+        st.lines["tool" if m.group(1) == "UTOOL" else "work object"] = k
+        return
     m = _MOTION.fullmatch(text)
     if not m:
         raise ProgramFormatError(f"{file}:{k}: /MN line {n} {text!r} is outside the motion "
                                  "subset this reader accepts (J/L P[n], UFRAME_NUM, UTOOL_NUM, "
-                                 "PAYLOAD[n], DO[n]=ON/OFF, AO[n]=value, remarks)")
+                                 "PAYLOAD[n], DO[n]=ON/OFF, AO[n]=value, PR[n]=LPOS, "
+                                 "PR[n,i]=value, UTOOL/UFRAME[n]=PR[m], remarks)")
     options = tuple(m.group(5).split())
     for o in options:
         if not _OPTIONS.fullmatch(o):

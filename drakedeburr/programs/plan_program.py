@@ -24,10 +24,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.programs.program import JOINT, LINEAR, ProgramMove, RobotProgram
-from drakedeburr.robots import DEFAULT_ROBOT, RobotSpec, get_robot
+from drakedeburr.programs.program import (
+    JOINT,
+    LINEAR,
+    ProgramMove,
+    RobotProgram,
+    zones_within_half_moves,
+)
+from drakedeburr.robots import DEFAULT_ROBOT, RobotSpec, fk_opw, get_robot
 
-__all__ = ["FlangeLoads", "program_from_plan", "plan_robot", "joint_fractions"]
+__all__ = ["FlangeLoads", "program_from_plan", "plan_robot", "joint_fractions", "joint_vias",
+           "VIA_TOLERANCE"]
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +81,46 @@ def joint_fractions(plan, spec: RobotSpec) -> dict[int, float]:
         for k in range(*seg.target_range):
             out[k] = float(np.clip(frac, 0.01, 1.0))
     return out
+
+
+#: [rad] how far the controller's joint-space straight line between two written joint moves may
+#: leave the plan's joint path on a home/transition segment (a PTP/MoveJ/J move interpolates
+#: the joints linearly): the plan's transitions bend around the hub, so their shape is
+#: written as via points (Douglas-Peucker in joint space, largest joint deviation)
+VIA_TOLERANCE = 1e-3
+
+
+def _simplify(Q: np.ndarray, tol: float) -> list[int]:
+    """Indices of the samples ``Q`` (M, 6) to keep so that the polyline through them is within
+    ``tol`` (largest joint difference) of every sample; first and last always kept."""
+    keep, stack = {0, len(Q) - 1}, [(0, len(Q) - 1)]
+    while stack:
+        a, b = stack.pop()
+        if b - a < 2:
+            continue
+        f = (np.arange(a + 1, b) - a) / (b - a)
+        chord = Q[a] + f[:, None] * (Q[b] - Q[a])
+        err = np.abs(Q[a + 1:b] - chord).max(axis=1)
+        j = int(np.argmax(err))
+        if err[j] > tol:
+            m = a + 1 + j
+            keep.add(m)
+            stack += [(a, m), (m, b)]
+    return sorted(keep)
+
+
+def joint_vias(plan, k: int, tol: float = VIA_TOLERANCE) -> np.ndarray:
+    """(V, 6) joints on the plan's path into joint target ``k`` (its home/transition segment)
+    where a straight joint-space move from the previous written point would leave the path by
+    more than ``tol``; empty when the segment is a straight line in joint space."""
+    seg = next((s for s in plan.segments if s.kind in _JOINT_SEGMENTS
+                and s.target_range == (k, k + 1)), None)
+    if seg is None or k == 0:
+        return np.zeros((0, 6))
+    t = np.linspace(seg.t_range[0], seg.t_range[1], 400)
+    Q = np.asarray(plan.trajectory.value(t))
+    idx = _simplify(Q, tol)
+    return Q[idx[1:-1]]
 
 
 def _comments(targets) -> list[str]:
@@ -132,12 +179,19 @@ def program_from_plan(
         raise InputError(f"plan mode {plan.mode!r} is neither 'tool' nor 'workpiece'")
     fractions = joint_fractions(plan, spec)
     comments = _comments(targets)
-    moves = tuple(ProgramMove(
-        X_WT=X_BW @ np.asarray(t.X_WF, float) @ X_Fc, q=np.asarray(t.q, float),
-        move_type=JOINT if getattr(t, "motion", None) == "joint" or (
-            getattr(t, "motion", None) is None and t.segment in _JOINT_SEGMENTS) else LINEAR,
-        speed=float(t.speed), zone=float(t.zone), comment=c,
-        joint_fraction=fractions.get(k)) for k, t, c in zip(keep, targets, comments, strict=True))
+    moves = []
+    for k, t, c in zip(keep, targets, comments, strict=True):
+        joint = getattr(t, "motion", None) == "joint" or (
+            getattr(t, "motion", None) is None and t.segment in _JOINT_SEGMENTS)
+        if joint and moves:  # the plan's bent joint path, as via points
+            for q in joint_vias(plan, k):
+                moves.append(ProgramMove(X_WT=fk_opw(spec.opw, q) @ X_Fc, q=q, move_type=JOINT,
+                                         speed=float(t.speed), zone=0.0,
+                                         joint_fraction=fractions.get(k)))
+        moves.append(ProgramMove(
+            X_WT=X_BW @ np.asarray(t.X_WF, float) @ X_Fc, q=np.asarray(t.q, float),
+            move_type=JOINT if joint else LINEAR, speed=float(t.speed), zone=float(t.zone),
+            comment=c, joint_fraction=fractions.get(k)))
     if not flag:
         if plan.failures:
             flag, flag_reason = "FORCED", f"{len(plan.failures)} planning failure(s) in the plan"
@@ -153,8 +207,8 @@ def program_from_plan(
     tool = plan.meta.get("tool") if isinstance(plan.meta, dict) else None
     if tool:  # not the standard burr: the operator mounts this one (the TCP is its)
         notes += (f"burr: {plan.meta.get('tool_title') or tool}: mount it before running",)
-    return RobotProgram(
+    return zones_within_half_moves(RobotProgram(
         name=name, moves=moves, X_FT=X_Fc, X_WO=X_BO, robot=spec,
         stationary_tool=plan.mode == "workpiece", tool_name=tool_name, wobj_name="wobjHub",
         source=f"drakedeburr plan {plan.hub}", flag=flag, flag_reason=flag_reason,
-        notes=notes, **extra)
+        notes=notes, **extra))

@@ -36,7 +36,7 @@ from drakedeburr.robots import (
 )
 
 __all__ = ["ProgramMove", "RobotProgram", "IoAction", "LINEAR", "JOINT", "check_pose",
-           "DEFAULT_JOINT_SPEED_FRACTION"]
+           "DEFAULT_JOINT_SPEED_FRACTION", "zones_within_half_moves"]
 
 LINEAR = "linear"
 JOINT = "joint"
@@ -278,6 +278,30 @@ class RobotProgram:
 
         return configuration_of(self.kinematics, self.moves[i].q, self.controller)
 
+    def path_points(self) -> np.ndarray:
+        """(N, 3) the programmed TCP path [m] as the controller interpolates it: the TCP in the
+        work object (tool in hand: X_OT's origin; stationary tool: the fixed TCP in the held
+        work object, X_OT^-1's origin)."""
+        X = np.array([self.X_OT(i) for i in range(len(self.moves))])
+        if self.stationary_tool:
+            X = np.linalg.inv(X)
+        return X[:, :3, 3]
+
+    def zone_limits(self) -> np.ndarray:
+        """(N,) the largest zone radius [m] each move may carry so that no controller shrinks
+        it: half the shorter of the move into its target and the move out of it (ABB zonedata
+        and KUKA C_DIS are reduced to half the adjacent move; RAPID reference "zonedata",
+        KSS "Approximate positioning"). The first move's start and the last move's successor
+        are not in the program: only the move the program holds counts there."""
+        p = self.path_points()
+        d = np.linalg.norm(np.diff(p, axis=0), axis=1)
+        out = np.zeros(len(p))
+        if len(p) >= 2:
+            out[0], out[-1] = 0.5 * d[0], 0.5 * d[-1]
+        if len(p) > 2:
+            out[1:-1] = 0.5 * np.minimum(d[:-1], d[1:])
+        return out
+
     def consistency_error(self) -> np.ndarray:
         """(N,) distance [m] between FK(q) * X_FT and X_WT per move (position part) plus
         orientation error [rad]; the writers refuse programs where it exceeds 1e-6."""
@@ -290,6 +314,18 @@ class RobotProgram:
             s = 0.5 * np.linalg.norm([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
             out[i] = dp + float(np.arctan2(s, 0.5 * (np.trace(R) - 1.0)))
         return out
+
+
+def zones_within_half_moves(program: RobotProgram) -> RobotProgram:
+    """The program with every zone reduced to :meth:`RobotProgram.zone_limits` (rounded down
+    to 0.001 mm, the finest zone RAPID and KRL write), so the corner the controller makes is
+    the one written."""
+    from dataclasses import replace
+
+    limits = np.floor(program.zone_limits() * 1e6 + 1e-6) / 1e6
+    moves = tuple(m if m.zone <= lim else replace(m, zone=float(lim))
+                  for m, lim in zip(program.moves, limits, strict=True))
+    return replace(program, moves=moves)
 
 
 def _check_move(i: int, m: ProgramMove) -> None:

@@ -9,9 +9,14 @@ joints); controllers resolve it with configuration data stored next to the pose:
 - KUKA ``S`` (status) and ``T`` (turn): S bit 0 = wrist centre behind axis 1 (overhead area),
   bit 1 = wrist centre in front of the lower arm (A3 >= phi), bit 2 = A5 <= 0; T bit i = 1 when
   axis i+1 < 0.
-- FANUC ``CONFIG : 'F/N U/D T/B, t1, t4, t6'``: N if J5 >= 0 else F; U if the elbow is in its
-  up branch (wrist centre in front of the lower arm); T if the wrist centre is in front of
-  axis 1, B behind; t1/t4/t6 the turn numbers of J1/J4/J6 (0 for -180 < q <= 180 deg).
+- FANUC ``CONFIG : 'F/N U/D T/B, t1, t4, t6'``: F (flip) if J5 >= 0, N (no flip) if J5 < 0
+  (FANUC's J5 sign, which is the model's: the ROS-Industrial FANUC models use the controller's
+  joint directions); U if the elbow is in its up branch (wrist centre in front of the lower
+  arm); T if the wrist centre is in front of axis 1, B behind; t1/t4/t6 the turn numbers of
+  J1/J4/J6: 0 for -180 < q < 180 deg, +1 for 180 <= q < 540, -1 for -540 < q <= -180.
+
+Every rule is checked against cases from public sources (vendor manuals, a worked FANUC
+example, RoboDK's post-processors) in ``tests/data/vendor_config_reference.yaml``.
 
 The geometric bits come from :func:`drakedeburr.robots.opw_ik.arm_branches`, so the same code
 serves every OPW robot; joint signs and turns are taken in the robot's own convention.
@@ -59,15 +64,26 @@ def kuka_status_turn(robot: RobotKinematics, q: np.ndarray) -> tuple[int, int]:
     return s, t
 
 
+#: joint offsets [rad] within which a solution on a configuration boundary still counts as
+#: having the written configuration (J1, J4, J5, J6 by +-1e-6 rad: a pose written with 6
+#: decimals moves an exact 0 or 90 deg joint by about that)
+_NUDGES = [np.array([a, 0.0, 0.0, b, c, d]) * 1e-6
+           for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) for d in (-1, 0, 1)
+           if (a, b, c, d) != (0, 0, 0, 0)]
+
+
 def _turn(q: float) -> int:
-    return int(math.ceil((q - math.pi) / (2 * math.pi) - 1e-12))
+    """FANUC turn number: floor((q + 180 deg) / 360 deg) for q >= 0, mirrored for q < 0 (as
+    RoboDK's FANUC post writes it), so the turn is 0 strictly inside (-180, 180) deg."""
+    k = math.floor((abs(q) + math.pi) / (2 * math.pi) + 1e-12)
+    return int(k if q >= 0 else -k)
 
 
 def fanuc_config(robot: RobotKinematics, q: np.ndarray) -> str:
     """FANUC configuration string, e.g. ``'N U T, 0, 0, 0'``, of joints ``q`` (6,) [rad]."""
     q = np.asarray(q, float)
     shoulder, elbow, _ = arm_branches(robot.opw, q)
-    f = "N" if q[4] >= 0 else "F"
+    f = "F" if q[4] >= 0 else "N"
     u = "U" if elbow > 0 else "D"
     t = "T" if shoulder > 0 else "B"
     return f"{f} {u} {t}, {_turn(q[0])}, {_turn(q[3])}, {_turn(q[5])}"
@@ -109,6 +125,9 @@ def joints_from_configuration(robot: RobotKinematics, X_BF: np.ndarray, vendor: 
     sols = ik_opw(robot.opw, X_BF)
     cand = joint_candidates(sols.q[0], robot.limits)
     match = [c for c in cand if configuration_of(robot, c, vendor) == config]
+    if not match:  # a joint on a boundary (0, +-90 deg, ...) within round-off of the pose read
+        match = [c for c in cand if any(configuration_of(robot, c + d, vendor) == config
+                                        for d in _NUDGES)]
     if not match:
         raise InputError(f"no IK solution with {vendor} configuration {config!r}")
     match_arr = np.array(match)

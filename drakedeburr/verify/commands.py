@@ -184,22 +184,10 @@ def _read_program_file(path: str | None):
 
 
 def _program_item(plan, actual):
-    """A required report item: the program (a file, or as read by :func:`_read_program_file`)
-    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
-    every difference named by line."""
-    from drakedeburr.post.export import plan_program
-    from drakedeburr.programs import compare_programs
-    from drakedeburr.verify.report import CheckItem
+    """The program_file item (kept for callers; :mod:`drakedeburr.post.program_check`)."""
+    from drakedeburr.post.program_check import program_file_item
 
-    if isinstance(actual, (str, Path)):
-        actual = _read_program_file(str(actual))
-    path = actual.files[0]
-    expected = plan_program(plan, actual.name)
-    found = compare_programs(expected, actual)
-    lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
-    return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
-                     detail=("; ".join(lines[:8]) + (" ..." if len(lines) > 8 else "")) or
-                     f"{path}: every move, frame and load as the plan's program")
+    return program_file_item(plan, actual)
 
 
 def _print_report(report) -> None:
@@ -212,7 +200,8 @@ def _print_report(report) -> None:
             f", t={it.time:.3f} s" if it.time is not None else "") + "]"
         pair = f" {it.pair[0]} <-> {it.pair[1]}" if it.pair and not it.passed else ""
         print(f"{mark}  {it.name:<{width}}  {value:>16} {limit:<14}{where}{pair}")
-        if it.name in ("program_file", "windows") and not it.passed and it.detail:
+        if (it.name in ("program_file", "windows") or it.name.startswith("controller_")) and (
+                not it.passed or it.comparison == "info") and it.detail:
             print(f"      {it.detail}")
     print("PASSED" if report.passed else "FAILED: " + ", ".join(report.failed))
 
@@ -275,7 +264,9 @@ def _run_verify(args: argparse.Namespace) -> int:
     if import_notes:  # what the mesh import changed (a tyre dropped) goes with the report
         report = replace(report, plan_info={**report.plan_info, "import_notes": import_notes})
     if program is not None:
-        items = (*report.items, _program_item(plan, program))
+        from drakedeburr.post.program_check import program_items
+
+        items = (*report.items, *program_items(plan, program, cell, config.tolerances))
         report = replace(report, items=items,
                          passed=all(i.passed for i in items if i.required))
     written = ()

@@ -1,0 +1,223 @@
+"""The program as the controller runs it, checked like a plan (``verify --program`` and the
+export gate): the file read back equals the plan's program line by line
+(:func:`program_file_item`), and the motion the controller makes of it
+(:func:`drakedeburr.programs.controller.controller_motion`: joints from the written poses and
+configuration by the vendor's rule, straight lines, the vendor's corners) reaches the verified
+joints, runs within the path tolerance of the verified motion, keeps the clearance at its
+samples and its zones; the values the cell must hold are named (:func:`controller_items`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["program_file_item", "controller_items", "program_items"]
+
+
+def program_file_item(plan, actual, cell=None):
+    """A required report item: the program (a file, or as read by :func:`_read_program_file`)
+    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
+    every difference named by line."""
+    from drakedeburr.post.export import plan_program
+    from drakedeburr.programs import compare_programs
+    from drakedeburr.verify.report import CheckItem
+
+    if isinstance(actual, (str, Path)):
+        from drakedeburr.programs import read_program
+
+        actual = read_program(str(actual))
+    path = actual.files[0]
+    expected = plan_program(plan, actual.name, cell=cell)
+    found = compare_programs(expected, actual)
+    lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
+    return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
+                     detail=("; ".join(lines[:8]) + (" ..." if len(lines) > 8 else "")) or
+                     f"{path}: every move, frame and load as the plan's program")
+
+
+def _mm_deg(X) -> str:
+    from drakedeburr.programs.common import euler_zyx_deg
+
+    a, b, c = euler_zyx_deg(np.asarray(X)[:3, :3])
+    x, y, z = np.asarray(X)[:3, 3] * 1e3
+    return f"({x:.3f}, {y:.3f}, {z:.3f}) mm, (A {a:.4f}, B {b:.4f}, C {c:.4f}) deg"
+
+
+def _cell_values(expected, actual) -> str:
+    """Every value the controller must hold for the program to run as verified."""
+    X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
+    m = expected.tool_mass + expected.workpiece_mass
+    cog = (expected.tool_mass * np.asarray(expected.tool_cog)
+           + expected.workpiece_mass * np.asarray(expected.workpiece_cog)) / m
+    fixed = "stationary tool (external TCP)" if expected.stationary_tool else "work object"
+    carried = "held work object" if expected.stationary_tool else "tool (TCP)"
+    out = [f"{carried} in the flange frame {_mm_deg(expected.X_FT)}",
+           f"{fixed} in the robot frame {_mm_deg(X_RO)}",
+           f"load {m:.3f} kg at ({', '.join(f'{v * 1e3:.3f}' for v in cog)}) mm in the flange"]
+    if actual.format == "ls":
+        from drakedeburr.programs.common import LS_ACCEL_TIME
+
+        out.append(f"ACC100 acceleration time <= {LS_ACCEL_TIME * 1e3:.0f} ms (CNT bound)")
+        if expected.stationary_tool:
+            out.append("Remote TCP option (RTCP)")
+    if actual.format == "rapid" and expected.stationary_tool:
+        out.append("a stationary-tool (robhold FALSE) tooldata and a robot-held (robhold TRUE) "
+                   "wobjdata")
+    if actual.format == "krl" and expected.stationary_tool:
+        out.append("external TCP ($IPO_MODE #TCP)")
+    return "the cell must hold: " + "; ".join(out)
+
+
+def _target_moves(plan, expected) -> dict[int, int]:
+    """Plan target index -> program move index (the program adds via points on bent joint
+    moves; a target's move carries its joints exactly)."""
+    out, j = {}, 0
+    for k, t in enumerate(plan.targets):
+        q = np.asarray(t.q, float)
+        while j < len(expected.moves) and not np.array_equal(expected.moves[j].q, q):
+            j += 1
+        if j == len(expected.moves):
+            break
+        out[k] = j
+        j += 1
+    return out
+
+
+def _path_item(plan, expected, actual, n, tol):
+    """The straight lines the controller runs on cuts vs the verified motion: every point of
+    a cut move within the path tolerance of the verified path, or within the zone the plan
+    verified around a target (where the plan blends and the controller may run the corner)."""
+    from drakedeburr.programs.program import JOINT
+    from drakedeburr.robots import fk_opw
+    from drakedeburr.verify.geometry import point_segment
+    from drakedeburr.verify.report import CheckItem
+
+    X_OB = np.linalg.inv(expected.X_WO)
+    targ = np.array([m.X_OT for m in actual.moves])  # flange-carried frame in the fixed one
+    pts = np.linalg.inv(targ)[:, :3, 3] if expected.stationary_tool else targ[:, :3, 3]
+    zones = np.array([m.zone for m in expected.moves])
+    dev = None
+    pd = tol.path_deviation
+    move_of = _target_moves(plan, expected)
+    cut_moves = [move_of[k] for s in plan.segments if s.kind == "cut"
+                 for k in range(s.target_range[0] + 1, s.target_range[1])
+                 if k in move_of and move_of[k] < n and move_of[k] - 1 == move_of.get(k - 1)
+                 and actual.moves[move_of[k]].move_type != JOINT]
+    if cut_moves:
+        segs = [s for s in plan.segments if s.kind == "cut"]
+        t = np.concatenate([np.append(np.arange(s.t_range[0], s.t_range[1], 0.004),
+                                      s.t_range[1]) for s in segs])
+        P = X_OB @ fk_opw(expected.kinematics.opw, plan.trajectory.value(t)) @ expected.X_FT
+        p_plan = np.linalg.inv(P)[:, :3, 3] if expected.stationary_tool else P[:, :3, 3]
+        q_pts, allow = [], []
+        for k in cut_moves:
+            a, b = pts[k - 1], pts[k]
+            m_ = max(2, int(np.ceil(np.linalg.norm(b - a) / 2.5e-4)) + 1)
+            f = np.linspace(0.0, 1.0, m_)[:, None]
+            c = a + f * (b - a)
+            al = np.full(m_, pd)
+            for end, z in ((a, zones[k - 1]), (b, zones[k])):
+                near = np.linalg.norm(c - end, axis=1) <= z + pd
+                al[near] = np.maximum(al[near], z + pd)
+            q_pts.append(c)
+            allow.append(al)
+        c, al = np.concatenate(q_pts), np.concatenate(allow)
+        d = point_segment(c, p_plan[:-1], p_plan[1:])
+        d = d[0] if isinstance(d, tuple) else d
+        dev = float(np.max(d - al))
+    return CheckItem(
+        "controller_path", dev is not None and dev <= 0.0, dev, 0.0, "m", "<=",
+        detail="the straight lines the controller runs on cuts vs the verified motion, less "
+        f"the path tolerance ({pd * 1e3:.3f} mm; the verified zone near a target)"
+        if dev is not None else "no linear cut moves to compare")
+
+
+def _zones_item(expected, actual, n):
+    """Zones the controller keeps: each within half the adjacent moves as written (FANUC: CNT
+    only where its bound holds)."""
+    from drakedeburr.programs.common import ls_cnts
+    from drakedeburr.verify.report import CheckItem
+
+    p_read = np.array([m.X_OT[:3, 3] for m in actual.moves])
+    if actual.stationary_tool:
+        p_read = np.linalg.inv(np.array([m.X_OT for m in actual.moves]))[:, :3, 3]
+    dd = np.linalg.norm(np.diff(p_read, axis=0), axis=1)
+    half = np.zeros(len(p_read))
+    if len(p_read) >= 2:
+        half[0], half[-1] = 0.5 * dd[0], 0.5 * dd[-1]
+        half[1:-1] = 0.5 * np.minimum(dd[:-1], dd[1:])
+    z = np.array([m.zone for m in actual.moves])
+    if actual.format == "ls":  # CNT: the bound, not the nominal label, must fit
+        bad = np.flatnonzero((z > 0) & (ls_cnts(expected)[:len(z)] == 0)) if n == len(z) else \
+            np.flatnonzero(z > 0)
+    else:
+        bad = np.flatnonzero(z > half + 1e-9)
+    return CheckItem(
+        "controller_zones", not bad.size, float(bad.size), 0.0, "count", "<=",
+        detail=(f"{bad.size} corner(s) the controller would make otherwise, first "
+                f"{actual.moves[bad[0]].file}:{actual.moves[bad[0]].zone_line}") if bad.size else
+        "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)")
+
+
+def controller_items(plan, actual, cell=None, tol=None) -> list:
+    """Report items of the program as the controller runs it
+    (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
+    poses and configuration equal the verified ones, no stop or jump on the way, the straight
+    lines it runs within the path tolerance of the verified motion, clearance at its samples,
+    zones the controller keeps, and (information) every value the cell must hold."""
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.post.export import plan_program
+    from drakedeburr.programs.controller import controller_motion
+    from drakedeburr.verify.report import CheckItem
+
+    tol = tol or default_tolerances()
+    expected = plan_program(plan, actual.name, cell=cell)
+    X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
+    motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
+                               step=tol.dense_step)
+    n = min(len(expected.moves), len(actual.moves))
+    q_plan = np.array([m.q for m in expected.moves[:n]])
+    err = np.abs(motion.q[:n] - q_plan).max(axis=1)
+    err = np.where(np.isnan(err), np.inf, err)
+    worst = int(np.argmax(err)) if n else 0
+    items = [CheckItem(
+        "controller_joints", bool(n) and float(err.max()) <= 1e-3, float(err.max()) if n else None,
+        1e-3, "rad", "<=",
+        detail=(f"joints the controller solves from the written pose and configuration vs the "
+                f"verified ones; worst move {worst + 1} ({actual.moves[worst].name}, "
+                f"{actual.moves[worst].configuration})") if n else "no moves")]
+    items.append(CheckItem(
+        "controller_motion", not motion.problems, float(len(motion.problems)), 0.0, "count", "<=",
+        detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
+        "runs it: no stop, jump or unreachable point"))
+    items.append(_path_item(plan, expected, actual, n, tol))
+    if cell is not None and len(motion.q_path):
+        from drakedeburr.verify.distances import DistanceProbe
+
+        probe = DistanceProbe(cell, 4 * tol.min_clearance, tol)
+        best, where = np.inf, None
+        for k, q in enumerate(motion.q_path):
+            r = probe.measure(q)
+            if r.clearance < best:
+                best, where = r.clearance, (k, r.clearance_pair)
+        mv = int(motion.move[where[0]]) if where else 0
+        items.append(CheckItem(
+            "controller_clearance", best >= tol.min_clearance, float(best), tol.min_clearance,
+            "m", ">=", pair=where[1] if where and where[1] != ("", "") else None,
+            detail=f"at {len(motion.q_path)} samples of the controller's motion (not the "
+            f"certificate); closest on move {mv + 1}"))
+    items.append(_zones_item(expected, actual, n))
+    used = ", ".join(f"{k} from the {v}" for k, v in motion.frames_used.items())
+    items.append(CheckItem("controller_setup", True, None, None, "-", "info", required=False,
+                           detail=f"{_cell_values(expected, actual)} ({used})"))
+    return items
+
+
+def program_items(plan, actual, cell=None, tol=None) -> list:
+    """Every program item: :func:`program_file_item` then :func:`controller_items`."""
+    if isinstance(actual, (str, Path)):
+        from drakedeburr.programs import read_program
+
+        actual = read_program(str(actual))
+    return [program_file_item(plan, actual, cell), *controller_items(plan, actual, cell, tol)]
