@@ -153,7 +153,8 @@ _KRL_DAT = ["&ACCESS RVP", "&REL 1", r"DEFDAT [A-Za-z]\w* PUBLIC", r"   ;[ -~]*"
             r"DECL E6POS XP\d+=\{[-\w ,.]*\}", "ENDDAT"]
 _LS_MN = [r"![ -:<-~]{0,32}", r"UFRAME_NUM=\d+", r"UTOOL_NUM=\d+", r"PAYLOAD\[\d+\]",
           r"J P\[(?P<n>\d+)\] \d+% (FINE|CNT\d+)",
-          r"L P\[(?P<n>\d+)\] \d+(mm/sec|cm/min) (FINE|CNT\d+)( RTCP)?"]
+          r"L P\[(?P<n>\d+)\] \d+(mm/sec|cm/min) (FINE|CNT\d+)( RTCP)?",
+          r"PR\[\d+\]=LPOS", rf"PR\[\d+,[1-6]\]={_NUM}", r"(UTOOL|UFRAME)\[\d+\]=PR\[\d+\]"]
 
 
 def _motions(lines: list[str], grammar: list[str], where: str) -> list[int]:
@@ -317,7 +318,15 @@ def hostile_plan(tmp_path_factory):
     plan = vs.good_plan()
     meta = dict(plan.meta, tool="standard", tool_title=f"burr\r\n{INJECT}\u2028END")
     folder = save_plan(replace(plan, hub=str(hub), meta=meta), root / "plan")
-    return folder, len(plan.targets)
+    return folder, _moves_of(plan)
+
+
+def _moves_of(plan) -> int:
+    """Motion lines the plan's program carries under a clean name: the targets plus the via
+    points of bent joint moves (programs.plan_program); a hostile name must add none."""
+    from drakedeburr.programs.plan_program import program_from_plan
+
+    return len(program_from_plan(plan, "Clean").moves)
 
 
 def test_export_hostile_hub_and_tool_title_add_no_instruction(hostile_plan, tmp_path, capsys):
@@ -449,7 +458,7 @@ def test_demo_on_a_hostile_hub_folder_writes_a_clean_program(tmp_path, monkeypat
     summary = run_demo(tmp_path / "out", hub=str(hub), test_mode=True, force=True)
     program = Path(summary["outputs"]["program"])
     assert program.parent == tmp_path / "out" and program.name.startswith("deburr_h5_evil_PTP")
-    assert parse_written(program) == list(range(1, len(plan.targets) + 1))
+    assert parse_written(program) == list(range(1, _moves_of(plan) + 1))
     assert "PTP {A1" not in program.read_text()
 
 

@@ -89,7 +89,14 @@ def _parse_krl(src, dat):
 
 
 def _ls_frame(text, name):
+    """The frame the LS program sets: ``PR[r,1..6]=`` X, Y, Z, W, P, R then ``NAME[1]=PR[r]``
+    (the last assignment of PR[r] before it), or an older file's ``!NAME[1] X=...`` remark."""
     v = {k: float(x) for k, x in re.findall(rf"{name}\[1\] ([XYZWPR])=({NUM})", text)}
+    if not v:
+        body = text.split(f"{name}[1]=PR[", 1)
+        reg = re.match(r"(\d+)\]", body[1]).group(1)
+        vals = dict(re.findall(rf"PR\[{reg},([1-6])\]=({NUM})", body[0]))
+        v = {k: float(vals[str(i + 1)]) for i, k in enumerate("XYZWPR")}
     return _pose([v["X"], v["Y"], v["Z"]], _zyx(v["R"], v["P"], v["W"]))
 
 

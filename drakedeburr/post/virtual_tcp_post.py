@@ -46,7 +46,7 @@ from drakedeburr.post.cl_post import (
 )
 from drakedeburr.post.cl_reader import ClProgram, read_cl
 from drakedeburr.post.tool_axis import READY_POSE, ToolAxisPathResult
-from drakedeburr.programs.program import RobotProgram
+from drakedeburr.programs.program import RobotProgram, zones_within_half_moves
 from drakedeburr.robots import RobotKinematics, solve_path, travel_weights
 
 __all__ = ["VirtualTcpSetup", "virtual_tcp_setup", "solve_virtual_tcp",
@@ -202,11 +202,12 @@ def virtual_tcp_program_from_cl(cl: ClProgram, name: str, s: PostSettings,
     if (bad and not s.force) or keep.size == 0:
         return PostResult(None, bad, changes, res, notes)
     flag, reason = _flag(bad)
-    program = RobotProgram(
+    # zones within half of the adjacent moves (the controller would shrink larger ones)
+    program = zones_within_half_moves(RobotProgram(
         name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]))),
         X_FT=setup.X_FT, X_WO=setup.X_BO, robot=s.robot, source=Path(cl.source).name,
         flag=flag, flag_reason=reason, notes=notes, tool_name="tVirtual",
-        wobj_name="wobjVirtual")
+        wobj_name="wobjVirtual"))
     return PostResult(program, bad, changes, res, notes)
 
 
