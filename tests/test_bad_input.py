@@ -185,7 +185,8 @@ CASES = [
     C("plan nosuchcell -o p", 2, ("nosuchcell", "tool_in_hand")),
     C("plan garbage.yaml --windows 0 -o p", 2, ("garbage.yaml",)),
     C("plan --robot bogus -o p", 2, ("bogus", "irb1600")),
-    C("plan --hub hub_negspeed -o p", 2, ("process.yaml", "grinding_speed", "positive")),
+    C("plan --hub hub_negspeed -o p", 2, ("process.yaml", "grinding_speed", "-1",
+                                         "0 < value <= 1 m/s")),
     C("plan --hub hub_listrecipe -o p", 2, ("process.yaml", "mapping")),
     C("plan --hub hub_badkey -o p", 2, ("process.yaml", "grinding_sped", "known")),
     # verify: numbers, the plan folder's files, outputs

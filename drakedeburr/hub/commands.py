@@ -22,6 +22,7 @@ def _run_generate(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.catalogue import BUNDLED
+    from drakedeburr._io import check_path_name
     from drakedeburr.hub.generate import generate_hub
     from drakedeburr.hub.spec import load_spec
     from drakedeburr.resources import hubs_dir
@@ -39,6 +40,7 @@ def _run_generate(args: argparse.Namespace) -> int:
         specs.extend(BUNDLED[n] for n in sorted(BUNDLED))
     elif args.names:
         for name in args.names:
+            check_path_name(name, "hub generate: hub name")
             if name in BUNDLED:
                 specs.append(BUNDLED[name])
             elif (out_root / name / "hub.yaml").is_file():

@@ -531,8 +531,11 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
                          f"front_band >= 0, got {options.front_reach!r}, "
                          f"{options.front_reach_far!r}, {options.front_band!r}")
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
+    from drakedeburr._io import check_regular_file
+
+    check_regular_file(path, "hub mesh", "mesh")  # before hashing: never /dev/zero, bounded
     sha = _file_hash(path)
     key = _cache_key(sha, options)
     name = _hub_name(path)

@@ -69,7 +69,7 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     import trimesh
 
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"hub mesh {path} does not exist")
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
@@ -77,6 +77,9 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
                             else "not a format read here")
         raise InputError(f"{path}: unsupported mesh type {path.suffix!r} ({what}); export the "
                          f"hub as {READABLE_FORMATS}")
+    from drakedeburr._io import check_regular_file
+
+    check_regular_file(path, "hub mesh", "mesh")  # READ_LIMITS["mesh"], regular files only
     try:
         # unprocessed first: trimesh's processing drops non-finite vertices silently
         mesh = trimesh.load(path, force="mesh", process=False)

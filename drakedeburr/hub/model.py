@@ -128,12 +128,9 @@ def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
 
 def _imported_from(path: Path) -> dict | None:
     """The mapping of an imported hub's ``hub.yaml`` (key ``imported_from``), else None."""
-    import yaml
+    from drakedeburr._io import load_yaml
 
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from exc
+    data = load_yaml(path, "hub description")  # bounded: size, aliases, duplicate keys
     if isinstance(data, dict) and "imported_from" in data:
         if not isinstance(data.get("name"), str):
             raise InputError(f"{path}: imported hub without a 'name'")

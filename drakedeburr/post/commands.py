@@ -120,8 +120,11 @@ def _check_args(args) -> None:
     from drakedeburr.errors import InputError
 
     cl = Path(args.cl_file)
-    if not cl.is_file():
-        raise InputError(f"{cl}: CL file not found" if not cl.exists() else f"{cl}: not a file")
+    if not cl.exists():
+        raise InputError(f"{cl}: CL file not found")
+    from drakedeburr._io import check_regular_file
+
+    check_regular_file(cl, "CL file", "cl")  # a regular file within READ_LIMITS["cl"]
     if args.feed is not None and not args.feed > 0:
         raise InputError(f"--feed must be > 0 mm/s, got {args.feed}")
     if not args.zone >= 0:

@@ -131,8 +131,12 @@ def run_job(job: BatchJob) -> dict:
                    cycle_s=plan.trajectory.duration, samples=report.settings["samples"],
                    report=str(out / "report.json"))
     except Exception as exc:  # a batch reports every hub; one failure must not stop the rest
-        log.exception("job %s / %s failed", job.scenario, job.hub)
-        row["error"] = f"{type(exc).__name__}: {exc}"
+        # one line per failed job; its traceback only at debug level (-vv)
+        text = " ".join(str(exc).split())
+        name = "" if isinstance(exc, (InputError, OSError)) else f"{type(exc).__name__}: "
+        log.error("job %s / %s failed: %s%s", job.scenario, job.hub, name, text)
+        log.debug("job %s / %s: traceback", job.scenario, job.hub, exc_info=True)
+        row["error"] = f"{type(exc).__name__}: {text}"
     row["elapsed_s"] = time.perf_counter() - started
     return row
 
