@@ -101,12 +101,56 @@ def _files(root: Path) -> None:
     hub = REPO / "models" / "hubs" / vs.HUB
     for name, recipe in (("hub_negspeed", "grinding_speed: -1\n"),
                          ("hub_listrecipe", "[1, 2]\n"),
-                         ("hub_badkey", "grinding_sped: 0.1\n")):
+                         ("hub_badkey", "grinding_sped: 0.1\n"), *HOSTILE_RECIPES.items()):
         (root / name).mkdir()
         for f in hub.iterdir():  # the bundled hub's files, its own recipe
             if f.name != "process.yaml":
                 (root / name / f.name).symlink_to(f)
-        (root / name / "process.yaml").write_text(recipe)
+        data = recipe if isinstance(recipe, bytes) else recipe.encode()
+        (root / name / "process.yaml").write_bytes(data)
+    _hostile_files(root)
+
+
+def _yaml_bomb(levels: int = 9, width: int = 9) -> str:
+    """Nested aliases: ``width ** levels`` nodes once expanded (a "billion laughs")."""
+    rows = [f"a0: &a0 [{', '.join(['lol'] * width)}]"]
+    for i in range(1, levels):
+        rows.append(f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * width)}]")
+    return "\n".join(rows) + "\n"
+
+
+#: process.yaml files a careless or hostile user may hand in (issue 43)
+HOSTILE_RECIPES = {
+    "hub_boolspeed": "grinding_speed: true\n",
+    "hub_mmspeed": "grinding_speed: 150\n",  # mm/s where the recipe is SI (m/s)
+    "hub_negair": "spindle_air_pressure: -0.2e6\n",
+    "hub_nanaccept": "acceptance: {theta_box_share: .nan}\n",
+    "hub_highband": "acceptance: {speed_band_fraction: high}\n",
+    "hub_dupkey": "grinding_speed: 0.1\napproach_speed: 0.05\ngrinding_speed: 0.2\n",
+    "hub_latin1": "# r\xe9glage de l'atelier\ngrinding_speed: 0.1\n".encode("latin-1"),
+    "hub_utf16": "grinding_speed: 0.1\n".encode("utf-16"),
+    "hub_bomb": "acceptance: {}\n" + _yaml_bomb(),
+    "hub_deep": "w1: " + "[" * 5000 + "]" * 5000 + "\n",
+    "hub_huge": "# " + "x" * (2 << 20) + "\n",  # over the 1 MiB recipe limit
+    "hub_strbounds": "bounds_small: {theta_min: '0.1', theta_max: 0.2}\n",
+    "hub_chamfer": "chamfer_width_min: 1.5e-3\nchamfer_width_max: 0.5e-3\n",
+    "hub_python": "grinding_speed: !!python/object/apply:os.system ['touch pwned']\n",
+}
+
+
+def _hostile_files(root: Path) -> None:
+    """Devices, pipes and names with path characters where files are expected."""
+    for name in ("zero.stl", "zero.cl", "zero.mod", "zero.obj"):
+        (root / name).symlink_to("/dev/zero")
+    os.mkfifo(root / "fifo.stl")
+    spec = (REPO / "models" / "hubs" / vs.HUB / "hub.yaml").read_text()
+    for name, hub_name in (("spec_dotdot.yaml", '".."'), ("spec_newline.yaml", '"a\\nb"'),
+                           ("spec_shell.yaml", '"x;rm -rf ~"'), ("spec_slash.yaml", "a/b"),
+                           ("spec_dot.yaml", '"."'), ("spec_hidden.yaml", ".hub")):
+        (root / name).write_text(spec.replace(f"name: {vs.HUB}", f"name: {hub_name}"))
+    (root / "spec_dup.yaml").write_text(spec + "spoke_count: 7\n")
+    (root / "o").mkdir()
+    (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
 
 @pytest.fixture(scope="module")
@@ -143,6 +187,8 @@ def tree(root: Path) -> dict[str, str]:
                 out[rel] = f"link {os.readlink(p)}"
             elif p.is_dir():
                 out[rel] = "dir"
+            elif not p.is_file():  # a pipe: never read (it would block)
+                out[rel] = "special"
             else:
                 out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
     return out
@@ -279,6 +325,59 @@ CASES = [
       ("--max-command", "--min-command")),
     C("laser shape polyline --points missing.csv -o c.ls", 2, ("missing.csv", "not found")),
     C("laser tool --sdf adir", 2, ("adir", "--sdf")),
+    # issue 43: recipes, each key typed with its unit and range; bounded, strict YAML
+    C("plan --hub hub_boolspeed -o p", 2, ("hub_boolspeed/process.yaml", "grinding_speed",
+                                           "True", "boolean", "0 < value <= 1 m/s")),
+    C("plan --hub hub_mmspeed -o p", 2, ("process.yaml", "grinding_speed", "150",
+                                         "out of range", "m/s", "0.15")),
+    C("plan --hub hub_negair -o p", 2, ("process.yaml", "spindle_air_pressure", "-200000",
+                                        "0 < value <= 1e+06 Pa")),
+    C("plan --hub hub_nanaccept -o p", 2, ("process.yaml", "theta_box_share", "nan",
+                                           "0 <= value <= 1")),
+    C("plan --hub hub_highband -o p", 2, ("process.yaml", "speed_band_fraction", "'high'",
+                                          "not a number")),
+    C("plan --hub hub_dupkey -o p", 2, ("process.yaml:3", "'grinding_speed'", "twice",
+                                        "line 1")),
+    C("plan --hub hub_latin1 -o p", 2, ("hub_latin1/process.yaml:1", "not UTF-8", "0xe9")),
+    C("plan --hub hub_utf16 -o p", 2, ("hub_utf16/process.yaml", "not UTF-8", "UTF-16")),
+    C("plan --hub hub_bomb -o p", 2, ("process.yaml", "alias expansion limit of 10000")),
+    C("plan --hub hub_deep -o p", 2, ("process.yaml", "depth limit of 64")),
+    C("plan --hub hub_huge -o p", 2, ("process.yaml", "recipe read limit of 1 MiB")),
+    C("plan --hub hub_strbounds -o p", 2, ("process.yaml", "bounds_small.theta_min", "'0.1'",
+                                           "rad")),
+    C("plan --hub hub_chamfer -o p", 2, ("process.yaml", "chamfer_width_min", "more than")),
+    C("plan --hub hub_python -o p", 2, ("process.yaml", "python/object")),
+    # issue 43: devices, pipes and oversized files are never read
+    C("cl zero.stl", 2, ("zero.stl", "character device", "regular files")),
+    C("cl fifo.stl", 2, ("fifo.stl", "a pipe")),
+    C("hub import zero.stl --out hubs", 2, ("zero.stl", "character device")),
+    C("verify zero.obj", 2, ("zero.obj", "character device")),
+    C("verify plan --program zero.mod", 2, ("zero.mod", "character device")),
+    C("post zero.cl -o p.mod", 2, ("zero.cl", "CL file", "character device")),
+    # issue 43: names that become paths
+    C("hub generate --spec spec_dotdot.yaml --out o/hubs", 2, ("spec_dotdot.yaml", "'..'",
+                                                             "cannot be a file name")),
+    C("hub generate --spec spec_newline.yaml --out o", 2, ("'a\\nb'", "file name")),
+    C("hub generate --spec spec_shell.yaml --out o", 2, ("'x;rm -rf ~'", "file name")),
+    C("hub generate --spec spec_slash.yaml --out o", 2, ("'a/b'", "file name")),
+    C("hub generate --spec spec_dot.yaml --out o", 2, ("'.'", "file name")),
+    C("hub generate --spec spec_hidden.yaml --out o", 2, ("'.hub'", "file name")),
+    C("hub generate --spec spec_dup.yaml --out o", 2, ("spec_dup.yaml", "spoke_count", "twice")),
+    C("hub generate .. --out o/hubs", 2, ("hub name", "'..'")),
+    # issue 43: outputs never replace inputs or each other
+    C("verify plan --json plan/plan.json", 2, ("plan/plan.json", "--json", "plan folder")),
+    C("verify plan --html plan/arrays.npz", 2, ("plan/arrays.npz", "--html", "plan folder")),
+    C("verify plan --json plan/report.json", 2, ("plan/report.json", "plan folder")),
+    C("verify plan --json r.out --html r.out", 2, ("r.out", "--html", "--json", "same file")),
+    C("verify plan --program x.mod --json x.mod", 2, ("x.mod", "--json", "--program",
+                                                      "input")),
+    C("verify plan --json ./plan/../plan/plan.json", 2, ("--json", "plan folder")),
+    C("export plan -o plan/plan.json", 2, ("plan/plan.json", "plan.json", "input")),
+    C("plan -o p --html p/replay.html", 2, ("p/replay.html", "inside the output folder")),
+    # issue 43: verify-all's scheduler, checked before any work, naming the option
+    C("verify-all . --scheduler notaurl", 2, ("--scheduler", "'notaurl'", "SCHEME://HOST:PORT")),
+    C("verify-all . --scheduler tcp://127.0.0.1:1", 2, ("--scheduler", "127.0.0.1:1",
+                                                        "no scheduler answers")),
     # show, demo
     C("show missing --html s.html", 2, ("missing",)),
     C("show tool_in_hand --hub missing --html s.html", 2, ("missing",)),

@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -186,9 +187,68 @@ def _read_doc(doc_path: Path) -> dict:
     return doc
 
 
+#: the arrays an ``arrays.npz`` may hold (format versions 1 and 2); any other member is refused
+#: before anything is decompressed
+_ARRAY_NAME = re.compile(r"(t|c|q|qd|X_HT|X_WF|q_targets|p_HC|n_H|X_WH|"
+                         r"tp\d{1,6}_(?:" + "|".join(TOOL_PATH_ARRAYS) + r"|axis_H|cone_axis_H))")
+#: the most a plan's arrays may take decompressed (a whole hub's plan is ~1 MB)
+NPZ_LIMIT = 256 << 20
+
+
+def _check_npz_members(npz_path: Path) -> None:
+    """Every member of ``arrays.npz`` checked from its zip entry and its .npy header before
+    anything is decompressed: a known array name, a numeric dtype, a size that matches the
+    header's shape, and all of them together within :data:`NPZ_LIMIT` (a small file that
+    decompresses to gigabytes is refused, naming the member and the limit)."""
+    import zipfile
+
+    from drakedeburr._io import check_regular_file
+
+    check_regular_file(npz_path, "plan arrays", NPZ_LIMIT)
+    try:
+        zf = zipfile.ZipFile(npz_path)
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise InputError(f"{npz_path}: not a readable .npz archive ({type(exc).__name__}: "
+                         f"{str(exc)[:120]})") from None
+    total = 0
+    with zf:
+        for info in zf.infolist():
+            name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
+            if not _ARRAY_NAME.fullmatch(name):
+                raise InputError(f"{npz_path}: member {info.filename[:60]!r} is not an array of "
+                                 "a plan (t, c, X_HT, X_WF, q_targets, p_HC, n_H, X_WH, tp<w>_*)")
+            total += info.file_size
+            if total > NPZ_LIMIT:
+                raise InputError(f"{npz_path}: member {name!r} takes the arrays past the plan "
+                                 f"arrays limit of {NPZ_LIMIT >> 20} MiB decompressed")
+            try:
+                with zf.open(info) as f:
+                    fmt = np.lib.format
+                    version = fmt.read_magic(f)
+                    read = {(1, 0): fmt.read_array_header_1_0,
+                            (2, 0): fmt.read_array_header_2_0}.get(version)
+                    if read is None:
+                        raise ValueError(f".npy format version {version} is not read here")
+                    shape, _, dtype = read(f)
+                    header = f.tell()
+            except Exception as exc:  # zlib, a bad header: numpy and zipfile raise many kinds
+                raise InputError(f"{npz_path}: member {name!r} has no readable .npy header "
+                                 f"({type(exc).__name__}: {str(exc)[:80]})") from None
+            if dtype.kind not in "biuf" or dtype.hasobject:
+                raise InputError(f"{npz_path}: array {name!r}: dtype {dtype}, expected numbers")
+            if len(shape) > 4 or any(n < 0 for n in shape):
+                raise InputError(f"{npz_path}: array {name!r}: shape {shape} is not an array "
+                                 "of a plan (at most 4 dimensions)")
+            if header + int(np.prod(shape, dtype=object)) * dtype.itemsize != info.file_size:
+                raise InputError(f"{npz_path}: array {name!r}: its header says shape {shape} "
+                                 f"{dtype}, which does not match its {info.file_size} bytes")
+
+
 def _read_arrays(npz_path: Path) -> dict[str, np.ndarray]:
     """The arrays of ``arrays.npz``; anything numpy or zipfile cannot read (truncated,
-    corrupt, pickled objects, not an archive) is an InputError naming the file."""
+    corrupt, pickled objects, not an archive) is an InputError naming the file. The members
+    are checked before anything is decompressed (:func:`_check_npz_members`)."""
+    _check_npz_members(npz_path)
     try:
         with np.load(npz_path, allow_pickle=False) as a:
             if not hasattr(a, "files"):
