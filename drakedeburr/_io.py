@@ -16,7 +16,8 @@ from typing import Any
 __all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atomic_folder",
            "atomic_write_files", "clean_leftovers", "check_folder_target", "temp_folder_beside",
            "umask", "READ_LIMITS", "YAML_LIMITS", "check_regular_file", "read_bounded",
-           "read_text_bounded", "load_yaml", "PATH_NAME", "check_path_name"]
+           "read_text_bounded", "load_yaml", "PATH_NAME", "check_path_name",
+           "size_text"]
 
 # Temporary names carry the writer's process id (``.NAME.tmp-PID-XXXX`` folders,
 # ``.NAME.PID-XXXX.tmp`` files) so that the next run removes what a killed one left
@@ -141,6 +142,17 @@ def _exchange(a: Path, b: Path) -> bool:
     return fn(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0
 
 
+def _remove(p: Path) -> None:
+    """Remove a temporary folder, or the link that took its place (an output that was a
+    symbolic link is replaced, not followed: the exchange leaves the link under the
+    temporary name, and ``shutil.rmtree`` refuses links)."""
+    if p.is_symlink() or p.is_file():
+        with contextlib.suppress(OSError):
+            p.unlink()
+    else:
+        shutil.rmtree(p, ignore_errors=True)
+
+
 def clean_leftovers(path: str | Path) -> None:
     """Remove what a killed :func:`atomic_folder` left beside ``path`` (its temporary folders),
     and put back the previous version if the kill came between the two renames of the
@@ -158,7 +170,7 @@ def clean_leftovers(path: str | Path) -> None:
         os.rename(olds.pop(), path)
     tmps = [p for p in parent.glob(f".{esc}.tmp-*") if _stale(p.name, tmp_pattern)]
     for p in olds + tmps:
-        shutil.rmtree(p, ignore_errors=True)
+        _remove(p)
 
 
 def check_folder_target(path: str | Path, is_ours=lambda p: True) -> Path:
@@ -214,12 +226,12 @@ def atomic_folder(path: str | Path, is_ours=lambda p: True):
         if not path.exists():
             os.rename(tmp, path)
         elif _exchange(tmp, path):
-            shutil.rmtree(tmp, ignore_errors=True)  # the previous version
+            _remove(tmp)  # the previous version (or the link that was there)
         else:
             old = parent / f".{path.name}.old-{os.getpid()}-0"
             os.rename(path, old)
             os.rename(tmp, path)
-            shutil.rmtree(old, ignore_errors=True)
+            _remove(old)
     except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         _name_the_output(exc, path, tmp)
@@ -270,11 +282,12 @@ READ_LIMITS: dict[str, int] = {
 }
 
 
-def _size_text(n: int) -> str:
+def size_text(n: int) -> str:
+    """A byte count for a message: ``1.5 MiB``, ``980 KiB``, ``512 bytes`` (never "0.0 MB")."""
     for unit, size in (("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
         if n >= size:
             return f"{n / size:.4g} {unit}"
-    return f"{n} bytes"
+    return f"{int(n)} bytes"
 
 
 def check_regular_file(path: str | Path, what: str, limit: str | int) -> int:
@@ -296,8 +309,8 @@ def check_regular_file(path: str | Path, what: str, limit: str | int) -> int:
                 else "a socket" if stat.S_ISSOCK(st.st_mode) else "not a regular file")
         raise InputError(f"{path}: {what} is {kind}; only regular files are read")
     if st.st_size > limit_bytes:
-        raise InputError(f"{path}: {what} is {_size_text(st.st_size)}, more than the "
-                         f"{name} read limit of {_size_text(limit_bytes)}")
+        raise InputError(f"{path}: {what} is {size_text(st.st_size)}, more than the "
+                         f"{name} read limit of {size_text(limit_bytes)}")
     return int(st.st_size)
 
 
@@ -314,7 +327,7 @@ def read_bounded(path: str | Path, what: str, limit: str | int) -> bytes:
     if len(data) > limit_bytes:
         name = limit if isinstance(limit, str) else "limit"
         raise InputError(f"{path}: {what} is more than the {name} read limit of "
-                         f"{_size_text(limit_bytes)}")
+                         f"{size_text(limit_bytes)}")
     return data
 
 

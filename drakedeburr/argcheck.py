@@ -134,8 +134,10 @@ def free_space(path: str | Path, need: int, option: str) -> None:
     except OSError:
         return
     if free < need:
-        raise InputError(f"{path}: {option}: {free / MB:.1f} MB free on {where}, the output "
-                         f"needs about {need / MB:.1f} MB")
+        from drakedeburr._io import size_text
+
+        raise InputError(f"{path}: {option}: {size_text(free)} free on {where}, the output "
+                         f"needs about {size_text(need)}")
 
 
 def parse_windows(text: str | None, option: str = "--windows") -> tuple[int, ...] | None:

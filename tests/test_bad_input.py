@@ -149,6 +149,9 @@ def _hostile_files(root: Path) -> None:
                            ("spec_dot.yaml", '"."'), ("spec_hidden.yaml", ".hub")):
         (root / name).write_text(spec.replace(f"name: {vs.HUB}", f"name: {hub_name}"))
     (root / "spec_dup.yaml").write_text(spec + "spoke_count: 7\n")
+    # every triangle collinear (was LinAlgError in cl, hub import and verify)
+    (root / "collinear.obj").write_text("".join(f"v {0.1 * i} 0 0\n" for i in range(5))
+                                        + "f 1 2 3\nf 2 3 4\nf 3 4 5\nf 1 3 5\n")
     (root / "o").mkdir()
     (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
@@ -315,9 +318,21 @@ CASES = [
     C("post small.cl -o adir", 2, ("adir", "folder")),
     C("post small.cl -o p.mod --feed 0", 2, ("--feed", "> 0")),
     # laser
-    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "> 0")),
-    C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2, ("--spacing", "> 0")),
-    C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "> 0")),
+    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "0 < value <= 5000 mm")),
+    C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2,
+      ("--spacing", "0.001 <= value <= 1000 mm")),
+    C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "0 < value <= 600")),
+    # issue 43: sizes that overflowed, spacings that asked for billions of points
+    C("laser shape circle --diameter 1e300 -o c.ls", 2, ("--diameter", "<= 5000 mm")),
+    C("laser shape circle --diameter 10 --spacing 1e-9 -o c.ls", 2, ("--spacing", "0.001")),
+    C("laser shape circle --diameter 4000 --spacing 0.001 -o c.ls", 2,
+      ("--spacing", "points", "limit of 200000")),
+    C("laser shape circle --diameter 10 --lead-in 1e300 -o c.ls", 2, ("--lead-in",)),
+    C("laser shape circle --diameter 10 --center inf 0 -o c.ls", 2, ("--center",)),
+    C("laser shape circle --diameter 10 --feed 1e308 -o c.ls", 2, ("--feed",)),
+    C("cl collinear.obj", 2, ("collinear.obj", "degenerate")),
+    C("hub import collinear.obj --out hubs", 2, ("collinear.obj", "degenerate")),
+    C("verify collinear.obj", 2, ("collinear.obj", "degenerate")),
     C("laser shape circle --diameter 10 -o adir", 2, ("adir", "folder")),
     C("laser shape circle --diameter 10 -o c.txt", 2, ("c.txt", ".ls")),
     C("laser shape circle --diameter 10 --name 9x -o c.ls", 2, ("'9x'", "letter")),
@@ -443,9 +458,10 @@ def test_free_space_is_checked_before_the_work(ws, capsys, monkeypatch):
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9 - 1000, 1000))
     before = tree(ws)
     code, _, err = run("plan --windows 0 -o p".split(), capsys)
-    assert code == 2 and "MB free" in err and "needs about" in err
+    assert code == 2 and "1000 bytes free" in err and "needs about" in err, err
+    assert "0.0 MB" not in err and "KiB" in err  # issue 43: never "0.0 MB free"
     code, _, err = run("export plan -o x.mod --force".split(), capsys)
-    assert code == 2 and "MB free" in err
+    assert code == 2 and "1000 bytes free" in err
     assert tree(ws) == before
 
 

@@ -54,6 +54,21 @@ class LoadedMesh:
     watertight: bool
 
 
+def _check_not_degenerate(mesh, path: Path) -> None:
+    """Refuse a mesh with no area or no extent in some direction (every triangle collinear,
+    or all on one line): nothing downstream (the axis estimate's eigenvectors, the window
+    search) has a solid to work on."""
+    areas = np.asarray(mesh.area_faces, float) if len(mesh.faces) else np.zeros(0)
+    scale = float(np.ptp(mesh.vertices, axis=0).max()) if len(mesh.vertices) else 0.0
+    if scale <= 0 or not (areas > 1e-12 * scale**2).any():
+        raise InputError(f"{path}: every triangle is degenerate (collinear vertices, no area): "
+                         "not a surface")
+    centred = mesh.vertices - mesh.vertices.mean(axis=0)
+    rank = np.linalg.matrix_rank(centred, tol=1e-9 * scale) if np.isfinite(centred).all() else 0
+    if rank < 2:
+        raise InputError(f"{path}: all vertices lie on one line: not a surface")
+
+
 def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     """Load a hub mesh and convert it to metres.
 
@@ -100,6 +115,7 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
         raise InputError(f"{path}: a face refers to a vertex the file does not have")
     mesh.process()
     mesh.merge_vertices()
+    _check_not_degenerate(mesh, path)
     size = float(mesh.extents.max())
     if stated is not None and unit == stated:
         log.info("%s: the file states its unit: %s", path.name,

@@ -275,6 +275,12 @@ class _Where:
         return f"{self.path}: {item}"
 
 
+_INT_LIMIT = 2**31
+#: the longest plan read [s] (a whole hub's cycle is under two minutes; a plan of 1e12 s
+#: would be sampled into petabytes by the verifier)
+PLAN_MAX_DURATION = 3600.0
+
+
 def _get(d, key: str, kind, where: str, default=...):
     """``d[key]`` of type ``kind`` (int: not bool; float: a finite int or float)."""
     if not isinstance(d, dict):
@@ -294,6 +300,8 @@ def _value(v, kind, where: str):
     if kind is int:
         if isinstance(v, bool) or not isinstance(v, int):
             raise _Bad(f"{where}: expected an integer, got {str(v)[:40]!r}")
+        if not -_INT_LIMIT <= v < _INT_LIMIT:  # an index or a count: fits numpy's int32
+            raise _Bad(f"{where}: {str(v)[:40]} is out of range (an index, |value| < 2**31)")
         return v
     if not isinstance(v, kind):
         name = getattr(kind, "__name__", None) or "/".join(k.__name__ for k in kind)
@@ -359,7 +367,7 @@ def _targets(doc: dict, arr: dict, jw, aw) -> tuple[CartesianTarget, ...]:
     return tuple(out)
 
 
-def _segments(doc: dict, n_targets: int, jw) -> tuple[PlanSegment, ...]:
+def _segments(doc: dict, n_targets: int, jw, t_span) -> tuple[PlanSegment, ...]:
     out = []
     for i, s in enumerate(_get(doc, "segments", list, jw["plan"])):
         w = jw[f"segments[{i}]"]
@@ -370,6 +378,9 @@ def _segments(doc: dict, n_targets: int, jw) -> tuple[PlanSegment, ...]:
         if not 0 <= a <= b <= n_targets:
             raise _Bad(f"{w}.target_range: [{a}, {b}] is not within the {n_targets} targets")
         t0, t1 = (_value(v, float, f"{w}.t_range") for v in trange)
+        if not (t_span[0] - 1e-9 <= t0 <= t1 <= t_span[1] + 1e-9):
+            raise _Bad(f"{w}.t_range: [{t0:g}, {t1:g}] s is not within the trajectory's "
+                       f"[{t_span[0]:g}, {t_span[1]:g}] s")
         out.append(PlanSegment(window_index=_get(s, "window_index", int, w),
                                kind=_choice(_get(s, "kind", str, w), _KINDS, f"{w}.kind"),
                                target_range=(a, b), t_range=(t0, t1)))
@@ -418,16 +429,24 @@ def _meta(doc: dict, jw) -> dict:
     return meta
 
 
+def _check_duration(t: np.ndarray, aw) -> None:
+    if t[-1] - t[0] > PLAN_MAX_DURATION or abs(t[0]) > PLAN_MAX_DURATION:
+        raise _Bad(aw[f"array 't': spans {t[0]:g} to {t[-1]:g} s, more than the plan "
+                      f"duration limit of {PLAN_MAX_DURATION:g} s"])
+
+
 def _trajectory(doc: dict, arr: dict, aw) -> JointTrajectory:
     if "c" not in arr and doc["version"] == 1:  # version 1: cubic Hermite through the knots
         t = _array(arr, "t", (None,), aw)
         q, qd = _array(arr, "q", (len(t), 6), aw), _array(arr, "qd", (len(t), 6), aw)
         if len(t) < 2 or np.any(np.diff(t) <= 0):
             raise _Bad(aw["array 't': knot times must increase strictly (at least 2)"])
+        _check_duration(t, aw)
         return JointTrajectory.from_hermite(t, q, qd)
     t = _array(arr, "t", (None,), aw)
     if len(t) < 1 or np.any(np.diff(t) <= 0):
         raise _Bad(aw["array 't': knot times must increase strictly"])
+    _check_duration(t, aw)
     c = _array(arr, "c", (None, len(t) - 1, 6), aw)
     if len(c) < 1:
         raise _Bad(aw["array 'c': no polynomial coefficients"])
@@ -465,12 +484,13 @@ def _records(doc: dict, arr: dict, jw, aw) -> tuple[ToolPathRecord, ...]:
 
 def _plan_from(doc: dict, arr: dict, folder: Path, jw, aw) -> Plan:
     targets = _targets(doc, arr, jw, aw)
+    tr = _trajectory(doc, arr, aw)
     return Plan(scenario=_get(doc, "scenario", str, jw["plan"]),
                 hub=_get(doc, "hub", str, jw["plan"]),
                 mode=_choice(doc.get("mode"), ("tool", "workpiece"), jw["mode"]),
                 X_WH=_array(arr, "X_WH", (4, 4), aw), targets=targets,
-                segments=_segments(doc, len(targets), jw),
-                trajectory=_trajectory(doc, arr, aw),
+                segments=_segments(doc, len(targets), jw, (tr.t[0], tr.t[-1])),
+                trajectory=tr,
                 tool_path=_records(doc, arr, jw, aw) or None,
                 failures=_failures(doc, jw), meta=_meta(doc, jw), run=_run_record(folder))
 
