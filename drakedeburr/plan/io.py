@@ -42,7 +42,7 @@ from drakedeburr.plan.types import (
 from drakedeburr.units import deg_from_rad
 
 __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv", "jsonable",
-           "plan_digest", "is_plan_folder"]
+           "plan_digest", "is_plan_folder", "hub_reference", "check_hub_reference"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 2
@@ -87,7 +87,8 @@ def _content(plan: Plan) -> tuple[dict, dict]:
                             cone_outer_half_angle=float(tp.cone_outer_half_angle),
                             depth_of_cut=float(tp.depth_of_cut)))
     doc = dict(
-        format=PLAN_FORMAT, version=PLAN_VERSION, scenario=plan.scenario, hub=plan.hub,
+        format=PLAN_FORMAT, version=PLAN_VERSION, scenario=_absolute(plan.scenario),
+        hub=_absolute(plan.hub),
         mode=plan.mode,
         targets=[dict(window_index=tg.window_index, segment=tg.segment, cl_index=tg.cl_index,
                       speed=tg.speed, zone=tg.zone, motion=tg.motion) for tg in plan.targets],
@@ -99,6 +100,52 @@ def _content(plan: Plan) -> tuple[dict, dict]:
         tool_paths=tp_docs,
     )
     return doc, arrays
+
+
+def _absolute(ref: str) -> str:
+    """A hub or scenario as a plan records it: a bundled name as it is, a folder or file as
+    its absolute path (a path relative to where the plan was made would name another hub, or
+    none, from another folder)."""
+    p = Path(ref)
+    if p.exists() and (len(p.parts) > 1 or p.is_dir() or p.suffix in (".yaml", ".yml")):
+        return str(p.resolve())
+    return ref
+
+
+def hub_reference(hub: str) -> dict | None:
+    """``{"path": absolute hub folder, "sha256": its content hash}``
+    (:func:`drakedeburr.cell.fingerprint.hub_digest`), None for a hub that cannot be found."""
+    from drakedeburr.cell.fingerprint import hub_digest
+    from drakedeburr.resources import resolve_hub_dir
+
+    try:
+        return {"path": str(resolve_hub_dir(hub)), "sha256": hub_digest(hub)}
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
+def check_hub_reference(doc: dict, doc_path: Path) -> None:
+    """Refuse (InputError naming ``plan.json`` and both hashes) a plan whose hub folder is
+    gone or whose content is not the content the plan was made for. Plans written before
+    hub references (no ``hub_ref``) pass: their hub is found as before."""
+    ref = doc.get("hub_ref")
+    if ref is None:
+        return
+    if not (isinstance(ref, dict) and isinstance(ref.get("path"), str)
+            and isinstance(ref.get("sha256"), str)):
+        raise InputError(f"{doc_path}: hub_ref: expected {{path, sha256}}")
+    from drakedeburr.cell.fingerprint import hub_digest
+
+    hub = doc.get("hub") if isinstance(doc.get("hub"), str) else ref["path"]
+    try:
+        now = hub_digest(hub)
+    except (FileNotFoundError, NotADirectoryError):
+        raise InputError(f"{doc_path}: the plan's hub {hub} is not there any more (it was "
+                         f"made for {ref['path']}, content sha256 {ref['sha256']})") from None
+    if now != ref["sha256"]:
+        raise InputError(f"{doc_path}: the hub {hub} has changed since the plan was made: its "
+                         f"content is sha256 {now}, the plan was made for sha256 "
+                         f"{ref['sha256']}; plan the hub again")
 
 
 def _doc_text(doc: dict) -> str:
@@ -133,6 +180,9 @@ def save_plan(plan: Plan, path: str | Path, *, is_ours=is_plan_folder) -> Path:
     is replaced whole (with its old report); any other existing folder is refused. Returns the
     folder."""
     doc, arrays = _content(plan)
+    ref = hub_reference(plan.hub)
+    if ref is not None:  # not part of the plan's digest: where its hub is and what it holds
+        doc = {**doc, "hub_ref": ref}
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     with atomic_folder(path, is_ours=is_ours) as tmp:
@@ -158,6 +208,7 @@ def load_plan(path: str | Path) -> Plan:
     if not doc_path.is_file():
         raise FileNotFoundError(f"no plan at {folder} (missing plan.json)")
     doc = _read_doc(doc_path)
+    check_hub_reference(doc, doc_path)
     npz_path = folder / "arrays.npz"
     if not npz_path.is_file():
         raise InputError(f"{folder}: missing arrays.npz (the plan's arrays): not a complete "
@@ -171,7 +222,9 @@ def load_plan(path: str | Path) -> Plan:
 
 def _read_doc(doc_path: Path) -> dict:
     try:
-        doc = json.loads(doc_path.read_bytes().decode("utf-8"))
+        from drakedeburr._io import read_bounded
+
+        doc = json.loads(read_bounded(doc_path, "plan", "json").decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise InputError(f"{doc_path}: not valid JSON ({type(exc).__name__}: "
                          f"{str(exc)[:120]})") from None
