@@ -17,7 +17,7 @@ __all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atom
            "atomic_write_files", "clean_leftovers", "check_folder_target", "temp_folder_beside",
            "umask", "READ_LIMITS", "YAML_LIMITS", "check_regular_file", "read_bounded",
            "read_text_bounded", "load_yaml", "PATH_NAME", "check_path_name",
-           "size_text"]
+           "size_text", "FILE_DIGITS", "round_numbers"]
 
 # Temporary names carry the writer's process id (``.NAME.tmp-PID-XXXX`` folders,
 # ``.NAME.PID-XXXX.tmp`` files) so that the next run removes what a killed one left
@@ -471,3 +471,29 @@ def check_path_name(name, what: str) -> str:
                          "and . (starting with a letter or digit, at most 100 characters, "
                          "no '..', no '/' or spaces)")
     return name
+
+
+# --------------------------------------------------------------------------- generated files
+
+#: significant digits a generated model file keeps of a number: far below a double's 17,
+#: so the last-bit differences of another machine's libm or BLAS (seen: a committed arm SDF
+#: reading ...69689661813 where another machine generated ...69689661815) do not reach the
+#: file; far above any model's precision (1e-12 of a metre is a picometre)
+FILE_DIGITS = 12
+
+_FLOAT_LITERAL = re.compile(r"(?<![\w.])-?\d+\.\d+(?:[eE][-+]?\d+)?(?![\w.])")
+
+
+def round_numbers(text: str, digits: int = FILE_DIGITS) -> str:
+    """``text`` with every decimal literal of more than ``digits`` significant digits rounded
+    to ``digits`` (and written as Python writes that float: ``3.0``, ``0.048``); shorter
+    literals stay as written. For generated files
+    that must be identical on every machine (models, meshes)."""
+    def short(m: re.Match) -> str:
+        lit = m.group(0)
+        mantissa = re.split(r"[eE]", lit)[0].lstrip("-").replace(".", "").lstrip("0")
+        if len(mantissa) <= digits:
+            return lit
+        return repr(float(f"{float(lit):.{digits}g}"))  # 3.0000000000000013 -> 3.0
+
+    return _FLOAT_LITERAL.sub(short, text)
