@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from drakedeburr.errors import InputError
 
 __all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "Acceptance", "Recipe",

@@ -19,10 +19,10 @@ _SEED = number(0, integer=True)
 
 def _run_generate(args: argparse.Namespace) -> int:
     from drakedeburr import argcheck
+    from drakedeburr._io import check_path_name
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.catalogue import BUNDLED
-    from drakedeburr._io import check_path_name
     from drakedeburr.hub.generate import generate_hub
     from drakedeburr.hub.spec import load_spec
     from drakedeburr.resources import hubs_dir

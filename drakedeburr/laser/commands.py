@@ -59,7 +59,8 @@ def register(subparsers) -> None:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--center", type=number(-5000, 5000, unit="mm"), nargs=2, default=(0.0, 0.0), metavar=("X", "Y"),
+    p.add_argument("--center", type=number(-5000, 5000, unit="mm"), nargs=2,
+                   default=(0.0, 0.0), metavar=("X", "Y"),
                    help="shape origin [mm] (tool mode: offset from the tool's home point)")
     p.add_argument("--rotation", type=number(), default=0.0, help="rotation [deg]")
     p.add_argument("--lead-in", type=_NONNEG_SIZE, default=0.0, help="lead-in length [mm], >= 0")
