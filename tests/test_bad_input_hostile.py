@@ -285,3 +285,27 @@ def test_verify_all_reports_a_broken_hub_in_one_line(tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["rows"][0]["error"] and not summary["passed"]
     assert "ERROR" in p.stdout
+
+
+def test_docs_list_every_recipe_key_with_its_unit_and_range():
+    """docs/plan.md's recipe table is the schema (drakedeburr.config.RECIPE_SCHEMA)."""
+    import dataclasses
+
+    from drakedeburr.config import ACCEPTANCE_SCHEMA, RECIPE_SCHEMA, Acceptance, ProcessParameters
+
+    text = (REPO / "docs" / "plan.md").read_text()
+    for f in dataclasses.fields(ProcessParameters):
+        if f.name.startswith("bounds_"):
+            assert f"| `{f.name}` | rad |" in text, f.name
+            continue
+        key = RECIPE_SCHEMA[f.name]
+        assert f"| `{f.name}` | {key.unit} | {key.range_text()} |" in text, f.name
+    for f in dataclasses.fields(Acceptance):
+        key = ACCEPTANCE_SCHEMA[f.name]
+        assert f"| `acceptance: {f.name}` | {key.unit} | {key.range_text()} or null |" in text
+    # and the defaults lie inside their ranges (a schema that refused the defaults would be
+    # wrong, not strict)
+    defaults = ProcessParameters()
+    for name, key in RECIPE_SCHEMA.items():
+        if hasattr(defaults, name):
+            key.check(getattr(defaults, name), "defaults", name)
