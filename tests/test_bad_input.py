@@ -66,6 +66,15 @@ def _broken_plans(root: Path, good: Path) -> None:
     bad = json.loads(json.dumps(doc))
     bad["targets"][3]["speed"] = "fast"
     (copy("plan_badtarget") / "plan.json").write_text(json.dumps(bad))
+    for name, change in (  # issue 43: numbers that overflowed or asked for petabytes
+            ("plan_bigindex", lambda d: d["targets"][3].__setitem__("cl_index", 10**20)),
+            ("plan_longtime", lambda d: d["segments"][1].__setitem__("t_range", [0.0, 1e12]))):
+        bad = json.loads(json.dumps(doc))
+        change(bad)
+        (copy(name) / "plan.json").write_text(json.dumps(bad))
+    a = {k: v.copy() for k, v in arrays.items()}
+    a["t"] = a["t"] * 1e10  # a trajectory of 1e11 s
+    _write_npz(copy("plan_longtraj") / "arrays.npz", a)
     bad = json.loads(json.dumps(doc))
     bad["segments"][1]["target_range"] = [0, 10**6]
     (copy("plan_badsegment") / "plan.json").write_text(json.dumps(bad))
@@ -252,6 +261,10 @@ CASES = [
     C("verify plan_missing", 2, ("arrays.npz", "'X_WF'", "missing")),
     C("verify plan_badtarget", 2, ("plan.json", "targets[3].speed", "finite number")),
     C("verify plan_badsegment", 2, ("plan.json", "segments[1].target_range", "357 targets")),
+    C("verify plan_bigindex", 2, ("plan.json", "targets[3].cl_index", "out of range")),
+    C("verify plan_longtime", 2, ("plan.json", "segments[1].t_range", "not within")),
+    C("verify plan_longtraj", 2, ("arrays.npz", "'t'", "duration limit of 3600 s")),
+    C("export plan_longtime -o x.mod", 2, ("segments[1].t_range",)),
     C("verify nothere", 2, ("nothere", "SCENARIO/HUB")),
     C("verify plan --json adir", 2, ("adir", "--json", "folder")),
     C("verify plan --html adir", 2, ("adir", "--html", "folder")),
@@ -389,6 +402,9 @@ CASES = [
     C("verify plan --json ./plan/../plan/plan.json", 2, ("--json", "plan folder")),
     C("export plan -o plan/plan.json", 2, ("plan/plan.json", "plan.json", "input")),
     C("plan -o p --html p/replay.html", 2, ("p/replay.html", "inside the output folder")),
+    C("post small.cl -o small.cl", 2, ("small.cl", "input")),
+    C("laser shape circle --diameter 10 -o c.ls --summary c.ls", 2, ("--summary", "same file")),
+    C("cl nan.stl --json nan.stl", 2, ("nan.stl", "--json", "input")),
     # issue 43: verify-all's scheduler, checked before any work, naming the option
     C("verify-all . --scheduler notaurl", 2, ("--scheduler", "'notaurl'", "SCHEME://HOST:PORT")),
     C("verify-all . --scheduler tcp://127.0.0.1:1", 2, ("--scheduler", "127.0.0.1:1",

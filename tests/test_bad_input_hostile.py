@@ -309,3 +309,15 @@ def test_docs_list_every_recipe_key_with_its_unit_and_range():
     for name, key in RECIPE_SCHEMA.items():
         if hasattr(defaults, name):
             key.check(getattr(defaults, name), "defaults", name)
+
+
+@pytest.mark.parametrize("name", ["bad name", "x\ny", "semi;colon", "-dash"])
+def test_verify_all_refuses_a_catalogue_folder_whose_name_is_not_a_file_name(tmp_path, capsys,
+                                                                             name):
+    """Each catalogue folder becomes OUT/SCENARIO/<folder>: its name is checked first."""
+    cat = tmp_path / "cat"
+    shutil.copytree(REPO / "models" / "hubs" / vs.HUB, cat / name, symlinks=True)
+    code = main(["verify-all", str(cat), "-o", str(tmp_path / "out"), "--quick"])
+    err = capsys.readouterr().err
+    assert code == 2 and "hub folder" in err and repr(name) in err, err
+    assert err.count("\n") == 1 and not (tmp_path / "out").exists()

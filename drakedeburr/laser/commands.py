@@ -152,6 +152,12 @@ def _run_shape(args) -> int:
 
     output_file(args.output, "-o/--output")
     output_file(args.summary, "--summary")
+    from drakedeburr.argcheck import separate_outputs
+
+    points = Path(args.points) if getattr(args, "points", None) else None
+    separate_outputs({"-o/--output": args.output, "--summary": args.summary},
+                     inputs={"the --points file": points if points and points.is_file() else
+                             None})
     if args.output.suffix.lower() != ".ls":
         raise InputError(f"{args.output}: -o/--output is a FANUC program: a .ls file")
     if not args.max_command > args.min_command:

@@ -211,6 +211,9 @@ def _run_post(args) -> int:
     from drakedeburr.programs.writers import format_for_controller
 
     _check_args(args)
+    from drakedeburr.argcheck import separate_outputs
+
+    separate_outputs({"-o/--output": args.output}, inputs={"the CL file": args.cl_file})
     name = program_name(args.cl_file, args.name)
     settings = settings_from_args(args)
     own = format_for_controller(settings.robot.controller)
