@@ -161,6 +161,8 @@ def _hostile_files(root: Path) -> None:
     # every triangle collinear (was LinAlgError in cl, hub import and verify)
     (root / "collinear.obj").write_text("".join(f"v {0.1 * i} 0 0\n" for i in range(5))
                                         + "f 1 2 3\nf 2 3 4\nf 3 4 5\nf 1 3 5\n")
+    (root / "up" / vs.HUB).mkdir(parents=True)  # a user's folder where a hub would go
+    (root / "up" / vs.HUB / "hub.yaml").write_text("the user's own file\n")
     (root / "o").mkdir()
     (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
@@ -392,6 +394,7 @@ CASES = [
     C("hub generate --spec spec_hidden.yaml --out o", 2, ("'.hub'", "file name")),
     C("hub generate --spec spec_dup.yaml --out o", 2, ("spec_dup.yaml", "spoke_count", "twice")),
     C("hub generate .. --out o/hubs", 2, ("hub name", "'..'")),
+    C("hub generate h5_straight --out up", 2, ("up/h5_straight", "did not generate")),
     # issue 43: outputs never replace inputs or each other
     C("verify plan --json plan/plan.json", 2, ("plan/plan.json", "--json", "plan folder")),
     C("verify plan --html plan/arrays.npz", 2, ("plan/arrays.npz", "--html", "plan folder")),
