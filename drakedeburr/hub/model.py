@@ -89,7 +89,9 @@ def read_obj(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     Written by hand: trimesh's loader merges/reorders vertices, the ground-truth loops refer to
     the exact vertex coordinates.
     """
-    text = Path(path).read_text()
+    from drakedeburr._io import read_text_bounded
+
+    text = read_text_bounded(path, "hub mesh", "mesh")  # a regular file within READ_LIMITS
     v_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("v ")]
     f_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("f ")]
     V = np.array(" ".join(v_lines).split(), float).reshape(-1, 3)
@@ -165,7 +167,9 @@ def load_hub(name_or_dir: str | Path) -> HubModel:
         raise FileNotFoundError(f"{d}: hub model not generated ({', '.join(missing)} missing); "
                                 f"run: {how}")
     V, F = read_obj(d / "hub.obj")
-    summary = json.loads((d / "summary.json").read_text())
+    from drakedeburr._io import read_bounded
+
+    summary = json.loads(read_bounded(d / "summary.json", "hub summary", "json"))
     windows = _read_edges(d / "edges.npz",
                           int(summary["window_count"]) if imported else spec.window_count)
     pieces = tuple(sorted((d / "collision").glob("piece_*.obj")))
