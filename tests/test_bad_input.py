@@ -163,6 +163,7 @@ def _hostile_files(root: Path) -> None:
                                         + "f 1 2 3\nf 2 3 4\nf 3 4 5\nf 1 3 5\n")
     (root / "up" / vs.HUB).mkdir(parents=True)  # a user's folder where a hub would go
     (root / "up" / vs.HUB / "hub.yaml").write_text("the user's own file\n")
+    (root / "huge.csv").write_text("0,0\n1e308,0\n0,1\n")  # was OverflowError
     (root / "o").mkdir()
     (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
@@ -333,7 +334,7 @@ CASES = [
     C("post small.cl -o adir", 2, ("adir", "folder")),
     C("post small.cl -o p.mod --feed 0", 2, ("--feed", "> 0")),
     # laser
-    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "0 < value <= 5000 mm")),
+    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "0.01 <= value <= 5000 mm")),
     C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2,
       ("--spacing", "0.001 <= value <= 1000 mm")),
     C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "0 < value <= 600")),
@@ -345,6 +346,8 @@ CASES = [
     C("laser shape circle --diameter 10 --lead-in 1e300 -o c.ls", 2, ("--lead-in",)),
     C("laser shape circle --diameter 10 --center inf 0 -o c.ls", 2, ("--center",)),
     C("laser shape circle --diameter 10 --feed 1e308 -o c.ls", 2, ("--feed",)),
+    C("laser shape hexagon --across-flats 1e-300 -o c.ls", 2, ("--across-flats", "0.01")),
+    C("laser shape polyline --points huge.csv -o c.ls", 2, ("1e+308 mm", "finite")),
     C("cl collinear.obj", 2, ("collinear.obj", "degenerate")),
     C("hub import collinear.obj --out hubs", 2, ("collinear.obj", "degenerate")),
     C("verify collinear.obj", 2, ("collinear.obj", "degenerate")),

@@ -321,3 +321,37 @@ def test_verify_all_refuses_a_catalogue_folder_whose_name_is_not_a_file_name(tmp
     err = capsys.readouterr().err
     assert code == 2 and "hub folder" in err and repr(name) in err, err
     assert err.count("\n") == 1 and not (tmp_path / "out").exists()
+
+
+def test_a_scheduler_address_where_another_service_answers(tmp_path, capsys):
+    """``--scheduler`` naming a port where something else answers (garbage bytes: Dask read a
+    length of 3 EiB from them, "internal error: MemoryError"): one line naming the option."""
+    import socket
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    port = srv.getsockname()[1]
+
+    def serve():
+        while True:
+            try:
+                conn, _ = srv.accept()
+                conn.sendall(b"HTTP/1.1 200 OK\r\n\r\n" + bytes(range(256)) * 64)
+                conn.close()
+            except OSError:
+                return
+
+    threading.Thread(target=serve, daemon=True).start()
+    cat = tmp_path / "cat"
+    shutil.copytree(REPO / "models" / "hubs" / vs.HUB, cat / vs.HUB, symlinks=True)
+    try:
+        code = main(["verify-all", str(cat), "-o", str(tmp_path / "out"), "--scheduler",
+                     f"tcp://127.0.0.1:{port}", "--quick", "--planner", "reference"])
+    finally:
+        srv.close()
+    err = capsys.readouterr().err
+    assert code == 2 and "internal error" not in err, err
+    assert f"--scheduler tcp://127.0.0.1:{port}" in err and "no Dask scheduler" in err
+    assert err.count("\n") == 1

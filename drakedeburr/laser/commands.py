@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from drakedeburr.argcheck import number
 _POS = number(0, lo_open=True)
 _NONNEG = number(0)
 #: shape sizes and offsets [mm]: up to 5 m (beyond any robot's reach; 1e300 would overflow)
-_SIZE = number(0, 5000, lo_open=True, unit="mm")
+_SIZE = number(0.01, 5000, unit="mm")  # from 10 um (1e-300 mm broke the timing)
 _NONNEG_SIZE = number(0, 5000, unit="mm")
 #: the most contour points a program is planned with (a 100 mm hole at 0.2 mm: 1571)
 MAX_POINTS = 200_000
@@ -112,6 +113,10 @@ def _make_shape(args):
             text = src.read_text() if src.is_file() else args.points.replace(" ", "\n")
             rows = [ln.replace(";", ",").split(",") for ln in text.splitlines() if ln.strip()]
             pts = tuple((m_from_mm(float(x)), m_from_mm(float(y))) for x, y in rows)
+            bad = [v for p in pts for v in p if not (math.isfinite(v) and abs(v) <= 5.0)]
+            if bad:
+                raise ValueError(f"a coordinate of {bad[0] * 1e3:g} mm: each must be finite, "
+                                 "|x|, |y| <= 5000 mm")
         except ValueError as exc:
             raise InputError(f"polyline --points {args.points!r}: expected x,y pairs in mm "
                              f"({exc})") from exc

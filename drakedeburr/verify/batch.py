@@ -195,7 +195,7 @@ def verify_all(
 
         collect_here()  # no Meshcat may be left for the helper threads to free
 
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        client = scheduler if isinstance(scheduler, Client) else _connect(Client, scheduler)
         try:
             futures = client.map(run_job, [replace(j, one_process=True) for j in jobs],
                                  pure=False)
@@ -239,6 +239,18 @@ def verify_all(
     atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, sort_keys=True))
     atomic_write_text(out_dir / "summary.md", summary_markdown(summary))
     return summary
+
+
+def _connect(Client, address: str):
+    """A Dask client of the scheduler at ``address``; anything that is not one (nothing
+    listening, another service answering with bytes Dask cannot read) is an InputError naming
+    the address, after at most 10 s."""
+    try:
+        return Client(address, timeout=10)
+    except Exception as exc:  # OSError, TimeoutError, a garbled reply (seen: MemoryError)
+        text = " ".join(str(exc).split())[:160]
+        raise InputError(f"--scheduler {address}: no Dask scheduler there "
+                         f"({type(exc).__name__}: {text})") from None
 
 
 def summary_markdown(summary: dict) -> str:
