@@ -16,7 +16,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES", "OTHER_MESH_SUFFIXES",
-           "MESH_TARGET_SUFFIXES", "READABLE_FORMATS"]
+           "MESH_TARGET_SUFFIXES", "READABLE_FORMATS", "check_mesh_file"]
 
 log = logging.getLogger(__name__)
 
@@ -54,6 +54,17 @@ class LoadedMesh:
     watertight: bool
 
 
+def check_mesh_file(path: Path) -> int:
+    """FileNotFoundError for a missing mesh file; InputError for anything but a regular file
+    (``/dev/zero``, a pipe, a folder) or one over ``READ_LIMITS["mesh"]``, named with the
+    limit. Returns its size. Call it before reading or hashing a mesh a user hands in."""
+    from drakedeburr._io import check_regular_file
+
+    if not Path(path).exists():
+        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    return check_regular_file(path, "hub mesh", "mesh")
+
+
 def _check_not_degenerate(mesh, path: Path) -> None:
     """Refuse a mesh with no area or no extent in some direction (every triangle collinear,
     or all on one line): nothing downstream (the axis estimate's eigenvectors, the window
@@ -84,17 +95,13 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     import trimesh
 
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    check_mesh_file(path)
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
         what = _WHY_NOT.get(suffix, "a CAD solid, not a triangle mesh" if suffix in _CAD
                             else "not a format read here")
         raise InputError(f"{path}: unsupported mesh type {path.suffix!r} ({what}); export the "
                          f"hub as {READABLE_FORMATS}")
-    from drakedeburr._io import check_regular_file
-
-    check_regular_file(path, "hub mesh", "mesh")  # READ_LIMITS["mesh"], regular files only
     try:
         # unprocessed first: trimesh's processing drops non-finite vertices silently
         mesh = trimesh.load(path, force="mesh", process=False)
