@@ -332,7 +332,7 @@ def _fields(cls, data: Any, where: str, skip: tuple[str, ...] = ()) -> dict:
         if key in skip:
             continue
         if key not in names:
-            raise InputError(f"{where}: unknown {cls.__name__} field {key!r}; "
+            raise InputError(f"{where}: unknown {cls.__name__} field {str(key)[:60]!r}; "
                              f"known: {sorted(names)}")
         out[key] = _value(cls, key, value, where)
     return out

@@ -355,3 +355,19 @@ def test_a_scheduler_address_where_another_service_answers(tmp_path, capsys):
     assert code == 2 and "internal error" not in err, err
     assert f"--scheduler tcp://127.0.0.1:{port}" in err and "no Dask scheduler" in err
     assert err.count("\n") == 1
+
+
+def test_an_error_line_quoting_a_huge_input_is_cut_short(monkeypatch, capsys):
+    """The issue's alias document gave a 5.8 MB "one line"; any message is cut at
+    cli.MAX_LINE characters."""
+    from drakedeburr import cli
+    from drakedeburr.laser import commands
+
+    def huge(args):
+        raise InputError("f.yaml: " + "lol, " * 1_000_000)
+
+    monkeypatch.setattr(commands, "_run_tool", huge)
+    code = main(["laser", "tool"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "f.yaml" in err
+    assert len(err) <= cli.MAX_LINE + 100 and "cut short" in err
