@@ -17,7 +17,7 @@ __all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "atom
            "atomic_write_files", "clean_leftovers", "check_folder_target", "temp_folder_beside",
            "umask", "READ_LIMITS", "YAML_LIMITS", "check_regular_file", "read_bounded",
            "read_text_bounded", "load_yaml", "PATH_NAME", "check_path_name",
-           "size_text", "FILE_DIGITS", "round_numbers"]
+           "size_text", "FILE_DIGITS", "round_numbers", "check_npz_members"]
 
 # Temporary names carry the writer's process id (``.NAME.tmp-PID-XXXX`` folders,
 # ``.NAME.PID-XXXX.tmp`` files) so that the next run removes what a killed one left
@@ -497,3 +497,59 @@ def round_numbers(text: str, digits: int = FILE_DIGITS) -> str:
         return repr(float(f"{float(lit):.{digits}g}"))  # 3.0000000000000013 -> 3.0
 
     return _FLOAT_LITERAL.sub(short, text)
+
+
+# --------------------------------------------------------------------------- .npz archives
+
+def check_npz_members(path: str | Path, names: re.Pattern, limit: int, what: str,
+                      known: str, kinds: str = "biuf") -> None:
+    """Refuse (InputError naming the file, the member and the limit) an ``.npz`` archive
+    before anything in it is decompressed: each member read only from its zip entry and its
+    ``.npy`` header (a few bytes) must have a name ``names`` matches (``known`` lists them
+    for the message), a dtype of ``kinds`` (never objects), at most 4 dimensions, as many
+    bytes as the header's shape says, and all together at most ``limit`` bytes. A 4 MB file
+    that decompresses to 3 GB is refused by its declared sizes."""
+    import zipfile
+
+    import numpy as np
+
+    from drakedeburr.errors import InputError
+
+    path = Path(path)
+    check_regular_file(path, what, limit)
+    try:
+        zf = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise InputError(f"{path}: not a readable .npz archive ({type(exc).__name__}: "
+                         f"{str(exc)[:120]})") from None
+    total = 0
+    fmt = np.lib.format
+    readers = {(1, 0): fmt.read_array_header_1_0, (2, 0): fmt.read_array_header_2_0}
+    with zf:
+        for info in zf.infolist():
+            name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
+            if not names.fullmatch(name):
+                raise InputError(f"{path}: member {info.filename[:60]!r} is not one of the "
+                                 f"{what} ({known})")
+            total += info.file_size
+            if total > limit:
+                raise InputError(f"{path}: member {name!r} takes the arrays past the {what} "
+                                 f"limit of {size_text(limit)} decompressed")
+            try:
+                with zf.open(info) as f:
+                    read = readers.get(fmt.read_magic(f))
+                    if read is None:
+                        raise ValueError("an .npy format version not read here")
+                    shape, _, dtype = read(f)
+                    header = f.tell()
+            except Exception as exc:  # zlib, a bad header: numpy and zipfile raise many kinds
+                raise InputError(f"{path}: member {name!r} has no readable .npy header "
+                                 f"({type(exc).__name__}: {str(exc)[:80]})") from None
+            if dtype.kind not in kinds or dtype.hasobject:
+                raise InputError(f"{path}: array {name!r}: dtype {dtype}, expected numbers")
+            if len(shape) > 4 or any(n < 0 for n in shape):
+                raise InputError(f"{path}: array {name!r}: shape {shape}: at most 4 "
+                                 "dimensions")
+            if header + int(np.prod(shape, dtype=object)) * dtype.itemsize != info.file_size:
+                raise InputError(f"{path}: array {name!r}: its header says shape {shape} "
+                                 f"{dtype}, which does not match its {info.file_size} bytes")

@@ -91,7 +91,7 @@ def test_npz_bomb_is_refused_from_its_headers(saved, tmp_path, kind):
     _npz_with_member(saved / "arrays.npz", plan / "arrays.npz", name, 300 << 20)
     assert (plan / "arrays.npz").stat().st_size < 8 << 20
     code, err, peak = _child(["verify", "plan"], tmp_path)
-    says = ("junk.npy", "not an array of a plan") if kind == "extra-member" else (
+    says = ("junk.npy", "not one of the plan arrays") if kind == "extra-member" else (
         "'qd'", "plan arrays limit of 256 MiB")
     _one_line_refusal(code, err, "plan/arrays.npz", *says)
     assert peak < GB, peak
@@ -371,3 +371,17 @@ def test_an_error_line_quoting_a_huge_input_is_cut_short(monkeypatch, capsys):
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "f.yaml" in err
     assert len(err) <= cli.MAX_LINE + 100 and "cut short" in err
+
+
+def test_hub_edges_npz_bomb_is_refused_from_its_headers(tmp_path):
+    """A hub folder whose edges.npz carries a window loop that decompresses to 300 MB."""
+    from drakedeburr.hub.model import load_hub
+
+    hub = tmp_path / "hub"
+    shutil.copytree(REPO / "models" / "hubs" / vs.HUB, hub)
+    _npz_with_member(hub / "edges.npz", tmp_path / "e.npz", "w9_p_HE.npy", 300 << 20)
+    shutil.move(tmp_path / "e.npz", hub / "edges.npz")
+    with pytest.raises(InputError, match=r"edges.npz: member 'w9_p_HE' takes the arrays past "
+                                         r"the hub edges limit of 256 MiB"):
+        load_hub(hub)
+    assert len(load_hub(vs.HUB).windows) == 5  # the bundled hub's own edges pass the check

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -109,7 +110,16 @@ def resolve_hub_dir(name_or_dir: str | Path) -> Path:
     return _resolve(name_or_dir)
 
 
+#: the arrays of a hub's ``edges.npz``
+_EDGE_ARRAYS = re.compile(r"kinds|w\d{1,4}_(?:p_HE|t_H|n_wall_H|n_face_H)")
+
+
 def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
+    from drakedeburr._io import check_npz_members
+
+    # from the headers, before anything is decompressed: names, dtypes, sizes, 256 MiB in all
+    check_npz_members(path, _EDGE_ARRAYS, 256 << 20, "hub edges", "kinds, w<i>_p_HE, ...",
+                      kinds="fU")
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
 

@@ -249,52 +249,13 @@ NPZ_LIMIT = 256 << 20
 
 
 def _check_npz_members(npz_path: Path) -> None:
-    """Every member of ``arrays.npz`` checked from its zip entry and its .npy header before
-    anything is decompressed: a known array name, a numeric dtype, a size that matches the
-    header's shape, and all of them together within :data:`NPZ_LIMIT` (a small file that
-    decompresses to gigabytes is refused, naming the member and the limit)."""
-    import zipfile
+    """Every member of ``arrays.npz`` checked from its zip entry and .npy header before
+    anything is decompressed (:func:`drakedeburr._io.check_npz_members`): a plan's array
+    name, numbers, a size matching the header's shape, :data:`NPZ_LIMIT` in all."""
+    from drakedeburr._io import check_npz_members
 
-    from drakedeburr._io import check_regular_file
-
-    check_regular_file(npz_path, "plan arrays", NPZ_LIMIT)
-    try:
-        zf = zipfile.ZipFile(npz_path)
-    except (zipfile.BadZipFile, OSError, ValueError) as exc:
-        raise InputError(f"{npz_path}: not a readable .npz archive ({type(exc).__name__}: "
-                         f"{str(exc)[:120]})") from None
-    total = 0
-    with zf:
-        for info in zf.infolist():
-            name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
-            if not _ARRAY_NAME.fullmatch(name):
-                raise InputError(f"{npz_path}: member {info.filename[:60]!r} is not an array of "
-                                 "a plan (t, c, X_HT, X_WF, q_targets, p_HC, n_H, X_WH, tp<w>_*)")
-            total += info.file_size
-            if total > NPZ_LIMIT:
-                raise InputError(f"{npz_path}: member {name!r} takes the arrays past the plan "
-                                 f"arrays limit of {NPZ_LIMIT >> 20} MiB decompressed")
-            try:
-                with zf.open(info) as f:
-                    fmt = np.lib.format
-                    version = fmt.read_magic(f)
-                    read = {(1, 0): fmt.read_array_header_1_0,
-                            (2, 0): fmt.read_array_header_2_0}.get(version)
-                    if read is None:
-                        raise ValueError(f".npy format version {version} is not read here")
-                    shape, _, dtype = read(f)
-                    header = f.tell()
-            except Exception as exc:  # zlib, a bad header: numpy and zipfile raise many kinds
-                raise InputError(f"{npz_path}: member {name!r} has no readable .npy header "
-                                 f"({type(exc).__name__}: {str(exc)[:80]})") from None
-            if dtype.kind not in "biuf" or dtype.hasobject:
-                raise InputError(f"{npz_path}: array {name!r}: dtype {dtype}, expected numbers")
-            if len(shape) > 4 or any(n < 0 for n in shape):
-                raise InputError(f"{npz_path}: array {name!r}: shape {shape} is not an array "
-                                 "of a plan (at most 4 dimensions)")
-            if header + int(np.prod(shape, dtype=object)) * dtype.itemsize != info.file_size:
-                raise InputError(f"{npz_path}: array {name!r}: its header says shape {shape} "
-                                 f"{dtype}, which does not match its {info.file_size} bytes")
+    check_npz_members(npz_path, _ARRAY_NAME, NPZ_LIMIT, "plan arrays",
+                      "t, c, X_HT, X_WF, q_targets, p_HC, n_H, X_WH, tp<w>_*")
 
 
 def _read_arrays(npz_path: Path) -> dict[str, np.ndarray]:
