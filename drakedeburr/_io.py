@@ -354,7 +354,18 @@ YAML_LIMITS = {"alias_expansion": 10_000, "depth": 64}
 _FLOAT_12 = re.compile(r"^[-+]?(?:\.[0-9]+|[0-9][0-9_]*(?:\.[0-9_]*)?)[eE][-+]?[0-9]+$")
 
 
-def _yaml_loader(where: str):
+def _local_tag(loader, suffix, node):
+    """A local tag (``!Rpy``, Drake's model directives): its node as plain data."""
+    import yaml
+
+    if isinstance(node, yaml.MappingNode):
+        return loader.construct_mapping(node, deep=True)
+    if isinstance(node, yaml.SequenceNode):
+        return loader.construct_sequence(node, deep=True)
+    return loader.construct_scalar(node)
+
+
+def _yaml_loader(where: str, local_tags: bool = False):
     """A yaml.SafeLoader subclass for one document: duplicate keys refused, alias expansion
     and nesting bounded (:data:`YAML_LIMITS`), and ``1.0e6`` / ``1e6`` read as numbers (YAML
     1.2; PyYAML's YAML 1.1 resolver wants ``1.0e+6``)."""
@@ -425,14 +436,20 @@ def _yaml_loader(where: str):
 
     Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_12,
                                  list("-+0123456789."))
+    if local_tags:
+        Loader.yaml_multi_constructors = dict(yaml.SafeLoader.yaml_multi_constructors)
+        Loader.add_multi_constructor("!", _local_tag)
     return Loader
 
 
-def load_yaml(path: str | Path, what: str, limit: str | int = "recipe"):
+def load_yaml(path: str | Path, what: str, limit: str | int = "recipe", *,
+              local_tags: bool = False):
     """One YAML document read safely (no Python tags) and bounded: at most ``limit`` bytes of
     a regular file (:func:`read_bounded`), UTF-8, no duplicate keys, bounded alias expansion
     and nesting (:data:`YAML_LIMITS`). An empty document is None. Every refusal is an
-    InputError of one line naming the file (and the line) and the limit."""
+    InputError of one line naming the file (and the line) and the limit. ``local_tags``:
+    accept local tags (``!Rpy`` of Drake's model directives) as plain data; ``!!python``
+    tags are refused either way."""
     import yaml
 
     from drakedeburr.errors import InputError
@@ -440,7 +457,8 @@ def load_yaml(path: str | Path, what: str, limit: str | int = "recipe"):
     path = Path(path)
     text = read_text_bounded(path, what, limit)
     try:
-        return yaml.load(text, Loader=_yaml_loader(str(path)))  # noqa: S506 - a SafeLoader
+        loader = _yaml_loader(str(path), local_tags)
+        return yaml.load(text, Loader=loader)  # noqa: S506 - a SafeLoader
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f":{mark.line + 1}" if mark is not None else ""

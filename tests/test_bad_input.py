@@ -164,6 +164,7 @@ def _hostile_files(root: Path) -> None:
     (root / "up" / vs.HUB).mkdir(parents=True)  # a user's folder where a hub would go
     (root / "up" / vs.HUB / "hub.yaml").write_text("the user's own file\n")
     (root / "huge.csv").write_text("0,0\n1e308,0\n0,1\n")  # was OverflowError
+    (root / "bomb_cell.yaml").write_text(_yaml_bomb())  # a scenario of nested aliases
     (root / "o").mkdir()
     (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
@@ -380,6 +381,7 @@ CASES = [
                                            "rad")),
     C("plan --hub hub_chamfer -o p", 2, ("process.yaml", "chamfer_width_min", "more than")),
     C("plan --hub hub_python -o p", 2, ("process.yaml", "python/object")),
+    C("plan bomb_cell.yaml -o p", 2, ("bomb_cell.yaml", "alias expansion limit")),
     # issue 43: devices, pipes and oversized files are never read
     C("cl zero.stl", 2, ("zero.stl", "character device", "regular files")),
     C("cl fifo.stl", 2, ("fifo.stl", "a pipe")),
