@@ -18,7 +18,8 @@ from pathlib import Path
 from drakedeburr.errors import InputError
 
 __all__ = ["number", "input_file", "output_file", "output_folder", "free_space",
-           "parse_windows", "check_windows", "hub_windows", "MB"]
+           "parse_windows", "check_windows", "hub_windows", "MB", "scheduler_address",
+           "separate_outputs"]
 
 MB = 1 << 20
 
@@ -133,8 +134,10 @@ def free_space(path: str | Path, need: int, option: str) -> None:
     except OSError:
         return
     if free < need:
-        raise InputError(f"{path}: {option}: {free / MB:.1f} MB free on {where}, the output "
-                         f"needs about {need / MB:.1f} MB")
+        from drakedeburr._io import size_text
+
+        raise InputError(f"{path}: {option}: {size_text(free)} free on {where}, the output "
+                         f"needs about {size_text(need)}")
 
 
 def parse_windows(text: str | None, option: str = "--windows") -> tuple[int, ...] | None:
@@ -184,3 +187,92 @@ def hub_windows(hub: str | Path) -> list[int]:
         from drakedeburr.hub.model import load_hub
 
         return [w.index for w in load_hub(d).windows]
+
+
+#: Dask's address schemes (distributed.comm: tcp, tls, ws, wss, ucx; inproc only in-process)
+_SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def scheduler_address(text: str | None, option: str = "--scheduler",
+                      timeout: float = 3.0) -> str | None:
+    """A Dask scheduler address ``SCHEME://HOST:PORT`` that answers: the form is checked, then
+    one TCP connection is tried (``timeout`` seconds), so a wrong address fails at once
+    naming the option instead of after Dask's 30 s connect timeout. None passes."""
+    if text is None:
+        return None
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        u = urlsplit(text)
+        host, port = u.hostname, u.port
+    except ValueError:
+        host = port = None
+        u = None
+    if u is None or u.scheme not in _SCHEDULER_SCHEMES or not host or port is None:
+        raise InputError(f"{option} {text!r}: expected a Dask scheduler address "
+                         f"SCHEME://HOST:PORT with SCHEME one of {', '.join(_SCHEDULER_SCHEMES)}"
+                         " (e.g. tcp://127.0.0.1:8786)")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as exc:
+        what = exc.strerror or type(exc).__name__
+        raise InputError(f"{option} {text}: no scheduler answers at {host}:{port} ({what}; "
+                         f"tried for {timeout:g} s)") from None
+    return text
+
+
+def _real(p: str | Path) -> Path:
+    return Path(os.path.realpath(os.path.abspath(os.fspath(p))))
+
+
+def _within(inner: Path, outer: Path) -> bool:
+    return inner == outer or outer in inner.parents
+
+
+def separate_outputs(outputs: dict, *, inputs: dict | None = None,
+                     input_folders: dict | None = None,
+                     output_folders: dict | None = None) -> None:
+    """Refuse (InputError, before any work) outputs that would replace an input or each
+    other: an output file that is an input file, lies inside an input folder (e.g. the plan
+    folder being verified) or inside an output folder (replaced whole), or is another output
+    of the same command; an output folder that holds an input or the working directory (it is
+    replaced by a rename). Each dict maps the option (or what the input is) to its path; None
+    values (not given) are skipped. Paths are compared after resolving links."""
+    def given(d):
+        return [(k, Path(v), _real(v)) for k, v in (d or {}).items() if v is not None]
+
+    outs, folders = given(outputs), given(output_folders)
+    ins, in_folders = given(inputs), given(input_folders)
+    seen: dict[Path, str] = {}
+    for option, shown, real in outs:
+        if real in seen:
+            raise InputError(f"{shown}: {option} and {seen[real]} name the same file; give "
+                             "each output its own file")
+        seen[real] = option
+        for what, ishown, ireal in ins:
+            if real == ireal:
+                raise InputError(f"{shown}: {option} is {what} {ishown}, an input of this "
+                                 "command; outputs never replace inputs")
+        for what, fshown, freal in in_folders:
+            if _within(real, freal):
+                raise InputError(f"{shown}: {option} is inside {what} {fshown}, an input of "
+                                 "this command; write it elsewhere")
+        for what, fshown, freal in folders:
+            if _within(real, freal):
+                raise InputError(f"{shown}: {option} is inside the output folder {fshown} "
+                                 f"({what}), which is written whole; write it elsewhere")
+    cwd = _real(".")
+    for option, shown, real in folders:
+        if _within(cwd, real):
+            raise InputError(f"{shown}: {option} is the working folder or holds it; an output "
+                             "folder is replaced whole, so choose a new folder (e.g. -o plan2)")
+        for what, ishown, ireal in ins + in_folders:
+            if _within(ireal, real):
+                raise InputError(f"{shown}: {option} holds {what} {ishown}, an input of this "
+                                 "command; outputs never replace inputs")
+        for other, oshown, oreal in folders:
+            if other != option and _within(oreal, real):
+                raise InputError(f"{shown}: {option} holds {other} {oshown}; give each output "
+                                 "its own folder")

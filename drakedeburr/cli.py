@@ -130,8 +130,13 @@ def _verbosity_everywhere(parser: argparse.ArgumentParser) -> None:
                 _verbosity_everywhere(sub)
 
 
+#: the longest error line printed (a message quoting a hostile file could be megabytes)
+MAX_LINE = 2000
+
+
 def _one_line(text: str) -> str:
-    return " ".join(str(text).split("\n")).strip()
+    line = " ".join(str(text).split("\n")).strip()
+    return line if len(line) <= MAX_LINE else line[:MAX_LINE - 20] + " ... (cut short)"
 
 
 _OS_WHAT = {

@@ -22,13 +22,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from drakedeburr.errors import InputError
 
 __all__ = ["ProcessParameters", "Tolerances", "OrientationBounds", "Acceptance", "Recipe",
            "Config", "load_config", "load_recipe", "default_tolerances", "process_parameters",
-           "dataclass_from_yaml", "recipe_from_record", "SOURCE_TARGETS", "PROCESS_FILE"]
+           "dataclass_from_yaml", "recipe_from_record", "SOURCE_TARGETS", "PROCESS_FILE",
+           "RecipeKey", "RECIPE_SCHEMA", "ACCEPTANCE_SCHEMA"]
 
 #: a part's process recipe, beside its model (e.g. ``models/hubs/<name>/process.yaml``)
 PROCESS_FILE = "process.yaml"
@@ -227,13 +227,97 @@ class Config:
                 "tolerances": dataclasses.asdict(self.tolerances)}
 
 
+@dataclass(frozen=True)
+class RecipeKey:
+    """What a recipe key may hold: a number in ``unit`` within [lo, hi] (an open end where
+    ``lo_open``/``hi_open``); ``optional``: null allowed (an Acceptance threshold not set)."""
+
+    unit: str
+    lo: float
+    hi: float
+    lo_open: bool = False
+    hi_open: bool = False
+    optional: bool = False
+    note: str = ""
+
+    def range_text(self) -> str:
+        u = f" {self.unit}" if self.unit not in ("", "-") else ""
+        return (f"{self.lo:g} {'<' if self.lo_open else '<='} value "
+                f"{'<' if self.hi_open else '<='} {self.hi:g}{u}")
+
+    def check(self, value: Any, where: str, key: str) -> Any:
+        if value is None and self.optional:
+            return None
+        shown = repr(value) if not isinstance(value, (dict, list)) else type(value).__name__
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            kind = "a boolean" if isinstance(value, bool) else type(value).__name__
+            raise InputError(f"{where}: {key}: {shown[:60]} is {kind}, not a number; expected "
+                             f"{self.range_text()}{self.note}")
+        v = float(value)
+        bad = not np.isfinite(v) or (v <= self.lo if self.lo_open else v < self.lo) or (
+            v >= self.hi if self.hi_open else v > self.hi)
+        if bad:
+            raise InputError(f"{where}: {key}: {shown[:60]} is out of range; expected "
+                             f"{self.range_text()}{self.note}")
+        return v
+
+
+_SPEED_NOTE = " (SI units: m/s, so 150 mm/s is 0.15)"
+_M = " (SI units: metres, so 1.5 mm is 1.5e-3)"
+K = RecipeKey
+#: every key a part's ``process.yaml`` may set, with its unit and allowed range (docs/plan.md
+#: lists them). The ranges are physical: a deburring feed is tens to hundreds of mm/s, a
+#: robot's TCP a few m/s; lengths of a burr's cut are millimetres.
+RECIPE_SCHEMA: dict[str, RecipeKey] = {
+    "grinding_speed": K("m/s", 0.0, 1.0, lo_open=True, note=_SPEED_NOTE),
+    "window_switch_speed": K("m/s", 0.0, 5.0, lo_open=True, note=_SPEED_NOTE),
+    "purge_speed": K("m/s", 0.0, 5.0, lo_open=True, note=_SPEED_NOTE),
+    "home_speed": K("m/s", 0.0, 5.0, lo_open=True, note=_SPEED_NOTE),
+    "approach_speed": K("m/s", 0.0, 1.0, lo_open=True, note=_SPEED_NOTE),
+    "tcp_acceleration": K("m/s^2", 0.0, 50.0, lo_open=True),
+    "spindle_air_pressure": K("Pa", 0.0, 1.0e6, lo_open=True, note=" (0.15 MPa is 0.15e6)"),
+    "depth_of_cut_large": K("m", 0.0, 5e-3, lo_open=True, note=_M),
+    "depth_of_cut_small": K("m", 0.0, 5e-3, lo_open=True, note=_M),
+    "w1": K("-", 0.0, 1.0),
+    "w2": K("-", 0.0, 1.0),
+    "l_max": K("m", 0.0, 0.1, lo_open=True, note=_M),
+    "delta_max": K("m", 0.0, 1e-3, lo_open=True, note=_M),
+    "key_point_curvature": K("1/m", 0.0, 1e4, lo_open=True),
+    "normal_search_radius": K("m", 0.0, 0.05, lo_open=True, note=_M),
+    "ransac_threshold": K("m", 0.0, 1e-3, lo_open=True, note=_M),
+    "chamfer_width_min": K("m", 0.0, 5e-3, lo_open=True, note=_M),
+    "chamfer_width_max": K("m", 0.0, 5e-3, lo_open=True, note=_M),
+    # theta boxes: mappings {theta_min, theta_max} [rad], -pi/2 < min < max < pi/2
+    "theta_min": K("rad", -0.5 * np.pi, 0.5 * np.pi, lo_open=True, hi_open=True),
+    "theta_max": K("rad", -0.5 * np.pi, 0.5 * np.pi, lo_open=True, hi_open=True),
+}
+#: the keys of ``acceptance:`` (null: not judged)
+ACCEPTANCE_SCHEMA: dict[str, RecipeKey] = {
+    "speed_band_fraction": K("-", 0.0, 1.0, optional=True),
+    "cycle_time_ratio": K("-", 1.0, 100.0, optional=True),
+    "theta_box_share": K("-", 0.0, 1.0, optional=True),
+    "j6_range_large": K("rad", 0.0, 2 * np.pi, optional=True),
+    "j6_range_small": K("rad", 0.0, 2 * np.pi, optional=True),
+}
+del K
+
+
 def _value(cls, key: str, value: Any, where: str) -> Any:
     if key.startswith("bounds_"):
+        if not isinstance(value, dict) or set(value) != {"theta_min", "theta_max"}:
+            shown = sorted(value) if isinstance(value, dict) else type(value).__name__
+            raise InputError(f"{where}: {key}: expected {{theta_min: .., theta_max: ..}} [rad] "
+                             f"(got {str(shown)[:80]})")
+        lo, hi = (RECIPE_SCHEMA[k].check(value[k], where, f"{key}.{k}")
+                  for k in ("theta_min", "theta_max"))
         try:
-            return OrientationBounds(**value)
+            return OrientationBounds(lo, hi)
         except (TypeError, ValueError) as exc:
             raise InputError(f"{where}: {key}: expected {{theta_min: .., theta_max: ..}} [rad] "
                              f"({exc})") from exc
+    schema = ACCEPTANCE_SCHEMA if cls is Acceptance else RECIPE_SCHEMA
+    if key in schema:
+        return schema[key].check(value, where, key)
     return value
 
 
@@ -248,17 +332,19 @@ def _fields(cls, data: Any, where: str, skip: tuple[str, ...] = ()) -> dict:
         if key in skip:
             continue
         if key not in names:
-            raise InputError(f"{where}: unknown {cls.__name__} field {key!r}; "
+            raise InputError(f"{where}: unknown {cls.__name__} field {str(key)[:60]!r}; "
                              f"known: {sorted(names)}")
         out[key] = _value(cls, key, value, where)
     return out
 
 
 def _read_yaml(path: Path) -> Any:
+    """A recipe document, bounded and strict (:func:`drakedeburr._io.load_yaml`: size,
+    encoding, duplicate keys, aliases); an empty one is {}."""
+    from drakedeburr._io import load_yaml
+
     try:
-        return yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML ({exc})") from exc
+        return load_yaml(path, "recipe") or {}
     except OSError as exc:
         raise InputError(f"{path}: cannot be read ({exc.strerror})") from exc
 
@@ -303,6 +389,11 @@ def load_recipe(folder: str | Path | None = None, **process_overrides: Any) -> R
                 acc = _fields(Acceptance, data["acceptance"] or {}, f"{f}: acceptance")
                 acceptance = _build(Acceptance, acc, f"{f}: acceptance")
             source = str(f)
+            lo, hi = (kwargs.get(k, getattr(ProcessParameters, k))
+                      for k in ("chamfer_width_min", "chamfer_width_max"))
+            if lo > hi:
+                raise InputError(f"{f}: chamfer_width_min {lo:g} m is more than "
+                                 f"chamfer_width_max {hi:g} m")
     given = {k: v for k, v in process_overrides.items() if v is not None}
     kwargs.update(given)
     where = source + (f" with {sorted(given)} given" if given else "")

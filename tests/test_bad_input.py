@@ -66,6 +66,15 @@ def _broken_plans(root: Path, good: Path) -> None:
     bad = json.loads(json.dumps(doc))
     bad["targets"][3]["speed"] = "fast"
     (copy("plan_badtarget") / "plan.json").write_text(json.dumps(bad))
+    for name, change in (  # issue 43: numbers that overflowed or asked for petabytes
+            ("plan_bigindex", lambda d: d["targets"][3].__setitem__("cl_index", 10**20)),
+            ("plan_longtime", lambda d: d["segments"][1].__setitem__("t_range", [0.0, 1e12]))):
+        bad = json.loads(json.dumps(doc))
+        change(bad)
+        (copy(name) / "plan.json").write_text(json.dumps(bad))
+    a = {k: v.copy() for k, v in arrays.items()}
+    a["t"] = a["t"] * 1e10  # a trajectory of 1e11 s
+    _write_npz(copy("plan_longtraj") / "arrays.npz", a)
     bad = json.loads(json.dumps(doc))
     bad["segments"][1]["target_range"] = [0, 10**6]
     (copy("plan_badsegment") / "plan.json").write_text(json.dumps(bad))
@@ -101,12 +110,63 @@ def _files(root: Path) -> None:
     hub = REPO / "models" / "hubs" / vs.HUB
     for name, recipe in (("hub_negspeed", "grinding_speed: -1\n"),
                          ("hub_listrecipe", "[1, 2]\n"),
-                         ("hub_badkey", "grinding_sped: 0.1\n")):
+                         ("hub_badkey", "grinding_sped: 0.1\n"), *HOSTILE_RECIPES.items()):
         (root / name).mkdir()
         for f in hub.iterdir():  # the bundled hub's files, its own recipe
             if f.name != "process.yaml":
                 (root / name / f.name).symlink_to(f)
-        (root / name / "process.yaml").write_text(recipe)
+        data = recipe if isinstance(recipe, bytes) else recipe.encode()
+        (root / name / "process.yaml").write_bytes(data)
+    _hostile_files(root)
+
+
+def _yaml_bomb(levels: int = 9, width: int = 9) -> str:
+    """Nested aliases: ``width ** levels`` nodes once expanded (a "billion laughs")."""
+    rows = [f"a0: &a0 [{', '.join(['lol'] * width)}]"]
+    for i in range(1, levels):
+        rows.append(f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * width)}]")
+    return "\n".join(rows) + "\n"
+
+
+#: process.yaml files a careless or hostile user may hand in (issue 43)
+HOSTILE_RECIPES = {
+    "hub_boolspeed": "grinding_speed: true\n",
+    "hub_mmspeed": "grinding_speed: 150\n",  # mm/s where the recipe is SI (m/s)
+    "hub_negair": "spindle_air_pressure: -0.2e6\n",
+    "hub_nanaccept": "acceptance: {theta_box_share: .nan}\n",
+    "hub_highband": "acceptance: {speed_band_fraction: high}\n",
+    "hub_dupkey": "grinding_speed: 0.1\napproach_speed: 0.05\ngrinding_speed: 0.2\n",
+    "hub_latin1": "# r\xe9glage de l'atelier\ngrinding_speed: 0.1\n".encode("latin-1"),
+    "hub_utf16": "grinding_speed: 0.1\n".encode("utf-16"),
+    "hub_bomb": "acceptance: {}\n" + _yaml_bomb(),
+    "hub_deep": "w1: " + "[" * 5000 + "]" * 5000 + "\n",
+    "hub_huge": "# " + "x" * (2 << 20) + "\n",  # over the 1 MiB recipe limit
+    "hub_strbounds": "bounds_small: {theta_min: '0.1', theta_max: 0.2}\n",
+    "hub_chamfer": "chamfer_width_min: 1.5e-3\nchamfer_width_max: 0.5e-3\n",
+    "hub_python": "grinding_speed: !!python/object/apply:os.system ['touch pwned']\n",
+}
+
+
+def _hostile_files(root: Path) -> None:
+    """Devices, pipes and names with path characters where files are expected."""
+    for name in ("zero.stl", "zero.cl", "zero.mod", "zero.obj"):
+        (root / name).symlink_to("/dev/zero")
+    os.mkfifo(root / "fifo.stl")
+    spec = (REPO / "models" / "hubs" / vs.HUB / "hub.yaml").read_text()
+    for name, hub_name in (("spec_dotdot.yaml", '".."'), ("spec_newline.yaml", '"a\\nb"'),
+                           ("spec_shell.yaml", '"x;rm -rf ~"'), ("spec_slash.yaml", "a/b"),
+                           ("spec_dot.yaml", '"."'), ("spec_hidden.yaml", ".hub")):
+        (root / name).write_text(spec.replace(f"name: {vs.HUB}", f"name: {hub_name}"))
+    (root / "spec_dup.yaml").write_text(spec + "spoke_count: 7\n")
+    # every triangle collinear (was LinAlgError in cl, hub import and verify)
+    (root / "collinear.obj").write_text("".join(f"v {0.1 * i} 0 0\n" for i in range(5))
+                                        + "f 1 2 3\nf 2 3 4\nf 3 4 5\nf 1 3 5\n")
+    (root / "up" / vs.HUB).mkdir(parents=True)  # a user's folder where a hub would go
+    (root / "up" / vs.HUB / "hub.yaml").write_text("the user's own file\n")
+    (root / "huge.csv").write_text("0,0\n1e308,0\n0,1\n")  # was OverflowError
+    (root / "bomb_cell.yaml").write_text(_yaml_bomb())  # a scenario of nested aliases
+    (root / "o").mkdir()
+    (root / "o" / "hub.yaml").write_text("the user's own file\n")
 
 
 @pytest.fixture(scope="module")
@@ -143,6 +203,8 @@ def tree(root: Path) -> dict[str, str]:
                 out[rel] = f"link {os.readlink(p)}"
             elif p.is_dir():
                 out[rel] = "dir"
+            elif not p.is_file():  # a pipe: never read (it would block)
+                out[rel] = "special"
             else:
                 out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
     return out
@@ -185,7 +247,8 @@ CASES = [
     C("plan nosuchcell -o p", 2, ("nosuchcell", "tool_in_hand")),
     C("plan garbage.yaml --windows 0 -o p", 2, ("garbage.yaml",)),
     C("plan --robot bogus -o p", 2, ("bogus", "irb1600")),
-    C("plan --hub hub_negspeed -o p", 2, ("process.yaml", "grinding_speed", "positive")),
+    C("plan --hub hub_negspeed -o p", 2, ("process.yaml", "grinding_speed", "-1",
+                                         "0 < value <= 1 m/s")),
     C("plan --hub hub_listrecipe -o p", 2, ("process.yaml", "mapping")),
     C("plan --hub hub_badkey -o p", 2, ("process.yaml", "grinding_sped", "known")),
     # verify: numbers, the plan folder's files, outputs
@@ -202,6 +265,10 @@ CASES = [
     C("verify plan_missing", 2, ("arrays.npz", "'X_WF'", "missing")),
     C("verify plan_badtarget", 2, ("plan.json", "targets[3].speed", "finite number")),
     C("verify plan_badsegment", 2, ("plan.json", "segments[1].target_range", "357 targets")),
+    C("verify plan_bigindex", 2, ("plan.json", "targets[3].cl_index", "out of range")),
+    C("verify plan_longtime", 2, ("plan.json", "segments[1].t_range", "not within")),
+    C("verify plan_longtraj", 2, ("arrays.npz", "'t'", "duration limit of 3600 s")),
+    C("export plan_longtime -o x.mod", 2, ("segments[1].t_range",)),
     C("verify nothere", 2, ("nothere", "SCENARIO/HUB")),
     C("verify plan --json adir", 2, ("adir", "--json", "folder")),
     C("verify plan --html adir", 2, ("adir", "--html", "folder")),
@@ -268,9 +335,23 @@ CASES = [
     C("post small.cl -o adir", 2, ("adir", "folder")),
     C("post small.cl -o p.mod --feed 0", 2, ("--feed", "> 0")),
     # laser
-    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "> 0")),
-    C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2, ("--spacing", "> 0")),
-    C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "> 0")),
+    C("laser shape circle --diameter 0 -o c.ls", 2, ("--diameter", "0.01 <= value <= 5000 mm")),
+    C("laser shape circle --diameter 10 --spacing 0 -o c.ls", 2,
+      ("--spacing", "0.001 <= value <= 1000 mm")),
+    C("laser shape circle --diameter 10 --feed 0 -o c.ls", 2, ("--feed", "0 < value <= 600")),
+    # issue 43: sizes that overflowed, spacings that asked for billions of points
+    C("laser shape circle --diameter 1e300 -o c.ls", 2, ("--diameter", "<= 5000 mm")),
+    C("laser shape circle --diameter 10 --spacing 1e-9 -o c.ls", 2, ("--spacing", "0.001")),
+    C("laser shape circle --diameter 4000 --spacing 0.001 -o c.ls", 2,
+      ("--spacing", "points", "limit of 200000")),
+    C("laser shape circle --diameter 10 --lead-in 1e300 -o c.ls", 2, ("--lead-in",)),
+    C("laser shape circle --diameter 10 --center inf 0 -o c.ls", 2, ("--center",)),
+    C("laser shape circle --diameter 10 --feed 1e308 -o c.ls", 2, ("--feed",)),
+    C("laser shape hexagon --across-flats 1e-300 -o c.ls", 2, ("--across-flats", "0.01")),
+    C("laser shape polyline --points huge.csv -o c.ls", 2, ("1e+308 mm", "finite")),
+    C("cl collinear.obj", 2, ("collinear.obj", "degenerate")),
+    C("hub import collinear.obj --out hubs", 2, ("collinear.obj", "degenerate")),
+    C("verify collinear.obj", 2, ("collinear.obj", "degenerate")),
     C("laser shape circle --diameter 10 -o adir", 2, ("adir", "folder")),
     C("laser shape circle --diameter 10 -o c.txt", 2, ("c.txt", ".ls")),
     C("laser shape circle --diameter 10 --name 9x -o c.ls", 2, ("'9x'", "letter")),
@@ -278,6 +359,64 @@ CASES = [
       ("--max-command", "--min-command")),
     C("laser shape polyline --points missing.csv -o c.ls", 2, ("missing.csv", "not found")),
     C("laser tool --sdf adir", 2, ("adir", "--sdf")),
+    # issue 43: recipes, each key typed with its unit and range; bounded, strict YAML
+    C("plan --hub hub_boolspeed -o p", 2, ("hub_boolspeed/process.yaml", "grinding_speed",
+                                           "True", "boolean", "0 < value <= 1 m/s")),
+    C("plan --hub hub_mmspeed -o p", 2, ("process.yaml", "grinding_speed", "150",
+                                         "out of range", "m/s", "0.15")),
+    C("plan --hub hub_negair -o p", 2, ("process.yaml", "spindle_air_pressure", "-200000",
+                                        "0 < value <= 1e+06 Pa")),
+    C("plan --hub hub_nanaccept -o p", 2, ("process.yaml", "theta_box_share", "nan",
+                                           "0 <= value <= 1")),
+    C("plan --hub hub_highband -o p", 2, ("process.yaml", "speed_band_fraction", "'high'",
+                                          "not a number")),
+    C("plan --hub hub_dupkey -o p", 2, ("process.yaml:3", "'grinding_speed'", "twice",
+                                        "line 1")),
+    C("plan --hub hub_latin1 -o p", 2, ("hub_latin1/process.yaml:1", "not UTF-8", "0xe9")),
+    C("plan --hub hub_utf16 -o p", 2, ("hub_utf16/process.yaml", "not UTF-8", "UTF-16")),
+    C("plan --hub hub_bomb -o p", 2, ("process.yaml", "alias expansion limit of 10000")),
+    C("plan --hub hub_deep -o p", 2, ("process.yaml", "depth limit of 64")),
+    C("plan --hub hub_huge -o p", 2, ("process.yaml", "recipe read limit of 1 MiB")),
+    C("plan --hub hub_strbounds -o p", 2, ("process.yaml", "bounds_small.theta_min", "'0.1'",
+                                           "rad")),
+    C("plan --hub hub_chamfer -o p", 2, ("process.yaml", "chamfer_width_min", "more than")),
+    C("plan --hub hub_python -o p", 2, ("process.yaml", "python/object")),
+    C("plan bomb_cell.yaml -o p", 2, ("bomb_cell.yaml", "alias expansion limit")),
+    # issue 43: devices, pipes and oversized files are never read
+    C("cl zero.stl", 2, ("zero.stl", "character device", "regular files")),
+    C("cl fifo.stl", 2, ("fifo.stl", "a pipe")),
+    C("hub import zero.stl --out hubs", 2, ("zero.stl", "character device")),
+    C("verify zero.obj", 2, ("zero.obj", "character device")),
+    C("verify plan --program zero.mod", 2, ("zero.mod", "character device")),
+    C("post zero.cl -o p.mod", 2, ("zero.cl", "CL file", "character device")),
+    # issue 43: names that become paths
+    C("hub generate --spec spec_dotdot.yaml --out o/hubs", 2, ("spec_dotdot.yaml", "'..'",
+                                                             "cannot be a file name")),
+    C("hub generate --spec spec_newline.yaml --out o", 2, ("'a\\nb'", "file name")),
+    C("hub generate --spec spec_shell.yaml --out o", 2, ("'x;rm -rf ~'", "file name")),
+    C("hub generate --spec spec_slash.yaml --out o", 2, ("'a/b'", "file name")),
+    C("hub generate --spec spec_dot.yaml --out o", 2, ("'.'", "file name")),
+    C("hub generate --spec spec_hidden.yaml --out o", 2, ("'.hub'", "file name")),
+    C("hub generate --spec spec_dup.yaml --out o", 2, ("spec_dup.yaml", "spoke_count", "twice")),
+    C("hub generate .. --out o/hubs", 2, ("hub name", "'..'")),
+    C("hub generate h5_straight --out up", 2, ("up/h5_straight", "did not generate")),
+    # issue 43: outputs never replace inputs or each other
+    C("verify plan --json plan/plan.json", 2, ("plan/plan.json", "--json", "plan folder")),
+    C("verify plan --html plan/arrays.npz", 2, ("plan/arrays.npz", "--html", "plan folder")),
+    C("verify plan --json plan/report.json", 2, ("plan/report.json", "plan folder")),
+    C("verify plan --json r.out --html r.out", 2, ("r.out", "--html", "--json", "same file")),
+    C("verify plan --program x.mod --json x.mod", 2, ("x.mod", "--json", "--program",
+                                                      "input")),
+    C("verify plan --json ./plan/../plan/plan.json", 2, ("--json", "plan folder")),
+    C("export plan -o plan/plan.json", 2, ("plan/plan.json", "plan.json", "input")),
+    C("plan -o p --html p/replay.html", 2, ("p/replay.html", "inside the output folder")),
+    C("post small.cl -o small.cl", 2, ("small.cl", "input")),
+    C("laser shape circle --diameter 10 -o c.ls --summary c.ls", 2, ("--summary", "same file")),
+    C("cl nan.stl --json nan.stl", 2, ("nan.stl", "--json", "input")),
+    # issue 43: verify-all's scheduler, checked before any work, naming the option
+    C("verify-all . --scheduler notaurl", 2, ("--scheduler", "'notaurl'", "SCHEME://HOST:PORT")),
+    C("verify-all . --scheduler tcp://127.0.0.1:1", 2, ("--scheduler", "127.0.0.1:1",
+                                                        "no scheduler answers")),
     # show, demo
     C("show missing --html s.html", 2, ("missing",)),
     C("show tool_in_hand --hub missing --html s.html", 2, ("missing",)),
@@ -343,9 +482,10 @@ def test_free_space_is_checked_before_the_work(ws, capsys, monkeypatch):
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9 - 1000, 1000))
     before = tree(ws)
     code, _, err = run("plan --windows 0 -o p".split(), capsys)
-    assert code == 2 and "MB free" in err and "needs about" in err
+    assert code == 2 and "1000 bytes free" in err and "needs about" in err, err
+    assert "0.0 MB" not in err and "KiB" in err  # issue 43: never "0.0 MB free"
     code, _, err = run("export plan -o x.mod --force".split(), capsys)
-    assert code == 2 and "MB free" in err
+    assert code == 2 and "1000 bytes free" in err
     assert tree(ws) == before
 
 

@@ -1,9 +1,10 @@
-"""Issue 21: property-based fuzzing of the readers of files a user hands in: the plan folder
+"""Issues 21 and 43: property-based fuzzing of the readers of files a user hands in: the plan folder
 (:func:`drakedeburr.plan.io.load_plan`), the verification report the export gate reads
 (:func:`drakedeburr.verify.gate.read_report`) and robot programs
 (:func:`drakedeburr.programs.read_program`). Whatever the bytes, a reader returns its result or
 raises InputError naming the file, never another exception (like the APT fuzz in
-test_cl_reader.py)."""
+test_cl_reader.py). Issue 43: the recipe reader (process.yaml, as YAML of every type and as
+raw bytes) and the CLI's arguments, at a budget CI affords (a few seconds each)."""
 
 from __future__ import annotations
 
@@ -208,3 +209,165 @@ def test_fuzz_read_program(fuzz_dir, data):
         read_program(d / first)
     except InputError as exc:
         assert str(d) in str(exc)
+
+
+# --------------------------------------------------------------------------- issue 43: recipes
+
+_RECIPE_KEYS = ("grinding_speed", "approach_speed", "spindle_air_pressure", "w1", "l_max",
+                "depth_of_cut_small", "chamfer_width_min", "chamfer_width_max", "bounds_large",
+                "bounds_small", "acceptance", "grinding_sped", "theta_min")
+_SCALARS = (st.none() | st.booleans() | st.integers(-10**25, 10**25)
+            | st.floats(allow_nan=True, allow_infinity=True)
+            | st.sampled_from(["1.0e6", "0.15", "high", "yes", "on", "", "~", ".nan", "-.inf",
+                               "1e-3", "0x10", "1_000", "150 mm/s"]))
+_YAML_VALUES = st.recursive(_SCALARS, lambda c: st.lists(c, max_size=3)
+                            | st.dictionaries(st.sampled_from(["theta_min", "theta_max",
+                                                               "speed_band_fraction", "x"]),
+                                              c, max_size=3), max_leaves=6)
+
+
+def _check_recipe(recipe) -> None:
+    """A recipe that loads holds only values its schema allows (unit ranges, no booleans)."""
+    import dataclasses
+
+    from drakedeburr.config import ACCEPTANCE_SCHEMA, RECIPE_SCHEMA
+
+    for f in dataclasses.fields(recipe.process):
+        v = getattr(recipe.process, f.name)
+        if f.name.startswith("bounds_"):
+            assert -np.pi / 2 < v.theta_min < v.theta_max < np.pi / 2
+            continue
+        key = RECIPE_SCHEMA[f.name]
+        assert not isinstance(v, bool) and np.isfinite(v), (f.name, v)
+        assert key.lo <= v <= key.hi, (f.name, v)
+    for f in dataclasses.fields(recipe.acceptance):
+        v = getattr(recipe.acceptance, f.name)
+        key = ACCEPTANCE_SCHEMA[f.name]
+        assert v is None or (not isinstance(v, bool) and key.lo <= v <= key.hi), (f.name, v)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=list(HealthCheck))
+@given(items=st.lists(st.tuples(st.sampled_from(_RECIPE_KEYS), _YAML_VALUES), max_size=5),
+       style=st.sampled_from(["block", "flow", "json"]))
+def test_fuzz_recipe_reader(fuzz_dir, items, style):
+    """Any process.yaml of known and unknown keys, repeated keys and values of every YAML
+    type: the recipe loads with every value in its schema's range, or InputError names the
+    file in one line."""
+    import yaml as pyyaml
+
+    from drakedeburr.config import PROCESS_FILE, load_recipe
+
+    folder = fuzz_dir / "recipe"
+    folder.mkdir(exist_ok=True)
+    if style == "json":  # JSON is YAML; a repeated key stays in the text
+        text = "{" + ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in items) + "}"
+    else:
+        flow = style == "flow"
+        text = "".join(pyyaml.safe_dump({k: v}, default_flow_style=flow) for k, v in items)
+    (folder / PROCESS_FILE).write_text(text)
+    keys = [k for k, _ in items]
+    try:
+        recipe = load_recipe(folder)
+    except InputError as exc:
+        assert str(folder / PROCESS_FILE) in str(exc)
+        assert len(str(exc)) < 2000, len(str(exc))
+        return
+    assert len(set(keys)) == len(keys), "a repeated key was accepted"
+    _check_recipe(recipe)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.binary(max_size=300) | st.text(max_size=200).map(lambda t: t.encode("utf-8")))
+def test_fuzz_recipe_bytes(fuzz_dir, data):
+    """Any bytes as process.yaml: a recipe within its schema, or InputError naming the file."""
+    from drakedeburr.config import PROCESS_FILE, load_recipe
+
+    folder = fuzz_dir / "recipe_bytes"
+    folder.mkdir(exist_ok=True)
+    (folder / PROCESS_FILE).write_bytes(data)
+    try:
+        recipe = load_recipe(folder)
+    except InputError as exc:
+        assert str(folder / PROCESS_FILE) in str(exc) and len(str(exc)) < 2000
+        return
+    _check_recipe(recipe)
+
+
+# --------------------------------------------------------------------------- issue 43: the CLI
+
+_WORDS = ["plan", "plan/plan.json", "plan/arrays.npz", "x.mod", "x.src", "c.ls", "r.json",
+          ".", "..", "/dev/zero", "a b", "a\nb", "-", "--", "0", "-1", "1.5", "nan", "inf",
+          "1e300", "1e-9", "100000000000000000000", "0,99", "1,1", "x", "tool_in_hand",
+          "h5_straight", "tool_in_hand/h5_straight", "small.cl", "*", "tcp://127.0.0.1:1"]
+_OPTIONS = ["-o", "--json", "--html", "--program", "--windows", "--grinding-speed", "--name",
+            "--robot", "--format", "--force", "--quick", "--hub", "--diameter", "--spacing",
+            "--feed", "--lead-in", "--center", "--seed", "--count", "--out", "--spec", "-vv",
+            "--no-replay", "--planner", "--scenario"]
+_COMMANDS = [["plan"], ["verify", "plan"], ["export", "plan"], ["hub", "random"],
+             ["hub", "generate"], ["laser", "shape", "circle"], ["post", "small.cl"],
+             ["verify", "tool_in_hand/h5_straight"]]
+
+
+class _Stub(Exception):
+    pass
+
+
+@pytest.fixture(scope="module")
+def cli_ws(tmp_path_factory, seed_plan):
+    from drakedeburr.plan.io import save_plan
+
+    root = tmp_path_factory.mktemp("cli_fuzz")
+    save_plan(vs.good_plan(), root / "plan")
+    (root / "small.cl").write_text("TOOL PATH/P1\nGOTO/800,0,600,0,0,1\nGOTO/810,0,600,0,0,1"
+                                   "\nEND-OF-PATH\n")
+    return root
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=list(HealthCheck))
+@given(command=st.sampled_from(_COMMANDS),
+       rest=st.lists(st.sampled_from(_OPTIONS) | st.sampled_from(_WORDS), max_size=6))
+def test_fuzz_cli_arguments(cli_ws, monkeypatch, capsys, command, rest):
+    """Random arguments to the commands: exit 0, 1 or 2, never an internal error or a
+    traceback without -vv, one line for exit 2, and the plan folder never changed by
+    anything but its own report. The long work (planning, verification, hub generation) is
+    replaced by a stub raising at its start: arguments that get that far passed every check."""
+    import hashlib
+
+    from drakedeburr.cli import main
+
+    def stub(*a, **k):
+        raise _Stub("reached the work")
+
+    import drakedeburr.hub.generate as gen
+    import drakedeburr.plan.planner as planner
+    import drakedeburr.verify.batch as batch
+    import drakedeburr.verify.checks as checks
+
+    for mod, name in ((planner, "plan_hub"), (batch, "make_plan"), (checks, "verify_plan"),
+                      (gen, "generate_hub"), (batch, "verify_all")):
+        monkeypatch.setattr(mod, name, stub)
+    monkeypatch.chdir(cli_ws)
+
+    def plan_files():
+        return {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in (cli_ws / "plan").iterdir() if p.name in ("plan.json", "arrays.npz")}
+
+    before = plan_files()
+    capsys.readouterr()
+    argv = [*command, *rest]
+    code = main(argv)
+    out, err = capsys.readouterr()
+    lines = [ln for ln in err.splitlines() if ln.strip() and "%|" not in ln]
+    assert plan_files() == before, argv
+    if "reached the work" in err:
+        assert code == 1, (argv, err)  # the stub: an "internal error" by design
+        return
+    assert code in (0, 1, 2), (argv, code, err)
+    assert "internal error" not in err, (argv, err)
+    if "-vv" not in argv:
+        assert "Traceback" not in err + out, (argv, err)
+        if code == 2:
+            assert len([ln for ln in lines if " INFO " not in ln and " WARNING " not in ln
+                        ]) == 1, (argv, lines)
+    for p in cli_ws.iterdir():  # nothing left half-written
+        assert ".tmp" not in p.name, (argv, p.name)

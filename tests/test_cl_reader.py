@@ -228,8 +228,11 @@ def test_end_of_path_continues_and_truncation_is_caught():
 def test_missing_file_is_named(tmp_path):
     with pytest.raises(InputError, match=r"missing\.cl: CL file not found"):
         mut.read_cl(tmp_path / "missing.cl")
-    with pytest.raises(InputError, match="not a file"):
+    with pytest.raises(InputError, match="CL file is a folder, a file is needed"):
         mut.read_cl(tmp_path)
+    (tmp_path / "zero.cl").symlink_to("/dev/zero")  # issue 43: never read to the end
+    with pytest.raises(InputError, match="zero.cl: CL file is a character device"):
+        mut.read_cl(tmp_path / "zero.cl")
 
 
 @pytest.mark.parametrize("text, line, token", [

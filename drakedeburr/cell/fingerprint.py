@@ -10,7 +10,7 @@ from pathlib import Path
 from drakedeburr.cell.tools import DEFAULT_TOOL
 from drakedeburr.resources import models_dir, resolve_hub_dir, scenario_path
 
-__all__ = ["cell_fingerprint"]
+__all__ = ["cell_fingerprint", "hub_digest"]
 
 #: model folders every cell draws from (each file hashed with its path inside ``models/``)
 _MODEL_FOLDERS = ("robots", "tools", "fixtures")
@@ -44,4 +44,18 @@ def cell_fingerprint(scenario: str | Path, hub: str | Path, robot: str | None,
     h.update(f"robot\0{robot or ''}".encode())
     if tool not in (None, DEFAULT_TOOL):
         h.update(f"tool\0{tool}".encode())
+    return h.hexdigest()
+
+
+def hub_digest(hub: str | Path) -> str:
+    """SHA-256 (hex) of a hub model folder's files (their paths inside it and their bytes;
+    ``summary.json`` aside: statistics, not geometry): what a plan records of the hub it was
+    made for (``plan.json`` ``hub_ref``), so verify and export can refuse a changed hub."""
+    h = hashlib.sha256()
+    hub_dir = resolve_hub_dir(hub)
+    for f in _files(hub_dir):
+        if f.name != "summary.json":
+            data = f.read_bytes()
+            h.update(f"{f.relative_to(hub_dir)}\0{len(data)}\0".encode())
+            h.update(data)
     return h.hexdigest()

@@ -34,6 +34,7 @@ from typing import Literal
 
 import numpy as np
 
+from drakedeburr._io import load_yaml
 from drakedeburr.cell.recipe import cell_recipe, plan_cell_args
 from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
@@ -423,6 +424,7 @@ def load_cell(
     plant = builder.plant()
     parser = builder.parser()
     add_package_to(parser.package_map())
+    load_yaml(scenario_file, "scenario", local_tags=True)  # bounded: aliases, size, UTF-8
     try:
         directives = LoadModelDirectives(str(scenario_file))
     except RuntimeError as exc:  # Drake reports parse errors as RuntimeError

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr._io import atomic_write_text
+from drakedeburr._io import atomic_write_text, round_numbers
 
 __all__ = [
     "BurrGeometry",
@@ -472,7 +472,8 @@ def tool_model_texts(
                 replace(spindle, burr=replace(spindle.burr, stick_out=v.burr.stick_out)))
             texts[f"spindle_stand{v.suffix}.sdf"] = _spindle_stand_sdf(
                 replace(stand, burr=replace(stand.burr, stick_out=v.burr.stick_out)))
-    return texts
+    # numbers to FILE_DIGITS: the same bytes on every machine (issue 43)
+    return {name: round_numbers(text) for name, text in texts.items()}
 
 
 def write_tool_models(out_dir: str | Path | None = None) -> list[Path]:

@@ -17,8 +17,32 @@ _NONNEGATIVE_MM = number(0, unit="mm")
 _SEED = number(0, integer=True)
 
 
+def _check_hub_target(target: Path, spec_file) -> None:
+    """Refuse a hub folder to generate into that holds files but is not a hub drakedeburr
+    generated (its hub.yaml from ``spec_to_yaml``, or its summary's generator version)."""
+    from drakedeburr.errors import InputError
+
+    if not target.exists():
+        return
+    if not target.is_dir():
+        raise InputError(f"{target}: exists and is a file; the hub's folder goes there")
+    if not any(target.iterdir()):
+        return
+    try:
+        ours = (target / "hub.yaml").read_text(errors="replace").startswith(
+            "# drakedeburr parametric hub") or "generator_version" in json.loads(
+            (target / "summary.json").read_text())
+    except (OSError, ValueError, TypeError):
+        ours = False
+    same = spec_file is not None and Path(spec_file).resolve() == (target / "hub.yaml").resolve()
+    if not (ours or same):
+        raise InputError(f"{target}: an existing folder that drakedeburr did not generate; the "
+                         "hub would be written into it (choose another --out or name)")
+
+
 def _run_generate(args: argparse.Namespace) -> int:
     from drakedeburr import argcheck
+    from drakedeburr._io import check_path_name
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.hub.catalogue import BUNDLED
@@ -39,6 +63,7 @@ def _run_generate(args: argparse.Namespace) -> int:
         specs.extend(BUNDLED[n] for n in sorted(BUNDLED))
     elif args.names:
         for name in args.names:
+            check_path_name(name, "hub generate: hub name")
             if name in BUNDLED:
                 specs.append(BUNDLED[name])
             elif (out_root / name / "hub.yaml").is_file():
@@ -49,6 +74,8 @@ def _run_generate(args: argparse.Namespace) -> int:
                                  f"{out_root / name}/hub.yaml")
     else:
         raise InputError("hub generate: name a hub, or use --all or --spec FILE")
+    for spec in specs:  # the files go into OUT/NAME: never into a folder we did not write
+        _check_hub_target(out_root / spec.name, args.spec)
     for spec in specs:
         progress = None if args.no_progress else tqdm_progress(f"hub {spec.name}")
         res = generate_hub(spec, out_root / spec.name, progress=progress)

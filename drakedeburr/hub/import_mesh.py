@@ -521,7 +521,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     from manifold3d import Manifold
 
     from drakedeburr.hub.import_output import import_summary, write_folder
-    from drakedeburr.hub.mesh_io import load_hub_mesh
+    from drakedeburr.hub.mesh_io import check_mesh_file, load_hub_mesh
 
     t_start = time.perf_counter()
     if options.refine not in ("cut", "coacd"):
@@ -531,8 +531,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
                          f"front_band >= 0, got {options.front_reach!r}, "
                          f"{options.front_reach_far!r}, {options.front_band!r}")
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    check_mesh_file(path)  # before hashing: a regular file within the mesh read limit
     sha = _file_hash(path)
     key = _cache_key(sha, options)
     name = _hub_name(path)

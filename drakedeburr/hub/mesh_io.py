@@ -16,7 +16,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES", "OTHER_MESH_SUFFIXES",
-           "MESH_TARGET_SUFFIXES", "READABLE_FORMATS"]
+           "MESH_TARGET_SUFFIXES", "READABLE_FORMATS", "check_mesh_file"]
 
 log = logging.getLogger(__name__)
 
@@ -54,6 +54,32 @@ class LoadedMesh:
     watertight: bool
 
 
+def check_mesh_file(path: Path) -> int:
+    """FileNotFoundError for a missing mesh file; InputError for anything but a regular file
+    (``/dev/zero``, a pipe, a folder) or one over ``READ_LIMITS["mesh"]``, named with the
+    limit. Returns its size. Call it before reading or hashing a mesh a user hands in."""
+    from drakedeburr._io import check_regular_file
+
+    if not Path(path).exists():
+        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    return check_regular_file(path, "hub mesh", "mesh")
+
+
+def _check_not_degenerate(mesh, path: Path) -> None:
+    """Refuse a mesh with no area or no extent in some direction (every triangle collinear,
+    or all on one line): nothing downstream (the axis estimate's eigenvectors, the window
+    search) has a solid to work on."""
+    areas = np.asarray(mesh.area_faces, float) if len(mesh.faces) else np.zeros(0)
+    scale = float(np.ptp(mesh.vertices, axis=0).max()) if len(mesh.vertices) else 0.0
+    if scale <= 0 or not (areas > 1e-12 * scale**2).any():
+        raise InputError(f"{path}: every triangle is degenerate (collinear vertices, no area): "
+                         "not a surface")
+    centred = mesh.vertices - mesh.vertices.mean(axis=0)
+    rank = np.linalg.matrix_rank(centred, tol=1e-9 * scale) if np.isfinite(centred).all() else 0
+    if rank < 2:
+        raise InputError(f"{path}: all vertices lie on one line: not a surface")
+
+
 def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     """Load a hub mesh and convert it to metres.
 
@@ -69,8 +95,7 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     import trimesh
 
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"hub mesh {path} does not exist")
+    check_mesh_file(path)
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
         what = _WHY_NOT.get(suffix, "a CAD solid, not a triangle mesh" if suffix in _CAD
@@ -97,6 +122,7 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
         raise InputError(f"{path}: a face refers to a vertex the file does not have")
     mesh.process()
     mesh.merge_vertices()
+    _check_not_degenerate(mesh, path)
     size = float(mesh.extents.max())
     if stated is not None and unit == stated:
         log.info("%s: the file states its unit: %s", path.name,

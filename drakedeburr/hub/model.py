@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -89,7 +90,9 @@ def read_obj(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     Written by hand: trimesh's loader merges/reorders vertices, the ground-truth loops refer to
     the exact vertex coordinates.
     """
-    text = Path(path).read_text()
+    from drakedeburr._io import read_text_bounded
+
+    text = read_text_bounded(path, "hub mesh", "mesh")  # a regular file within READ_LIMITS
     v_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("v ")]
     f_lines = [ln[2:] for ln in text.splitlines() if ln.startswith("f ")]
     V = np.array(" ".join(v_lines).split(), float).reshape(-1, 3)
@@ -107,7 +110,16 @@ def resolve_hub_dir(name_or_dir: str | Path) -> Path:
     return _resolve(name_or_dir)
 
 
+#: the arrays of a hub's ``edges.npz``
+_EDGE_ARRAYS = re.compile(r"kinds|w\d{1,4}_(?:p_HE|t_H|n_wall_H|n_face_H)")
+
+
 def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
+    from drakedeburr._io import check_npz_members
+
+    # from the headers, before anything is decompressed: names, dtypes, sizes, 256 MiB in all
+    check_npz_members(path, _EDGE_ARRAYS, 256 << 20, "hub edges", "kinds, w<i>_p_HE, ...",
+                      kinds="fU")
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
 
@@ -128,12 +140,9 @@ def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:
 
 def _imported_from(path: Path) -> dict | None:
     """The mapping of an imported hub's ``hub.yaml`` (key ``imported_from``), else None."""
-    import yaml
+    from drakedeburr._io import load_yaml
 
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from exc
+    data = load_yaml(path, "hub description")  # bounded: size, aliases, duplicate keys
     if isinstance(data, dict) and "imported_from" in data:
         if not isinstance(data.get("name"), str):
             raise InputError(f"{path}: imported hub without a 'name'")
@@ -168,7 +177,9 @@ def load_hub(name_or_dir: str | Path) -> HubModel:
         raise FileNotFoundError(f"{d}: hub model not generated ({', '.join(missing)} missing); "
                                 f"run: {how}")
     V, F = read_obj(d / "hub.obj")
-    summary = json.loads((d / "summary.json").read_text())
+    from drakedeburr._io import read_bounded
+
+    summary = json.loads(read_bounded(d / "summary.json", "hub summary", "json"))
     windows = _read_edges(d / "edges.npz",
                           int(summary["window_count"]) if imported else spec.window_count)
     pieces = tuple(sorted((d / "collision").glob("piece_*.obj")))

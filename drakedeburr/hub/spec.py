@@ -185,8 +185,12 @@ class HubSpec:
 
 
 def _check_kinds(s: HubSpec, bad) -> None:
-    if not s.name or any(c in s.name for c in "/\\ "):
-        raise bad("name", "must be a non-empty identifier without spaces or slashes")
+    from drakedeburr._io import check_path_name
+
+    try:  # the name becomes the hub's folder: no separators, '..', control or shell characters
+        check_path_name(s.name, "the name")
+    except InputError as exc:
+        raise bad("name", str(exc)) from None
     if s.spoke_style not in SPOKE_STYLES:
         raise bad("spoke_style", f"must be one of {', '.join(SPOKE_STYLES)}, got "
                   f"{s.spoke_style!r}")
@@ -407,8 +411,7 @@ def load_spec(path: str | Path) -> HubSpec:
     path = Path(path)
     if path.is_dir():
         path = path / "hub.yaml"
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from exc
+    from drakedeburr._io import load_yaml
+
+    data = load_yaml(path, "hub spec")  # bounded: size, aliases, duplicate keys, encoding
     return spec_from_mapping(data, str(path))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -16,6 +17,13 @@ from drakedeburr.argcheck import number
 
 _POS = number(0, lo_open=True)
 _NONNEG = number(0)
+#: shape sizes and offsets [mm]: up to 5 m (beyond any robot's reach; 1e300 would overflow)
+_SIZE = number(0.01, 5000, unit="mm")  # from 10 um (1e-300 mm broke the timing)
+_NONNEG_SIZE = number(0, 5000, unit="mm")
+#: the most contour points a program is planned with (a 100 mm hole at 0.2 mm: 1571)
+MAX_POINTS = 200_000
+
+
 #: --tool-file keys [mm] -> FiveBarGeometry fields [m]; working/assembly modes are signs
 TOOL_KEYS = {"l0_mm": "l0", "l1_mm": "l1", "l2_mm": "l2", "l3_mm": "l3", "l4_mm": "l4",
              "home_x_mm": "home_x", "work_radius_mm": "work_radius"}
@@ -65,8 +73,6 @@ def _geometry_fields(data, where: str) -> dict:
 def geometry_from_args(args, mapping=None, where: str = "tool"):
     """The Cutting Tool of ``mapping`` (a job's ``tool:``), then ``--tool-file``, then
     ``--links`` (each overriding the one before; the defaults otherwise)."""
-    import yaml
-
     from drakedeburr.errors import InputError
     from drakedeburr.laser.kinematics import FiveBarGeometry
     from drakedeburr.units import m_from_mm
@@ -74,14 +80,12 @@ def geometry_from_args(args, mapping=None, where: str = "tool"):
     fields: dict = {} if mapping is None else _geometry_fields(mapping, where)
     path = getattr(args, "tool_file", None)
     if path is not None:
+        from drakedeburr._io import load_yaml
         from drakedeburr.argcheck import input_file
 
         input_file(path, "--tool-file")
         where = str(path)
-        try:
-            data = yaml.safe_load(Path(path).read_text()) or {}
-        except yaml.YAMLError as exc:
-            raise InputError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+        data = load_yaml(path, "Cutting Tool file") or {}  # bounded, no duplicate keys
         fields.update(_geometry_fields(data, str(path)))
     if getattr(args, "links", None) is not None:
         where = "--links"
@@ -124,7 +128,7 @@ def register(subparsers) -> None:
     for kind, sizes in _SIZES.items():
         p = kinds.add_parser(kind, help=f"{kind} contour")
         for name, text in sizes:
-            p.add_argument(f"--{name}", type=_NONNEG if name == "corner-radius" else _POS,
+            p.add_argument(f"--{name}", type=_NONNEG_SIZE if name == "corner-radius" else _SIZE,
                            required=name != "corner-radius",
                            default=0.0 if name == "corner-radius" else None, help=text)
         if kind == "polyline":
@@ -150,29 +154,33 @@ def register(subparsers) -> None:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--center", type=number(), nargs=2, default=(0.0, 0.0), metavar=("X", "Y"),
+    p.add_argument("--center", type=number(-5000, 5000, unit="mm"), nargs=2,
+                   default=(0.0, 0.0), metavar=("X", "Y"),
                    help="shape origin [mm] (tool mode: offset from the tool's home point)")
     p.add_argument("--rotation", type=number(), default=0.0, help="rotation [deg]")
-    p.add_argument("--lead-in", type=_NONNEG, default=0.0, help="lead-in length [mm], >= 0")
+    p.add_argument("--lead-in", type=_NONNEG_SIZE, default=0.0, help="lead-in length [mm], >= 0")
     p.add_argument("--clockwise", action="store_true", help="cut clockwise")
-    p.add_argument("--spacing", type=_POS, default=None,
-                   help="point spacing [mm], > 0 (default 0.2 tool / 2 robot)")
+    p.add_argument("--spacing", type=number(1e-3, 1000, unit="mm"), default=None,
+                   help="point spacing [mm], 0.001 to 1000 (default 0.2 tool / 2 robot); at "
+                        f"most {MAX_POINTS} points along the contour")
     p.add_argument("--mode", choices=("auto", "tool", "robot"), default="auto",
                    help="tool: Cutting Tool alone; robot: robot contour; auto: tool if it fits")
-    p.add_argument("--feed", type=_POS, default=10.0, help="cutting speed [m/min], > 0")
-    p.add_argument("--servo-velocity", type=_POS, default=10.0,
-                   help="servo limit [rad/s], > 0")
-    p.add_argument("--servo-acceleration", type=_POS, default=300.0,
-                   help="servo limit [rad/s^2], > 0")
+    p.add_argument("--feed", type=number(0, 600, lo_open=True, unit="m/min"), default=10.0,
+                   help="cutting speed [m/min], > 0 and <= 600 (10 m/s)")
+    p.add_argument("--servo-velocity", type=number(0, 1e4, lo_open=True, unit="rad/s"),
+                   default=10.0, help="servo limit [rad/s], > 0")
+    p.add_argument("--servo-acceleration", type=number(0, 1e6, lo_open=True, unit="rad/s^2"),
+                   default=300.0, help="servo limit [rad/s^2], > 0")
     p.add_argument("--travel-angle", type=number(-90, 90, lo_open=True, hi_open=True),
                    default=0.0, help="robot mode [deg], between -90 and 90")
     p.add_argument("--work-angle", type=number(-90, 90, lo_open=True, hi_open=True),
                    default=0.0, help="robot mode [deg], between -90 and 90")
-    p.add_argument("--robot-acceleration", type=_POS, default=3.0,
+    p.add_argument("--robot-acceleration", type=number(0, 100, lo_open=True, unit="m/s^2"),
+                   default=3.0,
                    help="robot mode TCP acceleration [m/s^2], > 0")
-    p.add_argument("--min-command", type=_NONNEG, default=0.5,
+    p.add_argument("--min-command", type=number(0, 100, unit="V"), default=0.5,
                    help="laser command floor [V], >= 0")
-    p.add_argument("--max-command", type=_POS, default=10.0,
+    p.add_argument("--max-command", type=number(0, 100, lo_open=True, unit="V"), default=10.0,
                    help="laser command ceiling [V], > the floor")
     p.add_argument("--ao", type=number(1, integer=True), default=1,
                    help="analogue output port, >= 1")
@@ -212,6 +220,10 @@ def _make_shape(args):
             text = src.read_text() if src.is_file() else args.points.replace(" ", "\n")
             rows = [ln.replace(";", ",").split(",") for ln in text.splitlines() if ln.strip()]
             pts = tuple((m_from_mm(float(x)), m_from_mm(float(y))) for x, y in rows)
+            bad = [v for p in pts for v in p if not (math.isfinite(v) and abs(v) <= 5.0)]
+            if bad:
+                raise ValueError(f"a coordinate of {bad[0] * 1e3:g} mm: each must be finite, "
+                                 "|x|, |y| <= 5000 mm")
         except ValueError as exc:
             raise InputError(f"polyline --points {args.points!r}: expected x,y pairs in mm "
                              f"({exc})") from exc
@@ -219,6 +231,23 @@ def _make_shape(args):
     sizes = {name.replace("-", "_"): m_from_mm(getattr(args, name.replace("-", "_")))
              for name, _ in _SIZES[args.kind]}
     return shapes.SHAPE_KINDS[args.kind](**sizes, **common)
+
+
+def _check_point_count(shape, args) -> None:
+    """Refuse a --spacing that would give more than :data:`MAX_POINTS` contour points (the
+    contour measured at 1 mm: at most ~31 000 points for the largest shape allowed)."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.laser.shapes import build_contour
+    from drakedeburr.units import m_from_mm
+
+    spacing = 2.0 if args.spacing is None else args.spacing  # the larger default (robot)
+    if args.spacing is None and args.mode != "robot":
+        spacing = 0.2
+    perimeter_mm = build_contour(shape, m_from_mm(1.0)).perimeter * 1e3
+    if perimeter_mm / spacing > MAX_POINTS:
+        raise InputError(f"--spacing {spacing:g} mm: the {shape.kind}'s {perimeter_mm:.4g} mm "
+                         f"contour would have {perimeter_mm / spacing:.3g} points, more than "
+                         f"the limit of {MAX_POINTS}; give a larger --spacing")
 
 
 def _run_shape(args) -> int:
@@ -236,6 +265,12 @@ def _run_shape(args) -> int:
 
     output_file(args.output, "-o/--output")
     output_file(args.summary, "--summary")
+    from drakedeburr.argcheck import separate_outputs
+
+    points = Path(args.points) if getattr(args, "points", None) else None
+    separate_outputs({"-o/--output": args.output, "--summary": args.summary},
+                     inputs={"the --points file": points if points and points.is_file() else
+                             None})
     if args.output.suffix.lower() != ".ls":
         raise InputError(f"{args.output}: -o/--output is a FANUC program: a .ls file")
     if not args.max_command > args.min_command:
@@ -243,6 +278,7 @@ def _run_shape(args) -> int:
                          f"{args.min_command:g} V")
     fanuc_ls._check_name(args.name or args.output.stem)
     shape = _make_shape(args)
+    _check_point_count(shape, args)
     feed = args.feed / 60.0
     power = PowerMap(nominal_speed=feed, min_command=args.min_command,
                      max_command=args.max_command, channel=args.ao)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drakedeburr._io import round_numbers
 from drakedeburr.laser.kinematics import FiveBarGeometry, forward_kinematics
 
 __all__ = ["five_bar_sdf", "joint_positions", "add_cutting_tool", "set_tool_positions",
@@ -64,7 +65,7 @@ def five_bar_sdf(g: FiveBarGeometry | None = None, nozzle_length: float = NOZZLE
       <visual name="laser_head"><pose>0 {g.l3} {0.5 * nozzle_length} 0 0 0</pose>
         <geometry><cylinder><radius>0.012</radius><length>{nozzle_length}</length></cylinder>
         </geometry><material><diffuse>0.85 0.2 0.1 1</diffuse></material></visual>"""
-    return f"""<?xml version="1.0"?>
+    return round_numbers(f"""<?xml version="1.0"?>
 <!-- Five-bar Cutting Tool (drakedeburr.laser.model.five_bar_sdf; source 004 Fig. 3).
      L0={g.l0} L1={g.l1} L2={g.l2} L3={g.l3} L4={g.l4} m. Generated, do not edit. -->
 <sdf version="1.9" xmlns:drake="http://drake.mit.edu">
@@ -95,7 +96,7 @@ def five_bar_sdf(g: FiveBarGeometry | None = None, nozzle_length: float = NOZZLE
     </drake:ball_constraint>
   </model>
 </sdf>
-"""
+""")
 
 
 def joint_positions(g: FiveBarGeometry, q: np.ndarray) -> np.ndarray:

@@ -102,6 +102,12 @@ def _run_cl(args: argparse.Namespace) -> int:
             raise InputError(f"--method {m!r}: choose from {', '.join(METHODS)}")
     _check_source(args.source)
     argcheck.output_file(args.json, "--json")
+    from pathlib import Path
+
+    src = Path(args.source)
+    argcheck.separate_outputs({"--json": args.json},
+                              inputs={"the mesh": src if src.is_file() else None},
+                              input_folders={"the hub folder": src if src.is_dir() else None})
     windows, view, desc = _windows_and_view(args)
     table = cl_table(windows, methods, params, progress=tqdm_progress("windows"))
     table["source"] = desc

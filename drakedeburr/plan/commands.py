@@ -44,6 +44,10 @@ def _check_plan_args(args: argparse.Namespace, scenario: str, hub: str) -> tuple
     out = Path(args.output) if args.output else _default_output(scenario, hub)
     argcheck.output_folder(out, "-o/--output", is_ours=is_plan_folder)
     argcheck.output_file(args.html, "--html")
+    scenario_file = Path(scenario) if Path(scenario).suffix in (".yaml", ".yml") else None
+    argcheck.separate_outputs({"--html": args.html}, inputs={"the scenario": scenario_file},
+                              input_folders={"the hub folder": resolve_hub_dir(hub)},
+                              output_folders={"-o/--output": out})
     argcheck.free_space(out, _PLAN_BYTES_PER_WINDOW * len(windows or have), "-o/--output")
     if args.html:
         argcheck.free_space(Path(args.html).parent, _HTML_BYTES, "--html")
@@ -122,6 +126,10 @@ def _check_export_args(args: argparse.Namespace):
     if not folder.exists():
         raise InputError(f"{folder}: no such plan folder")
     plan = load_plan(folder)
+    dat = out.with_suffix(".dat") if out.suffix.lower() == ".src" else None
+    argcheck.separate_outputs(
+        {"-o/--output": out, "-o/--output (.dat beside the .src)": dat},
+        inputs={f"the plan's {f.name}": f for f in sorted(folder.iterdir()) if f.is_file()})
     spec = plan_robot(plan)
     if args.robot is not None and get_robot(args.robot) is not spec:
         raise InputError(f"--robot {args.robot}: the plan {folder} was made for {spec.name}")

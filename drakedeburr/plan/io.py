@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +42,7 @@ from drakedeburr.plan.types import (
 from drakedeburr.units import deg_from_rad
 
 __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv", "jsonable",
-           "plan_digest", "is_plan_folder"]
+           "plan_digest", "is_plan_folder", "hub_reference", "check_hub_reference"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 2
@@ -86,7 +87,8 @@ def _content(plan: Plan) -> tuple[dict, dict]:
                             cone_outer_half_angle=float(tp.cone_outer_half_angle),
                             depth_of_cut=float(tp.depth_of_cut)))
     doc = dict(
-        format=PLAN_FORMAT, version=PLAN_VERSION, scenario=plan.scenario, hub=plan.hub,
+        format=PLAN_FORMAT, version=PLAN_VERSION, scenario=_absolute(plan.scenario),
+        hub=_absolute(plan.hub),
         mode=plan.mode,
         targets=[dict(window_index=tg.window_index, segment=tg.segment, cl_index=tg.cl_index,
                       speed=tg.speed, zone=tg.zone, motion=tg.motion) for tg in plan.targets],
@@ -98,6 +100,52 @@ def _content(plan: Plan) -> tuple[dict, dict]:
         tool_paths=tp_docs,
     )
     return doc, arrays
+
+
+def _absolute(ref: str) -> str:
+    """A hub or scenario as a plan records it: a bundled name as it is, a folder or file as
+    its absolute path (a path relative to where the plan was made would name another hub, or
+    none, from another folder)."""
+    p = Path(ref)
+    if p.exists() and (len(p.parts) > 1 or p.is_dir() or p.suffix in (".yaml", ".yml")):
+        return str(p.resolve())
+    return ref
+
+
+def hub_reference(hub: str) -> dict | None:
+    """``{"path": absolute hub folder, "sha256": its content hash}``
+    (:func:`drakedeburr.cell.fingerprint.hub_digest`), None for a hub that cannot be found."""
+    from drakedeburr.cell.fingerprint import hub_digest
+    from drakedeburr.resources import resolve_hub_dir
+
+    try:
+        return {"path": str(resolve_hub_dir(hub)), "sha256": hub_digest(hub)}
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
+def check_hub_reference(doc: dict, doc_path: Path) -> None:
+    """Refuse (InputError naming ``plan.json`` and both hashes) a plan whose hub folder is
+    gone or whose content is not the content the plan was made for. Plans written before
+    hub references (no ``hub_ref``) pass: their hub is found as before."""
+    ref = doc.get("hub_ref")
+    if ref is None:
+        return
+    if not (isinstance(ref, dict) and isinstance(ref.get("path"), str)
+            and isinstance(ref.get("sha256"), str)):
+        raise InputError(f"{doc_path}: hub_ref: expected {{path, sha256}}")
+    from drakedeburr.cell.fingerprint import hub_digest
+
+    hub = doc.get("hub") if isinstance(doc.get("hub"), str) else ref["path"]
+    try:
+        now = hub_digest(hub)
+    except (FileNotFoundError, NotADirectoryError):
+        raise InputError(f"{doc_path}: the plan's hub {hub} is not there any more (it was "
+                         f"made for {ref['path']}, content sha256 {ref['sha256']})") from None
+    if now != ref["sha256"]:
+        raise InputError(f"{doc_path}: the hub {hub} has changed since the plan was made: its "
+                         f"content is sha256 {now}, the plan was made for sha256 "
+                         f"{ref['sha256']}; plan the hub again")
 
 
 def _doc_text(doc: dict) -> str:
@@ -132,6 +180,9 @@ def save_plan(plan: Plan, path: str | Path, *, is_ours=is_plan_folder) -> Path:
     is replaced whole (with its old report); any other existing folder is refused. Returns the
     folder."""
     doc, arrays = _content(plan)
+    ref = hub_reference(plan.hub)
+    if ref is not None:  # not part of the plan's digest: where its hub is and what it holds
+        doc = {**doc, "hub_ref": ref}
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     with atomic_folder(path, is_ours=is_ours) as tmp:
@@ -157,6 +208,7 @@ def load_plan(path: str | Path) -> Plan:
     if not doc_path.is_file():
         raise FileNotFoundError(f"no plan at {folder} (missing plan.json)")
     doc = _read_doc(doc_path)
+    check_hub_reference(doc, doc_path)
     npz_path = folder / "arrays.npz"
     if not npz_path.is_file():
         raise InputError(f"{folder}: missing arrays.npz (the plan's arrays): not a complete "
@@ -170,7 +222,9 @@ def load_plan(path: str | Path) -> Plan:
 
 def _read_doc(doc_path: Path) -> dict:
     try:
-        doc = json.loads(doc_path.read_bytes().decode("utf-8"))
+        from drakedeburr._io import read_bounded
+
+        doc = json.loads(read_bounded(doc_path, "plan", "json").decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise InputError(f"{doc_path}: not valid JSON ({type(exc).__name__}: "
                          f"{str(exc)[:120]})") from None
@@ -186,9 +240,29 @@ def _read_doc(doc_path: Path) -> dict:
     return doc
 
 
+#: the arrays an ``arrays.npz`` may hold (format versions 1 and 2); any other member is refused
+#: before anything is decompressed
+_ARRAY_NAME = re.compile(r"(t|c|q|qd|X_HT|X_WF|q_targets|p_HC|n_H|X_WH|"
+                         r"tp\d{1,6}_(?:" + "|".join(TOOL_PATH_ARRAYS) + r"|axis_H|cone_axis_H))")
+#: the most a plan's arrays may take decompressed (a whole hub's plan is ~1 MB)
+NPZ_LIMIT = 256 << 20
+
+
+def _check_npz_members(npz_path: Path) -> None:
+    """Every member of ``arrays.npz`` checked from its zip entry and .npy header before
+    anything is decompressed (:func:`drakedeburr._io.check_npz_members`): a plan's array
+    name, numbers, a size matching the header's shape, :data:`NPZ_LIMIT` in all."""
+    from drakedeburr._io import check_npz_members
+
+    check_npz_members(npz_path, _ARRAY_NAME, NPZ_LIMIT, "plan arrays",
+                      "t, c, X_HT, X_WF, q_targets, p_HC, n_H, X_WH, tp<w>_*")
+
+
 def _read_arrays(npz_path: Path) -> dict[str, np.ndarray]:
     """The arrays of ``arrays.npz``; anything numpy or zipfile cannot read (truncated,
-    corrupt, pickled objects, not an archive) is an InputError naming the file."""
+    corrupt, pickled objects, not an archive) is an InputError naming the file. The members
+    are checked before anything is decompressed (:func:`_check_npz_members`)."""
+    _check_npz_members(npz_path)
     try:
         with np.load(npz_path, allow_pickle=False) as a:
             if not hasattr(a, "files"):
@@ -215,6 +289,12 @@ class _Where:
         return f"{self.path}: {item}"
 
 
+_INT_LIMIT = 2**31
+#: the longest plan read [s] (a whole hub's cycle is under two minutes; a plan of 1e12 s
+#: would be sampled into petabytes by the verifier)
+PLAN_MAX_DURATION = 3600.0
+
+
 def _get(d, key: str, kind, where: str, default=...):
     """``d[key]`` of type ``kind`` (int: not bool; float: a finite int or float)."""
     if not isinstance(d, dict):
@@ -234,6 +314,8 @@ def _value(v, kind, where: str):
     if kind is int:
         if isinstance(v, bool) or not isinstance(v, int):
             raise _Bad(f"{where}: expected an integer, got {str(v)[:40]!r}")
+        if not -_INT_LIMIT <= v < _INT_LIMIT:  # an index or a count: fits numpy's int32
+            raise _Bad(f"{where}: {str(v)[:40]} is out of range (an index, |value| < 2**31)")
         return v
     if not isinstance(v, kind):
         name = getattr(kind, "__name__", None) or "/".join(k.__name__ for k in kind)
@@ -299,7 +381,7 @@ def _targets(doc: dict, arr: dict, jw, aw) -> tuple[CartesianTarget, ...]:
     return tuple(out)
 
 
-def _segments(doc: dict, n_targets: int, jw) -> tuple[PlanSegment, ...]:
+def _segments(doc: dict, n_targets: int, jw, t_span) -> tuple[PlanSegment, ...]:
     out = []
     for i, s in enumerate(_get(doc, "segments", list, jw["plan"])):
         w = jw[f"segments[{i}]"]
@@ -310,6 +392,9 @@ def _segments(doc: dict, n_targets: int, jw) -> tuple[PlanSegment, ...]:
         if not 0 <= a <= b <= n_targets:
             raise _Bad(f"{w}.target_range: [{a}, {b}] is not within the {n_targets} targets")
         t0, t1 = (_value(v, float, f"{w}.t_range") for v in trange)
+        if not (t_span[0] - 1e-9 <= t0 <= t1 <= t_span[1] + 1e-9):
+            raise _Bad(f"{w}.t_range: [{t0:g}, {t1:g}] s is not within the trajectory's "
+                       f"[{t_span[0]:g}, {t_span[1]:g}] s")
         out.append(PlanSegment(window_index=_get(s, "window_index", int, w),
                                kind=_choice(_get(s, "kind", str, w), _KINDS, f"{w}.kind"),
                                target_range=(a, b), t_range=(t0, t1)))
@@ -358,16 +443,24 @@ def _meta(doc: dict, jw) -> dict:
     return meta
 
 
+def _check_duration(t: np.ndarray, aw) -> None:
+    if t[-1] - t[0] > PLAN_MAX_DURATION or abs(t[0]) > PLAN_MAX_DURATION:
+        raise _Bad(aw[f"array 't': spans {t[0]:g} to {t[-1]:g} s, more than the plan "
+                      f"duration limit of {PLAN_MAX_DURATION:g} s"])
+
+
 def _trajectory(doc: dict, arr: dict, aw) -> JointTrajectory:
     if "c" not in arr and doc["version"] == 1:  # version 1: cubic Hermite through the knots
         t = _array(arr, "t", (None,), aw)
         q, qd = _array(arr, "q", (len(t), 6), aw), _array(arr, "qd", (len(t), 6), aw)
         if len(t) < 2 or np.any(np.diff(t) <= 0):
             raise _Bad(aw["array 't': knot times must increase strictly (at least 2)"])
+        _check_duration(t, aw)
         return JointTrajectory.from_hermite(t, q, qd)
     t = _array(arr, "t", (None,), aw)
     if len(t) < 1 or np.any(np.diff(t) <= 0):
         raise _Bad(aw["array 't': knot times must increase strictly"])
+    _check_duration(t, aw)
     c = _array(arr, "c", (None, len(t) - 1, 6), aw)
     if len(c) < 1:
         raise _Bad(aw["array 'c': no polynomial coefficients"])
@@ -405,12 +498,13 @@ def _records(doc: dict, arr: dict, jw, aw) -> tuple[ToolPathRecord, ...]:
 
 def _plan_from(doc: dict, arr: dict, folder: Path, jw, aw) -> Plan:
     targets = _targets(doc, arr, jw, aw)
+    tr = _trajectory(doc, arr, aw)
     return Plan(scenario=_get(doc, "scenario", str, jw["plan"]),
                 hub=_get(doc, "hub", str, jw["plan"]),
                 mode=_choice(doc.get("mode"), ("tool", "workpiece"), jw["mode"]),
                 X_WH=_array(arr, "X_WH", (4, 4), aw), targets=targets,
-                segments=_segments(doc, len(targets), jw),
-                trajectory=_trajectory(doc, arr, aw),
+                segments=_segments(doc, len(targets), jw, (tr.t[0], tr.t[-1])),
+                trajectory=tr,
                 tool_path=_records(doc, arr, jw, aw) or None,
                 failures=_failures(doc, jw), meta=_meta(doc, jw), run=_run_record(folder))
 

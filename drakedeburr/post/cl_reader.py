@@ -362,10 +362,11 @@ def read_cl(
         InputError: no such file, or not a readable file.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: CL file not found" if not path.exists()
-                         else f"{path}: not a file")
-    size = path.stat().st_size
+    if not path.exists():
+        raise InputError(f"{path}: CL file not found")
+    from drakedeburr._io import check_regular_file
+
+    size = check_regular_file(path, "CL file", "cl")  # READ_LIMITS["cl"], regular files only
     state = ClReadState()
     comments: list[tuple[int, str]] = []
     tick = None if progress is None else (lambda n, chars: progress(min(chars, size), size,

@@ -142,8 +142,11 @@ def _check_args(args) -> None:
     from drakedeburr.errors import InputError
 
     cl = Path(args.cl_file)
-    if not cl.is_file():
-        raise InputError(f"{cl}: CL file not found" if not cl.exists() else f"{cl}: not a file")
+    if not cl.exists():
+        raise InputError(f"{cl}: CL file not found")
+    from drakedeburr._io import check_regular_file
+
+    check_regular_file(cl, "CL file", "cl")  # a regular file within READ_LIMITS["cl"]
     if not args.zone >= 0:
         raise InputError(f"--zone must be >= 0 mm, got {args.zone}")
     if args.workpiece_in_hand and args.tool is None:
@@ -247,6 +250,9 @@ def _run_post(args) -> int:
     from drakedeburr.programs.writers import format_for_controller
 
     _check_args(args)
+    from drakedeburr.argcheck import separate_outputs
+
+    separate_outputs({"-o/--output": args.output}, inputs={"the CL file": args.cl_file})
     settings = settings_from_args(args)
     own = format_for_controller(settings.robot.controller)
     if args.fmt is not None and args.fmt != own:

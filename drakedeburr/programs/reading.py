@@ -154,8 +154,10 @@ def format_of(path: str | Path) -> str:
 def _check_utf8(path: Path) -> None:
     """Refuse a file that is not UTF-8 text, naming the line (a missing file is left to the
     reader)."""
-    try:
-        data = path.read_bytes()
+    from drakedeburr._io import read_bounded
+
+    try:  # a regular file of at most READ_LIMITS["program"] (never /dev/zero read to the end)
+        data = read_bounded(path, "program file", "program")
     except FileNotFoundError:
         return
     try:

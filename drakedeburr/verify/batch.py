@@ -131,8 +131,12 @@ def run_job(job: BatchJob) -> dict:
                    cycle_s=plan.trajectory.duration, samples=report.settings["samples"],
                    report=str(out / "report.json"))
     except Exception as exc:  # a batch reports every hub; one failure must not stop the rest
-        log.exception("job %s / %s failed", job.scenario, job.hub)
-        row["error"] = f"{type(exc).__name__}: {exc}"
+        # one line per failed job; its traceback only at debug level (-vv)
+        text = " ".join(str(exc).split())
+        name = "" if isinstance(exc, (InputError, OSError)) else f"{type(exc).__name__}: "
+        log.error("job %s / %s failed: %s%s", job.scenario, job.hub, name, text)
+        log.debug("job %s / %s: traceback", job.scenario, job.hub, exc_info=True)
+        row["error"] = f"{type(exc).__name__}: {text}"
     row["elapsed_s"] = time.perf_counter() - started
     return row
 
@@ -191,7 +195,7 @@ def verify_all(
 
         collect_here()  # no Meshcat may be left for the helper threads to free
 
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        client = scheduler if isinstance(scheduler, Client) else _connect(Client, scheduler)
         try:
             futures = client.map(run_job, [replace(j, one_process=True) for j in jobs],
                                  pure=False)
@@ -235,6 +239,18 @@ def verify_all(
     atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, sort_keys=True))
     atomic_write_text(out_dir / "summary.md", summary_markdown(summary))
     return summary
+
+
+def _connect(Client, address: str):
+    """A Dask client of the scheduler at ``address``; anything that is not one (nothing
+    listening, another service answering with bytes Dask cannot read) is an InputError naming
+    the address, after at most 10 s."""
+    try:
+        return Client(address, timeout=10)
+    except Exception as exc:  # OSError, TimeoutError, a garbled reply (seen: MemoryError)
+        text = " ".join(str(exc).split())[:160]
+        raise InputError(f"--scheduler {address}: no Dask scheduler there "
+                         f"({type(exc).__name__}: {text})") from None
 
 
 def summary_markdown(summary: dict) -> str:

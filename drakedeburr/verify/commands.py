@@ -44,7 +44,7 @@ def _is_output_folder(folder: Path) -> bool:
     return is_plan_folder(folder) or is_report_folder(folder)
 
 
-def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
+def _check_outputs(args: argparse.Namespace, kind: str, target, hub=None) -> None:
     """Output paths and the program file, before any work."""
     from drakedeburr import argcheck
     from drakedeburr.errors import InputError
@@ -65,6 +65,18 @@ def _check_outputs(args: argparse.Namespace, kind: str, target) -> None:
         argcheck.output_folder(args.hub_cache, "--hub-cache")
     if args.program:
         argcheck.input_file(args.program, "--program file")
+    files = {"--json": args.json, "--html": args.html}
+    program = {"the --program file": args.program}
+    if kind == "plan":
+        argcheck.separate_outputs(files, inputs=program,
+                                  input_folders={"the plan folder": target})
+    else:
+        hub = Path(hub or "")
+        mesh = hub.suffix.lower() in MESH_TARGET_SUFFIXES
+        argcheck.separate_outputs(
+            files, inputs={**program, "the hub mesh": hub if mesh else None},
+            input_folders={"the hub folder": hub if hub.is_dir() else None},
+            output_folders={"-o/--out": args.out})
 
 
 def _resolve_target(target: str, scenario: str | None):
@@ -74,8 +86,11 @@ def _resolve_target(target: str, scenario: str | None):
 
     path = Path(target)
     if path.suffix.lower() in MESH_TARGET_SUFFIXES:
-        if not path.is_file():
+        if not path.exists():
             raise FileNotFoundError(f"{path}: no such hub mesh file")
+        from drakedeburr._io import check_regular_file
+
+        check_regular_file(path, "hub mesh", "mesh")
         return ("hub", scenario or "tool_in_hand", str(path))
     if path.is_dir() and (path / "hub.yaml").is_file():
         return ("hub", scenario or "tool_in_hand", str(path))
@@ -223,7 +238,7 @@ def _run_verify(args: argparse.Namespace) -> int:
         check_windows(windows, hub_windows(plan.hub), Path(plan.hub).name)
     else:
         scenario, hub = rest
-        _check_outputs(args, kind, None)
+        _check_outputs(args, kind, None, hub)
         from drakedeburr.resources import scenario_path
 
         scenario_path(scenario)
@@ -330,6 +345,12 @@ def _run_verify_all(args: argparse.Namespace) -> int:
     argcheck.output_folder(args.out, "-o/--out")
     for scenario in args.scenario or []:
         scenario_path(scenario)
+    argcheck.scheduler_address(args.scheduler)
+    from drakedeburr._io import check_path_name
+    from drakedeburr.verify.batch import hub_folders
+
+    for hub in hub_folders(args.hubs):  # each becomes OUT/SCENARIO/HUB
+        check_path_name(hub.name, f"{args.hubs}: hub folder")
 
     scenarios = args.scenario or ["tool_in_hand", "workpiece_in_hand"]
     summary = verify_all(

@@ -25,6 +25,16 @@ def _window_loops(hub_source):
         return []
 
 
+def _host(text: str) -> str:
+    """An argparse ``type``: a host name or address to bind (``*``: every interface)."""
+    import re
+
+    if text == "*" or re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9.:-]{0,252}", text or ""):
+        return text
+    raise argparse.ArgumentTypeError(f"expected a host name or address (e.g. 127.0.0.1, "
+                                     f"localhost, '*' for every interface), got {text!r}")
+
+
 def _is_scenario(target: str) -> bool:
     from drakedeburr.resources import scenario_names
 
@@ -49,7 +59,7 @@ def _run_show(args: argparse.Namespace) -> int:
         resolve_hub_sdf(args.target)
     elif args.hub is not None:
         resolve_hub_sdf(args.hub)
-    meshcat = scene.get_meshcat()
+    meshcat = scene.get_meshcat(host=args.host)
     role = "proximity" if args.collision else "illustration"
     if _is_scenario(args.target):
         from drakedeburr.cell import load_cell
@@ -117,6 +127,10 @@ def register(subparsers) -> None:
     p.add_argument("--q", type=number(), nargs="+", default=None, metavar="DEG",
                    help="robot joints J1..J6 in degrees (default: the scenario's home)")
     p.add_argument("--collision", action="store_true", help="draw collision geometry instead")
+    p.add_argument("--host", type=_host, default=None, metavar="ADDRESS",
+                   help="interface Meshcat listens on (default 127.0.0.1: this machine only; "
+                        "'*' or 0.0.0.0 exposes the viewer to the network, where anyone who "
+                        "can reach the port sees the cell)")
     p.add_argument("--wait", action="store_true",
                    help="keep serving Meshcat after writing --html (default without --html)")
     p.set_defaults(_run=_run_show)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr._io import atomic_write_text
-from drakedeburr.viz.scene import collect_here
+from drakedeburr.viz.scene import collect_here, get_meshcat
 
 __all__ = ["plan_replay", "save_plan_html", "draw_tool_path"]
 
@@ -54,18 +54,19 @@ def plan_replay(plan, *, cell=None, meshcat=None, dt: float = 0.04, show_path: b
     Args:
         plan: the Plan.
         cell: the loaded cell (default: rebuilt from ``plan.scenario``/``plan.hub``).
-        meshcat: a ``pydrake.geometry.Meshcat`` (default: a new one on a free port).
+        meshcat: a ``pydrake.geometry.Meshcat`` (default: a new one on a free port of
+            127.0.0.1, :func:`drakedeburr.viz.scene.get_meshcat`).
         dt: frame spacing of the recording [s].
         show_path: draw the commanded tool paths.
 
     Returns:
         The Meshcat instance (its recording is published; open ``meshcat.web_url()``).
     """
-    from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
+    from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Role
     from pydrake.systems.framework import DiagramBuilder
 
     cell = _unique_cell(plan, cell)
-    meshcat = meshcat or Meshcat()
+    meshcat = meshcat or get_meshcat(new=True)
     builder = DiagramBuilder()
     robot_diagram = builder.AddSystem(cell.diagram)
     params = MeshcatVisualizerParams()

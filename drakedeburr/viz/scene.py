@@ -21,6 +21,7 @@ from drakedeburr._io import atomic_write_text
 
 __all__ = [
     "ROOT",
+    "DEFAULT_HOST",
     "get_meshcat",
     "collect_here",
     "publish_scene_graph",
@@ -41,13 +42,31 @@ log = logging.getLogger(__name__)
 ROOT = "/drakedeburr"
 
 
-@functools.cache
-def _shared_meshcat():
-    from pydrake.geometry import Meshcat
+#: the interface Meshcat binds unless told otherwise: this machine only (Drake's own default,
+#: ``MeshcatParams.host = "*"``, listens on every interface, so anyone on the plant network
+#: could open the cell)
+DEFAULT_HOST = "127.0.0.1"
 
-    meshcat = Meshcat()
-    log.info("Meshcat listening at %s", meshcat.web_url())
+
+def _new_meshcat(host: str | None, port: int | None):
+    """A Meshcat on ``host`` (``MeshcatParams.host``: "localhost"/an address binds that
+    interface only, "*" every interface; None: :data:`DEFAULT_HOST`) and ``port`` (None: the
+    first free one from 7000), logged with the address it actually bound."""
+    from pydrake.geometry import Meshcat, MeshcatParams
+
+    params = MeshcatParams()
+    params.host = DEFAULT_HOST if host is None else str(host)
+    if port is not None:
+        params.port = int(port)
+    meshcat = Meshcat(params)
+    log.info("Meshcat listening on %s port %d: %s", params.host, meshcat.port(),
+             meshcat.web_url())
     return meshcat
+
+
+@functools.cache
+def _shared_meshcat(host: str | None = None):
+    return _new_meshcat(host, None)
 
 
 def collect_here() -> None:
@@ -65,23 +84,18 @@ def collect_here() -> None:
     gc.collect()
 
 
-def get_meshcat(*, new: bool = False, port: int | None = None):
+def get_meshcat(*, new: bool = False, port: int | None = None, host: str | None = None):
     """The process-wide Meshcat (started on first use), or a new one.
 
     Args:
         new: start a separate Meshcat instead of reusing the shared one.
         port: port for a new Meshcat (None: Drake picks a free one from 7000 on).
+        host: interface to listen on (None: :data:`DEFAULT_HOST`, this machine only; "*":
+            every interface, reachable from the network).
     """
     if not new and port is None:
-        return _shared_meshcat()
-    from pydrake.geometry import Meshcat, MeshcatParams
-
-    params = MeshcatParams()
-    if port is not None:
-        params.port = port
-    meshcat = Meshcat(params)
-    log.info("Meshcat listening at %s", meshcat.web_url())
-    return meshcat
+        return _shared_meshcat(host)
+    return _new_meshcat(host, port)
 
 
 def _rgba(color: Sequence[float]):

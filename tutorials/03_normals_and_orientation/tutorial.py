@@ -114,9 +114,11 @@ def main() -> None:
     print(f"wrote {png}")
 
     # 4b. meshcat scene as static HTML
-    from pydrake.geometry import Meshcat, Rgba, SurfaceTriangle, TriangleSurfaceMesh
+    from pydrake.geometry import Rgba, SurfaceTriangle, TriangleSurfaceMesh
 
-    meshcat = Meshcat()
+    from drakedeburr.viz import get_meshcat
+
+    meshcat = get_meshcat(new=True)  # on 127.0.0.1 only (Drake's Meshcat() listens everywhere)
     V, F = hub.vertices_H, hub.faces
     mesh = TriangleSurfaceMesh([SurfaceTriangle(*f) for f in F.tolist()], V.tolist())
     meshcat.SetObject("hub", mesh, Rgba(0.75, 0.75, 0.78, 0.6))

@@ -151,12 +151,11 @@ def main() -> None:
           f"{sorted(set(job.contour_motion.config))}")
 
     # 5. Meshcat animation ------------------------------------------------------------------
-    from pydrake.geometry import Meshcat
-
     from drakedeburr.laser.display import animate_hole, build_tool_scene
     from drakedeburr.resources import model_path
+    from drakedeburr.viz import get_meshcat
 
-    meshcat = Meshcat()
+    meshcat = get_meshcat(new=True)  # on 127.0.0.1 only (Drake's Meshcat() listens everywhere)
     # the Cutting Tool on the IRB1600's flange (robot_model=None shows the tool alone)
     scene = build_tool_scene(meshcat, g, robot_model=model_path("robots/irb1600_10_120.sdf"))
     prog = plan_hole(Keyhole(head_diameter=0.012, slot_width=0.005, slot_length=0.010,
