@@ -267,3 +267,33 @@ def test_csv_touch_file_gives_the_same_frames(tmp_path):
         assert main(["calibrate", str(tmp_path / name), "--report", str(rep)] + extra) == 0
         reps.append(yaml.safe_load(rep.read_text()))
     assert reps[0]["tcp"] == reps[1]["tcp"] and reps[0]["table"] == reps[1]["table"]
+
+
+# ----------------------------------------------------------- calibration_io read directly
+def test_read_touches_csv_refuses_bad_rows_naming_file_and_line(tmp_path):
+    from drakedeburr.errors import InputError
+    from drakedeburr.post.calibration_io import read_touches
+
+    header = "target,fx,fy,fz,x,y,z,rx,ry,rz\n"
+    bad = {"x.csv": ("target,x\n", ":1: expected the header"),
+           "y.csv": (header + "table,0,0,0,1,2,3,0,0\n", ":2: expected 10 columns"),
+           "z.csv": (header + "# c\nfloor,0,0,0,1,2,3,0,0,0\n", ":3: target 'floor'"),
+           "e.csv": (header, "no touches")}
+    for name, (text, why) in bad.items():
+        (tmp_path / name).write_text(text)
+        with pytest.raises(InputError, match=why) as e:
+            read_touches(tmp_path / name)
+        assert str(tmp_path / name) in str(e.value)
+    with pytest.raises(InputError, match="touch file not found"):
+        read_touches(tmp_path / "missing.yaml")
+
+
+def test_calibrate_command_refuses_a_missing_touch_file_in_one_line(tmp_path, capsys):
+    """post.calibrate_cmd (the `calibrate` subcommand): bad input is exit 2, one line."""
+    from drakedeburr.post import calibrate_cmd
+
+    assert callable(calibrate_cmd.register)
+    assert main(["calibrate", str(tmp_path / "none.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "none.csv" in err[0] and "Traceback" not in err[0]
+    assert not any(tmp_path.iterdir())
