@@ -9,6 +9,8 @@ the tool it has set. The fitted frames are checked against the truth, the writte
 through Drake's own frame poses, the written program by a parser written here and FK.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import yaml
@@ -297,3 +299,30 @@ def test_calibrate_command_refuses_a_missing_touch_file_in_one_line(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "none.csv" in err[0] and "Traceback" not in err[0]
     assert not any(tmp_path.iterdir())
+
+
+def test_calibrate_takes_an_arm_file_like_the_other_commands(tmp_path):
+    """`calibrate --robot FILE`: a copy of the M-10iA's arm file (whose controller frame is
+    0.45 m above the model base) gives the same fit as the registered name, and the fit is
+    the true one (it would be 0.45 m off if the file's base frame were ignored)."""
+    import shutil
+
+    from drakedeburr.post.cl_post import pose_from_mm_deg
+
+    spec = get_robot("m10ia")
+    touches = _touch_file(tmp_path / "touches.yaml", spec)
+    root = Path(__file__).resolve().parents[1]
+    arm = shutil.copy(root / "models" / "robots" / "m10ia.yaml", tmp_path / "my_arm.yaml")
+    reps = []
+    for robot in ("m10ia", str(arm)):
+        rep = tmp_path / f"rep_{len(reps)}.yaml"
+        assert main(["calibrate", str(touches), "--robot", robot, "--report", str(rep)]) == 0
+        reps.append(yaml.safe_load(rep.read_text()))
+    assert reps[0]["tcp"] == reps[1]["tcp"]
+    assert reps[0]["table"]["frame_mm_deg"] == reps[1]["table"]["frame_mm_deg"]
+    X = pose_from_mm_deg(reps[1]["table"]["frame_mm_deg"])
+    f = FEATURES * 1e-3
+    err = np.linalg.norm(f @ (X[:3, :3] - X_TABLE_TRUE[:3, :3]).T + X[:3, 3]
+                         - X_TABLE_TRUE[:3, 3], axis=1)
+    assert err.max() < 3 * SIGMA
+    assert main(["calibrate", str(touches), "--robot", str(tmp_path / "none.yaml")]) == 2

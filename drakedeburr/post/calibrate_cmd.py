@@ -37,8 +37,10 @@ def register(subparsers) -> None:
                     "frames and a check program. Exit codes: 0 ok, 1 residual or predicted "
                     "error over the limit (report written), 2 bad input, 130 interrupted.")
     p.add_argument("touches", help="touch file (.yaml / .csv, see docs/post.md)")
-    p.add_argument("--robot", default=None, choices=robot_names(),
-                   help="the arm that reported the poses (default: the file's, else irb1600)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE",
+                   help=f"the arm that reported the poses: a registered arm "
+                        f"({', '.join(robot_names())}) or an arm file (*.yaml, "
+                        "docs/robots.md); default: the touch file's, else irb1600")
     p.add_argument("--tool", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="the tool set on the controller when the poses were reported (mm, "
                         "deg; default: the file's 'tool')")
