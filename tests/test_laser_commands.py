@@ -1,6 +1,7 @@
 """CLI: drakedeburr laser shape / tool."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -52,7 +53,6 @@ def test_polyline_points_and_tool_summary(tmp_path, capsys):
 
 
 def _servo_deg(text):
-    import re
 
     return np.array(re.findall(r"J1 =\t(-?[\d.]+)\tdeg,\tJ2 =\t(-?[\d.]+)\tdeg", text), float)
 
@@ -114,7 +114,6 @@ def test_bad_tool_file_is_exit_2_naming_the_key(tmp_path, capsys):
 
 
 def test_robot_mode_writes_the_plate_as_uframe_and_the_arms_config(tmp_path, capsys):
-    import re
 
     out = tmp_path / "r.ls"
     assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
@@ -125,10 +124,25 @@ def test_robot_mode_writes_the_plate_as_uframe_and_the_arms_config(tmp_path, cap
                  "--corner-radius", "10", "--plate", "750,-50,150,0,0,45", "-o",
                  str(out)]) == 0
     text = out.read_text()
-    uf = dict(re.findall(r"!UFRAME\[1\] ([XYZWPR])=(-?[\d.]+) ;", text))
-    assert [float(uf[k]) for k in "XYZWPR"] == pytest.approx([750, -50, 150, 0, 0, 45])
+    assert _ls_frame(text, "UFRAME") == pytest.approx([750, -50, 150, 0, 0, 45])
+    assert "!UFRAME" not in text  # set by statements, not left to remarks
     configs = set(re.findall(r"CONFIG : '([^']*)'", text))
     assert len(configs) >= 2  # J6's turn changes as the tool goes once around
     assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
                  "--robot", "irb1600", "-o", str(out)]) == 2
     assert "abb controller" in capsys.readouterr().err
+
+
+def _ls_frame(text: str, label: str, n: int = 1) -> list[float]:
+    """X, Y, Z [mm], W, P, R [deg] a FANUC LS program sets ``label[n]`` to: the ``PR[k,i]=v``
+    statements before ``label[n]=PR[k]`` (parsed here, not by the package's reader)."""
+    lines = [ln.split(":", 1)[1].strip().rstrip(";").strip() for ln in text.splitlines()
+             if re.match(r"\s*\d+:", ln)]
+    end = next(i for i, ln in enumerate(lines) if re.fullmatch(rf"{label}\[{n}\]=PR\[\d+\]", ln))
+    pr = re.fullmatch(rf"{label}\[{n}\]=PR\[(\d+)\]", lines[end]).group(1)
+    vals = {}
+    for ln in lines[:end]:
+        m = re.fullmatch(rf"PR\[{pr},([1-6])\]=(-?[\d.]+)", ln)
+        if m:
+            vals[int(m.group(1))] = float(m.group(2))
+    return [vals[i] for i in range(1, 7)]

@@ -4,6 +4,7 @@ import re
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import drakedeburr.laser.feature as mut
 from drakedeburr.errors import InputError
@@ -65,8 +66,13 @@ def test_contour_ls_program(tmp_path):
     X_RP = _X([np.pi, 0, 0], [1.0, 0.0, 0.5])  # the plate: the program's UFRAME
     text = fanuc_ls.contour_program_ls(tg, "hex100", LaserCell("m10ia", X_RP))
     assert "DEFAULT_GROUP\t= 1,*,*,*,*;" in text
-    uf = dict(re.findall(r"!UFRAME\[1\] ([XYZWPR])=(-?[\d.]+) ;", text))
-    assert np.allclose([float(uf[k]) for k in "XYZ"], [1000.0, 0.0, 500.0], atol=1e-3)
+    uf = _ls_frame(text, "UFRAME")
+    assert np.allclose(uf[:3], [1000.0, 0.0, 500.0], atol=1e-3)
+    w_, p_, r_ = np.deg2rad(uf[3:])  # FANUC W, P, R: R = Rz(r) Ry(p) Rx(w)
+    R_uf = (Rotation.from_euler("z", r_) * Rotation.from_euler("y", p_)
+            * Rotation.from_euler("x", w_)).as_matrix()
+    assert np.allclose(R_uf, X_RP[:3, :3], atol=1e-9)
+    assert text.index("UFRAME[1]=PR[10]") < text.index("UFRAME_NUM=1 ;")
     assert "UFRAME_NUM=1 ;" in text and "UF : 1, UT : 1" in text
     xyz = np.array(re.findall(r"X =\t(-?[\d.]+)\tmm,\tY =\t(-?[\d.]+)\tmm,\tZ =\t(-?[\d.]+)",
                               text), float)
@@ -93,3 +99,18 @@ def test_bad_settings():
         mut.FeatureSettings(point_spacing=0)
     with pytest.raises(InputError, match="travel_angle must be within"):
         mut.FeatureSettings(travel_angle=2.0)
+
+
+def _ls_frame(text: str, label: str, n: int = 1) -> list[float]:
+    """X, Y, Z [mm], W, P, R [deg] a FANUC LS program sets ``label[n]`` to: the ``PR[k,i]=v``
+    statements before ``label[n]=PR[k]`` (parsed here, not by the package's reader)."""
+    lines = [ln.split(":", 1)[1].strip().rstrip(";").strip() for ln in text.splitlines()
+             if re.match(r"\s*\d+:", ln)]
+    end = next(i for i, ln in enumerate(lines) if re.fullmatch(rf"{label}\[{n}\]=PR\[\d+\]", ln))
+    pr = re.fullmatch(rf"{label}\[{n}\]=PR\[(\d+)\]", lines[end]).group(1)
+    vals = {}
+    for ln in lines[:end]:
+        m = re.fullmatch(rf"PR\[{pr},([1-6])\]=(-?[\d.]+)", ln)
+        if m:
+            vals[int(m.group(1))] = float(m.group(2))
+    return [vals[i] for i in range(1, 7)]

@@ -28,6 +28,7 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.laser.feature import LaserTargets
 from drakedeburr.laser.hole import HoleProgram
 from drakedeburr.laser.robot_job import LaserJob
+from drakedeburr.programs.ls import FRAME_PR, frame_statements
 
 __all__ = ["hole_program_ls", "contour_program_ls", "job_programs_ls", "write_ls",
            "wpr_deg_from_R"]
@@ -103,16 +104,6 @@ def hole_program_ls(prog: HoleProgram, name: str, laser_do: int = 1, uframe: int
     return _assemble(name, prog.contour.name, mn, pos, "*,1,*,*,*")
 
 
-def _frame_remarks(label: str, X: np.ndarray) -> list[str]:
-    """``!UFRAME[1] X=...`` remarks (<= 32 characters) of a frame [m] in mm / deg."""
-    x, y, z = X[:3, 3] * 1e3
-    w, p, r = wpr_deg_from_R(X[:3, :3])
-    from drakedeburr.programs.common import fnum
-
-    return [f"!{label} {k}={fnum(v, 3)} ;" for k, v in zip("XYZWPR", (x, y, z, w, p, r),
-                                                           strict=True)]
-
-
 def _gp1(i: int, uframe: int, utool: int, config: str, X: np.ndarray) -> str:
     x, y, z = X[:3, 3] * 1e3
     w, p, r = wpr_deg_from_R(X[:3, :3])
@@ -144,7 +135,8 @@ def _contour_lines(targets: LaserTargets, first: int, laser_do: int) -> list[str
 
 def job_programs_ls(job: LaserJob, name: str, laser_do: int = 1) -> dict[str, str]:
     """FANUC .ls texts of a laser job, {program name: text}: the robot's program ``name``
-    (group 1: the UFRAME / UTOOL values as remarks, ``UFRAME_NUM``/``UTOOL_NUM``, a FINE
+    (group 1: UFRAME / UTOOL set from their values through ``PR[10]``
+    (:func:`drakedeburr.programs.ls.frame_statements`), ``UFRAME_NUM``/``UTOOL_NUM``, a FINE
     joint move over each hole and ``CALL <name>_Hnn``, then the contour with the laser on)
     and one Cutting Tool program per hole (group 2, :func:`hole_program_ls`). Every robot
     point carries the CONFIG of its joints (:mod:`drakedeburr.laser.robot_job`).
@@ -154,8 +146,11 @@ def job_programs_ls(job: LaserJob, name: str, laser_do: int = 1) -> dict[str, st
     name = _check_name(name)
     cell = job.cell
     out: dict[str, str] = {}
-    mn = _frame_remarks(f"UFRAME[{cell.uframe}]", cell.X_RP)
-    mn += _frame_remarks(f"UTOOL[{cell.utool}]", X_FT_of(cell, job.geometry))
+    mn = [f"!sets UFRAME[{cell.uframe}], UTOOL[{cell.utool}] ;",
+          f"!through PR[{FRAME_PR}] (overwritten) ;"]
+    mn += [f"{s} ;" for s in frame_statements("UFRAME", cell.uframe, cell.X_RP, FRAME_PR)]
+    mn += [f"{s} ;" for s in frame_statements("UTOOL", cell.utool, X_FT_of(cell, job.geometry),
+                                              FRAME_PR)]
     mn += [f"UFRAME_NUM={cell.uframe} ;", f"UTOOL_NUM={cell.utool} ;"]
     pos: list[str] = []
     k = 0

@@ -46,7 +46,7 @@ from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
 from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number
 from drakedeburr.units import mm_from_m
 
-__all__ = ["format_ls", "read_ls"]
+__all__ = ["format_ls", "read_ls", "frame_statements", "FRAME_PR"]
 
 _ATTR = ["OWNER\t\t= MNEDITOR;", "PROG_SIZE\t= 0;", "VERSION\t\t= 0;", "MEMORY_SIZE\t= 0;",
          "PROTECT\t\t= READ_WRITE;", "TCD:  STACK_SIZE\t= 0,", "      TASK_PRIORITY\t= 50,",
@@ -60,7 +60,7 @@ _KEYS = ("X", "Y", "Z", "W", "P", "R")
 FRAME_PR = 10
 
 
-def _frame_statements(label: str, n: int, X: np.ndarray, pr: int) -> list[str]:
+def frame_statements(label: str, n: int, X: np.ndarray, pr: int) -> list[str]:
     """``PR[pr]`` set to the frame's X, Y, Z [mm], W, P, R [deg] and ``UTOOL[n]=PR[pr]`` (or
     UFRAME): the controller takes the values from the program, not from its setup screens
     (HandlingTOOL Operator's Manual, frame instructions; RoboDK's FANUC post does the same)."""
@@ -89,8 +89,8 @@ def _mn(p: RobotProgram, uframe: int, utool: int, payload: int) -> list[str]:
     mn = [f"!{h}" for h in wrap_remarks(header_lines(p, "FANUC LS", extra), LS_REMARK_MAX)]
     X_RO = np.linalg.solve(p.X_BR, p.X_WO)
     mn += [f"!sets UTOOL[{utool}], UFRAME[{uframe}]", f"!through PR[{FRAME_PR}] (overwritten)"]
-    mn += _frame_statements("UTOOL", utool, p.X_FT, FRAME_PR)
-    mn += _frame_statements("UFRAME", uframe, X_RO, FRAME_PR)
+    mn += frame_statements("UTOOL", utool, p.X_FT, FRAME_PR)
+    mn += frame_statements("UFRAME", uframe, X_RO, FRAME_PR)
     mn += [f"!the cell must hold PAYLOAD[{payload}]:"]
     mn += ["!" + r for r in _payload_remarks(p, payload)]
     mn += [f"UFRAME_NUM={uframe}", f"UTOOL_NUM={utool}", f"PAYLOAD[{payload}]"]
