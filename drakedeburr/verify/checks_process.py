@@ -389,9 +389,10 @@ class WindowTime:
 
     Attributes:
         window: the window. cut_s: its cut's time in the plan [s].
-        edge_length_m: the closed polyline through its CL points (the program's contact
-            points) [m]; tool_path_m: the programmed tool-point path of the cut (from the
-            approach's end through every cut target) [m].
+        edge_length_m: the closed polyline through its CL points (the ones the cut is checked
+            against: the plan's ToolPath, else read off the hub's true edge) [m];
+            tool_path_m: the programmed tool-point path of the cut (from the approach's end
+            through every cut target) [m].
         feed_mps: the grinding speed [m/s]; edge_seconds: edge_length_m / feed_mps [s];
             cut_ratio: cut_s / edge_seconds.
         fraction_in_band: share of the cut's travel in the feed band (``tcp_speed_band``).
@@ -447,10 +448,18 @@ def _air_move(sp, cfg, g) -> AirMove:
 
 
 def _edge_and_tool_path(sp, g) -> tuple[float, float]:
-    """(closed CL polyline length, programmed tool-point path length) of a cut segment [m]."""
+    """(closed polyline length of the window's CL points, programmed tool-point path length)
+    of a cut segment [m]. The CL points are the ones its cut is checked against
+    (:class:`drakedeburr.verify.refs.WindowRef`: the plan's ToolPath, else read off the hub's
+    true edge), else the cut targets' own."""
     a, b = g.target_range
     targets = sp.targets
-    c = np.array([t.p_HC for t in targets[a:b] if t.p_HC is not None], float).reshape(-1, 3)
+    ref = (sp.refs or {}).get(g.window_index)
+    if ref is not None:
+        c = np.asarray(ref.p_HC, float).reshape(-1, 3)
+    else:
+        c = np.array([t.p_HC for t in targets[a:b] if t.p_HC is not None],
+                     float).reshape(-1, 3)
     edge = (float(np.linalg.norm(np.diff(np.vstack([c, c[:1]]), axis=0), axis=1).sum())
             if len(c) > 1 else 0.0)
     p = np.array([t.X_HT[:3, 3] for t in targets[max(a - 1, 0):b]], float)
