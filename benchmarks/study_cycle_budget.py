@@ -16,7 +16,9 @@ verification report (``report.json`` beside it, with the ``time_budget`` item), 
   transition / approach / retract move's joint path (the plan's trajectory sampled along it)
   timed rest to rest by the planner's own time-optimal construction
   (:func:`drakedeburr.plan.timing.time_path`) with no TCP speed or acceleration cap, at the
-  planner's margins (95 % / 90 %) and at the full limits; beside the plan's time and the
+  planner's margins (95 % / 90 %) and at the full limits, then under each TCP cap alone (the
+  move's programmed speed; the recipe's TCP path acceleration) and both (the planner's own
+  timing, the reproduction to read the others against); beside the plan's time and the
   joint-displacement bound of ``time_budget``;
 * **the window order at the bound**: the sum of the joint-displacement bounds of the moves
   between the cuts (home -> first approach, each retract -> next approach, last retract ->
@@ -102,7 +104,7 @@ def least_j6_range(kin, X_HT: np.ndarray, q_branch: np.ndarray, *, n_spin: int =
     return hi, float(ok.mean()), figures
 
 
-def retime_air_moves(plan, kin, cell) -> list[dict]:
+def retime_air_moves(plan, kin, cell, tcp_acceleration: float) -> list[dict]:
     """Each home/transition move re-timed on its own joint path (module docstring)."""
     from drakedeburr.plan.timing import TimingLimits, time_path
 
@@ -118,11 +120,21 @@ def retime_air_moves(plan, kin, cell) -> list[dict]:
         keep = np.concatenate([[True], np.diff(s) > 1e-9])
         s, q = s[keep], q[keep]
         p = kin.p_HT(q)
-        row = {"kind": g.kind, "window_after": None, "plan_s": g.t_range[1] - g.t_range[0]}
-        for name, vf, af in (("margins", 0.95, 0.9), ("full", 1.0, 1.0)):
-            lim = TimingLimits(v_cap=1e3, a_cap=1e3, v_max=tuple(v), a_max=tuple(a),
+        row = {"kind": g.kind, "window": int(g.window_index),
+               "plan_s": g.t_range[1] - g.t_range[0]}
+        v_prog = float(plan.targets[g.target_range[1] - 1].speed)
+        a_tcp = float(tcp_acceleration)
+        # (name, TCP speed cap, TCP acceleration cap, joint margins): without the TCP caps at
+        # the planner's margins and at the full limits; then each TCP cap alone (margins), and
+        # both (the planner's own timing of this path, to read the re-timing against)
+        for name, v_cap, a_cap, vf, af in (
+                ("margins", 1e3, 1e3, 0.95, 0.9), ("full", 1e3, 1e3, 1.0, 1.0),
+                ("speed_cap_only", v_prog, 1e3, 0.95, 0.9),
+                ("acceleration_cap_only", 1e3, a_tcp, 0.95, 0.9),
+                ("both_caps", v_prog, a_tcp, 0.95, 0.9)):
+            lim = TimingLimits(v_cap=v_cap, a_cap=a_cap, v_max=tuple(v), a_max=tuple(a),
                                velocity_fraction=vf, acceleration_fraction=af)
-            row[f"retimed_{name}_s"] = float(time_path(s, q, p, lim).t[-1])
+            row[f"retimed_{name}_s"] = float(time_path(s, q, p, lim, fk=kin.p_HT).t[-1])
         out.append(row)
     return out
 
@@ -209,11 +221,23 @@ def main(argv=None) -> int:
               f"there J4/J5/J6 {oj[0]:.1f}/{oj[1]:.1f}/{oj[2]:.1f} deg, spin "
               f"{row['on_that_path_spin_range_deg']:.0f} deg ({100 * share:.0f} % of the spin "
               "states feasible)", flush=True)
-    result["air"] = retime_air_moves(plan, kin, cell)
+    from drakedeburr.verify.checks import config_for_plan
+
+    a_tcp = config_for_plan(plan).process.tcp_acceleration
+    result["air"] = retime_air_moves(plan, kin, cell, a_tcp)
     for r in result["air"]:
         print(f"{r['kind']:10s} plan {r['plan_s']:.3f} s; same joint path at the joint limits "
               f"without TCP caps: {r['retimed_margins_s']:.3f} s (95/90 % margins), "
-              f"{r['retimed_full_s']:.3f} s (full)")
+              f"{r['retimed_full_s']:.3f} s (full); TCP speed cap alone "
+              f"{r['retimed_speed_cap_only_s']:.3f} s, TCP acceleration cap alone "
+              f"{r['retimed_acceleration_cap_only_s']:.3f} s, both "
+              f"{r['retimed_both_caps_s']:.3f} s")
+    for kinds in (("home", "transition"), ("approach", "retract")):
+        rows = [r for r in result["air"] if r["kind"] in kinds]
+        print(f"{'/'.join(kinds)}: " + ", ".join(
+            f"{k} {sum(r[k] for r in rows):.3f} s" for k in (
+                "plan_s", "retimed_margins_s", "retimed_full_s", "retimed_speed_cap_only_s",
+                "retimed_acceleration_cap_only_s", "retimed_both_caps_s")))
     result["order"] = order_bounds(plan, cell)
     o = result["order"]
     print(f"moves between the cuts at their bound: order {o['plan_order']} "
