@@ -12,6 +12,8 @@ verification report (``report.json`` beside it, with the ``time_budget`` item), 
   sweep over every lower end c (1 deg grid) finds the least R such that a spin path keeps J6 in
   [c, c + R]. No clearance query: a lower bound for these axes, not a plan (the spindle body
   may hit the hub at the spins it picks);
+* **the J4-J6 trade of the spin**: the least-motion spin path (the planner's spin cost, no
+  clearance, no smoothing) with J6's term weighted x1 ... x100, and its J4-J6 ranges;
 * **the moves off the cut re-timed on their own joint path at the joint limits**: each home /
   transition / approach / retract move's joint path (the plan's trajectory sampled along it)
   timed rest to rest by the planner's own time-optimal construction
@@ -102,6 +104,55 @@ def least_j6_range(kin, X_HT: np.ndarray, q_branch: np.ndarray, *, n_spin: int =
                "j6_range_rad": float(np.ptp(qp[:, 5])),
                "spin_range_rad": float(np.ptp(np.unwrap(psi[path])))}
     return hi, float(ok.mean()), figures
+
+
+def spin_tradeoff(kin, X_HT: np.ndarray, q_branch: np.ndarray, weights=(1, 3, 10, 30, 100), *,
+                  n_spin: int = 72, max_step: int = 2, wrist_margin: float = 0.15) -> list:
+    """The J4-J6 ranges [rad] of the least-motion spin path (the planner's spin cost: each
+    joint's step over its speed limit, squared, summed) with J6's term weighted by each of
+    ``weights`` (1: the planner's cost, without its clearance and smoothing)."""
+    from drakedeburr.plan.spin import spin_frames
+
+    n = len(X_HT)
+    psi = np.arange(n_spin) * (2 * np.pi / n_spin)
+    X = np.repeat(X_HT[:, None], n_spin, axis=1).reshape(-1, 4, 4).copy()
+    X[:, :3, :3] = spin_frames(X[:, :3, :3], np.tile(psi, n))
+    q_all, branches = kin.ik_all(kin.X_WF_from_X_HT(X))
+    m = np.flatnonzero(np.all(branches == kin.branch_of(q_branch)[None], axis=1))[0]
+    q = q_all[:, m].reshape(n, n_spin, 6)
+    ok = np.all(np.isfinite(q), axis=2)
+    qq = np.where(np.isfinite(q), q, 0.0)
+    for j in (3, 5):
+        qq[..., j] = q_branch[j] + np.mod(qq[..., j] - q_branch[j] + np.pi, 2 * np.pi) - np.pi
+    ok &= np.all((qq >= kin.q_lower) & (qq <= kin.q_upper), axis=2)
+    ok &= np.abs(qq[..., 4]) >= wrist_margin
+    shifts = np.arange(-max_step, max_step + 1)
+    P = (np.arange(n_spin)[:, None] - shifts[None, :]) % n_spin
+    rows = np.arange(n_spin)
+    out = []
+    for W in weights:
+        w = 1.0 / np.asarray(kin.v_max, float)
+        w[5] *= np.sqrt(W)
+        cost = np.where(ok[0], 0.0, np.inf)
+        back = np.zeros((n, n_spin), int)
+        for k in range(1, n):
+            step = np.stack([np.sum(((qq[k] - qq[k - 1, P[:, i]]) * w) ** 2, axis=1)
+                             for i in range(len(shifts))], axis=1)
+            cand = cost[P] + step
+            arg = np.argmin(cand, axis=1)
+            cost = np.where(ok[k], cand[rows, arg], np.inf)
+            back[k] = P[rows, arg]
+        if not np.isfinite(cost).any():
+            out.append({"weight": W, "ok": False})
+            continue
+        path = np.zeros(n, int)
+        path[-1] = int(np.argmin(cost))
+        for k in range(n - 1, 0, -1):
+            path[k - 1] = back[k, path[k]]
+        qp = qq[np.arange(n), path]
+        out.append({"weight": W, "ok": True,
+                    "j4_j6_range_deg": np.degrees(np.ptp(qp[:, 3:6], axis=0)).tolist()})
+    return out
 
 
 def retime_air_moves(plan, kin, cell, tcp_acceleration: float) -> list[dict]:
@@ -213,6 +264,7 @@ def main(argv=None) -> int:
             rec = budget["per_window"].get(str(g.window_index))
             if rec:
                 row["plan_j6_range_deg"] = float(np.degrees(rec["j6_range_rad"]))
+        row["spin_tradeoff"] = spin_tradeoff(kin, X, qb, max_step=args.max_step)
         result["windows"][int(g.window_index)] = row
         pj = row["plan_j4_j6_range_deg_at_targets"]
         oj = row["on_that_path_j4_j6_range_deg"]
@@ -221,6 +273,10 @@ def main(argv=None) -> int:
               f"there J4/J5/J6 {oj[0]:.1f}/{oj[1]:.1f}/{oj[2]:.1f} deg, spin "
               f"{row['on_that_path_spin_range_deg']:.0f} deg ({100 * share:.0f} % of the spin "
               "states feasible)", flush=True)
+        print("   J6 weighted in the spin cost: " + "; ".join(
+            f"x{r['weight']}: " + ("none" if not r["ok"] else "/".join(
+                f"{x:.0f}" for x in r["j4_j6_range_deg"])) for r in row["spin_tradeoff"])
+              + " (J4/J5/J6 deg)", flush=True)
     from drakedeburr.verify.checks import config_for_plan
 
     a_tcp = config_for_plan(plan).process.tcp_acceleration
