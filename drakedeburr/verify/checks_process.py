@@ -1,7 +1,12 @@
 """Process figures and speed checks: the share of each cut at the feed and what slows it,
-the TCP speed against the programmed speeds, J4-J6 ranges, the cycle time."""
+the TCP speed against the programmed speeds, J4-J6 ranges, the cycle time and where it goes
+(:func:`time_budget`: per window the cut against its edge length over the feed, the moves off
+the cut against the joint-space minimum time of their joint displacement, the wrist ranges and
+the limit that binds on each slow stretch)."""
 
 from __future__ import annotations
+
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -10,7 +15,8 @@ from drakedeburr.verify.report import CheckItem
 from drakedeburr.verify.sampling import KIND_CODE
 
 __all__ = ["tcp_speed_band", "slowdowns_justified", "tcp_speed_max", "program_speeds",
-           "j4_j6_range", "cycle_time", "speed_band_per_window"]
+           "j4_j6_range", "cycle_time", "speed_band_per_window", "time_budget",
+           "AirMove", "WindowTime", "min_time_1d", "joint_move_bound"]
 
 
 #: (what, kind) of the columns of :func:`_limit_ratios`
@@ -226,15 +232,21 @@ def program_speeds(sp, cfg) -> CheckItem:
                      "ratio", ">=", detail=detail, **where)
 
 
+def _wrist_ranges(sp) -> dict:
+    """{window: (3,) the J4-J6 ranges over its cut's samples [rad]}."""
+    out = {}
+    for w in sp.cut_windows:
+        idx = sp.samples_of(w)
+        if len(idx):
+            out[w] = np.ptp(sp.samples.q[idx][:, 3:6], axis=0)
+    return out
+
+
 def j4_j6_range(sp, cfg) -> CheckItem:
     acc = cfg.acceptance
     ranges = {}
     worst, worst_w, worst_lim = -np.inf, None, None
-    for w in sp.cut_windows:
-        idx = sp.samples_of(w)
-        if not len(idx):
-            continue
-        rng = np.ptp(sp.samples.q[idx][:, 3:6], axis=0)
+    for w, rng in _wrist_ranges(sp).items():
         large = w in sp.edge_of and sp.edge_of[w].kind == "large"
         lim = acc.j6_range_large if large else acc.j6_range_small
         ranges[w] = {"J4_range_rad": float(rng[0]), "J5_range_rad": float(rng[1]),
@@ -250,19 +262,28 @@ def j4_j6_range(sp, cfg) -> CheckItem:
                "(the source: 20 deg large / 10 deg small windows)", per_window=ranges)
 
 
+def _straight_seconds(sp, g) -> float | None:
+    """A segment's straight moves (target to target) at its last target's programmed speed
+    [s], None where the segment has no previous target."""
+    a, b = g.target_range
+    targets = sp.targets
+    if a < 1 or b > len(targets):
+        return None
+    travel = sum(np.linalg.norm(targets[k].X_HT[:3, 3] - targets[k - 1].X_HT[:3, 3])
+                 for k in range(a, b))
+    return float(travel / max(targets[b - 1].speed, 1e-9))
+
+
 def _physical_seconds(sp, cfg) -> float:
     """Edge length over the feed plus straight moves at their programmed speeds [s]."""
-    total, targets, v_g = 0.0, sp.targets, cfg.process.grinding_speed
+    total, v_g = 0.0, cfg.process.grinding_speed
     for g in sp.segments:
-        a, b = g.target_range
         if g.kind == "cut" and g.window_index in sp.edge_of:
             e = np.asarray(sp.edge_of[g.window_index].p_HE)
             total += float(np.linalg.norm(np.diff(np.vstack([e, e[:1]]), axis=0),
                                           axis=1).sum()) / v_g
-        elif a >= 1 and b <= len(targets):
-            travel = sum(np.linalg.norm(targets[k].X_HT[:3, 3] - targets[k - 1].X_HT[:3, 3])
-                         for k in range(a, b))
-            total += travel / max(targets[b - 1].speed, 1e-9)
+        else:
+            total += _straight_seconds(sp, g) or 0.0
     return total
 
 
@@ -275,3 +296,237 @@ def cycle_time(sp, cfg) -> CheckItem:
         "cycle_time", limit is None or bool(ratio <= limit), float(ratio), limit, "ratio", "<=",
         detail=f"cycle {duration:.3f} s vs physical limit {physical:.3f} s (edge length / "
                "grinding speed + straight moves at their programmed speeds)")
+
+
+# -- where the cycle's time goes ----------------------------------------------------------------
+
+
+def min_time_1d(d: float, v0: float, v1: float, v_max: float, a_max: float
+                ) -> tuple[float, bool]:
+    """The least time one joint needs to move by ``d`` [rad] from velocity ``v0`` to ``v1``
+    [rad/s] under |velocity| <= ``v_max`` and |acceleration| <= ``a_max``, and whether that
+    profile cruises at ``v_max`` (velocity-bound) or not (acceleration-bound).
+
+    The time-optimal control of a double integrator with a velocity bound is bang-bang with one
+    switch, with a cruise at the bound between (Kröger & Wahl, IEEE T-RO 26(1) 2010, type I
+    profiles): accelerate at ``sigma a_max`` (sigma = +-1) to a peak ``p``, brake at
+    ``-sigma a_max`` to ``v1``. In the frame where sigma = +1 (``D, a, b`` = sigma ``d, v0,
+    v1``), ``D = (p^2 - a^2) / (2 a_max) + (p^2 - b^2) / (2 a_max)``, so
+    ``p^2 = a_max D + (a^2 + b^2) / 2`` with ``p >= max(a, b)`` and
+    ``T = (2 p - a - b) / a_max``; when ``p > v_max`` the joint cruises at ``v_max`` for
+    ``(D - (2 v_max^2 - a^2 - b^2) / (2 a_max)) / v_max``. The least T over both signs and
+    both roots of p. Rest to rest this is the trapezoid (Lynch & Park, Modern Robotics
+    sec. 9.2.2): ``T = |d| / v_max + v_max / a_max`` when ``|d| >= v_max^2 / a_max``, else
+    ``2 sqrt(|d| / a_max)``."""
+    v0 = float(np.clip(v0, -v_max, v_max))
+    v1 = float(np.clip(v1, -v_max, v_max))
+    best, cruise = np.inf, False
+    for sigma in (1.0, -1.0):
+        D, a, b = sigma * d, sigma * v0, sigma * v1
+        p2 = a_max * D + 0.5 * (a * a + b * b)
+        if p2 < 0.0:
+            continue
+        for p in (np.sqrt(p2), -np.sqrt(p2)):
+            if p < max(a, b) - 1e-12 * max(v_max, 1.0):
+                continue
+            if p > v_max:
+                T = ((2 * v_max - a - b) / a_max
+                     + (D - (2 * v_max ** 2 - a * a - b * b) / (2 * a_max)) / v_max)
+                c = True
+            else:
+                T, c = (2 * p - a - b) / a_max, False
+            if T < best:
+                best, cruise = float(max(T, 0.0)), c
+    return best, cruise
+
+
+def joint_move_bound(q0, q1, qd0, qd1, v_max, a_max) -> tuple[float, int, bool]:
+    """The least time of a joint-space move from (``q0``, ``qd0``) to (``q1``, ``qd1``) at the
+    joint limits (6,) [rad, rad/s]: the largest over the joints of :func:`min_time_1d` (a lower
+    bound: every joint must make its own displacement), the joint that sets it and whether
+    that joint is velocity-bound there."""
+    per = [min_time_1d(float(q1[j] - q0[j]), float(qd0[j]), float(qd1[j]), float(v_max[j]),
+                       float(a_max[j])) for j in range(len(q0))]
+    j = int(np.argmax([p[0] for p in per]))
+    return per[j][0], j, per[j][1]
+
+
+@dataclass(frozen=True)
+class AirMove:
+    """One move off the cut (home, transition, approach, retract) against its bound.
+
+    Attributes:
+        kind: the segment's kind; window: its window (-1 home/transition).
+        duration_s: its time in the plan [s].
+        bound_s: the least time of its joint displacement (and end velocities) at the joint
+            velocity/acceleration limits (:func:`joint_move_bound`) [s].
+        bound_joint: the joint that sets ``bound_s`` ("J1".."J6"); bound_limit: "speed" when it
+            cruises at its velocity limit, else "acceleration".
+        programmed_s: its straight moves at its programmed TCP speed [s] (the figure
+            ``cycle_time`` counts), None without a previous target.
+        peak_joint / peak_limit / peak_ratio: the limit most in use during the move (a joint's
+            speed or acceleration, or the TCP acceleration) and its share.
+    """
+
+    kind: str
+    window: int
+    duration_s: float
+    bound_s: float
+    bound_joint: str
+    bound_limit: str
+    programmed_s: float | None
+    peak_joint: str
+    peak_limit: str
+    peak_ratio: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class WindowTime:
+    """Where one window's time goes.
+
+    Attributes:
+        window: the window. cut_s: its cut's time in the plan [s].
+        edge_length_m: the closed polyline through its CL points (the ones the cut is checked
+            against: the plan's ToolPath, else read off the hub's true edge) [m];
+            tool_path_m: the programmed tool-point path of the cut (from the approach's end
+            through every cut target) [m].
+        feed_mps: the grinding speed [m/s]; edge_seconds: edge_length_m / feed_mps [s];
+            cut_ratio: cut_s / edge_seconds.
+        fraction_in_band: share of the cut's travel in the feed band (``tcp_speed_band``).
+        j4_range_rad, j5_range_rad, j6_range_rad: the wrist's ranges over the cut [rad].
+        slow_stretches: each stretch below the band with the limit that binds there
+            (``tcp_speed_band``'s: from_m, to_m, min_mps, at, joint, limit, ratio).
+        air_before: the moves off the cut from the previous window's cut (or the start) to this
+            one's, in order; air_before_s / air_bound_s: their time and the sum of their bounds.
+    """
+
+    window: int
+    cut_s: float
+    edge_length_m: float
+    tool_path_m: float
+    feed_mps: float
+    edge_seconds: float
+    cut_ratio: float
+    fraction_in_band: float
+    j4_range_rad: float
+    j5_range_rad: float
+    j6_range_rad: float
+    slow_stretches: tuple
+    air_before: tuple[AirMove, ...]
+    air_before_s: float
+    air_bound_s: float
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["slow_stretches"] = [dict(st) for st in self.slow_stretches]
+        d["air_before"] = [m.as_dict() for m in self.air_before]
+        return d
+
+
+def _air_move(sp, cfg, g) -> AirMove:
+    traj, lim = sp.plan.trajectory, sp.limits
+    t0, t1 = (float(x) for x in g.t_range)
+    q = traj.value(np.array([t0, t1]))
+    qd = traj.derivative(np.array([t0, t1]), 1)
+    bound, j, cruise = joint_move_bound(q[0], q[1], qd[0], qd[1], lim.velocity,
+                                        lim.acceleration)
+    if t1 > t0:
+        _, _, r, _ = _limit_ratios(sp, cfg, t0, t1)
+        peak = r.max(axis=0)
+        k = int(np.argmax(peak))
+        pj, pl, pr = *_LIMITS[k], float(peak[k])
+    else:
+        pj, pl, pr = "-", "-", 0.0
+    return AirMove(kind=g.kind, window=int(g.window_index), duration_s=t1 - t0,
+                   bound_s=float(bound), bound_joint=f"J{j + 1}",
+                   bound_limit="speed" if cruise else "acceleration",
+                   programmed_s=_straight_seconds(sp, g), peak_joint=pj, peak_limit=pl,
+                   peak_ratio=pr)
+
+
+def _edge_and_tool_path(sp, g) -> tuple[float, float]:
+    """(closed polyline length of the window's CL points, programmed tool-point path length)
+    of a cut segment [m]. The CL points are the ones its cut is checked against
+    (:class:`drakedeburr.verify.refs.WindowRef`: the plan's ToolPath, else read off the hub's
+    true edge), else the cut targets' own."""
+    a, b = g.target_range
+    targets = sp.targets
+    ref = (sp.refs or {}).get(g.window_index)
+    if ref is not None:
+        c = np.asarray(ref.p_HC, float).reshape(-1, 3)
+    else:
+        c = np.array([t.p_HC for t in targets[a:b] if t.p_HC is not None],
+                     float).reshape(-1, 3)
+    edge = (float(np.linalg.norm(np.diff(np.vstack([c, c[:1]]), axis=0), axis=1).sum())
+            if len(c) > 1 else 0.0)
+    p = np.array([t.X_HT[:3, 3] for t in targets[max(a - 1, 0):b]], float)
+    tool = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
+    return edge, tool
+
+
+def window_times(sp, cfg) -> tuple[dict, tuple[AirMove, ...]]:
+    """({window: :class:`WindowTime`}, the moves after the last cut), computed once."""
+    return sp.memo("window_times", lambda: _window_times(sp, cfg))
+
+
+def _window_times(sp, cfg):
+    band = speed_band_per_window(sp, cfg)
+    wrist = _wrist_ranges(sp)
+    v_g = cfg.process.grinding_speed
+    out, pending = {}, []
+    for g in sp.segments:
+        if g.kind != "cut":
+            pending.append(_air_move(sp, cfg, g))
+            continue
+        w = int(g.window_index)
+        edge, tool = _edge_and_tool_path(sp, g)
+        cut_s = float(g.t_range[1] - g.t_range[0])
+        edge_s = edge / v_g
+        rng = wrist.get(w, np.full(3, np.nan))
+        info = band.get(w, {})
+        out[w] = WindowTime(
+            window=w, cut_s=cut_s, edge_length_m=edge, tool_path_m=tool, feed_mps=v_g,
+            edge_seconds=edge_s, cut_ratio=cut_s / edge_s if edge_s > 0 else np.inf,
+            fraction_in_band=float(info.get("fraction_in_band", np.nan)),
+            j4_range_rad=float(rng[0]), j5_range_rad=float(rng[1]), j6_range_rad=float(rng[2]),
+            slow_stretches=tuple(info.get("slow_stretches", ())),
+            air_before=tuple(pending), air_before_s=sum(m.duration_s for m in pending),
+            air_bound_s=sum(m.bound_s for m in pending))
+        pending = []
+    return out, tuple(pending)
+
+
+def time_budget(sp, cfg) -> CheckItem:
+    """Where the cycle's time goes: per window (:class:`WindowTime`) its cut against the edge
+    length over the feed, the moves before it against their joint-space bound, its wrist
+    ranges and the limit binding on each slow stretch; key -1: the moves after the last cut.
+    The value: the cycle over the sum of the cuts' edge time and the moves' bounds."""
+    per, after = window_times(sp, cfg)
+    cycle = float(sp.plan.trajectory.duration)
+    cut_s = sum(r.cut_s for r in per.values())
+    edge_s = sum(r.edge_seconds for r in per.values())
+    air = [m for r in per.values() for m in r.air_before] + list(after)
+    air_s = sum(m.duration_s for m in air)
+    air_bound = sum(m.bound_s for m in air)
+    prog = sum(m.programmed_s or 0.0 for m in air)
+    bound = edge_s + air_bound
+    ratio = cycle / bound if bound > 0 else None
+    shown = {w: r.as_dict() for w, r in per.items()}
+    if after:
+        shown[-1] = {"air_after": [m.as_dict() for m in after],
+                     "air_after_s": sum(m.duration_s for m in after),
+                     "air_bound_s": sum(m.bound_s for m in after)}
+    worst = max(per, key=lambda w: per[w].cut_ratio, default=None)
+    return CheckItem(
+        "time_budget", True, ratio, None, "ratio", "info", window=worst,
+        detail=(f"cycle {cycle:.3f} s = cuts {cut_s:.3f} s (edge length / feed {edge_s:.3f} s)"
+                f" + moves off the cut {air_s:.3f} s (least time of their joint displacement "
+                f"at the joint limits {air_bound:.3f} s; at their programmed TCP speeds "
+                f"{prog:.3f} s); value: cycle / ({edge_s:.3f} + {air_bound:.3f}) s"
+                + ("" if worst is None else
+                   f"; slowest cut: window {worst}, {per[worst].cut_ratio:.3f} x its edge "
+                   "time")),
+        per_window=shown)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr._io import atomic_write_text
-from drakedeburr.units import mm_from_m, mm_s_from_m_s
+from drakedeburr.units import deg_from_rad, mm_from_m, mm_s_from_m_s
 from drakedeburr.verify.report import VerificationReport, report_dict
 
 __all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html",
@@ -312,6 +312,8 @@ def report_html(report: VerificationReport, *, replay_html: str | None = None,
                               f"{html.escape(_pretty(doc, it.name))}</pre>")
         if it.name == "tcp_speed_band" and it.per_window:
             per_window.append(_slow_stretch_table(it.per_window))
+        if it.name == "time_budget" and it.per_window:
+            per_window.append(_time_budget_tables(it.per_window))
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>drakedeburr verification: {html.escape(str(info['hub']))}</title>
@@ -351,6 +353,55 @@ def _slow_stretch_table(per_window: dict) -> str:
             '<table id="slow-stretches"><thead><tr><th>window</th><th>tool travel [mm]</th>'
             "<th>slowest [mm/s]</th><th>where</th><th>nearest limit</th><th>share of it</th>"
             f"</tr></thead><tbody>{''.join(rows)}</tbody></table>")
+
+
+def _time_budget_tables(per_window: dict) -> str:
+    """Where the cycle's time goes: per window the cut against its edge length over the feed,
+    the wrist ranges and the limits binding its slow stretches; every move off the cut
+    against the least time of its joint displacement at the joint limits."""
+    cuts, moves = [], []
+
+    def move_rows(ms, before):
+        for m in ms:
+            prog = "&ndash;" if m["programmed_s"] is None else f"{m['programmed_s']:.3f}"
+            moves.append(
+                f"<tr><td>{html.escape(str(before))}</td><td>{html.escape(m['kind'])}</td>"
+                f"<td>{m['duration_s']:.3f}</td><td>{m['bound_s']:.3f}</td>"
+                f"<td>{m['duration_s'] / max(m['bound_s'], 1e-9):.2f}</td>"
+                f"<td>{html.escape(m['bound_joint'])} {html.escape(m['bound_limit'])}</td>"
+                f"<td>{prog}</td><td>{html.escape(m['peak_joint'])} "
+                f"{html.escape(m['peak_limit'])} {100 * m['peak_ratio']:.0f} %</td></tr>")
+
+    for w, r in per_window.items():
+        if "air_after" in r:
+            move_rows(r["air_after"], "end")
+            continue
+        move_rows(r["air_before"], f"window {w}")
+        slow = "<br>".join(
+            f"{mm_from_m(st['from_m']):.1f}-{mm_from_m(st['to_m']):.1f} mm, "
+            f"{mm_s_from_m_s(st['min_mps']):.0f} mm/s: {html.escape(st['joint'])} "
+            f"{html.escape(st['limit'])} {100 * st['ratio']:.0f} %"
+            for st in r["slow_stretches"])
+        wrist = " / ".join(f"{deg_from_rad(r[k]):.1f}"
+                           for k in ("j4_range_rad", "j5_range_rad", "j6_range_rad"))
+        cuts.append(
+            f"<tr><td>{html.escape(str(w))}</td><td>{r['cut_s']:.3f}</td>"
+            f"<td>{mm_from_m(r['edge_length_m']):.1f}</td><td>{r['edge_seconds']:.3f}</td>"
+            f"<td>{r['cut_ratio']:.3f}</td><td>{100 * r['fraction_in_band']:.1f} %</td>"
+            f"<td>{wrist}</td><td>{r['air_before_s']:.3f} / {r['air_bound_s']:.3f}</td>"
+            f"<td>{slow}</td></tr>")
+    return ("<h3>time_budget: where the cycle goes</h3>"
+            '<table id="time-budget"><thead><tr><th>window</th><th>cut [s]</th>'
+            "<th>edge length [mm]</th><th>edge / feed [s]</th><th>ratio</th><th>at the feed</th>"
+            "<th>J4 / J5 / J6 range [deg]</th><th>moves before: time / bound [s]</th>"
+            f"<th>slow stretches: the limit that binds</th></tr></thead><tbody>{''.join(cuts)}"
+            "</tbody></table>"
+            "<h3>moves off the cut against the least time of their joint displacement at the "
+            "joint limits</h3>"
+            '<table id="air-moves"><thead><tr><th>before</th><th>move</th><th>time [s]</th>'
+            "<th>bound [s]</th><th>ratio</th><th>bound set by</th>"
+            "<th>at programmed speed [s]</th><th>limit most in use</th></tr></thead><tbody>"
+            f"{''.join(moves)}</tbody></table>")
 
 
 def _pretty(doc: dict, name: str) -> str:

@@ -103,6 +103,9 @@ CHECKS: tuple[Check, ...] = (
     Check("manipulability", motion.manipulability, "info", "|det J| of the flange Jacobian"),
     Check("j4_j6_range", process.j4_j6_range, "process", "J4-J6 ranges per window"),
     Check("cycle_time", process.cycle_time, "process", "cycle time vs its physical bound"),
+    Check("time_budget", process.time_budget, "info",
+          "where the cycle goes: per window the cut vs edge length / feed, the moves off the "
+          "cut vs their joint-limit bound, J4-J6 ranges, the limit binding each slow stretch"),
     Check("cl_chord_error", path.cl_chord_error, "required",
           "chord-height error of the CL points vs the true edge"),
     Check("cl_chord_length", path.cl_chord_length, "required", "longest chord between CL points"),
