@@ -46,7 +46,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 4  # 4: pieces held to 1 mm above the front near the windows (front_band)
+IMPORT_VERSION = 5  # 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
+# 4: pieces held to 1 mm above the front near the windows (front_band)
 # 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
@@ -65,8 +66,10 @@ class ImportOptions:
             estimate it.
         front: "auto" (decided from the mesh, see :mod:`drakedeburr.hub.front`) or the file
             axis the front face looks along: "+x", "-x", "+y", "-y", "+z", "-z".
-        burr_diameter, clearance: the burr and the clearance it needs [m]: openings narrower
-            than :func:`drakedeburr.hub.openings.min_window_width` are not windows.
+        burr_diameter, clearance: the burr and the clearance it needs [m].
+        burr_diameters: every burr of the tool library [m] (None: see
+            :func:`drakedeburr.hub.extract.extract_window_edges`): an opening no burr fits
+            with the clearance (:func:`drakedeburr.hub.openings.burr_need`) is not a window.
         min_window_width: [m] overrides that bound when given.
         expected_windows: fail unless this many windows are found (None: any number >= 1).
         edge_spacing: arc-length spacing of the stored edge points [m].
@@ -114,6 +117,7 @@ class ImportOptions:
     axis_M: tuple[float, float, float] | None = None
     front: str = "auto"
     burr_diameter: float = DEFAULT_BURR_DIAMETER
+    burr_diameters: tuple[float, ...] | None = None
     clearance: float = DEFAULT_CLEARANCE
     min_window_width: float | None = None
     expected_windows: int | None = None
@@ -233,31 +237,48 @@ def _smooth(v: np.ndarray, k: int = 3) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray):
-    """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc)."""
+def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
+                  outline_xy: np.ndarray | None = None):
+    """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc).
+
+    The loop may leave the face (down a spoke flank, along the rim's lip): its tangent is the
+    3-D chord, "into the opening" is the plan-view inward normal of the opening's outline
+    ``outline_xy`` (M, 2) at the nearest point (of the loop's own plan view when None) made
+    perpendicular to the tangent, and "out of the front surface" completes them
+    (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
+    the latter, the face beside it; a probe that finds a facet not facing its side (less than
+    0.3) keeps the constructed direction."""
     import open3d as o3d
+    from scipy.spatial import cKDTree
 
     chord = np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0)
-    left = np.c_[-chord[:, 1], chord[:, 0], np.zeros(len(p))]  # into the opening (plan view)
-    left /= np.linalg.norm(left, axis=1, keepdims=True)
-    z = np.array([0.0, 0.0, 1.0])
+    t0 = chord / np.maximum(np.linalg.norm(chord, axis=1, keepdims=True), 1e-12)
+    ref = p[:, :2] if outline_xy is None else np.asarray(outline_xy, float)
+    tang = np.roll(ref, -1, axis=0) - np.roll(ref, 1, axis=0)
+    inward = np.c_[-tang[:, 1], tang[:, 0]]
+    inward /= np.maximum(np.linalg.norm(inward, axis=1, keepdims=True), 1e-12)
+    left = np.c_[inward[cKDTree(ref).query(p[:, :2])[1]], np.zeros(len(p))]
+    left -= np.einsum("ij,ij->i", left, t0)[:, None] * t0  # into the opening, across t
+    left /= np.maximum(np.linalg.norm(left, axis=1, keepdims=True), 1e-12)
+    up = np.cross(t0, left)  # out of the front surface
 
     def normal_at(q: np.ndarray) -> np.ndarray:
         res = scene.compute_closest_points(o3d.core.Tensor(q.astype(np.float32)))
         return face_normals[res["primitive_ids"].numpy().astype(np.int64)]
 
     # facets of an open mesh may face either way: orient by the side they must face
-    n_wall = normal_at(p + _NORMAL_SIDE * left - _NORMAL_PROBE * z)
+    n_wall = normal_at(p + _NORMAL_SIDE * left - _NORMAL_PROBE * up)
     n_wall *= np.where(np.einsum("ij,ij->i", n_wall, left) < 0, -1.0, 1.0)[:, None]
     bad = np.einsum("ij,ij->i", n_wall, left) < 0.3
     n_wall[bad] = left[bad]
-    n_face = normal_at(p - _NORMAL_PROBE * left + _NORMAL_SIDE * z)
-    n_face *= np.where(n_face[:, 2] < 0, -1.0, 1.0)[:, None]
-    bad = n_face[:, 2] < 0.3
-    n_face[bad] = z
+    n_face = normal_at(p - _NORMAL_PROBE * left + _NORMAL_SIDE * up)
+    n_face *= np.where(np.einsum("ij,ij->i", n_face, up) < 0, -1.0, 1.0)[:, None]
+    bad = np.einsum("ij,ij->i", n_face, up) < 0.3
+    n_face[bad] = up[bad]
     n_wall, n_face = _smooth(n_wall), _smooth(n_face)
     t = np.cross(n_wall, n_face)
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    norm = np.linalg.norm(t, axis=1)
+    t = np.where((norm > 0.2)[:, None], t / np.maximum(norm, 1e-12)[:, None], t0)
     flip = np.einsum("ij,ij->i", t, chord) < 0
     t[flip] *= -1.0
     return n_wall, n_face, t
@@ -349,6 +370,7 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     ext = extract_window_edges(mesh, source=str(path), axis_M=options.axis_M,
                                front=options.front, spacing=options.edge_spacing,
                                burr_diameter=options.burr_diameter,
+                               burr_diameters=options.burr_diameters,
                                clearance=options.clearance,
                                min_window_width=options.min_window_width,
                                expected_windows=options.expected_windows)
@@ -366,7 +388,7 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     windows, walls = [], []
     for w, xy in zip(ext.windows, ext.outlines_xy, strict=True):
         p = w.p_HE - np.array([0.0, 0.0, dz])
-        n_wall, n_face, t = _edge_normals(scene, normals, p)
+        n_wall, n_face, t = _edge_normals(scene, normals, p, xy)
         windows.append(WindowEdge(index=w.index, kind=w.kind, p_HE=p, t_H=t, n_wall_H=n_wall,
                                   n_face_H=n_face))
         walls.append(_wall_line(xy, p))
