@@ -32,7 +32,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drakedeburr.errors import InputError, NoCuttableWindow
+from drakedeburr.errors import (
+    InputError,
+    NoCuttableWindow,
+    describe_numerical_error,
+    numerical_errors,
+)
 from drakedeburr.hub.front import FrontDecision, decide_front, front_from_user
 from drakedeburr.hub.openings import (
     DEFAULT_BURR_DIAMETER,
@@ -200,14 +205,24 @@ def _window_edges(scene, scan, spacing: float, source: str):
 
     kept, rejected, figures = [], [], []
     for op in scan.windows:
-        outline = opening_outline(scene, op.mask, scan.grid, scan.pixel, scan.z0,
-                                  min(spacing, 0.5e-3))
-        line = deburr_line(scene, outline, scan.z0)
         ang = float(np.arctan2(op.center_xy[1], op.center_xy[0]) % (2 * np.pi))
         entry = {"center_xy_mm": [round(float(v) * 1e3, 2) for v in op.center_xy],
-                 "width_mm": round(op.width * 1e3, 2),
-                 **{k: round(v * (1e3 if k != "missing" else 1.0), 3)
-                    for k, v in line.figures.items()}}
+                 "width_mm": round(op.width * 1e3, 2)}
+        try:
+            outline = opening_outline(scene, op.mask, scan.grid, scan.pixel, scan.z0,
+                                      min(spacing, 0.5e-3))
+            line = deburr_line(scene, outline, scan.z0)
+        except InputError:
+            raise
+        except numerical_errors() as exc:  # degenerate geometry: this window, named
+            why = ("numerical failure while tracing the front boundary: "
+                   + describe_numerical_error(exc))
+            log.warning("%s: opening at (%.0f, %.0f) mm rejected as a window: %s", source,
+                        op.center_xy[0] * 1e3, op.center_xy[1] * 1e3, why)
+            rejected.append({**entry, "reason": why})
+            continue
+        entry.update({k: round(v * (1e3 if k != "missing" else 1.0), 3)
+                      for k, v in line.figures.items()})
         if line.reason:
             log.warning("%s: opening at (%.0f, %.0f) mm rejected as a window: %s", source,
                         op.center_xy[0] * 1e3, op.center_xy[1] * 1e3, line.reason)
@@ -277,13 +292,22 @@ def extract_window_edges(
     burrs = _burrs(burr_diameter, burr_diameters)
     min_w = (min_window_width if min_window_width is not None
              else _min_window_width(burrs, clearance))
-    frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
-                                source=source)
-    v_H = _to_frame(mesh, frame.X_MH)
-    scene = _scene(v_H, mesh.faces)
-    r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
-    scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
-                         min_width=min_w, source=source, burrs=burrs, clearance=clearance)
+    try:
+        frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
+                                    source=source)
+        v_H = _to_frame(mesh, frame.X_MH)
+        scene = _scene(v_H, mesh.faces)
+        r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
+        scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
+                             min_width=min_w, source=source, burrs=burrs, clearance=clearance)
+    except InputError:
+        raise
+    except numerical_errors() as exc:  # degenerate geometry: a named result, not a crash
+        axis = np.asarray(axis_M if axis_M is not None else [0.0, 0.0, 1.0], float)
+        raise NoCuttableWindow(
+            f"{source}: the hub frame and the through-openings could not be measured "
+            f"(numerical failure: {describe_numerical_error(exc)})", source=str(source),
+            axis=axis, openings=[], rejected=[]) from exc
     notes = {"axis_estimated": frame.estimated,
              "front": None if frame.front is None else frame.front.as_dict(frame.X_MH[:3, 2]),
              "min_window_width_mm": round(min_w * 1e3, 3),

@@ -38,7 +38,12 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.errors import InputError, NoCuttableWindow
+from drakedeburr.errors import (
+    InputError,
+    NoCuttableWindow,
+    describe_numerical_error,
+    numerical_errors,
+)
 from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 from drakedeburr.hub.types import WindowEdge
 
@@ -388,10 +393,25 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     windows, walls = [], []
     for w, xy in zip(ext.windows, ext.outlines_xy, strict=True):
         p = w.p_HE - np.array([0.0, 0.0, dz])
-        n_wall, n_face, t = _edge_normals(scene, normals, p, xy)
-        windows.append(WindowEdge(index=w.index, kind=w.kind, p_HE=p, t_H=t, n_wall_H=n_wall,
-                                  n_face_H=n_face))
+        try:
+            n_wall, n_face, t = _edge_normals(scene, normals, p, xy)
+        except numerical_errors() as exc:  # this window, named; the others go on
+            c = p.mean(axis=0)
+            why = f"numerical failure reading its normals: {describe_numerical_error(exc)}"
+            log.warning("%s: window at (%.0f, %.0f) mm dropped: %s", path, c[0] * 1e3,
+                        c[1] * 1e3, why)
+            ext.notes["rejected"].append({"center_xy_mm": [round(float(c[0]) * 1e3, 2),
+                                                           round(float(c[1]) * 1e3, 2)],
+                                          "reason": why})
+            continue
+        windows.append(WindowEdge(index=len(windows), kind=w.kind, p_HE=p, t_H=t,
+                                  n_wall_H=n_wall, n_face_H=n_face))
         walls.append(_wall_line(xy, p))
+    if not windows:
+        raise NoCuttableWindow(f"{path}: no window left: "
+                               + "; ".join(r["reason"] for r in ext.notes["rejected"]),
+                               source=str(path), axis=X_MH[:3, 2],
+                               openings=ext.notes["not_windows"], rejected=ext.notes["rejected"])
     return X_MH, V_H, F, windows, ext.notes, walls
 
 
@@ -582,7 +602,16 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     notes["dropped"] = tyre
     if progress is not None:
         progress(2, steps, "collision pieces (CoACD)" if closed else "collision pieces (shell)")
-    pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)
+    try:
+        pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)
+    except InputError:
+        raise
+    except numerical_errors() as exc:  # CoACD / Qhull / manifold3d on degenerate pieces
+        raise NoCuttableWindow(
+            f"{path}: {len(windows)} windows found, but the collision model could not be "
+            f"built ({'CoACD pieces' if closed else 'surface shell pieces'}: "
+            f"{describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],
+            openings=notes["not_windows"], rejected=notes["rejected"]) from exc
     if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
         log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
                     path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
@@ -594,9 +623,17 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
                     options.front_band * 1e3, options.front_reach_far * 1e3)
     if progress is not None:
         progress(3, steps, "write folder")
-    hulls = [Manifold.hull_points(pv) for pv in pieces]
-    mass, com, I_com, volume, how = _mass_properties(path, V_H, F, hulls, closed,
-                                                     options.density)
+    try:
+        hulls = [Manifold.hull_points(pv) for pv in pieces]
+        mass, com, I_com, volume, how = _mass_properties(path, V_H, F, hulls, closed,
+                                                         options.density)
+    except InputError:
+        raise
+    except numerical_errors() as exc:
+        raise NoCuttableWindow(
+            f"{path}: the mass properties of the collision pieces could not be computed "
+            f"({describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],
+            openings=notes["not_windows"], rejected=notes["rejected"]) from exc
     hull_volume = float(sum(h.volume() for h in hulls))
     summary = import_summary(name, path, sha, key, lm.unit, closed, X_MH, options, notes, V_H,
                              F, volume, how, diameter, mass, com, windows, pieces, hull_volume,

@@ -354,7 +354,11 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
         bad = int(np.flatnonzero(seg < 1e-9 * seg.sum())[0])
         raise InputError(f"{name}: points {bad} and {(bad + 1) % len(p)} coincide")
     u = chord_parameters(p)
-    spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    try:
+        spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    except (np.linalg.LinAlgError, ValueError) as exc:  # degenerate loop: named, not a crash
+        raise InputError(f"{name}: the periodic B-spline fit of its {len(p)} points failed "
+                         f"({type(exc).__name__}: {str(exc)[:160]})") from exc
     # arc-length table on the data parameters (Gauss-Legendre per span)
     x, w = _GL8
     t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
