@@ -145,3 +145,52 @@ def test_gentle_stretches_follow_the_mesh_creases(wheel):
         assert gentle.mean() > 0.5
         d = _segment_distance(p[gentle], a, b)
         assert np.median(d) <= 0.5e-3, (w.index, np.quantile(d, [0.5, 0.9]))
+
+
+def test_normals_and_frames_on_the_3d_loops(wheel):
+    """The importer's normals (hub.import_mesh._edge_normals) and the local frames
+    (frames.local_frames.R_HL_from_normals) on loops that leave the face: the inner-side
+    normal points into the opening (1 mm along its plan-view part lies over the opening's
+    outline polygon, or on the wall just beside it), is perpendicular to the tangent; the
+    tangent runs along the loop (the next point's direction) also where the loop climbs a
+    flank; every frame is a rotation with columns (N, T, N x T)."""
+    import open3d as o3d
+    import trimesh
+    from matplotlib.path import Path as MplPath
+
+    from drakedeburr.frames.local_frames import R_HL_from_normals
+    from drakedeburr.hub.import_mesh import _edge_normals
+
+    _, mesh, res = wheel
+    X_HM = np.linalg.inv(res.X_MH)
+    V_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(V_H.astype(np.float32)),
+                        o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
+    normals = trimesh.Trimesh(V_H, mesh.faces, process=False).face_normals
+    steep_seen = 0
+    for w, outline in zip(res.windows, res.outlines_xy, strict=True):
+        n_wall, n_face, t = _edge_normals(scene, normals, w.p_HE, outline)
+        chord = np.roll(w.p_HE, -1, axis=0) - np.roll(w.p_HE, 1, axis=0)
+        chord /= np.linalg.norm(chord, axis=1, keepdims=True)
+        assert np.quantile(np.einsum("ij,ij->i", t, chord), 0.05) > 0.9
+        assert np.abs(np.einsum("ij,ij->i", n_wall, t)).max() < 0.5
+        R = R_HL_from_normals(t, n_wall)
+        np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-9)
+        np.testing.assert_allclose(np.einsum("nij,nik->njk", R, R),
+                                   np.broadcast_to(np.eye(3), R.shape), atol=1e-9)
+        assert np.einsum("ij,ij->i", R[:, :, 1], chord).min() > 0.0
+        # into the opening: 1 mm along the plan-view part of N is over the opening (inside
+        # its outline) or nearer to it (by more than 0.1 mm)
+        from scipy.spatial import cKDTree
+
+        n_xy = R[:, :2, 0]
+        ok = np.linalg.norm(n_xy, axis=1) > 0.3
+        p0 = w.p_HE[ok, :2]
+        p1 = p0 + 1e-3 * n_xy[ok] / np.linalg.norm(n_xy[ok], axis=1, keepdims=True)
+        tree = cKDTree(outline)
+        nearer = tree.query(p1)[0] < tree.query(p0)[0] - 0.1e-3
+        into = MplPath(outline).contains_points(p1) | nearer
+        assert ok.mean() > 0.5 and into.mean() > 0.9, (ok.mean(), into.mean())
+        steep_seen += int((np.abs(t[:, 2]) > np.sin(np.radians(60))).sum())
+    assert steep_seen > 0  # the frames were checked where the loop climbs a flank too

@@ -15,8 +15,9 @@ in metres or millimetres. Steps:
    surface seen along -Z_H inside the innermost window radius).
 3. Edge normals from the mesh: ``n_face_H`` = normal of the surface just outside the loop,
    ``n_wall_H`` = normal of the wall just below it (outward = into the opening; facets are
-   oriented by the side they must face, so an inconsistent winding does not matter),
-   ``t_H = n_wall_H x n_face_H``; a few neighbours averaged.
+   oriented by the side they must face, so an inconsistent winding does not matter), a few
+   neighbours averaged; ``t_H`` = the loop's own chord direction (also where the loop climbs a
+   flank: a 3-D loop), ``n_wall_H`` made perpendicular to it.
 4. Convex collision pieces (:mod:`drakedeburr.hub.import_collision`): CoACD plus targeted cuts
    for a closed mesh, a probe-checked surface shell for an open one.
 5. Files are written into a temporary folder next to the target and renamed into place. The
@@ -252,7 +253,8 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     perpendicular to the tangent, and "out of the front surface" completes them
     (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
     the latter, the face beside it; a probe that finds a facet not facing its side (less than
-    0.3) keeps the constructed direction."""
+    0.3) keeps the constructed direction. The tangent returned is the loop's chord direction,
+    the wall normal is made perpendicular to it."""
     import open3d as o3d
     from scipy.spatial import cKDTree
 
@@ -281,12 +283,12 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     bad = np.einsum("ij,ij->i", n_face, up) < 0.3
     n_face[bad] = up[bad]
     n_wall, n_face = _smooth(n_wall), _smooth(n_face)
-    t = np.cross(n_wall, n_face)
-    norm = np.linalg.norm(t, axis=1)
-    t = np.where((norm > 0.2)[:, None], t / np.maximum(norm, 1e-12)[:, None], t0)
-    flip = np.einsum("ij,ij->i", t, chord) < 0
-    t[flip] *= -1.0
-    return n_wall, n_face, t
+    # the tangent is the loop's own (a 3-D loop's facets beside a flank give normals whose
+    # cross product strays from it); the wall normal is made perpendicular to it
+    n_wall -= np.einsum("ij,ij->i", n_wall, t0)[:, None] * t0
+    norm = np.linalg.norm(n_wall, axis=1)
+    n_wall = np.where((norm > 0.2)[:, None], n_wall / np.maximum(norm, 1e-12)[:, None], left)
+    return n_wall, n_face, t0
 
 
 # --------------------------------------------------------------------------- steps
