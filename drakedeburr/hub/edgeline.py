@@ -389,6 +389,10 @@ def _implausible(p: np.ndarray, fig: dict, gap: tuple, crossings: list) -> str:
     dz = np.abs(np.roll(p[:, 2], -1) - p[:, 2])
     fig["max_step"] = float(dz.max())
     fig["height_range"] = float(np.ptp(p[:, 2]))
+    # where the loop climbs: stretches steeper than 60 deg to the face plane (their length)
+    dzs = np.roll(p[:, 2], -1) - p[:, 2]
+    steep = np.abs(dzs) > np.sin(np.radians(60.0)) * np.maximum(d, 1e-12)
+    fig["steep_length"] = float(d[steep].sum())
     if gap[0] > MAX_BRIDGE_GAP:
         w = gap[1]
         return (f"not closed: at ({w[0] * 1e3:.0f}, {w[1] * 1e3:.0f}, {w[2] * 1e3:.0f}) mm "
