@@ -318,9 +318,9 @@ def extract_window_edges(
     notes.update(rejected=rejected, loops=figures)
     if not kept:
         why = "; ".join(f"{o['kind']} at r = {o['radius_mm']:.0f} mm: {o['reason']}"
-                        for o in notes["not_windows"][:6])
+                        for o in notes["not_windows"][:30])
         why += "".join(f"; rejected edge at {r['center_xy_mm']} mm: {r['reason']}"
-                       for r in rejected[:6])
+                       for r in rejected[:30])
         msg = (f"{source}: no window found looking along the hub axis "
                f"{np.round(frame.X_MH[:3, 2], 4)} (estimated={frame.estimated}); "
                f"{len(scan.openings)} through-openings: {why or 'none'}; pass the axis or "
