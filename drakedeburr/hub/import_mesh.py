@@ -52,7 +52,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 5  # 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
+IMPORT_VERSION = 6  # 6: a wall normal faces the opening more than the front
+# 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
 # 4: pieces held to 1 mm above the front near the windows (front_band)
 # 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
@@ -253,7 +254,8 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     perpendicular to the tangent, and "out of the front surface" completes them
     (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
     the latter, the face beside it; a probe that finds a facet not facing its side (less than
-    0.3) keeps the constructed direction. The tangent returned is the loop's chord direction,
+    0.3), or a wall probe whose facet faces the front more than the opening, keeps the
+    constructed direction. The tangent returned is the loop's chord direction,
     the wall normal is made perpendicular to it."""
     import open3d as o3d
     from scipy.spatial import cKDTree
@@ -276,7 +278,10 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     # facets of an open mesh may face either way: orient by the side they must face
     n_wall = normal_at(p + _NORMAL_SIDE * left - _NORMAL_PROBE * up)
     n_wall *= np.where(np.einsum("ij,ij->i", n_wall, left) < 0, -1.0, 1.0)[:, None]
-    bad = np.einsum("ij,ij->i", n_wall, left) < 0.3
+    # a wall faces the opening more than it faces the front (else the probe found a face or
+    # a flank below the edge: its normal is not the inner-side one)
+    along = np.einsum("ij,ij->i", n_wall, left)
+    bad = (along < 0.3) | (np.einsum("ij,ij->i", n_wall, up) > along)
     n_wall[bad] = left[bad]
     n_face = normal_at(p - _NORMAL_PROBE * left + _NORMAL_SIDE * up)
     n_face *= np.where(np.einsum("ij,ij->i", n_face, up) < 0, -1.0, 1.0)[:, None]
