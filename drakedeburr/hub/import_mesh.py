@@ -52,13 +52,15 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 6  # 6: a wall normal faces the opening more than the front
+IMPORT_VERSION = 7  # 7: a wall normal within 30 deg of the constructed one
+# 6: a wall normal faces the opening more than the front
 # 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
 # 4: pieces held to 1 mm above the front near the windows (front_band)
 # 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
 _NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
+_WALL_TILT = np.radians(30.0)  # a wall normal at most this far from the constructed one
 
 Progress = Callable[[int, int, str], None] | None
 
@@ -293,6 +295,10 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     n_wall -= np.einsum("ij,ij->i", n_wall, t0)[:, None] * t0
     norm = np.linalg.norm(n_wall, axis=1)
     n_wall = np.where((norm > 0.2)[:, None], n_wall / np.maximum(norm, 1e-12)[:, None], left)
+    # a window wall stands within WALL_TILT of the constructed direction (drafts are a few
+    # degrees); a facet tilted further is a flank below a climbing stretch, not the wall
+    off = np.einsum("ij,ij->i", n_wall, left) < np.cos(_WALL_TILT)
+    n_wall[off] = left[off]
     return n_wall, n_face, t0
 
 
