@@ -52,7 +52,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 7  # 7: a wall normal within 30 deg of the constructed one
+IMPORT_VERSION = 8  # 8: into the opening = Z_H x t (horizontal across a steep tangent)
+# 7: a wall normal within 30 deg of the constructed one
 # 6: a wall normal faces the opening more than the front
 # 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
 # 4: pieces held to 1 mm above the front near the windows (front_band)
@@ -251,9 +252,10 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc).
 
     The loop may leave the face (down a spoke flank, along the rim's lip): its tangent is the
-    3-D chord, "into the opening" is the plan-view inward normal of the opening's outline
-    ``outline_xy`` (M, 2) at the nearest point (of the loop's own plan view when None) made
-    perpendicular to the tangent, and "out of the front surface" completes them
+    3-D chord, "into the opening" is the horizontal direction across it (Z_H x t) on the side
+    of the plan-view inward normal of the opening's outline ``outline_xy`` (M, 2) at the
+    nearest point (of the loop's own plan view when None), and "out of the front surface"
+    completes them
     (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
     the latter, the face beside it; a probe that finds a facet not facing its side (less than
     0.3), or a wall probe whose facet faces the front more than the opening, keeps the
@@ -268,9 +270,13 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     tang = np.roll(ref, -1, axis=0) - np.roll(ref, 1, axis=0)
     inward = np.c_[-tang[:, 1], tang[:, 0]]
     inward /= np.maximum(np.linalg.norm(inward, axis=1, keepdims=True), 1e-12)
-    left = np.c_[inward[cKDTree(ref).query(p[:, :2])[1]], np.zeros(len(p))]
-    left -= np.einsum("ij,ij->i", left, t0)[:, None] * t0  # into the opening, across t
-    left /= np.maximum(np.linalg.norm(left, axis=1, keepdims=True), 1e-12)
+    inward3 = np.c_[inward[cKDTree(ref).query(p[:, :2])[1]], np.zeros(len(p))]
+    # into the opening: the horizontal direction across t (Z_H x t, the side of the
+    # outline's inward normal); for a tangent along the axis the inward normal itself
+    left = np.cross([0.0, 0.0, 1.0], t0)
+    ln = np.linalg.norm(left, axis=1)
+    left = np.where((ln > 1e-3)[:, None], left / np.maximum(ln, 1e-12)[:, None], inward3)
+    left *= np.where(np.einsum("ij,ij->i", left, inward3) < 0, -1.0, 1.0)[:, None]
     up = np.cross(t0, left)  # out of the front surface
 
     def normal_at(q: np.ndarray) -> np.ndarray:
