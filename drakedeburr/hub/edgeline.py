@@ -216,6 +216,7 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     p, gap = _bridge(scene, p, float(np.median(np.linalg.norm(
         np.diff(outline_xy, axis=0), axis=1))))
     figures["largest_bridge_gap"] = gap[0]
+    p = _forward_only(p, outline_xy)
     p, crossings = _untangle(p)
     reason = _implausible(p, figures, gap, crossings)
     return EdgeLine(None if reason else p, band, outline_xy, reason, figures)
@@ -324,6 +325,25 @@ def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray
     q = p.copy()
     q[keep] = np.column_stack([xy[keep], z[keep]])
     return q
+
+
+def _forward_only(p: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
+    """The loop without its back-tracking spikes: each point's place along the opening's
+    outline (the arc position of its nearest outline point, scipy cKDTree) must not go back
+    by more than 1 mm from the furthest reached so far (a filled stretch snapped onto a wall
+    beside a corner can run back and forth; a climb keeps its place). Points that go back
+    are dropped; the loop keeps its order."""
+    from scipy.spatial import cKDTree
+
+    seg = np.linalg.norm(np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
+    L = float(seg.sum())
+    pos = s[cKDTree(outline_xy).query(p[:, :2])[1]]
+    pos = pos - pos[0]
+    pos = np.where(pos < -0.5 * L, pos + L, pos)
+    out = np.unwrap(pos * (2 * np.pi / L)) * (L / (2 * np.pi))
+    keep = out >= np.maximum.accumulate(out) - 1e-3
+    return p[keep] if keep.sum() >= 16 else p
 
 
 def _crossings(p: np.ndarray) -> list[tuple[int, int, np.ndarray]]:

@@ -52,7 +52,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 8  # 8: into the opening = Z_H x t (horizontal across a steep tangent)
+IMPORT_VERSION = 9  # 9: loops without back-tracking spikes (edgeline._forward_only)
+# 8: into the opening = Z_H x t (horizontal across a steep tangent)
 # 7: a wall normal within 30 deg of the constructed one
 # 6: a wall normal faces the opening more than the front
 # 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
