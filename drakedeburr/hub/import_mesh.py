@@ -52,7 +52,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 9  # 9: loops without back-tracking spikes (edgeline._forward_only)
+IMPORT_VERSION = 10  # 10: into the opening = Z_H x t, left of travel
+# 9: loops without back-tracking spikes (edgeline._forward_only)
 # 8: into the opening = Z_H x t (horizontal across a steep tangent)
 # 7: a wall normal within 30 deg of the constructed one
 # 6: a wall normal faces the opening more than the front
@@ -253,10 +254,10 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc).
 
     The loop may leave the face (down a spoke flank, along the rim's lip): its tangent is the
-    3-D chord, "into the opening" is the horizontal direction across it (Z_H x t) on the side
-    of the plan-view inward normal of the opening's outline ``outline_xy`` (M, 2) at the
-    nearest point (of the loop's own plan view when None), and "out of the front surface"
-    completes them
+    3-D chord, "into the opening" is the horizontal direction across it to its left
+    (Z_H x t; where t is along the axis the plan-view inward normal of the opening's outline
+    ``outline_xy`` (M, 2) at the nearest point, of the loop's own plan view when None), and
+    "out of the front surface" completes them
     (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
     the latter, the face beside it; a probe that finds a facet not facing its side (less than
     0.3), or a wall probe whose facet faces the front more than the opening, keeps the
@@ -272,12 +273,13 @@ def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     inward = np.c_[-tang[:, 1], tang[:, 0]]
     inward /= np.maximum(np.linalg.norm(inward, axis=1, keepdims=True), 1e-12)
     inward3 = np.c_[inward[cKDTree(ref).query(p[:, :2])[1]], np.zeros(len(p))]
-    # into the opening: the horizontal direction across t (Z_H x t, the side of the
-    # outline's inward normal); for a tangent along the axis the inward normal itself
+    # into the opening: the horizontal direction across t to its left (Z_H x t: into the
+    # opening of a CCW loop, and the frame's upright t x left then has Z_H >= 0 even where a
+    # low-poly corner makes the loop run back a little); for a tangent along the axis the
+    # outline's inward normal
     left = np.cross([0.0, 0.0, 1.0], t0)
     ln = np.linalg.norm(left, axis=1)
     left = np.where((ln > 1e-3)[:, None], left / np.maximum(ln, 1e-12)[:, None], inward3)
-    left *= np.where(np.einsum("ij,ij->i", left, inward3) < 0, -1.0, 1.0)[:, None]
     up = np.cross(t0, left)  # out of the front surface
 
     def normal_at(q: np.ndarray) -> np.ndarray:
