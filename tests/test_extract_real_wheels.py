@@ -148,7 +148,7 @@ def test_gentle_stretches_follow_the_mesh_creases(wheel):
 
 
 def test_normals_and_frames_on_the_3d_loops(wheel):
-    """The importer's normals (hub.import_mesh._edge_normals) and the local frames
+    """The importer's normals (hub.edge_normals.edge_normals) and the local frames
     (frames.local_frames.R_HL_from_normals) on loops that leave the face: the inner-side
     normal points into the opening (1 mm along its plan-view part lies over the opening's
     outline polygon, or on the wall just beside it), is perpendicular to the tangent; the
@@ -159,7 +159,7 @@ def test_normals_and_frames_on_the_3d_loops(wheel):
     from matplotlib.path import Path as MplPath
 
     from drakedeburr.frames.local_frames import R_HL_from_normals
-    from drakedeburr.hub.import_mesh import _edge_normals
+    from drakedeburr.hub.edge_normals import edge_normals as _edge_normals
 
     _, mesh, res = wheel
     X_HM = np.linalg.inv(res.X_MH)

@@ -13,11 +13,7 @@ in metres or millimetres. Steps:
    dish unless ``front`` says, openings that are not windows listed with their reasons). The
    origin is then moved along the axis onto the front face of the centre (median height of the
    surface seen along -Z_H inside the innermost window radius).
-3. Edge normals from the mesh: ``n_face_H`` = normal of the surface just outside the loop,
-   ``n_wall_H`` = normal of the wall just below it (outward = into the opening; facets are
-   oriented by the side they must face, so an inconsistent winding does not matter), a few
-   neighbours averaged; ``t_H`` = the loop's own chord direction (also where the loop climbs a
-   flank: a 3-D loop), ``n_wall_H`` made perpendicular to it.
+3. Edge normals from the mesh (:mod:`drakedeburr.hub.edge_normals`).
 4. Convex collision pieces (:mod:`drakedeburr.hub.import_collision`): CoACD plus targeted cuts
    for a closed mesh, a probe-checked surface shell for an open one.
 5. Files are written into a temporary folder next to the target and renamed into place. The
@@ -45,6 +41,7 @@ from drakedeburr.errors import (
     describe_numerical_error,
     numerical_errors,
 )
+from drakedeburr.hub.edge_normals import edge_normals as _edge_normals
 from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 from drakedeburr.hub.types import WindowEdge
 
@@ -52,18 +49,8 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 10  # 10: into the opening = Z_H x t, left of travel
-# 9: loops without back-tracking spikes (edgeline._forward_only)
-# 8: into the opening = Z_H x t (horizontal across a steep tangent)
-# 7: a wall normal within 30 deg of the constructed one
-# 6: a wall normal faces the opening more than the front
-# 5: 3-D front-boundary loops (issue 42), windows judged by the burrs
-# 4: pieces held to 1 mm above the front near the windows (front_band)
-# 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
+IMPORT_VERSION = 10  # 5-10: 3-D loops, burrs (issue 42); 4: front_band; 3: band filter
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
-_NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
-_NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
-_WALL_TILT = np.radians(30.0)  # a wall normal at most this far from the constructed one
 
 Progress = Callable[[int, int, str], None] | None
 
@@ -241,74 +228,6 @@ def _front_origin_offset(scene, r_inner: float, z_top: float) -> float:
     t = scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
     t = t[np.isfinite(t)]
     return float(np.median(z_top - t)) if len(t) else 0.0
-
-
-def _smooth(v: np.ndarray, k: int = 3) -> np.ndarray:
-    """Average each row with its k neighbours on both sides (closed loop) and normalise."""
-    out = sum(np.roll(v, s, axis=0) for s in range(-k, k + 1))
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
-
-
-def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
-                  outline_xy: np.ndarray | None = None):
-    """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc).
-
-    The loop may leave the face (down a spoke flank, along the rim's lip): its tangent is the
-    3-D chord, "into the opening" is the horizontal direction across it to its left
-    (Z_H x t; where t is along the axis the plan-view inward normal of the opening's outline
-    ``outline_xy`` (M, 2) at the nearest point, of the loop's own plan view when None), and
-    "out of the front surface" completes them
-    (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
-    the latter, the face beside it; a probe that finds a facet not facing its side (less than
-    0.3), or a wall probe whose facet faces the front more than the opening, keeps the
-    constructed direction. The tangent returned is the loop's chord direction,
-    the wall normal is made perpendicular to it."""
-    import open3d as o3d
-    from scipy.spatial import cKDTree
-
-    chord = np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0)
-    t0 = chord / np.maximum(np.linalg.norm(chord, axis=1, keepdims=True), 1e-12)
-    ref = p[:, :2] if outline_xy is None else np.asarray(outline_xy, float)
-    tang = np.roll(ref, -1, axis=0) - np.roll(ref, 1, axis=0)
-    inward = np.c_[-tang[:, 1], tang[:, 0]]
-    inward /= np.maximum(np.linalg.norm(inward, axis=1, keepdims=True), 1e-12)
-    inward3 = np.c_[inward[cKDTree(ref).query(p[:, :2])[1]], np.zeros(len(p))]
-    # into the opening: the horizontal direction across t to its left (Z_H x t: into the
-    # opening of a CCW loop, and the frame's upright t x left then has Z_H >= 0 even where a
-    # low-poly corner makes the loop run back a little); for a tangent along the axis the
-    # outline's inward normal
-    left = np.cross([0.0, 0.0, 1.0], t0)
-    ln = np.linalg.norm(left, axis=1)
-    left = np.where((ln > 1e-3)[:, None], left / np.maximum(ln, 1e-12)[:, None], inward3)
-    up = np.cross(t0, left)  # out of the front surface
-
-    def normal_at(q: np.ndarray) -> np.ndarray:
-        res = scene.compute_closest_points(o3d.core.Tensor(q.astype(np.float32)))
-        return face_normals[res["primitive_ids"].numpy().astype(np.int64)]
-
-    # facets of an open mesh may face either way: orient by the side they must face
-    n_wall = normal_at(p + _NORMAL_SIDE * left - _NORMAL_PROBE * up)
-    n_wall *= np.where(np.einsum("ij,ij->i", n_wall, left) < 0, -1.0, 1.0)[:, None]
-    # a wall faces the opening more than it faces the front (else the probe found a face or
-    # a flank below the edge: its normal is not the inner-side one)
-    along = np.einsum("ij,ij->i", n_wall, left)
-    bad = (along < 0.3) | (np.einsum("ij,ij->i", n_wall, up) > along)
-    n_wall[bad] = left[bad]
-    n_face = normal_at(p - _NORMAL_PROBE * left + _NORMAL_SIDE * up)
-    n_face *= np.where(np.einsum("ij,ij->i", n_face, up) < 0, -1.0, 1.0)[:, None]
-    bad = np.einsum("ij,ij->i", n_face, up) < 0.3
-    n_face[bad] = up[bad]
-    n_wall, n_face = _smooth(n_wall), _smooth(n_face)
-    # the tangent is the loop's own (a 3-D loop's facets beside a flank give normals whose
-    # cross product strays from it); the wall normal is made perpendicular to it
-    n_wall -= np.einsum("ij,ij->i", n_wall, t0)[:, None] * t0
-    norm = np.linalg.norm(n_wall, axis=1)
-    n_wall = np.where((norm > 0.2)[:, None], n_wall / np.maximum(norm, 1e-12)[:, None], left)
-    # a window wall stands within WALL_TILT of the constructed direction (drafts are a few
-    # degrees); a facet tilted further is a flank below a climbing stretch, not the wall
-    off = np.einsum("ij,ij->i", n_wall, left) < np.cos(_WALL_TILT)
-    n_wall[off] = left[off]
-    return n_wall, n_face, t0
 
 
 # --------------------------------------------------------------------------- steps
@@ -547,6 +466,19 @@ def _mass_properties(path: Path, V_H, F, hulls, closed: bool, density: float):
             float(mp.volume), how)
 
 
+def _warn_pieces(path: Path, coll: dict, options: ImportOptions) -> None:
+    """WARNINGs for pieces that reach into an opening or stand proud of the front."""
+    if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
+        log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
+                    path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
+    if coll["front_probes_inside_pieces"]:
+        log.warning("%s: %d probes above the front surface lie inside collision pieces (pieces "
+                    "stand more than %.1f mm proud within %.0f mm of a window, %.1f mm further "
+                    "out): the planner may find the tool blocked there", path,
+                    coll["front_probes_inside_pieces"], options.front_reach * 1e3,
+                    options.front_band * 1e3, options.front_reach_far * 1e3)
+
+
 # --------------------------------------------------------------------------- main
 def _from_cache(target: Path, key: str, name: str, path: Path, sha: str,
                 t_start: float) -> ImportedHub | None:
@@ -634,24 +566,15 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
             f"built ({'CoACD pieces' if closed else 'surface shell pieces'}: "
             f"{describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],
             openings=notes["not_windows"], rejected=notes["rejected"]) from exc
-    if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
-        log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
-                    path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
-    if coll["front_probes_inside_pieces"]:
-        log.warning("%s: %d probes above the front surface lie inside collision pieces (pieces "
-                    "stand more than %.1f mm proud within %.0f mm of a window, %.1f mm further "
-                    "out): the planner may find the tool blocked there", path,
-                    coll["front_probes_inside_pieces"], options.front_reach * 1e3,
-                    options.front_band * 1e3, options.front_reach_far * 1e3)
-    if progress is not None:
-        progress(3, steps, "write folder")
+    _warn_pieces(path, coll, options)
+    progress is not None and progress(3, steps, "write folder")
     try:
         hulls = [Manifold.hull_points(pv) for pv in pieces]
         mass, com, I_com, volume, how = _mass_properties(path, V_H, F, hulls, closed,
                                                          options.density)
-    except InputError:
-        raise
     except numerical_errors() as exc:
+        if isinstance(exc, InputError):  # an InputError (a ValueError) passes as it is
+            raise
         raise NoCuttableWindow(
             f"{path}: the mass properties of the collision pieces could not be computed "
             f"({describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],

@@ -414,7 +414,6 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
       wiggles); ``facets``: facet count.
     """
     p = curve.p_data
-    n = len(p)
     chord = np.roll(p, -1, axis=0) - p
     length = _norm(chord)
     unit = chord / np.maximum(length, 1e-300)[:, None]

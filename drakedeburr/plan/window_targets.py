@@ -120,9 +120,9 @@ class WindowTargets:
             slope = float(np.degrees(np.arcsin(min(1.0, abs(float(t_bad @ face))))))
             where = np.round(np.asarray(tp.p_HC)[bad[0]] * 1e3, 1).tolist()
             why = (f": the edge there runs at {slope:.0f} deg to the face plane (down a flank, "
-                   f"along the hub axis): an axis across the edge is at least {slope:.0f} deg off the "
-                   f"face normal, beyond the recipe's tilt and lead, so a burr coming from the "
-                   f"front cannot follow it" if slope > 45.0 else "")
+                   f"along the hub axis): an axis across the edge is at least {slope:.0f} deg "
+                   f"off the face normal, beyond the recipe's tilt and lead, so a burr coming "
+                   f"from the front cannot follow it" if slope > 45.0 else "")
             raise InputError(f"ToolPath of window {tp.window_index}: tool axis (tip -> spindle) "
                              f"points into the hub at CL point {int(bad[0])} at {where} mm "
                              f"(axis {np.round(axis[bad[0]], 3).tolist()}, face normal "
