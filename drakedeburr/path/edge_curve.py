@@ -23,7 +23,7 @@ from scipy.interpolate import BSpline, make_interp_spline
 
 from drakedeburr.errors import InputError
 
-__all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters"]
+__all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters", "polyline_fit_report"]
 
 # samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
 _GAUSS_ORDER = 8
@@ -354,7 +354,11 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
         bad = int(np.flatnonzero(seg < 1e-9 * seg.sum())[0])
         raise InputError(f"{name}: points {bad} and {(bad + 1) % len(p)} coincide")
     u = chord_parameters(p)
-    spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    try:
+        spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    except (np.linalg.LinAlgError, ValueError) as exc:  # degenerate loop: named, not a crash
+        raise InputError(f"{name}: the periodic B-spline fit of its {len(p)} points failed "
+                         f"({type(exc).__name__}: {str(exc)[:160]})") from exc
     # arc-length table on the data parameters (Gauss-Legendre per span)
     x, w = _GL8
     t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
@@ -363,3 +367,88 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     s_table = np.concatenate([[0.0], np.cumsum(ds)])
     return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
                      length=float(s_table[-1]))
+
+
+def _corners(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):
+    """(arc positions (K,), turns (K,)) of a closed polyline's corners: points turning more
+    than ``angle``, runs of them within ``merge`` of each other joined (turn summed, position
+    turn-weighted)."""
+    idx = np.flatnonzero(turn > angle)
+    if not len(idx):
+        return np.zeros(0), np.zeros(0)
+    L = s[-1]
+    groups = [[idx[0]]]
+    for i in idx[1:]:
+        (groups[-1].append(i) if s[i] - s[groups[-1][-1]] <= merge else groups.append([i]))
+    if len(groups) > 1 and s[groups[0][0]] + L - s[groups[-1][-1]] <= merge:
+        groups[0] = groups.pop() + groups[0]
+    pos, tot = [], []
+    for g in groups:
+        g = np.asarray(g)
+        sg = s[g] - np.where(s[g] > s[g[-1]], L, 0.0)  # a group over the seam: unwrapped
+        pos.append(float(np.average(sg, weights=turn[g])) % L)
+        tot.append(float(turn[g].sum()))
+    order = np.argsort(pos)
+    return np.asarray(pos)[order], np.asarray(tot)[order]
+
+
+def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.0),
+                        samples: int = 16) -> dict:
+    """How the fit follows a polygonal loop (issue 42: a low-poly mesh's edge is a polygon of
+    facets): what the spline does between and across its data points, against the facets.
+
+    The data polyline is split into facets at its corners (a turn of more than
+    ``corner_angle`` between consecutive chords; collinear points inside a facet are one
+    facet; turns closer than 2.5 data spacings are one corner: equal-arc resampling cuts a
+    corner into two). Figures, SI:
+
+    * ``facet_median``, ``facet_min`` [m]: facet lengths; ``spacing`` [m]: median data spacing;
+    * ``deviation_max`` [m]: largest distance of C(u) from the polyline (``samples`` per data
+      span) - the fit's own chord error against the facets; ``deviation_per_facet`` its ratio
+      to ``facet_median``;
+    * ``kappa_max`` [1/m]: the fit's largest curvature; ``kappa_polyline`` [1/m]: the
+      polyline's largest corner turn over the mean of its two facets (the curvature the facets
+      themselves imply); ``kappa_ratio`` = kappa_max / kappa_polyline;
+    * ``inflections``: sign changes of the curvature about the loop's mean plane normal where
+      the polyline itself turns only one way (0 on a convex polygon if the fit invents no
+      wiggles); ``facets``: facet count.
+    """
+    p = curve.p_data
+    chord = np.roll(p, -1, axis=0) - p
+    length = _norm(chord)
+    unit = chord / np.maximum(length, 1e-300)[:, None]
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
+    s = np.concatenate([[0.0], np.cumsum(length)])
+    spacing = float(np.median(length))
+    corners, turns = _corners(turn, s, corner_angle, 2.5 * spacing)
+    if len(corners) < 3:
+        corners, turns = s[:-1], turn
+    facet = np.diff(np.r_[corners, corners[0] + s[-1]])
+    # the polyline's own curvature: corner turn over the mean of its two facets
+    k_poly = turns / np.maximum(0.5 * (facet + np.roll(facet, 1)), 1e-300)
+    # the fit between its data points
+    t = (np.arange(samples) + 0.5) / samples
+    u0 = curve.u_data
+    u1 = np.r_[u0[1:], 1.0]
+    uu = (u0[:, None] + t[None, :] * (u1 - u0)[:, None]).ravel()
+    q = curve.position(uu)
+    a = np.repeat(p, samples, axis=0)
+    b = np.repeat(np.roll(p, -1, axis=0), samples, axis=0)
+    dev = _dist_to_segment(q, a, b)
+    d1, d2 = curve.derivative(uu, 1), curve.derivative(uu, 2)
+    c = p.mean(axis=0)
+    normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
+    k_signed = (np.cross(d1, d2) @ normal) / _norm(d1) ** 3
+    k_abs = _norm(np.cross(d1, d2)) / _norm(d1) ** 3
+    poly_sign = np.sign(np.cross(np.roll(unit, 1, axis=0), unit) @ normal)[turn > corner_angle]
+    one_way = bool(np.all(poly_sign >= 0) or np.all(poly_sign <= 0))
+    sgn = np.sign(k_signed[np.abs(k_signed) > 1e-9])
+    flips = int(np.count_nonzero(sgn != np.roll(sgn, 1))) if one_way and len(sgn) else 0
+    kp = float(k_poly.max())
+    return {"facets": int(len(corners)), "facet_median": float(np.median(facet)),
+            "facet_min": float(facet.min()), "spacing": spacing,
+            "deviation_max": float(dev.max()),
+            "deviation_per_facet": float(dev.max() / np.median(facet)),
+            "kappa_max": float(k_abs.max()), "kappa_polyline": kp,
+            "kappa_ratio": float(k_abs.max() / kp) if kp > 0 else float("inf"),
+            "inflections": flips}
