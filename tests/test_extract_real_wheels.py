@@ -192,5 +192,10 @@ def test_normals_and_frames_on_the_3d_loops(wheel):
         nearer = tree.query(p1)[0] < tree.query(p0)[0] - 0.1e-3
         into = MplPath(outline).contains_points(p1) | nearer
         assert ok.mean() > 0.5 and into.mean() > 0.9, (ok.mean(), into.mean())
+        # where the loop runs down a flank too (the plan direction of its tangent is noise
+        # there, so it cannot tell where the opening is)
+        steep = np.abs(t[ok, 2]) > np.sin(np.radians(60))
+        if steep.sum() >= 5:
+            assert into[steep].mean() > 0.9, (w.index, into[steep].mean(), steep.sum())
         steep_seen += int((np.abs(t[:, 2]) > np.sin(np.radians(60))).sum())
     assert steep_seen > 0  # the frames were checked where the loop climbs a flank too

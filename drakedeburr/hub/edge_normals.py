@@ -16,6 +16,7 @@ __all__ = ["edge_normals"]
 _NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
 _NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
 _WALL_TILT = np.radians(30.0)  # a wall normal at most this far from the constructed one
+_STEEP = np.radians(45.0)  # a loop tangent steeper than this: 'into the opening' from the outline
 
 
 def _smooth(v: np.ndarray, k: int = 3) -> np.ndarray:
@@ -30,8 +31,9 @@ def edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
 
     The loop may leave the face (down a spoke flank, along the rim's lip): its tangent is the
     3-D chord, "into the opening" is the horizontal direction across it to its left
-    (Z_H x t; where t is along the axis the plan-view inward normal of the opening's outline
-    ``outline_xy`` (M, 2) at the nearest point, of the loop's own plan view when None), and
+    (Z_H x t; where t is steeper than 45 deg, down a flank, the plan-view inward normal of the
+    opening's outline ``outline_xy`` (M, 2) at the nearest point, of the loop's own plan view
+    when None, made perpendicular to t), and
     "out of the front surface" completes them
     (t x into-the-opening: +Z_H on a flat stretch). The wall is probed below the edge along
     the latter, the face beside it; a probe that finds a facet not facing its side (less than
@@ -54,7 +56,18 @@ def edge_normals(scene, face_normals: np.ndarray, p: np.ndarray,
     # outline's inward normal
     left = np.cross([0.0, 0.0, 1.0], t0)
     ln = np.linalg.norm(left, axis=1)
-    left = np.where((ln > 1e-3)[:, None], left / np.maximum(ln, 1e-12)[:, None], inward3)
+    # where the loop runs down a flank (steeper than _STEEP) the plan direction of its tangent
+    # is noise (a low-poly flank's chords wander sideways by a fraction of a millimetre), and
+    # Z_H x t with it: on the audibot rim's window 0 it pointed away from the opening's plan
+    # centroid at 91 of 218 such points (0 of 632 gentler ones), tilting the tool into the
+    # spoke. There the outline's inward normal, made perpendicular to t, says where the
+    # opening is.
+    along = inward3 - np.einsum("ij,ij->i", inward3, t0)[:, None] * t0
+    an = np.linalg.norm(along, axis=1)
+    steep = (np.abs(t0[:, 2]) > np.sin(_STEEP)) & (an > 0.2)
+    left = np.where((ln > 1e-3)[:, None] & ~steep[:, None],
+                    left / np.maximum(ln, 1e-12)[:, None],
+                    np.where(steep[:, None], along / np.maximum(an, 1e-12)[:, None], inward3))
     up = np.cross(t0, left)  # out of the front surface
 
     def normal_at(q: np.ndarray) -> np.ndarray:

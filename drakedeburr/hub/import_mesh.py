@@ -49,7 +49,9 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 10  # 5-10: 3-D loops, burrs (issue 42); 4: front_band; 3: band filter
+# 11: into-the-opening from the outline on steep stretches; 5-10: 3-D loops, burrs (issue 42);
+# 4: front_band; 3: band filter
+IMPORT_VERSION = 11
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 
 Progress = Callable[[int, int, str], None] | None
