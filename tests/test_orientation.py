@@ -355,3 +355,21 @@ def test_slope_limited_tangents_keep_the_burr_in_front_on_a_climbing_edge():
     assert (up[:, 2] >= s - 1e-12).all()
     lead = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", out, t), -1, 1)))
     assert lead.max() <= 45.0 + 1e-9
+
+
+def test_slope_limit_leaves_a_flat_loop_bit_for_bit():
+    """A loop within the slope limit (every bundled and random hub) gets the very tangents it
+    came with, not a re-normalised copy, so its frames and tool axes are those of the planner
+    before the limit existed, bit for bit (a last-bit change moves the IK's iterates)."""
+    import math
+
+    from drakedeburr.orientation.orient import slope_limited_tangents
+
+    rng = np.random.default_rng(4)
+    phi, slope = rng.uniform(0, 2 * np.pi, 50), np.radians(rng.uniform(-40, 40, 50))
+    t = np.c_[np.cos(slope) * np.cos(phi), np.cos(slope) * np.sin(phi), np.sin(slope)]
+    t *= 1.0 + 1e-15 * rng.normal(size=(50, 1))  # unit to the last bits, as a fit gives them
+    n = np.cross(t, [0.0, 0.0, 1.0])
+    out = slope_limited_tangents(t, n, math.radians(45.0))
+    assert np.abs(np.degrees(np.arcsin(np.abs(t[:, 2])))).max() < 45.0
+    np.testing.assert_array_equal(out, t)

@@ -65,12 +65,12 @@ def slope_limited_tangents(t_H: np.ndarray, n_H: np.ndarray, max_slope: float) -
     ``max_slope`` [rad], keeping the sign of their climb. The plan direction of a limited
     tangent is ``n x Z_H`` of its inner-side normal ``n_H`` (along a CCW loop, across the
     normal: the plan direction of a steep tangent itself is noise, and one along the normal
-    would fold the frame). Tangents within the limit are returned as they are."""
+    would fold the frame). Without a steep tangent ``t_H`` itself is returned (bit for bit)."""
     t = np.asarray(t_H, float) / np.linalg.norm(t_H, axis=1, keepdims=True)
     slope = np.arcsin(np.clip(np.abs(t[:, 2]), 0.0, 1.0))
     steep = slope > max_slope
-    if not steep.any():
-        return t
+    if not steep.any():  # the input itself, not its re-normalised copy: a flat loop's frames
+        return np.asarray(t_H, float)  # are bit for bit those before the limit existed
     h = np.cross(np.asarray(n_H, float)[steep], [0.0, 0.0, 1.0])
     h[:, 2] = 0.0
     h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
