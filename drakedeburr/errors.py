@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-__all__ = ["DrakeDeburrError", "InputError", "NoCuttableWindow", "VerificationFailed"]
+__all__ = ["DrakeDeburrError", "InputError", "NoCuttableWindow", "VerificationFailed",
+           "numerical_errors", "describe_numerical_error"]
 
 
 class DrakeDeburrError(Exception):
@@ -38,3 +39,24 @@ class NoCuttableWindow(InputError):
 
 class VerificationFailed(DrakeDeburrError):
     """A plan failed verification and the caller asked for something that needs a pass."""
+
+
+def numerical_errors() -> tuple[type[BaseException], ...]:
+    """The exception types the numerical libraries raise on degenerate geometry (coincident or
+    collinear points, a flat hull, a singular matrix): numpy/LAPACK ``LinAlgError``, scipy's
+    ``QhullError``, and the ``ValueError``/``RuntimeError``/``FloatingPointError``/
+    ``ZeroDivisionError``/``IndexError`` that open3d, CoACD, manifold3d, trimesh and scipy raise
+    for such input. Catch them where a named failure can be reported instead (issue 42);
+    an :class:`InputError` is re-raised before them by the callers."""
+    import numpy as np
+    from scipy.spatial import QhullError
+
+    return (np.linalg.LinAlgError, QhullError, ValueError, RuntimeError, FloatingPointError,
+            ZeroDivisionError, IndexError)
+
+
+def describe_numerical_error(exc: BaseException) -> str:
+    """One line naming the library and the error: ``scipy QhullError: QH6154 ...``."""
+    lib = (type(exc).__module__ or "").split(".")[0] or "python"
+    first = (str(exc).strip().splitlines() or [""])[0][:200]
+    return f"{lib} {type(exc).__name__}: {first}"

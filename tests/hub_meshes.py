@@ -58,3 +58,24 @@ def degraded_mesh(hub, rng, *, mm: bool = True, mirror: bool = False, no_barrel:
         X[:3, :3] = X[:3, :3] @ R
     V_M = V @ X[:3, :3].T + X[:3, 3]
     return V_M * (1e3 if mm else 1.0), F, X
+
+
+def narrow_slot_disc_stl(path, slot_width: float = 8e-3, slots: int = 6):
+    """A 500 mm disc, 25 mm thick, with a 60 mm centre bore and ``slots`` radial slots
+    ``slot_width`` wide and 80 mm long at r = 120-200 mm, written as a millimetre STL: a
+    readable hub whose openings no burr of the tool library fits when the slots are narrower
+    than the 6 mm burr's 10 mm (head + 2 x 2 mm clearance). Returns the path."""
+    import manifold3d as m3d
+    import trimesh
+
+    disc = m3d.Manifold.cylinder(0.025, 0.25, 0.25, 128).translate([0, 0, -0.025])
+    cut = m3d.Manifold.cylinder(0.05, 0.03, 0.03, 48).translate([0, 0, -0.04])
+    for k in range(slots):
+        a = 2 * np.pi * k / slots
+        slot = m3d.Manifold.cube([0.08, slot_width, 0.05], center=True).translate(
+            [0.16, 0.0, -0.0125]).rotate([0.0, 0.0, float(np.degrees(a))])
+        cut = cut + slot
+    mesh = (disc - cut).to_mesh()
+    trimesh.Trimesh(np.asarray(mesh.vert_properties[:, :3]) * 1e3,
+                    np.asarray(mesh.tri_verts)).export(path)
+    return path

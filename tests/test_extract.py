@@ -86,23 +86,35 @@ def test_disc_hub_axis_estimated(disc_hub):
     assert abs(res.X_MH[:3, 2] @ [0, 0, 1]) == pytest.approx(1.0, abs=1e-6)
 
 
-def test_audibot_rim_is_refused_with_its_reasons(extdata):
-    """The low-poly game rim: spokes and rim are separate, unstitched surfaces that meet at
-    different heights, so no window has a closed edge on the face; the refusal names every
-    opening and why (the twin-spoke slits are too narrow for the 12 mm burr, the five windows'
-    edges step by ~14 mm where spoke and rim meet)."""
+def test_audibot_rim_front_side_from_its_barrel(extdata):
+    """The low-poly game rim (tests/test_extract_real_wheels.py checks its windows): the front
+    side is -Y of the file, decided by the cues (the barrel extends behind the face)."""
     lm = load_hub_mesh(extdata / AUDIBOT)
     assert lm.unit == "m" and not lm.watertight
-    with pytest.raises(InputError) as err:
-        mut.extract_window_edges(lm.mesh, source="audibot")
-    msg = str(err.value)
-    assert msg.startswith("audibot: no window found looking along the hub axis")
-    assert msg.count("too narrow at r = 18") == 5 and "slot 27." in msg
-    assert msg.count("rejected edge at") == 5 and "the edge jumps" in msg
-    # the front side: -Y of the file (the barrel extends behind the face toward +Y)
     frame = mut.hub_frame_from_mesh(lm.mesh, source="audibot")
     assert frame.X_MH[:3, 2] @ [0, -1, 0] > 0.999
     assert frame.front.decided_by == "cues" and any("barrel" in e for e in frame.front.evidence)
+
+
+def test_openings_no_burr_fits_are_refused_with_width_and_each_burrs_need(tmp_path):
+    """8 mm slots: narrower than the 6 mm burr's 10 mm and the 12 mm burr's 16 mm (head + 2 x
+    2 mm clearance); the refusal names every opening with its measured width and each need."""
+    from hub_meshes import narrow_slot_disc_stl
+
+    lm = load_hub_mesh(narrow_slot_disc_stl(tmp_path / "slots.stl"))
+    with pytest.raises(InputError) as err:
+        mut.extract_window_edges(lm.mesh, source="slots", front="+z")
+    msg = str(err.value)
+    assert msg.startswith("slots: no window found looking along the hub axis")
+    assert msg.count("vent slot 8.") == 6 and "centre bore" in msg
+    assert msg.count("the 6 mm burr needs 10.0 mm, the 12 mm burr needs 16.0 mm") == 6
+    # a 12 mm slot is a window for the small burr (10 mm), not for the standard one (16 mm)
+    lm = load_hub_mesh(narrow_slot_disc_stl(tmp_path / "s12.stl", slot_width=12e-3))
+    res = mut.extract_window_edges(lm.mesh, source="s12", front="+z")
+    assert len(res.windows) == 6 and all(11.5 < e["width_mm"] < 12.5 for e in res.notes["loops"])
+    with pytest.raises(InputError, match="the 12 mm burr needs 16.0 mm"):
+        mut.extract_window_edges(lm.mesh, source="s12", front="+z",
+                                 burr_diameters=(12e-3,))
 
 
 def test_no_opening_and_bad_files(tmp_path):

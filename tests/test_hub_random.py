@@ -17,9 +17,13 @@ def test_defaults_are_the_cells_burr_and_clearance():
 
     assert mut.DEFAULT_BURR_DIAMETER == BURR.head_diameter == openings.DEFAULT_BURR_DIAMETER
     assert openings.DEFAULT_CLEARANCE == Tolerances().min_clearance
-    # the derived minimum window width: the larger of head + clearances and 2.5 burrs
-    assert openings.min_window_width(12e-3, 2e-3) == pytest.approx(30e-3)
-    assert openings.min_window_width(6e-3, 2e-3) == pytest.approx(15e-3)  # a 24 mm slot passes
+    # the tool library's heads, and the width each needs: head + 2 x clearance (issue 42)
+    from drakedeburr.cell.tools import BURR_HEADS
+
+    assert openings.DEFAULT_BURR_DIAMETERS == tuple(
+        sorted((b.head_diameter for b in BURR_HEADS.values()), reverse=True))
+    assert openings.min_window_width(12e-3, 2e-3) == pytest.approx(16e-3)
+    assert openings.min_window_width((12e-3, 6e-3), 2e-3) == pytest.approx(10e-3)
     assert openings.min_window_width(4e-3, 5e-3) == pytest.approx(14e-3)
 
 

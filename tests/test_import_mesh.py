@@ -158,42 +158,46 @@ def test_no_windows_and_the_audibot_rim_refused_with_reasons(tmp_path, extdata):
     disc = _box_stl(tmp_path / "disc.stl", (0.4, 0.4, 0.1))
     with pytest.raises(InputError, match=r"disc\.stl: no window found"):
         mut.import_mesh(disc, tmp_path / "out")
-    # a real-world low-poly rim (not watertight, spokes and rim unstitched): refused with
-    # every opening's reason, not a bad model (tests/test_extract.py checks the reasons)
-    rim = extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl"
-    with pytest.raises(NoCuttableWindow, match=r"audibot__wheel_rim_only_DERIVED_m\.stl: no "
-                                              r"window found.*slot 27\.\d mm wide.*the edge jumps"
-                       ) as e:
-        mut.import_mesh(rim, tmp_path / "out")
+    # a readable hub whose openings no burr fits (8 mm slots): refused with every opening's
+    # reason, not a bad model (tests/test_extract.py checks the reasons)
+    from hub_meshes import narrow_slot_disc_stl
+
+    slots = narrow_slot_disc_stl(tmp_path / "slots.stl")
+    with pytest.raises(NoCuttableWindow, match=r"slots\.stl: no window found.*vent slot 8\.\d mm "
+                                              r"wide") as e:
+        mut.import_mesh(slots, tmp_path / "out", options=mut.ImportOptions(front="+z"))
     # openings, none a window: a result (exit 1 with a report), with every reason attached
-    assert len(e.value.openings) == 5 and len(e.value.rejected) == 5
-    assert all(o["kind"] == "too narrow" for o in e.value.openings)
+    assert len(e.value.openings) == 7 and e.value.rejected == []
+    assert sorted(o["kind"] for o in e.value.openings) == ["centre bore"] + ["too narrow"] * 6
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
-def test_the_audibot_wheel_dae_with_its_tyre_reads_as_its_rim(tmp_path, extdata):
+def test_the_audibot_wheel_dae_with_its_tyre_reads_as_its_rim(extdata):
     """The COLLADA wheel as the ROS description ships it (tyre + rim, 720 mm across): the
     tyre - the part lying wholly outside the rest - is dropped and said, and the rim gives the
-    same openings, widths and reasons as the rim alone (the derived STL, cut from the same
+    same windows, widths and openings as the rim alone (the derived STL, cut from the same
     file by hand)."""
-    def refused(path):
-        with pytest.raises(NoCuttableWindow) as e:
-            mut.import_mesh(path, tmp_path / "out")
-        return e.value
+    from drakedeburr.hub.extract import extract_window_edges
+    from drakedeburr.hub.mesh_io import load_hub_mesh
 
-    dae = refused(extdata / "wheel_models" / "audibot__wheel.dae")
-    rim = refused(extdata / "wheel_models" / "audibot__wheel_rim_only_DERIVED_m.stl")
-    (note,) = dae.notes
+    res = {}
+    for name in ("audibot__wheel.dae", "audibot__wheel_rim_only_DERIVED_m.stl"):
+        path = extdata / "wheel_models" / name
+        mesh, note = mut._without_tyre(path, load_hub_mesh(path).mesh, None)
+        res[name] = (extract_window_edges(mesh, source=name), note)
+    (dae, note), (rim, none) = res["audibot__wheel.dae"], res[
+        "audibot__wheel_rim_only_DERIVED_m.stl"]
     assert note.startswith("tyre dropped: 1 part(s)") and "720 mm" in note
-    assert rim.notes == []
-    assert [o["kind"] for o in dae.openings] == [o["kind"] for o in rim.openings] == [
-        "too narrow"] * 5
+    assert none is None
+    assert len(dae.windows) == len(rim.windows) == 10
+    assert dae.notes["not_windows"] == rim.notes["not_windows"] == []
     # radii within 2.5 mm: the hub centre is estimated on each file's own vertices (the
     # tyre's bead-seat fragments inside the rim stay, the low-poly rim has 10 sides)
-    for what, tol in (("width_mm", 0.2), ("radius_mm", 2.5), ("area_mm2", 30.0)):
-        np.testing.assert_allclose(sorted(o[what] for o in dae.openings),
-                                   sorted(o[what] for o in rim.openings), atol=tol)
-    assert len(dae.rejected) == len(rim.rejected) == 5
+    a, b = (v[0].notes["loops"] for v in res.values())
+    np.testing.assert_allclose(sorted(e["width_mm"] for e in a),
+                               sorted(e["width_mm"] for e in b), atol=0.3)
+    np.testing.assert_allclose(sorted(np.hypot(*e["center_xy_mm"]) for e in a),
+                               sorted(np.hypot(*e["center_xy_mm"]) for e in b), atol=2.5)
 
 
 def test_a_tyre_is_dropped_only_when_it_rings_the_rest(tmp_path):
@@ -446,7 +450,8 @@ def test_front_openings_and_input_view(imported, capsys):
     assert imp["front"]["decided_by"] == "cues" and len(imp["front"]["evidence"]) >= 2
     kinds = sorted(o["kind"] for o in imp["not_windows"])
     assert kinds == ["centre bore"] + ["lug hole"] * 5
-    assert imp["min_window_width_mm"] == pytest.approx(30.0)
+    assert imp["min_window_width_mm"] == pytest.approx(10.0)  # the 6 mm burr's need
+    assert imp["burrs_mm"] == [12.0, 6.0]
     assert main(["-q", "hub", "info", str(res.dir), "--json"]) == 0
     view = json.loads(capsys.readouterr().out)["input"]
     assert view["unit"] == "mm" and len(view["edges"]) == 5

@@ -325,3 +325,51 @@ def test_coefficients_gram_and_its_bands_match_the_residuals(m, w2nd, closed):
     offsets_g, Gk_g = prob._gram_bands_general()  # the closed form is the general sums
     np.testing.assert_array_equal(offsets_g, offsets)
     np.testing.assert_array_equal(Gk_g, Gk)
+
+
+def test_slope_limited_tangents_keep_the_burr_in_front_on_a_climbing_edge():
+    """Issue 42: a loop that runs down a flank (tangent along -Z_H). The frame's tangent keeps
+    its climb's sign, its slope is limited to 45 deg and its plan direction is across the
+    inner-side normal (n x Z_H), so the upright axis of the frame (-Z_L, tip -> spindle) is
+    45 deg off +Z_H instead of horizontal, and the true edge stays at >= 45 deg to every axis
+    perpendicular to the frame tangent: a 90 deg cone still touches it with its flank. A flat
+    tangent is left as it is."""
+    import math
+
+    from drakedeburr.frames.local_frames import R_HL_from_normals
+    from drakedeburr.orientation.orient import slope_limited_tangents
+
+    t = np.array([[0.0, 0.0, -1.0], [0.05, 0.02, -0.998], [1.0, 0.0, 0.0],
+                  [0.6, 0.0, 0.8]])
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    n = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    out = slope_limited_tangents(t, n, math.radians(45.0))
+    np.testing.assert_allclose(np.linalg.norm(out, axis=1), 1.0)
+    np.testing.assert_allclose(out[2], t[2])  # flat: unchanged
+    s = math.sqrt(0.5)
+    np.testing.assert_allclose(out[0], [s, 0.0, -s], atol=1e-12)  # n x z = +x, going down
+    np.testing.assert_allclose(out[1], [s, 0.0, -s], atol=1e-12)
+    np.testing.assert_allclose(out[3], [s, 0.0, s], atol=1e-12)  # climbing up
+    R = R_HL_from_normals(out, n)
+    up = -R[:, :, 2]  # -Z_L: the upright tool axis from tip to spindle
+    assert (up[:, 2] >= s - 1e-12).all()
+    lead = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", out, t), -1, 1)))
+    assert lead.max() <= 45.0 + 1e-9
+
+
+def test_slope_limit_leaves_a_flat_loop_bit_for_bit():
+    """A loop within the slope limit (every bundled and random hub) gets the very tangents it
+    came with, not a re-normalised copy, so its frames and tool axes are those of the planner
+    before the limit existed, bit for bit (a last-bit change moves the IK's iterates)."""
+    import math
+
+    from drakedeburr.orientation.orient import slope_limited_tangents
+
+    rng = np.random.default_rng(4)
+    phi, slope = rng.uniform(0, 2 * np.pi, 50), np.radians(rng.uniform(-40, 40, 50))
+    t = np.c_[np.cos(slope) * np.cos(phi), np.cos(slope) * np.sin(phi), np.sin(slope)]
+    t *= 1.0 + 1e-15 * rng.normal(size=(50, 1))  # unit to the last bits, as a fit gives them
+    n = np.cross(t, [0.0, 0.0, 1.0])
+    out = slope_limited_tangents(t, n, math.radians(45.0))
+    assert np.abs(np.degrees(np.arcsin(np.abs(t[:, 2])))).max() < 45.0
+    np.testing.assert_array_equal(out, t)

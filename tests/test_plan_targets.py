@@ -67,3 +67,32 @@ def test_cutting_lower_on_the_flank_lifts_the_tool_but_keeps_the_chamfer():
     np.testing.assert_allclose(mut.edge_point_from_tool_pose(X, n, d, r, lift), 0.0, atol=1e-15)
     with pytest.raises(ValueError, match="flank"):
         mut.contact_geometry(1.0)
+
+
+def test_an_axis_into_the_hub_on_a_climbing_edge_names_the_slope():
+    """A 3-D window loop (issue 42) that runs along the hub axis, 10 mm down a flank: its
+    local frame's upright axis is horizontal and the orientation stage's axis points into the
+    hub; the refusal says where and that the edge there runs at ~90 deg to the face plane."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from drakedeburr.errors import InputError
+    from drakedeburr.frames.local_frames import R_HL_from_normals
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    z = np.linspace(0.0, -0.01, 6)
+    p = np.c_[np.full(6, 0.15), np.zeros(6), z]
+    t = np.tile([0.0, 0.0, -1.0], (6, 1))  # down the flank
+    n = np.tile([-1.0, 0.0, 0.0], (6, 1))  # into the opening (toward the axis)
+    R = R_HL_from_normals(t, n)
+    zT = R[:, :, 2]  # upright in L: +Z_T along Z_L, horizontal here
+    tp = SimpleNamespace(window_index=3, kind="large", p_HC=p, R_HL=R, zT_H=zT,
+                         cone_zT_H=zT, cone_half_angle=0.1, cone_outer_half_angle=0.12,
+                         depth_of_cut=0.5e-3)
+    # the axis from tip to spindle (-Z_L) is horizontal here: perpendicular to the face normal
+    assert np.abs(zT[:, 2]).max() < 1e-12 and np.allclose(np.linalg.norm(zT, axis=1), 1.0)
+    with pytest.raises(InputError, match=r"window 3: tool axis .* points into the hub at CL "
+                                         r"point 0 at \[150\.0, 0\.0, 0\.0\] mm .* runs at 90 "
+                                         r"deg to the face plane"):
+        WindowTargets.from_tool_path(tp)

@@ -40,6 +40,7 @@ from drakedeburr._io import atomic_write_text, round_numbers
 
 __all__ = [
     "BurrGeometry",
+    "BURR_HEADS",
     "FloatingSpindle",
     "SpindleStand",
     "BURR",
@@ -196,6 +197,14 @@ class SpindleStand:
 
 
 BURR = BurrGeometry()
+#: The burr heads of the tool library, largest first: the standard 12 mm head and the small
+#: 6 mm head (a 6 mm, 90 deg carbide cone on a 3 mm shank, as burr makers sell them for
+#: narrow slots). The hub stage judges an opening by them (hub.openings.burr_need: head + 2 x
+#: clearance, smallest need tried before an opening is refused; DEFAULT_BURR_DIAMETERS there
+#: is tested equal). The cell's spindle models carry the standard head.
+BURR_HEADS = {"standard": BURR,
+              "small": replace(BURR, head_diameter=6e-3, contact_radius=1.5e-3,
+                               shank_diameter=3e-3)}
 FLOATING_SPINDLE = FloatingSpindle(burr=BURR)
 SPINDLE_STAND = SpindleStand(burr=BURR)
 

@@ -25,11 +25,19 @@ edge) is therefore filtered along the loop, a running median then a Gaussian of 
 millimetre, and the face read again there (:func:`_smoothed_edge`); the true band of a round or
 chamfer changes over millimetres, not between profiles 0.5 mm apart.
 
-**Plausibility** (a loop that fails is rejected with its reason, not used): no jump of more
-than ``MAX_STEP`` between neighbouring edge points (the walk left the face onto another
-surface), the 3-D length at most ``MAX_LENGTH_RATIO`` x the opening outline's, and the
-loop's deviation from its best-fit plane at most ``MAX_WARP`` x its plan-view size; at most
-``MAX_MISSING`` of the outline without a face beside it.
+**Where the edge leaves the face** (real wheels: the front boundary runs along the spoke face,
+turns down a spoke flank, along the rim's lip): neighbouring edge points then differ in height
+by more than their plan-view distance. Such a stretch is not an error: the points between them
+are filled in along the straight segment and moved onto the nearest mesh surface
+(:func:`_bridge`), so the loop follows the flank. A profile that finds no face within ``reach``
+takes the band of its neighbours (periodic interpolation along the loop) and reads the surface
+there, or the outline point itself (where the surface seen from the front ends).
+
+**Rejections** are only those a person looking at the model would accept, each naming where:
+no front boundary (no profile found a front-visible surface), not closed (a filled stretch
+keeps a gap wider than ``MAX_BRIDGE_GAP`` with no surface in it: a hole or a seam), or
+self-intersecting (two stretches of the loop cross in plan view at the same height, within
+``CROSS_DZ``).
 """
 
 from __future__ import annotations
@@ -44,10 +52,9 @@ __all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANG
 BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
 WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
 JUMP = 0.8e-3  # [m] height step between two samples (0.1 mm apart) that is a hidden wall
-MAX_STEP = 3e-3  # [m] largest jump between neighbouring edge points of a plausible loop
-MAX_LENGTH_RATIO = 1.6  # 3-D loop length / opening outline length
-MAX_WARP = 0.35  # deviation from the best-fit plane / plan-view diameter
-MAX_MISSING = 0.05  # share of the outline without a face beside it
+MAX_BRIDGE_GAP = 10e-3  # [m] a gap this wide left in a filled stretch: the loop is not closed
+CROSS_DZ = 1e-3  # [m] plan-view crossings closer than this in height are self-intersections
+SWALLOWTAIL = 0.05  # a crossing cutting off at most this share of the loop is cut out
 BAND_MEDIAN = 2.5e-3  # [m] running median of the band width along the loop ("Noise")
 BAND_SIGMA = 1.0e-3  # [m] Gaussian smoothing of the band width along the loop ("Noise")
 
@@ -186,18 +193,104 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     lag, run = max(1, int(round(lag_length / step))), max(2, int(round(run_length / step)))
     first = _face_start(t, n, z0, step, lag, run, int(round(ledge_length / step)))
     ok = first >= 0
-    rows = np.flatnonzero(ok)
-    k = first[ok]
-    p = np.column_stack([xy[rows, k], z0 - t[rows, k]])
-    band = np.full(P, np.nan)
-    band[rows] = s[k]
-    if len(rows) >= 16:
-        p = _smoothed_edge(scene, p, outline_xy[rows], out[rows], band[rows], z0, step)
     figures = {"outline_length": float(np.linalg.norm(
         np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1).sum()),
         "missing": float(1.0 - ok.mean())}
-    reason = _implausible(p, figures)
+    band = np.full(P, np.nan)
+    if ok.sum() < max(4, P // 20):
+        c = outline_xy.mean(axis=0)
+        return EdgeLine(None, band, outline_xy,
+                        f"no front boundary: no surface seen from the front within "
+                        f"{reach * 1e3:.0f} mm of the opening's outline (around "
+                        f"({c[0] * 1e3:.0f}, {c[1] * 1e3:.0f}) mm)", figures)
+    rows = np.flatnonzero(ok)
+    band[rows] = s[first[ok]]
+    p_rows = np.column_stack([xy[rows, first[ok]], z0 - t[rows, first[ok]]])
+    if len(rows) >= 16:
+        p_rows = _smoothed_edge(scene, p_rows, outline_xy[rows], out[rows], band[rows], z0,
+                                step)
+    p = np.full((P, 3), np.nan)
+    p[rows] = p_rows
+    if not ok.all():
+        p = _fill_missing(scene, p, band, ok, outline_xy, out, z0)
+    p, gap = _bridge(scene, p, float(np.median(np.linalg.norm(
+        np.diff(outline_xy, axis=0), axis=1))))
+    figures["largest_bridge_gap"] = gap[0]
+    p = _forward_only(p, outline_xy)
+    p, crossings = _untangle(p)
+    reason = _implausible(p, figures, gap, crossings)
     return EdgeLine(None if reason else p, band, outline_xy, reason, figures)
+
+
+def _fill_missing(scene, p: np.ndarray, band: np.ndarray, ok: np.ndarray,
+                  outline_xy: np.ndarray, out: np.ndarray, z0: float) -> np.ndarray:
+    """Edge points of the profiles without a face (module doc): the band of the neighbours
+    (periodic interpolation along the loop), read on the surface there; where that ray misses,
+    the outline point (a ray just outside the opening)."""
+    P = len(p)
+    idx = np.arange(P)
+    rows = np.flatnonzero(ok)
+    b = np.interp(idx, rows, band[rows], period=P)
+    miss = np.flatnonzero(~ok)
+    q = p.copy()
+    for bb in (b[miss], np.full(len(miss), 0.02e-3)):
+        xy = outline_xy[miss] + bb[:, None] * out[miss]
+        t, _ = _cast(scene, xy, z0)
+        hit = np.isfinite(t)
+        q[miss[hit]] = np.column_stack([xy[hit], z0 - t[hit]])
+        miss = miss[~hit]
+        if not len(miss):
+            break
+    # still nothing under the outline (a gap in an open mesh): neighbours' heights
+    if len(miss):
+        have = np.flatnonzero(np.isfinite(q[:, 2]))
+        xy = outline_xy[miss] + b[miss, None] * out[miss]
+        q[miss] = np.column_stack([xy, np.interp(miss, have, q[have, 2], period=P)])
+    return q
+
+
+def _bridge(scene, p: np.ndarray, spacing: float) -> tuple[np.ndarray, tuple]:
+    """Fill the stretches where the loop leaves the face (module doc): between neighbours
+    more than 2 ``spacing`` apart in 3-D, points every ``spacing`` on the segment, moved to
+    the nearest point of the mesh (open3d ``compute_closest_points``); where two of those
+    land far apart (on two surfaces), the same again between them (3 levels).
+
+    Returns:
+        (M, 3) the loop with the filled points; (the largest distance [m] left between
+        neighbours of a filled stretch, its midpoint (3,) in H or None).
+    """
+    import open3d as o3d
+
+    def closest(q: np.ndarray) -> np.ndarray:
+        res = scene.compute_closest_points(o3d.core.Tensor(q.astype(np.float32)))
+        return res["points"].numpy().astype(float)
+
+    def fill(a: np.ndarray, b: np.ndarray, depth: int) -> list[np.ndarray]:
+        m = int(np.ceil(np.linalg.norm(b - a) / spacing)) - 1
+        q = closest(a + (np.arange(1, m + 1) / (m + 1))[:, None] * (b - a))
+        chain, out = np.vstack([a, q, b]), []
+        for k in range(len(chain) - 1):
+            out.append(chain[k:k + 1])
+            if depth and np.linalg.norm(chain[k + 1] - chain[k]) > 2.0 * spacing:
+                out += fill(chain[k], chain[k + 1], depth - 1)[1:]
+        return out
+
+    nxt = np.roll(p, -1, axis=0)
+    far = np.linalg.norm(nxt - p, axis=1) > 2.0 * spacing
+    if not far.any():
+        return p, (0.0, None)
+    parts, gap, where = [], 0.0, None
+    for i in range(len(p)):
+        if not far[i]:
+            parts.append(p[i:i + 1])
+            continue
+        chain = np.concatenate(fill(p[i], nxt[i], 3) + [nxt[i][None]])
+        d = np.linalg.norm(np.diff(chain, axis=0), axis=1)
+        k = int(np.argmax(d))
+        if d[k] > gap:
+            gap, where = float(d[k]), 0.5 * (chain[k] + chain[k + 1])
+        parts.append(chain[:-1])
+    return np.concatenate(parts), (gap, where)
 
 
 def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray,
@@ -234,31 +327,99 @@ def _smoothed_edge(scene, p: np.ndarray, outline_xy: np.ndarray, out: np.ndarray
     return q
 
 
-def _implausible(p: np.ndarray, fig: dict) -> str:
-    """'' or why the loop is not a plausible window edge (module doc); fills ``fig``."""
-    if fig["missing"] > MAX_MISSING:
-        return (f"no front face found beside {fig['missing']:.0%} of the opening's outline "
-                f"(within 10 mm of it)")
+def _forward_only(p: np.ndarray, outline_xy: np.ndarray) -> np.ndarray:
+    """The loop without its back-tracking spikes: each point's place along the opening's
+    outline (the arc position of its nearest outline point, scipy cKDTree) must not go back
+    by more than 1 mm from the furthest reached so far (a filled stretch snapped onto a wall
+    beside a corner can run back and forth; a climb keeps its place). Points that go back
+    are dropped; the loop keeps its order."""
+    from scipy.spatial import cKDTree
+
+    seg = np.linalg.norm(np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
+    L = float(seg.sum())
+    pos = s[cKDTree(outline_xy).query(p[:, :2])[1]]
+    pos = pos - pos[0]
+    pos = np.where(pos < -0.5 * L, pos + L, pos)
+    out = np.unwrap(pos * (2 * np.pi / L)) * (L / (2 * np.pi))
+    keep = out >= np.maximum.accumulate(out) - 1e-3
+    return p[keep] if keep.sum() >= 16 else p
+
+
+def _crossings(p: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
+    """Plan-view crossings of two non-neighbouring segments (i, i+1), (j, j+1), i < j, of the
+    closed loop ``p`` (N, 3) whose heights there differ by less than ``CROSS_DZ`` (3-D
+    self-intersections): [(i, j, (x, y, z) [m])]."""
+    a, b = p, np.roll(p, -1, axis=0)
+    n = len(p)
+    lo, hi = np.minimum(a[:, :2], b[:, :2]), np.maximum(a[:, :2], b[:, :2])
+    found = []
+    for s0 in range(0, n, 512):  # blocks: (512, N) pair tests
+        i = np.arange(s0, min(n, s0 + 512))
+        cand = ((lo[i, None, 0] <= hi[None, :, 0]) & (lo[None, :, 0] <= hi[i, None, 0])
+                & (lo[i, None, 1] <= hi[None, :, 1]) & (lo[None, :, 1] <= hi[i, None, 1]))
+        gap = np.arange(n)[None, :] - i[:, None]
+        cand &= (gap > 1) & ~((i[:, None] == 0) & (np.arange(n)[None, :] == n - 1))
+        ii, jj = np.nonzero(cand)
+        ii = i[ii]
+        if not len(ii):
+            continue
+        d1, d2 = b[ii, :2] - a[ii, :2], b[jj, :2] - a[jj, :2]
+        w = a[jj, :2] - a[ii, :2]
+        den = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+        good = np.abs(den) > 1e-18
+        den = np.where(good, den, 1.0)
+        u = (w[:, 0] * d2[:, 1] - w[:, 1] * d2[:, 0]) / den
+        v = (w[:, 0] * d1[:, 1] - w[:, 1] * d1[:, 0]) / den
+        za = a[ii, 2] + u * (b[ii, 2] - a[ii, 2])
+        zb = a[jj, 2] + v * (b[jj, 2] - a[jj, 2])
+        hit = good & (u > 0) & (u < 1) & (v > 0) & (v < 1) & (np.abs(za - zb) < CROSS_DZ)
+        found += [(int(ii[k]), int(jj[k]), np.r_[a[ii[k], :2] + u[k] * d1[k], za[k]])
+                  for k in np.flatnonzero(hit)]
+    return found
+
+
+def _untangle(p: np.ndarray, max_share: float = SWALLOWTAIL) -> tuple[np.ndarray, list]:
+    """The loop with its small self-intersection loops cut out (the "swallowtails" of an
+    offset curve at a corner, where neighbouring profiles' face starts cross): a crossing
+    whose smaller side holds at most ``max_share`` of the points is replaced by the crossing
+    point. Returns the loop and the crossings left (the first of them names a real one)."""
+    for _ in range(64):
+        found = _crossings(p)
+        if not found:
+            return p, []
+        n = len(p)
+        small = [(min(j - i, n - (j - i)), i, j, x) for i, j, x in found]
+        size, i, j, x = min(small, key=lambda t: t[0])
+        if size > max_share * n:
+            return p, found
+        if j - i <= n - (j - i):
+            p = np.vstack([p[:i + 1], x[None], p[j + 1:]])
+        else:  # the small side runs over the seam
+            p = np.vstack([x[None], p[i + 1:j + 1]])
+    return p, _crossings(p)
+
+
+def _implausible(p: np.ndarray, fig: dict, gap: tuple, crossings: list) -> str:
+    """'' or why the loop is not a window's front boundary (module doc); fills ``fig``."""
     if len(p) < 16:
-        return "fewer than 16 edge points"
+        return "no front boundary: fewer than 16 edge points"
     d = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
     fig["length"] = float(d.sum())
     dz = np.abs(np.roll(p[:, 2], -1) - p[:, 2])
     fig["max_step"] = float(dz.max())
-    c = p.mean(axis=0)
-    normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
-    fig["warp"] = float(np.abs((p - c) @ normal).max())
-    size = float(np.ptp(p[:, :2], axis=0).max())
-    if fig["max_step"] > MAX_STEP:
-        i = int(np.argmax(dz))
-        return (f"the edge jumps {fig['max_step'] * 1e3:.1f} mm in height at "
-                f"({p[i, 0] * 1e3:.0f}, {p[i, 1] * 1e3:.0f}) mm: the line leaves the face "
-                f"onto another surface")
-    if fig["length"] > MAX_LENGTH_RATIO * fig["outline_length"]:
-        ratio = fig["length"] / fig["outline_length"]
-        return (f"loop {fig['length'] * 1e3:.0f} mm long, {ratio:.2f} x the opening's outline "
-                f"({fig['outline_length'] * 1e3:.0f} mm)")
-    if fig["warp"] > MAX_WARP * size:
-        return (f"loop not planar enough for a window edge: {fig['warp'] * 1e3:.0f} mm off its "
-                f"best-fit plane over a {size * 1e3:.0f} mm window")
+    fig["height_range"] = float(np.ptp(p[:, 2]))
+    # where the loop climbs: stretches steeper than 60 deg to the face plane (their length)
+    dzs = np.roll(p[:, 2], -1) - p[:, 2]
+    steep = np.abs(dzs) > np.sin(np.radians(60.0)) * np.maximum(d, 1e-12)
+    fig["steep_length"] = float(d[steep].sum())
+    if gap[0] > MAX_BRIDGE_GAP:
+        w = gap[1]
+        return (f"not closed: at ({w[0] * 1e3:.0f}, {w[1] * 1e3:.0f}, {w[2] * 1e3:.0f}) mm "
+                f"the front boundary has a {gap[0] * 1e3:.1f} mm gap with no surface in it "
+                f"(a hole or a seam between parts of the mesh)")
+    if crossings:
+        x = crossings[0][2]
+        return (f"self-intersecting: the loop crosses itself at ({x[0] * 1e3:.0f}, "
+                f"{x[1] * 1e3:.0f}, {x[2] * 1e3:.0f}) mm")
     return ""

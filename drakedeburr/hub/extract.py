@@ -11,12 +11,14 @@ Steps (each refusal raises an InputError that says which step and what was found
    at the front-most point of the spoke region (``origin_M`` overrides), X_H = the mesh X axis
    projected (or Y when X is along the axis).
 3. Openings (:mod:`drakedeburr.hub.openings`): plan-view rays along -Z_H; windows, centre
-   bore, lug holes and openings too narrow for the burr (``min_window_width``, derived from
-   the burr diameter and the clearance) are told apart, every opening that is not a window is
-   reported with its reason.
+   bore, lug holes and openings no burr of the tool library fits (each burr's need: head +
+   2 x clearance, the small burr tried before an opening is refused) are told apart, every
+   opening that is not a window is reported with its reason and the measured width.
 4. Edge of each window (:mod:`drakedeburr.hub.edgeline`): where the front face ends at the
-   opening (the face side of a round or chamfer), by profiles of ray casts from the front;
-   a loop whose length, steps or planarity are implausible is rejected with its reason.
+   opening (the face side of a round or chamfer), by profiles of ray casts from the front,
+   following the boundary where it leaves the face (down a spoke flank, along the rim's
+   lip): a 3-D loop. It is rejected only when there is no front boundary, it is not closed
+   or it intersects itself, and the reason says where.
 5. Loops are oriented counter-clockwise seen from +Z_H, resampled at equal arc length
    (``spacing``, the source's "initial CL points") and numbered CCW from +X_H; ``t_H``
    holds chord tangents, the wall and face normals are left None (the importer reads them off
@@ -30,10 +32,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drakedeburr.errors import InputError, NoCuttableWindow
+from drakedeburr.errors import (
+    InputError,
+    NoCuttableWindow,
+    describe_numerical_error,
+    numerical_errors,
+)
 from drakedeburr.hub.front import FrontDecision, decide_front, front_from_user
 from drakedeburr.hub.openings import (
     DEFAULT_BURR_DIAMETER,
+    DEFAULT_BURR_DIAMETERS,
     DEFAULT_CLEARANCE,
     find_openings,
 )
@@ -197,14 +205,24 @@ def _window_edges(scene, scan, spacing: float, source: str):
 
     kept, rejected, figures = [], [], []
     for op in scan.windows:
-        outline = opening_outline(scene, op.mask, scan.grid, scan.pixel, scan.z0,
-                                  min(spacing, 0.5e-3))
-        line = deburr_line(scene, outline, scan.z0)
         ang = float(np.arctan2(op.center_xy[1], op.center_xy[0]) % (2 * np.pi))
         entry = {"center_xy_mm": [round(float(v) * 1e3, 2) for v in op.center_xy],
-                 "width_mm": round(op.width * 1e3, 2),
-                 **{k: round(v * (1e3 if k != "missing" else 1.0), 3)
-                    for k, v in line.figures.items()}}
+                 "width_mm": round(op.width * 1e3, 2)}
+        try:
+            outline = opening_outline(scene, op.mask, scan.grid, scan.pixel, scan.z0,
+                                      min(spacing, 0.5e-3))
+            line = deburr_line(scene, outline, scan.z0)
+        except InputError:
+            raise
+        except numerical_errors() as exc:  # degenerate geometry: this window, named
+            why = ("numerical failure while tracing the front boundary: "
+                   + describe_numerical_error(exc))
+            log.warning("%s: opening at (%.0f, %.0f) mm rejected as a window: %s", source,
+                        op.center_xy[0] * 1e3, op.center_xy[1] * 1e3, why)
+            rejected.append({**entry, "reason": why})
+            continue
+        entry.update({k: round(v * (1e3 if k != "missing" else 1.0), 3)
+                      for k, v in line.figures.items()})
         if line.reason:
             log.warning("%s: opening at (%.0f, %.0f) mm rejected as a window: %s", source,
                         op.center_xy[0] * 1e3, op.center_xy[1] * 1e3, line.reason)
@@ -222,6 +240,15 @@ def _window_edges(scene, scan, spacing: float, source: str):
     return kept, rejected, [f for _, f in sorted(figures, key=lambda t: t[0])]
 
 
+def _burrs(burr_diameter: float, burr_diameters) -> tuple[float, ...]:
+    """The burrs an opening is judged by (see :func:`extract_window_edges`)."""
+    if burr_diameters:
+        return tuple(float(b) for b in burr_diameters)
+    if abs(burr_diameter - DEFAULT_BURR_DIAMETER) < 1e-12:
+        return DEFAULT_BURR_DIAMETERS
+    return (float(burr_diameter),)
+
+
 def extract_window_edges(
     mesh,
     *,
@@ -235,6 +262,7 @@ def extract_window_edges(
     clearance: float = DEFAULT_CLEARANCE,
     min_window_width: float | None = None,
     expected_windows: int | None = None,
+    burr_diameters: tuple[float, ...] | None = None,
 ) -> ExtractionResult:
     """Find the window edge loops of a hub mesh (see module doc).
 
@@ -246,9 +274,12 @@ def extract_window_edges(
         front: "auto" or the file axis the front faces ("+z", "-y", ...).
         spacing: arc-length spacing of the returned loop points [m].
         pixel: plan-view grid step for finding openings [m].
-        burr_diameter, clearance: the burr and the clearance it needs [m]; they set the
-            narrowest window (:func:`drakedeburr.hub.openings.min_window_width`) unless
-            ``min_window_width`` [m] is given.
+        burr_diameter, clearance: the burr and the clearance it needs [m].
+        burr_diameters: every burr that may cut [m]; None: the tool library's
+            (``DEFAULT_BURR_DIAMETERS``) when ``burr_diameter`` is the standard one, else
+            ``burr_diameter`` alone. An opening is a window candidate when one of them fits
+            (:func:`drakedeburr.hub.openings.min_window_width`) unless ``min_window_width``
+            [m] is given.
         expected_windows: if given, a different count is an error.
 
     Returns:
@@ -258,27 +289,38 @@ def extract_window_edges(
         InputError: no opening, no plausible window edge, or the wrong number of windows;
             the message names the openings and why each was not used.
     """
+    burrs = _burrs(burr_diameter, burr_diameters)
     min_w = (min_window_width if min_window_width is not None
-             else _min_window_width(burr_diameter, clearance))
-    frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
-                                source=source)
-    v_H = _to_frame(mesh, frame.X_MH)
-    scene = _scene(v_H, mesh.faces)
-    r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
-    scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
-                         min_width=min_w, source=source)
+             else _min_window_width(burrs, clearance))
+    try:
+        frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
+                                    source=source)
+        v_H = _to_frame(mesh, frame.X_MH)
+        scene = _scene(v_H, mesh.faces)
+        r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
+        scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
+                             min_width=min_w, source=source, burrs=burrs, clearance=clearance)
+    except InputError:
+        raise
+    except numerical_errors() as exc:  # degenerate geometry: a named result, not a crash
+        axis = np.asarray(axis_M if axis_M is not None else [0.0, 0.0, 1.0], float)
+        raise NoCuttableWindow(
+            f"{source}: the hub frame and the through-openings could not be measured "
+            f"(numerical failure: {describe_numerical_error(exc)})", source=str(source),
+            axis=axis, openings=[], rejected=[]) from exc
     notes = {"axis_estimated": frame.estimated,
              "front": None if frame.front is None else frame.front.as_dict(frame.X_MH[:3, 2]),
              "min_window_width_mm": round(min_w * 1e3, 3),
+             "burrs_mm": [round(b * 1e3, 3) for b in burrs],
              "not_windows": [o.as_dict() for o in scan.not_windows],
              "watertight": bool(mesh.is_watertight)}
     kept, rejected, figures = _window_edges(scene, scan, spacing, source)
     notes.update(rejected=rejected, loops=figures)
     if not kept:
         why = "; ".join(f"{o['kind']} at r = {o['radius_mm']:.0f} mm: {o['reason']}"
-                        for o in notes["not_windows"][:6])
+                        for o in notes["not_windows"][:30])
         why += "".join(f"; rejected edge at {r['center_xy_mm']} mm: {r['reason']}"
-                       for r in rejected[:6])
+                       for r in rejected[:30])
         msg = (f"{source}: no window found looking along the hub axis "
                f"{np.round(frame.X_MH[:3, 2], 4)} (estimated={frame.estimated}); "
                f"{len(scan.openings)} through-openings: {why or 'none'}; pass the axis or "

@@ -13,10 +13,7 @@ in metres or millimetres. Steps:
    dish unless ``front`` says, openings that are not windows listed with their reasons). The
    origin is then moved along the axis onto the front face of the centre (median height of the
    surface seen along -Z_H inside the innermost window radius).
-3. Edge normals from the mesh: ``n_face_H`` = normal of the surface just outside the loop,
-   ``n_wall_H`` = normal of the wall just below it (outward = into the opening; facets are
-   oriented by the side they must face, so an inconsistent winding does not matter),
-   ``t_H = n_wall_H x n_face_H``; a few neighbours averaged.
+3. Edge normals from the mesh (:mod:`drakedeburr.hub.edge_normals`).
 4. Convex collision pieces (:mod:`drakedeburr.hub.import_collision`): CoACD plus targeted cuts
    for a closed mesh, a probe-checked surface shell for an open one.
 5. Files are written into a temporary folder next to the target and renamed into place. The
@@ -38,7 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.errors import InputError, NoCuttableWindow
+from drakedeburr.errors import (
+    InputError,
+    NoCuttableWindow,
+    describe_numerical_error,
+    numerical_errors,
+)
+from drakedeburr.hub.edge_normals import edge_normals as _edge_normals
 from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 from drakedeburr.hub.types import WindowEdge
 
@@ -46,11 +49,10 @@ __all__ = ["ImportOptions", "ImportedHub", "import_mesh", "IMPORT_VERSION", "DIA
 
 log = logging.getLogger(__name__)
 
-IMPORT_VERSION = 4  # 4: pieces held to 1 mm above the front near the windows (front_band)
-# 3: edge band filtered along the loop (hub/edgeline.py "Noise"); shell patch
+# 11: into-the-opening from the outline on steep stretches; 5-10: 3-D loops, burrs (issue 42);
+# 4: front_band; 3: band filter
+IMPORT_VERSION = 11
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
-_NORMAL_PROBE = 1.5e-3  # [m] how far from the edge the face/wall normals are sampled
-_NORMAL_SIDE = 0.3e-3  # [m] sideways offset of those samples off the corner
 
 Progress = Callable[[int, int, str], None] | None
 
@@ -65,8 +67,10 @@ class ImportOptions:
             estimate it.
         front: "auto" (decided from the mesh, see :mod:`drakedeburr.hub.front`) or the file
             axis the front face looks along: "+x", "-x", "+y", "-y", "+z", "-z".
-        burr_diameter, clearance: the burr and the clearance it needs [m]: openings narrower
-            than :func:`drakedeburr.hub.openings.min_window_width` are not windows.
+        burr_diameter, clearance: the burr and the clearance it needs [m].
+        burr_diameters: every burr of the tool library [m] (None: see
+            :func:`drakedeburr.hub.extract.extract_window_edges`): an opening no burr fits
+            with the clearance (:func:`drakedeburr.hub.openings.burr_need`) is not a window.
         min_window_width: [m] overrides that bound when given.
         expected_windows: fail unless this many windows are found (None: any number >= 1).
         edge_spacing: arc-length spacing of the stored edge points [m].
@@ -114,6 +118,7 @@ class ImportOptions:
     axis_M: tuple[float, float, float] | None = None
     front: str = "auto"
     burr_diameter: float = DEFAULT_BURR_DIAMETER
+    burr_diameters: tuple[float, ...] | None = None
     clearance: float = DEFAULT_CLEARANCE
     min_window_width: float | None = None
     expected_windows: int | None = None
@@ -227,42 +232,6 @@ def _front_origin_offset(scene, r_inner: float, z_top: float) -> float:
     return float(np.median(z_top - t)) if len(t) else 0.0
 
 
-def _smooth(v: np.ndarray, k: int = 3) -> np.ndarray:
-    """Average each row with its k neighbours on both sides (closed loop) and normalise."""
-    out = sum(np.roll(v, s, axis=0) for s in range(-k, k + 1))
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
-
-
-def _edge_normals(scene, face_normals: np.ndarray, p: np.ndarray):
-    """(n_wall, n_face, t) (N, 3) each for a CCW loop ``p`` (N, 3) in H (see module doc)."""
-    import open3d as o3d
-
-    chord = np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0)
-    left = np.c_[-chord[:, 1], chord[:, 0], np.zeros(len(p))]  # into the opening (plan view)
-    left /= np.linalg.norm(left, axis=1, keepdims=True)
-    z = np.array([0.0, 0.0, 1.0])
-
-    def normal_at(q: np.ndarray) -> np.ndarray:
-        res = scene.compute_closest_points(o3d.core.Tensor(q.astype(np.float32)))
-        return face_normals[res["primitive_ids"].numpy().astype(np.int64)]
-
-    # facets of an open mesh may face either way: orient by the side they must face
-    n_wall = normal_at(p + _NORMAL_SIDE * left - _NORMAL_PROBE * z)
-    n_wall *= np.where(np.einsum("ij,ij->i", n_wall, left) < 0, -1.0, 1.0)[:, None]
-    bad = np.einsum("ij,ij->i", n_wall, left) < 0.3
-    n_wall[bad] = left[bad]
-    n_face = normal_at(p - _NORMAL_PROBE * left + _NORMAL_SIDE * z)
-    n_face *= np.where(n_face[:, 2] < 0, -1.0, 1.0)[:, None]
-    bad = n_face[:, 2] < 0.3
-    n_face[bad] = z
-    n_wall, n_face = _smooth(n_wall), _smooth(n_face)
-    t = np.cross(n_wall, n_face)
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    flip = np.einsum("ij,ij->i", t, chord) < 0
-    t[flip] *= -1.0
-    return n_wall, n_face, t
-
-
 # --------------------------------------------------------------------------- steps
 def _scene(V: np.ndarray, F: np.ndarray):
     import open3d as o3d
@@ -349,6 +318,7 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     ext = extract_window_edges(mesh, source=str(path), axis_M=options.axis_M,
                                front=options.front, spacing=options.edge_spacing,
                                burr_diameter=options.burr_diameter,
+                               burr_diameters=options.burr_diameters,
                                clearance=options.clearance,
                                min_window_width=options.min_window_width,
                                expected_windows=options.expected_windows)
@@ -366,10 +336,25 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     windows, walls = [], []
     for w, xy in zip(ext.windows, ext.outlines_xy, strict=True):
         p = w.p_HE - np.array([0.0, 0.0, dz])
-        n_wall, n_face, t = _edge_normals(scene, normals, p)
-        windows.append(WindowEdge(index=w.index, kind=w.kind, p_HE=p, t_H=t, n_wall_H=n_wall,
-                                  n_face_H=n_face))
+        try:
+            n_wall, n_face, t = _edge_normals(scene, normals, p, xy)
+        except numerical_errors() as exc:  # this window, named; the others go on
+            c = p.mean(axis=0)
+            why = f"numerical failure reading its normals: {describe_numerical_error(exc)}"
+            log.warning("%s: window at (%.0f, %.0f) mm dropped: %s", path, c[0] * 1e3,
+                        c[1] * 1e3, why)
+            ext.notes["rejected"].append({"center_xy_mm": [round(float(c[0]) * 1e3, 2),
+                                                           round(float(c[1]) * 1e3, 2)],
+                                          "reason": why})
+            continue
+        windows.append(WindowEdge(index=len(windows), kind=w.kind, p_HE=p, t_H=t,
+                                  n_wall_H=n_wall, n_face_H=n_face))
         walls.append(_wall_line(xy, p))
+    if not windows:
+        raise NoCuttableWindow(f"{path}: no window left: "
+                               + "; ".join(r["reason"] for r in ext.notes["rejected"]),
+                               source=str(path), axis=X_MH[:3, 2],
+                               openings=ext.notes["not_windows"], rejected=ext.notes["rejected"])
     return X_MH, V_H, F, windows, ext.notes, walls
 
 
@@ -483,6 +468,19 @@ def _mass_properties(path: Path, V_H, F, hulls, closed: bool, density: float):
             float(mp.volume), how)
 
 
+def _warn_pieces(path: Path, coll: dict, options: ImportOptions) -> None:
+    """WARNINGs for pieces that reach into an opening or stand proud of the front."""
+    if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
+        log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
+                    path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
+    if coll["front_probes_inside_pieces"]:
+        log.warning("%s: %d probes above the front surface lie inside collision pieces (pieces "
+                    "stand more than %.1f mm proud within %.0f mm of a window, %.1f mm further "
+                    "out): the planner may find the tool blocked there", path,
+                    coll["front_probes_inside_pieces"], options.front_reach * 1e3,
+                    options.front_band * 1e3, options.front_reach_far * 1e3)
+
+
 # --------------------------------------------------------------------------- main
 def _from_cache(target: Path, key: str, name: str, path: Path, sha: str,
                 t_start: float) -> ImportedHub | None:
@@ -559,21 +557,29 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     notes["dropped"] = tyre
     if progress is not None:
         progress(2, steps, "collision pieces (CoACD)" if closed else "collision pieces (shell)")
-    pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)
-    if coll["max_window_intrusion_mm"] > options.window_reach * 1e3:
-        log.warning("%s: collision pieces reach %.2f mm into a window opening (allowed %.2f mm)",
-                    path, coll["max_window_intrusion_mm"], options.window_reach * 1e3)
-    if coll["front_probes_inside_pieces"]:
-        log.warning("%s: %d probes above the front surface lie inside collision pieces (pieces "
-                    "stand more than %.1f mm proud within %.0f mm of a window, %.1f mm further "
-                    "out): the planner may find the tool blocked there", path,
-                    coll["front_probes_inside_pieces"], options.front_reach * 1e3,
-                    options.front_band * 1e3, options.front_reach_far * 1e3)
-    if progress is not None:
-        progress(3, steps, "write folder")
-    hulls = [Manifold.hull_points(pv) for pv in pieces]
-    mass, com, I_com, volume, how = _mass_properties(path, V_H, F, hulls, closed,
-                                                     options.density)
+    try:
+        pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)
+    except InputError:
+        raise
+    except numerical_errors() as exc:  # CoACD / Qhull / manifold3d on degenerate pieces
+        raise NoCuttableWindow(
+            f"{path}: {len(windows)} windows found, but the collision model could not be "
+            f"built ({'CoACD pieces' if closed else 'surface shell pieces'}: "
+            f"{describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],
+            openings=notes["not_windows"], rejected=notes["rejected"]) from exc
+    _warn_pieces(path, coll, options)
+    progress is not None and progress(3, steps, "write folder")
+    try:
+        hulls = [Manifold.hull_points(pv) for pv in pieces]
+        mass, com, I_com, volume, how = _mass_properties(path, V_H, F, hulls, closed,
+                                                         options.density)
+    except numerical_errors() as exc:
+        if isinstance(exc, InputError):  # an InputError (a ValueError) passes as it is
+            raise
+        raise NoCuttableWindow(
+            f"{path}: the mass properties of the collision pieces could not be computed "
+            f"({describe_numerical_error(exc)})", source=str(path), axis=X_MH[:3, 2],
+            openings=notes["not_windows"], rejected=notes["rejected"]) from exc
     hull_volume = float(sum(h.volume() for h in hulls))
     summary = import_summary(name, path, sha, key, lm.unit, closed, X_MH, options, notes, V_H,
                              F, volume, how, diameter, mass, com, windows, pieces, hull_volume,

@@ -99,6 +99,7 @@ def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H
                    "X_MH": np.round(X_MH, 9).tolist(), "options": _options_json(options),
                    "front": notes.get("front"),
                    "min_window_width_mm": notes["min_window_width_mm"],
+                   "burrs_mm": notes.get("burrs_mm"),
                    "not_windows": notes["not_windows"], "rejected": notes["rejected"],
                    "loops": notes["loops"], "dropped": notes.get("dropped")},
         "frame": "H: origin on the hub axis at the front face of the centre, +Z out of the "

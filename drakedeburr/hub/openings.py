@@ -9,10 +9,17 @@ inscribed circle, radius of its centre, roundness) and classified:
 * ``lug hole``: round (area <= 1.35 x its inscribed circle's), <= 35 mm wide, at most half
   the hub's radius from the axis, one of >= 3 openings of that size (+-15 %) on one circle
   (+-3 mm): the bolt pattern;
-* ``too narrow``: narrower than the burr needs (:func:`min_window_width`); ``slot`` in the
-  reason when it is long (length > 3 x width), e.g. a vent slot;
+* ``too narrow``: no burr of the tool library fits it: narrower than the smallest burr's
+  need (:func:`burr_need`: head diameter + 2 x clearance; the burrs are tried smallest need
+  first, so the small burr is tried before an opening is refused); the reason gives the
+  measured width and each burr's need, and says ``vent slot`` when it is long
+  (length > 3 x width);
 * ``noise``: fewer than 4 grid cells (not reported);
-* otherwise a ``window``.
+* otherwise a ``window`` (a candidate: the planner and the verifier then judge reach and
+  clearance with the real tool).
+
+The burrs come from the caller (the CLI passes the tool library's heads,
+``drakedeburr.cell.tools.BURR_HEADS``); the hub stage does not import the cell.
 
 Every opening that is not a window (except noise) is logged at WARNING with its reason and
 listed in the result.
@@ -26,27 +33,31 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Opening", "OpeningScan", "find_openings", "min_window_width", "WIDTH_FACTOR",
-           "DEFAULT_BURR_DIAMETER", "DEFAULT_CLEARANCE"]
+__all__ = ["Opening", "OpeningScan", "find_openings", "min_window_width", "burr_need",
+           "DEFAULT_BURR_DIAMETER", "DEFAULT_BURR_DIAMETERS", "DEFAULT_CLEARANCE"]
 
 log = logging.getLogger(__name__)
 
 DEFAULT_BURR_DIAMETER = 12e-3  # [m] = drakedeburr.cell.tools.BURR.head_diameter (tested)
+#: [m] the head diameters of the tool library, largest first
+#: (= drakedeburr.cell.tools.BURR_HEADS, tested)
+DEFAULT_BURR_DIAMETERS = (12e-3, 6e-3)
 DEFAULT_CLEARANCE = 2e-3  # [m] = drakedeburr.config.Tolerances().min_clearance (tested)
-WIDTH_FACTOR = 2.5  # the catalogue's plannable window: >= 2.5 burr diameters (issue 16)
 
 
-def min_window_width(burr_diameter: float = DEFAULT_BURR_DIAMETER,
+def burr_need(burr_diameter: float = DEFAULT_BURR_DIAMETER,
+              clearance: float = DEFAULT_CLEARANCE) -> float:
+    """Narrowest opening [m] a burr of ``burr_diameter`` [m] passes with ``clearance`` [m] to
+    both walls: ``burr_diameter + 2 clearance`` (12 mm burr, 2 mm: 16 mm; 6 mm burr: 10 mm)."""
+    return burr_diameter + 2.0 * clearance
+
+
+def min_window_width(burr_diameter: float | tuple[float, ...] = DEFAULT_BURR_DIAMETERS,
                      clearance: float = DEFAULT_CLEARANCE) -> float:
-    """Narrowest opening [m] that counts as a window for a burr of ``burr_diameter`` [m].
-
-    The larger of two bounds: the burr head must pass with ``clearance`` to both walls
-    (``burr_diameter + 2 clearance``), and the planner needs room to tilt the tool within its
-    cone and to turn around a slot's end; the hubs it is designed and tested for (the random
-    catalogue) keep every window >= ``WIDTH_FACTOR`` burr diameters wide. With the 12 mm burr
-    and 2 mm clearance: max(16, 30) = 30 mm; with a 6 mm burr 15 mm.
-    """
-    return max(burr_diameter + 2.0 * clearance, WIDTH_FACTOR * burr_diameter)
+    """Narrowest opening [m] that is a window candidate: the smallest :func:`burr_need` of
+    the burrs ``burr_diameter`` (one diameter or several) [m]."""
+    ds = (burr_diameter,) if np.isscalar(burr_diameter) else tuple(burr_diameter)
+    return min(burr_need(float(d), clearance) for d in ds)
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,7 +155,9 @@ def _lug_pattern(cands: list[dict], r_max: float) -> set[int]:
 
 def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
                   min_width: float | None = None, source: str = "mesh",
-                  quiet: bool = False) -> OpeningScan:
+                  quiet: bool = False,
+                  burrs: tuple[float, ...] = DEFAULT_BURR_DIAMETERS,
+                  clearance: float = DEFAULT_CLEARANCE) -> OpeningScan:
     """Cast the plan-view grid along -Z_H and classify the openings (module doc).
 
     Args:
@@ -152,14 +165,17 @@ def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
         r_max: largest distance of the mesh from the axis [m].
         z_top: height above the mesh for the ray origins [m].
         pixel: grid step [m].
-        min_width: narrowest window [m]; default :func:`min_window_width`.
+        min_width: narrowest window [m]; default :func:`min_window_width` of ``burrs``.
         source: name for messages.
+        burrs: the burr head diameters of the tool library [m] (the refusal names each one's
+            need); clearance: what each needs to both walls [m].
         quiet: log the openings that are not windows at DEBUG instead of WARNING.
     """
     import open3d as o3d
     from scipy import ndimage
 
-    min_width = min_window_width() if min_width is None else min_width
+    burrs = tuple(sorted(float(b) for b in burrs)) or (DEFAULT_BURR_DIAMETER,)
+    min_width = min_window_width(burrs, clearance) if min_width is None else min_width
     n_px = int(np.ceil(2 * r_max / pixel)) + 3
     g = (np.arange(n_px) - (n_px - 1) / 2) * pixel
     gx, gy = np.meshgrid(g, g, indexing="ij")
@@ -178,7 +194,8 @@ def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
             continue  # noise of the grid
         cands.append({"label": lab, "mask": mask, **_measure(mask, g, pixel)})
     lugs = _lug_pattern(cands, r_max)
-    openings = [_classify(c, centre, lugs, min_width) for c in cands]
+    needs = [(b, burr_need(b, clearance)) for b in burrs]
+    openings = [_classify(c, centre, lugs, min_width, needs) for c in cands]
     for o in openings:
         if o.kind != "window":
             level = logging.DEBUG if quiet else (
@@ -190,17 +207,22 @@ def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
     return OpeningScan(g, pixel, z_top, hit, openings)
 
 
-def _classify(c: dict, centre: int, lugs: set[int], min_width: float) -> Opening:
+def _classify(c: dict, centre: int, lugs: set[int], min_width: float,
+              needs: list[tuple[float, float]]) -> Opening:
     if c["label"] == centre or c["radius"] < 0.25 * c["width"]:
         kind, reason = "centre bore", "it contains the hub axis (centre bore)"
     elif c["label"] in lugs:
         kind, reason = "lug hole", (f"round {c['width'] * 1e3:.1f} mm hole, one of a bolt "
                                     f"pattern on a {2 * c['radius'] * 1e3:.1f} mm circle")
     elif c["width"] < min_width:
-        what = "slot" if c["length"] > 3.0 * c["width"] else "opening"
-        kind, reason = "too narrow", (f"{what} {c['width'] * 1e3:.1f} mm wide, narrower than "
-                                      f"the {min_width * 1e3:.1f} mm a window needs for the "
-                                      "burr (see min_window_width)")
+        what = "vent slot" if c["length"] > 3.0 * c["width"] else "opening"
+        each = ", ".join(f"the {b * 1e3:g} mm burr needs {n * 1e3:.1f} mm" for b, n in needs)
+        own = min(n for _, n in needs) if needs else 0.0
+        extra = ("" if abs(own - min_width) < 1e-9
+                 else f"; the narrowest window asked for is {min_width * 1e3:.1f} mm")
+        kind, reason = "too narrow", (f"{what} {c['width'] * 1e3:.1f} mm wide (inscribed "
+                                      f"circle): no burr fits with the clearance: {each}"
+                                      f"{extra}")
     else:
         kind, reason = "window", ""
     return Opening(c["label"], kind, reason, c["area"], c["width"], c["length"],

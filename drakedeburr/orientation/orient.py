@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Literal
@@ -42,13 +43,41 @@ class OrientOptions:
         smooth_sigma: kernel standard deviation [CL points] (the source gives no value).
         pso: swarm settings (source: 50, 200, 0.8, 2, 2; seeded).
         exact: sequential-convex settings.
+        max_frame_slope: [rad] the local frames' tangent is the edge's with its slope to the
+            face plane (X_H Y_H) limited to this (issue 42: a real wheel's loop climbs spoke
+            flanks at 70-90 deg, where an axis perpendicular to the edge would be nearly
+            horizontal). On such a stretch the burr leads the edge by the difference, at most
+            90 deg - 45 deg = 45 deg: the largest lead at which a 90 deg cone still touches the
+            edge line with its flank (a line meets the cone tangentially only at >= the
+            half-angle, 45 deg, to its axis). Flat loops (every bundled hub) are unchanged.
     """
 
     second_difference_weight: float = 0.0
+    max_frame_slope: float = math.radians(45.0)
     smooth: bool | None = None
     smooth_sigma: float = 2.0
     pso: PsoOptions = field(default_factory=PsoOptions)
     exact: ExactOptions = field(default_factory=ExactOptions)
+
+
+def slope_limited_tangents(t_H: np.ndarray, n_H: np.ndarray, max_slope: float) -> np.ndarray:
+    """(M, 3) unit tangents ``t_H`` (M, 3) with their slope to the X_H Y_H plane limited to
+    ``max_slope`` [rad], keeping the sign of their climb. The plan direction of a limited
+    tangent is ``n x Z_H`` of its inner-side normal ``n_H`` (along a CCW loop, across the
+    normal: the plan direction of a steep tangent itself is noise, and one along the normal
+    would fold the frame). Without a steep tangent ``t_H`` itself is returned (bit for bit)."""
+    t = np.asarray(t_H, float) / np.linalg.norm(t_H, axis=1, keepdims=True)
+    slope = np.arcsin(np.clip(np.abs(t[:, 2]), 0.0, 1.0))
+    steep = slope > max_slope
+    if not steep.any():  # the input itself, not its re-normalised copy: a flat loop's frames
+        return np.asarray(t_H, float)  # are bit for bit those before the limit existed
+    h = np.cross(np.asarray(n_H, float)[steep], [0.0, 0.0, 1.0])
+    h[:, 2] = 0.0
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
+    out = t.copy()
+    out[steep] = (math.cos(max_slope) * h
+                  + math.sin(max_slope) * np.sign(t[steep, 2])[:, None] * np.array([0, 0, 1.0]))
+    return out
 
 
 def _bounds_for(kind: str, params: ProcessParameters) -> OrientationBounds:
@@ -143,7 +172,8 @@ def orient_window(
     if n.shape != cl.p_HC.shape:
         raise InputError(f"window {cl.window_index}: n_H has shape {n.shape}, "
                          f"expected {cl.p_HC.shape} (one normal per CL point)")
-    R_HL = R_HL_from_normals(cl.t_H, n, name=f"window {cl.window_index}")
+    t_frame = slope_limited_tangents(cl.t_H, n, options.max_frame_slope)
+    R_HL = R_HL_from_normals(t_frame, n, name=f"window {cl.window_index}")
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)
     th = rep.x.reshape(prob.m, 2)

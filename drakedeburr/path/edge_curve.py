@@ -23,7 +23,8 @@ from scipy.interpolate import BSpline, make_interp_spline
 
 from drakedeburr.errors import InputError
 
-__all__ = ["EdgeCurve", "fit_edge_curve", "chord_parameters"]
+__all__ = ["EdgeCurve", "fit_edge_curve", "fit_faceted_curve", "facet_sagitta",
+           "chord_parameters", "polyline_fit_report"]
 
 # samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
 _GAUSS_ORDER = 8
@@ -326,6 +327,37 @@ def _dist_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return _norm(p - (a + t * ab))
 
 
+def _checked_loop(p: np.ndarray, name: str) -> np.ndarray:
+    """(N, 3) points of a closed loop, checked (N >= 5, finite, no repeated consecutive points;
+    a repeated closing point dropped)."""
+    p = np.asarray(p, float)
+    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 5:
+        raise InputError(f"{name}: need (N >= 5, 3) loop points, got shape {p.shape}")
+    if not np.isfinite(p).all():
+        bad = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
+        raise InputError(f"{name}: point {bad} is not finite: {p[bad]}")
+    if np.linalg.norm(p[0] - p[-1]) < 1e-12:
+        p = p[:-1]  # tolerate a repeated closing point
+    seg = np.linalg.norm(np.diff(np.vstack([p, p[:1]]), axis=0), axis=1)
+    if (seg < 1e-9 * seg.sum()).any():
+        bad = int(np.flatnonzero(seg < 1e-9 * seg.sum())[0])
+        raise InputError(f"{name}: points {bad} and {(bad + 1) % len(p)} coincide")
+    return p
+
+
+def _edge_curve(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
+    """The EdgeCurve of a periodic spline with the (N + 1,) data parameters ``u`` (the last
+    one, 1, the closing point's) of the (N, 3) points ``p``: the arc-length table on the data
+    parameters (Gauss-Legendre per span)."""
+    x, w = _GL8
+    t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
+    speed = np.linalg.norm(spline(t, nu=1), axis=-1)
+    ds = 0.5 * (speed * w).sum(-1) * np.diff(u)
+    s_table = np.concatenate([[0.0], np.cumsum(ds)])
+    return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
+                     length=float(s_table[-1]))
+
+
 def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     """Fit a closed cubic B-spline (NURBS with unit weights) through a closed polyline.
 
@@ -341,25 +373,171 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     Raises:
         InputError: too few points, non-finite values, or repeated consecutive points.
     """
-    p = np.asarray(p, float)
-    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 5:
-        raise InputError(f"{name}: need (N >= 5, 3) loop points, got shape {p.shape}")
-    if not np.isfinite(p).all():
-        bad = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
-        raise InputError(f"{name}: point {bad} is not finite: {p[bad]}")
-    if np.linalg.norm(p[0] - p[-1]) < 1e-12:
-        p = p[:-1]  # tolerate a repeated closing point
-    seg = np.linalg.norm(np.diff(np.vstack([p, p[:1]]), axis=0), axis=1)
-    if (seg < 1e-9 * seg.sum()).any():
-        bad = int(np.flatnonzero(seg < 1e-9 * seg.sum())[0])
-        raise InputError(f"{name}: points {bad} and {(bad + 1) % len(p)} coincide")
+    p = _checked_loop(p, name)
     u = chord_parameters(p)
-    spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
-    # arc-length table on the data parameters (Gauss-Legendre per span)
-    x, w = _GL8
-    t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
-    speed = np.linalg.norm(spline(t, nu=1), axis=-1)
-    ds = 0.5 * (speed * w).sum(-1) * np.diff(u)
-    s_table = np.concatenate([[0.0], np.cumsum(ds)])
-    return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
-                     length=float(s_table[-1]))
+    try:
+        spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
+    except (np.linalg.LinAlgError, ValueError) as exc:  # degenerate loop: named, not a crash
+        raise InputError(f"{name}: the periodic B-spline fit of its {len(p)} points failed "
+                         f"({type(exc).__name__}: {str(exc)[:160]})") from exc
+    return _edge_curve(spline, u, p)
+
+
+#: the smallest expected deviation of a data point from the true curve [m] (a point on a
+#: straight facet, or at a corner: the mesh's own vertex precision)
+FACET_POINT_SIGMA = 1e-6
+
+
+def facet_sagitta(p: np.ndarray, *, corner_angle: float = np.radians(1.0)) -> dict:
+    """How far the points of a polygonal loop (a low-poly mesh's edge, resampled along its
+    facets) can lie from the smooth curve the facets were cut from.
+
+    A mesher cuts a curve into chords within a chordal tolerance: a facet of length L on a
+    curve of curvature k lies up to k L^2 / 8 (its sagitta) off the curve, at its middle, and
+    on it at its corners. The curvature a corner implies is its turn over its shorter facet
+    (:func:`polyline_fit_report` splits the loop into facets), so a facet's sagitta is at
+    most ``turn * L_short / 8`` of either of its corners (the smaller: a long straight facet
+    beside a tight corner is straight, as a chord-tolerance mesher makes it), and a point's
+    expected deviation is that sagitta times ``4 x (1 - x)`` at the fraction x along its
+    facet (at least ``FACET_POINT_SIGMA``).
+
+    Returns:
+        ``{"sigma": (N,) [m], "facets": count, "facet_median": [m], "sagitta_max": [m]}``;
+        fewer than 3 corners: every point ``FACET_POINT_SIGMA`` (not a polygon).
+    """
+    p = np.asarray(p, float)
+    chord = np.roll(p, -1, axis=0) - p
+    length = _norm(chord)
+    unit = chord / np.maximum(length, 1e-300)[:, None]
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
+    s = np.concatenate([[0.0], np.cumsum(length)])
+    pos, tot = _corners(turn, s, corner_angle, 2.5 * float(np.median(length)))
+    if len(pos) < 3:
+        return {"sigma": np.full(len(p), FACET_POINT_SIGMA), "facets": int(len(pos)),
+                "facet_median": float(s[-1]), "sagitta_max": 0.0}
+    total = s[-1]
+    facet = np.diff(np.r_[pos, pos[0] + total])
+    corner_sag = tot * np.minimum(facet, np.roll(facet, 1)) / 8.0  # facet k runs corner k->k+1
+    sag = np.minimum(corner_sag, np.roll(corner_sag, -1))
+    k = (np.searchsorted(pos, s[:-1], side="right") - 1) % len(pos)
+    x = np.mod(s[:-1] - pos[k], total) / facet[k]
+    sigma = np.maximum(4.0 * x * (1.0 - x) * sag[k], FACET_POINT_SIGMA)
+    return {"sigma": sigma, "facets": int(len(pos)), "facet_median": float(np.median(facet)),
+            "sagitta_max": float(sag.max())}
+
+
+def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
+                      corner_angle: float = np.radians(1.0)) -> EdgeCurve:
+    """A closed cubic B-spline that smooths a polygonal loop within its facets' chord error
+    (issue 42: the interpolating fit of a low-poly mesh's edge bends at every facet corner,
+    6-26 x the curvature the facets imply, :func:`polyline_fit_report`).
+
+    scipy's ``make_splprep`` (periodic, chord-length parameters) with weights 1 / sigma, sigma
+    each point's expected deviation from the true curve (:func:`facet_sagitta`), and the
+    smoothing factor s = N: the fit stays within about one sigma of the points on average,
+    on the corners and on straight facets (sigma = 1 um) and free by up to the sagitta in the
+    middle of a curved facet. A loop without facets (a dense smooth edge) is fitted within
+    1 um: practically the interpolating fit.
+
+    Raises:
+        InputError: as :func:`fit_edge_curve`.
+    """
+    from scipy.interpolate import make_splprep
+
+    p = _checked_loop(p, name)
+    u = chord_parameters(p)
+    sigma = facet_sagitta(p, corner_angle=corner_angle)["sigma"]
+    w = 1.0 / np.r_[sigma, sigma[:1]]
+    try:
+        fit, _ = make_splprep(np.vstack([p, p[:1]]).T, u=u, w=w, s=float(len(w)),
+                              bc_type="periodic")
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise InputError(f"{name}: the smoothing B-spline fit of its {len(p)} points failed "
+                         f"({type(exc).__name__}: {str(exc)[:160]})") from exc
+    spline = BSpline(fit.t, np.asarray(fit.c), fit.k, extrapolate="periodic")
+    return _edge_curve(spline, u, p)
+
+
+def _corners(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):
+    """(arc positions (K,), turns (K,)) of a closed polyline's corners: points turning more
+    than ``angle``, runs of them within ``merge`` of each other joined (turn summed, position
+    turn-weighted)."""
+    idx = np.flatnonzero(turn > angle)
+    if not len(idx):
+        return np.zeros(0), np.zeros(0)
+    L = s[-1]
+    groups = [[idx[0]]]
+    for i in idx[1:]:
+        (groups[-1].append(i) if s[i] - s[groups[-1][-1]] <= merge else groups.append([i]))
+    if len(groups) > 1 and s[groups[0][0]] + L - s[groups[-1][-1]] <= merge:
+        groups[0] = groups.pop() + groups[0]
+    pos, tot = [], []
+    for g in groups:
+        g = np.asarray(g)
+        sg = s[g] - np.where(s[g] > s[g[-1]], L, 0.0)  # a group over the seam: unwrapped
+        pos.append(float(np.average(sg, weights=turn[g])) % L)
+        tot.append(float(turn[g].sum()))
+    order = np.argsort(pos)
+    return np.asarray(pos)[order], np.asarray(tot)[order]
+
+
+def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.0),
+                        samples: int = 16) -> dict:
+    """How the fit follows a polygonal loop (issue 42: a low-poly mesh's edge is a polygon of
+    facets): what the spline does between and across its data points, against the facets.
+
+    The data polyline is split into facets at its corners (a turn of more than
+    ``corner_angle`` between consecutive chords; collinear points inside a facet are one
+    facet; turns closer than 2.5 data spacings are one corner: equal-arc resampling cuts a
+    corner into two). Figures, SI:
+
+    * ``facet_median``, ``facet_min`` [m]: facet lengths; ``spacing`` [m]: median data spacing;
+    * ``deviation_max`` [m]: largest distance of C(u) from the polyline (``samples`` per data
+      span) - the fit's own chord error against the facets; ``deviation_per_facet`` its ratio
+      to ``facet_median``;
+    * ``kappa_max`` [1/m]: the fit's largest curvature; ``kappa_polyline`` [1/m]: the
+      polyline's largest corner turn over the mean of its two facets (the curvature the facets
+      themselves imply); ``kappa_ratio`` = kappa_max / kappa_polyline;
+    * ``inflections``: sign changes of the curvature about the loop's mean plane normal where
+      the polyline itself turns only one way (0 on a convex polygon if the fit invents no
+      wiggles); ``facets``: facet count.
+    """
+    p = curve.p_data
+    chord = np.roll(p, -1, axis=0) - p
+    length = _norm(chord)
+    unit = chord / np.maximum(length, 1e-300)[:, None]
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
+    s = np.concatenate([[0.0], np.cumsum(length)])
+    spacing = float(np.median(length))
+    corners, turns = _corners(turn, s, corner_angle, 2.5 * spacing)
+    if len(corners) < 3:
+        corners, turns = s[:-1], turn
+    facet = np.diff(np.r_[corners, corners[0] + s[-1]])
+    # the polyline's own curvature: corner turn over the mean of its two facets
+    k_poly = turns / np.maximum(0.5 * (facet + np.roll(facet, 1)), 1e-300)
+    # the fit between its data points
+    t = (np.arange(samples) + 0.5) / samples
+    u0 = curve.u_data
+    u1 = np.r_[u0[1:], 1.0]
+    uu = (u0[:, None] + t[None, :] * (u1 - u0)[:, None]).ravel()
+    q = curve.position(uu)
+    a = np.repeat(p, samples, axis=0)
+    b = np.repeat(np.roll(p, -1, axis=0), samples, axis=0)
+    dev = _dist_to_segment(q, a, b)
+    d1, d2 = curve.derivative(uu, 1), curve.derivative(uu, 2)
+    c = p.mean(axis=0)
+    normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
+    k_signed = (np.cross(d1, d2) @ normal) / _norm(d1) ** 3
+    k_abs = _norm(np.cross(d1, d2)) / _norm(d1) ** 3
+    poly_sign = np.sign(np.cross(np.roll(unit, 1, axis=0), unit) @ normal)[turn > corner_angle]
+    one_way = bool(np.all(poly_sign >= 0) or np.all(poly_sign <= 0))
+    sgn = np.sign(k_signed[np.abs(k_signed) > 1e-9])
+    flips = int(np.count_nonzero(sgn != np.roll(sgn, 1))) if one_way and len(sgn) else 0
+    kp = float(k_poly.max())
+    return {"facets": int(len(corners)), "facet_median": float(np.median(facet)),
+            "facet_min": float(facet.min()), "spacing": spacing,
+            "deviation_max": float(dev.max()),
+            "deviation_per_facet": float(dev.max() / np.median(facet)),
+            "kappa_max": float(k_abs.max()), "kappa_polyline": kp,
+            "kappa_ratio": float(k_abs.max() / kp) if kp > 0 else float("inf"),
+            "inflections": flips}

@@ -116,10 +116,17 @@ class WindowTargets:
         half = float(tp.cone_outer_half_angle if cone_mapping == "outer" else tp.cone_half_angle)
         bad = np.flatnonzero(axis @ face <= 0.0)
         if bad.size:
+            t_bad = _unit(np.asarray(tp.R_HL)[bad[0], :, 1])
+            slope = float(np.degrees(np.arcsin(min(1.0, abs(float(t_bad @ face))))))
+            where = np.round(np.asarray(tp.p_HC)[bad[0]] * 1e3, 1).tolist()
+            why = (f": the edge there runs at {slope:.0f} deg to the face plane (down a flank, "
+                   f"along the hub axis): an axis across the edge is at least {slope:.0f} deg "
+                   f"off the face normal, beyond the recipe's tilt and lead, so a burr coming "
+                   f"from the front cannot follow it" if slope > 45.0 else "")
             raise InputError(f"ToolPath of window {tp.window_index}: tool axis (tip -> spindle) "
-                             f"points into the hub at CL point {int(bad[0])} "
+                             f"points into the hub at CL point {int(bad[0])} at {where} mm "
                              f"(axis {np.round(axis[bad[0]], 3).tolist()}, face normal "
-                             f"{face.tolist()})")
+                             f"{face.tolist()}){why}")
         return cls(window_index=int(tp.window_index), kind=str(tp.kind),
                    p_HC=np.asarray(tp.p_HC, float), t_H=_unit(np.asarray(tp.R_HL)[:, :, 1]),
                    n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), retract_H=axis, cone_retract_H=cone,
