@@ -1,0 +1,576 @@
+"""CAD solids (STEP, IGES) through OpenCASCADE (the ``cadquery-ocp`` binding, module ``OCP``):
+read, check, tessellate, and find the window loops on the B-rep's exact edges.
+
+Units come from the file: OpenCASCADE's readers convert the file's length unit (STEP
+``LENGTH_UNIT``/``SI_UNIT``, IGES global section) to millimetres; :func:`read_cad` scales that
+to metres and records the file's own unit name.
+
+Window loops (docs/hub.md, "CAD solids"): with the hub axis +Z_H known,
+
+1. every B-rep face is classified from its tessellation (area-weighted outward normal, share
+   seen from the front along -Z_H) and its exact surface: a **blend** (fillet or chamfer) is
+   a narrow face (2 area / perimeter <= :data:`BLEND_MAX_WIDTH`) that is convex (its principal
+   curvature bends away from the outward normal) or a plane at 20-70 deg to the axis; a
+   **front** face is not a blend, faces the front (normal within 60 deg of +Z_H) and is seen
+   from the front over at least half its area;
+2. the **front boundary** is every edge between a front face and a face that is not: on a
+   sharp edge the crease between face and wall, on a rounded or chamfered edge the line where
+   the face meets the blend (the face-side tangent line, as docs/hub.md defines the deburred
+   line);
+3. those edges are chained into closed loops through shared vertices; a loop that encloses
+   the axis is the centre bore or the rim's outer edge, a loop whose inside a ray along the
+   axis cannot pass is blind (a pocket, a recess), a loop narrower than the burr needs is
+   named with its width; the rest are the windows.
+
+Every loop is the exact edge curves: each edge is sampled on its own curve (line, circle,
+B-spline) at equal arc length, and the loop's edges are also joined into one NURBS
+(``GeomConvert_CompCurveToBSplineCurve``, exact for lines and arcs). Face and wall normals are
+the exact surface normals at the sample points.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from drakedeburr.errors import InputError
+
+__all__ = ["CAD_SUFFIXES", "CadSolid", "CadLoop", "read_cad", "tessellate", "cad_loops",
+           "BLEND_MAX_WIDTH", "DEFAULT_CHORDAL_TOLERANCE"]
+
+log = logging.getLogger(__name__)
+
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+BLEND_MAX_WIDTH = 6.0e-3  # [m] widest fillet/chamfer strip taken for an edge blend
+DEFAULT_CHORDAL_TOLERANCE = 0.1e-3  # [m] tessellation of the collision geometry
+DEFAULT_ANGULAR_TOLERANCE = 0.2  # [rad]
+_FRONT_COS = 0.5  # a front face's mean normal lies within 60 deg of +Z_H
+_SEEN_SHARE = 0.5  # ... and at least this share of its area is seen from the front
+
+
+@dataclass(frozen=True, eq=False)
+class CadSolid:
+    """A B-rep read from a CAD file.
+
+    Attributes:
+        shape: the OCP TopoDS_Shape (coordinates in millimetres, OpenCASCADE's session unit).
+        source: the file.
+        unit: the file's length unit as it states it (e.g. "millimetre", "INCH").
+        scale: metres per shape unit (1e-3).
+        solids: number of solids in the file.
+    """
+
+    shape: object
+    source: Path
+    unit: str
+    scale: float
+    solids: int
+
+
+@dataclass(frozen=True, eq=False)
+class CadLoop:
+    """One closed front-boundary loop of the B-rep, in the file frame M [m].
+
+    Attributes:
+        p: (N, 3) points on the edges (loop order, not closed), t: (N, 3) unit tangents.
+        n_face, n_wall: (N, 3) exact normals of the front face and of the wall (out of the
+            material into the opening; beyond the blend on a rounded edge).
+        edges: the loop's TopoDS_Edges in order; faces: the front/other face index per edge.
+        blended: per edge, whether the other face is a fillet/chamfer (the edge is rounded).
+        nurbs: the loop joined into one Geom_BSplineCurve (shape units, mm).
+    """
+
+    p: np.ndarray
+    t: np.ndarray
+    n_face: np.ndarray
+    n_wall: np.ndarray
+    edges: list
+    faces: list
+    blended: list
+    nurbs: object
+    info: dict = field(default_factory=dict)
+
+
+def _quiet() -> None:
+    """OpenCASCADE's readers print progress to stdout; the library only logs."""
+    from OCP.Message import Message, Message_Gravity
+
+    printers = Message.DefaultMessenger_s().Printers()
+    for i in range(1, printers.Length() + 1):
+        printers.Value(i).SetTraceLevel(Message_Gravity.Message_Fail)
+
+
+def _failed_entities(reader, limit: int = 3) -> list[str]:
+    """'#N TYPE: message' of the entities the reader could not load (the STEP/IGES check)."""
+    out = []
+    try:
+        model = reader.Model()
+        checks = reader.WS().ModelCheckList()
+        checks.Start()
+        while checks.More() and len(out) < limit:
+            ch = checks.Value()
+            if ch.HasFailed():
+                ent = ch.Entity()
+                num = model.Number(ent) if ent is not None else 0
+                what = model.TypeName(ent, False) if ent is not None else "file"
+                msg = ch.CFail(1, True) if ch.NbFails() else ""
+                out.append(f"#{num} {what}: {msg}".strip())
+            checks.Next()
+    except Exception:  # the check list is a diagnosis only
+        pass
+    return out
+
+
+def _file_unit(reader, suffix: str) -> str:
+    if suffix in (".step", ".stp"):
+        from OCP.collections import Sequence_TCollection_AsciiString as Seq
+
+        lengths, angles, solid_angles = Seq(), Seq(), Seq()
+        reader.FileUnits(lengths, angles, solid_angles)
+        names = sorted({lengths.Value(i + 1).ToCString() for i in range(lengths.Length())})
+        return ", ".join(names) or "unstated (read as millimetre)"
+    try:
+        return reader.IGESModel().GlobalSection().UnitName().ToCString()
+    except Exception:
+        return "unstated (read as millimetre)"
+
+
+def read_cad(path: str | Path) -> CadSolid:
+    """Read a STEP or IGES file into one B-rep solid (or several, kept together).
+
+    Raises:
+        FileNotFoundError: no such file.
+        InputError: not readable, entities that fail to load (named by their number and
+            type), no solid or closed shell, or an invalid B-rep (the face named).
+    """
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.IGESControl import IGESControl_Reader
+    from OCP.STEPControl import STEPControl_Reader
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"CAD file {path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in CAD_SUFFIXES:
+        raise InputError(f"{path}: not a STEP or IGES file ({', '.join(CAD_SUFFIXES)})")
+    if path.stat().st_size == 0:
+        raise InputError(f"{path}: the file is empty")
+    _quiet()
+    reader = STEPControl_Reader() if suffix in (".step", ".stp") else IGESControl_Reader()
+    kind = "STEP" if suffix in (".step", ".stp") else "IGES"
+    status = reader.ReadFile(str(path))
+    if status != IFSelect_RetDone:
+        bad = _failed_entities(reader)
+        raise InputError(f"{path}: not a readable {kind} file ({status.name})"
+                         + (f": {'; '.join(bad)}" if bad else ""))
+    unit = _file_unit(reader, suffix)
+    if reader.TransferRoots() == 0:
+        raise InputError(f"{path}: no {kind} entity could be turned into a shape"
+                         + "".join(f"; {b}" for b in _failed_entities(reader)))
+    shape = reader.OneShape()
+    return _checked(path, shape, unit, kind)
+
+
+def _checked(path: Path, shape, unit: str, kind: str) -> CadSolid:
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID
+    from OCP.TopExp import TopExp
+    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
+
+    solids, shells, faces = (TopTools_IndexedMapOfShape() for _ in range(3))
+    TopExp.MapShapes_s(shape, TopAbs_SOLID, solids)
+    TopExp.MapShapes_s(shape, TopAbs_SHELL, shells)
+    TopExp.MapShapes_s(shape, TopAbs_FACE, faces)
+    if faces.Extent() == 0:
+        raise InputError(f"{path}: the {kind} file holds no surface (no face, no solid): "
+                         "export the wheel as a solid")
+    if solids.Extent() == 0:
+        log.warning("%s: no solid in the file, %d faces in %d shells: read as surfaces",
+                    path, faces.Extent(), shells.Extent())
+    if not BRepCheck_Analyzer(shape).IsValid():
+        for i in range(1, faces.Extent() + 1):
+            if not BRepCheck_Analyzer(_face(faces, i)).IsValid():
+                raise InputError(f"{path}: face {i} of {faces.Extent()} is not a valid "
+                                 "B-rep face (OpenCASCADE BRepCheck); repair the model")
+        raise InputError(f"{path}: the B-rep is not valid (OpenCASCADE BRepCheck: edges or "
+                         "shells do not join); repair the model")
+    return CadSolid(shape=shape, source=path, unit=unit, scale=1e-3,
+                    solids=int(solids.Extent()))
+
+
+# --------------------------------------------------------------------------- tessellation
+def tessellate(cad: CadSolid, chordal: float = DEFAULT_CHORDAL_TOLERANCE,
+               angular: float = DEFAULT_ANGULAR_TOLERANCE):
+    """(V (n, 3) [m], F (m, 3), face_of_triangle (m,), faces map) of the B-rep meshed by
+    ``BRepMesh_IncrementalMesh`` at the chordal tolerance ``chordal`` [m]; triangles wound
+    by the face orientation (outward), vertices on shared edges merged."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
+    from OCP.TopExp import TopExp
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
+
+    mesher = BRepMesh_IncrementalMesh(cad.shape, chordal / cad.scale, False, angular, True)
+    mesher.Perform()
+    fmap = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(cad.shape, TopAbs_FACE, fmap)
+    V, F, owner, base = [], [], [], 0
+    for i in range(1, fmap.Extent() + 1):
+        face = _face(fmap, i)
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(face, loc)
+        if tri is None:
+            raise InputError(f"{cad.source}: face {i} could not be meshed at "
+                             f"{chordal * 1e3:g} mm (OpenCASCADE BRepMesh)")
+        trsf = loc.Transformation()
+        nodes = np.array([_xyz(tri.Node(j).Transformed(trsf))
+                          for j in range(1, tri.NbNodes() + 1)])
+        tris = np.array([tri.Triangle(j).Get() for j in range(1, tri.NbTriangles() + 1)]) - 1
+        if face.Orientation() == TopAbs_REVERSED:
+            tris = tris[:, [0, 2, 1]]
+        V.append(nodes)
+        F.append(tris + base)
+        owner.append(np.full(len(tris), i - 1))
+        base += len(nodes)
+    V = np.concatenate(V) * cad.scale
+    F = np.concatenate(F)
+    owner = np.concatenate(owner)
+    # nodes on a shared edge are the same 3-D points in both faces' triangulations
+    key = np.round(V / 1e-9).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    V, F = V[first], inverse.reshape(-1)[F]
+    ok = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+    return V, F[ok], owner[ok], fmap
+
+
+def _face(fmap, i: int):
+    """The i-th (1-based) face of an indexed map, as a TopoDS_Face."""
+    from OCP.TopoDS import TopoDS
+
+    return TopoDS.Face(fmap.FindKey(i))
+
+
+def _xyz(p) -> tuple[float, float, float]:
+    return (p.X(), p.Y(), p.Z())
+
+
+def barrel_axis(cad: CadSolid) -> tuple[np.ndarray, np.ndarray] | None:
+    """(direction (3,), a point (3,) [m]) of the largest cylindrical face (a wheel's barrel),
+    or None when the B-rep has none."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GeomAbs import GeomAbs_Cylinder
+    from OCP.GProp import GProp_GProps
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    best, best_area = None, 0.0
+    exp = TopExp_Explorer(cad.shape, TopAbs_FACE)
+    while exp.More():
+        face = TopoDS.Face(exp.Current())
+        exp.Next()
+        surf = BRepAdaptor_Surface(face)
+        if surf.GetType() != GeomAbs_Cylinder:
+            continue
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(face, props)
+        if props.Mass() > best_area:
+            ax = surf.Cylinder().Axis()
+            best_area, best = props.Mass(), (np.array(_xyz(ax.Direction())),
+                                             np.array(_xyz(ax.Location())) * cad.scale)
+    return best
+
+
+# --------------------------------------------------------------------------- faces
+def _convex(face) -> bool | None:
+    """True when the face bends away from its outward normal (a convex blend), False when
+    towards it, None for a plane."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.BRepTools import BRepTools
+    from OCP.GeomAbs import GeomAbs_Plane
+    from OCP.TopAbs import TopAbs_REVERSED
+
+    surf = BRepAdaptor_Surface(face)
+    if surf.GetType() == GeomAbs_Plane:
+        return None
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+    props = BRepLProp_SLProps(surf, 0.5 * (u0 + u1), 0.5 * (v0 + v1), 2, 1e-9)
+    if not props.IsCurvatureDefined():
+        return None
+    k = max((props.MaxCurvature(), props.MinCurvature()), key=abs)
+    if face.Orientation() == TopAbs_REVERSED:
+        k = -k
+    return bool(k < 0)
+
+
+def classify_faces(cad: CadSolid, V_H, F, owner, fmap) -> dict:
+    """Per face (0-based index in ``fmap``): ``front``, ``blend`` flags and figures (see the
+    module doc); ``V_H``: the tessellation in H [m]."""
+    import open3d as o3d
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    tri = V_H[F]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    c = tri.mean(axis=1)
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(V_H.astype(np.float32)),
+                        o3d.core.Tensor(F.astype(np.uint32)))
+    rays = np.zeros((len(F), 6), np.float32)
+    rays[:, :2], rays[:, 2], rays[:, 5] = c[:, :2], float(V_H[:, 2].max()) + 0.01, -1.0
+    ans = scene.cast_rays(o3d.core.Tensor(rays))
+    t_hit = ans["t_hit"].numpy()
+    hit = np.where(np.isfinite(t_hit), ans["primitive_ids"].numpy().astype(np.int64), -1)
+    z_hit = rays[:, 2] - t_hit
+    seen = (hit >= 0) & (np.abs(z_hit - c[:, 2]) < 2e-5)
+    seen |= (hit >= 0) & (owner[np.clip(hit, 0, None)] == owner)
+    n = len(fmap)
+    a_face = np.bincount(owner, area, n)
+    nz = np.bincount(owner, 0.5 * cross[:, 2], n) / np.maximum(a_face, 1e-30)
+    seen_share = np.bincount(owner, area * seen, n) / np.maximum(a_face, 1e-30)
+    out = {}
+    for i in range(n):
+        face = _face(fmap, i + 1)
+        props = GProp_GProps()
+        BRepGProp.LinearProperties_s(face, props)
+        width = 2.0 * a_face[i] / max(props.Mass() * cad.scale, 1e-12)
+        convex = _convex(face)
+        blend = width <= BLEND_MAX_WIDTH and (
+            convex is True or (convex is None and 0.34 < nz[i] < 0.94))
+        front = (not blend and nz[i] >= _FRONT_COS and seen_share[i] >= _SEEN_SHARE)
+        out[i] = {"front": bool(front), "blend": bool(blend), "nz": float(nz[i]),
+                  "width": float(width), "area": float(a_face[i]),
+                  "seen": float(seen_share[i])}
+    return out
+
+
+# --------------------------------------------------------------------------- loops
+def _edge_faces(shape):
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp
+    from OCP.collections import (
+        IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as EdgeFaces,
+    )
+    from OCP.collections import (
+        IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape,
+    )
+
+    emap = EdgeFaces()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    vmap = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_VERTEX, vmap)
+    return emap, vmap
+
+
+def boundary_chains(cad: CadSolid, fmap, cls: dict):
+    """Closed chains of front-boundary edges: list of (edges [(edge, forward, front face
+    index, other face index)], problem or None)."""
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+
+    emap, vmap = _edge_faces(cad.shape)
+    links: dict[int, list[int]] = {}
+    items = []
+    for i in range(1, emap.Extent() + 1):
+        edge = TopoDS.Edge(emap.FindKey(i))
+        idx = sorted({fmap.FindIndex(f) - 1 for f in emap.FindFromIndex(i)})
+        if len(idx) != 2 or cls[idx[0]]["front"] == cls[idx[1]]["front"]:
+            continue
+        fi, oi = (idx[0], idx[1]) if cls[idx[0]]["front"] else (idx[1], idx[0])
+        v0 = vmap.FindIndex(TopExp.FirstVertex_s(edge, True))
+        v1 = vmap.FindIndex(TopExp.LastVertex_s(edge, True))
+        k = len(items)
+        items.append((edge, v0, v1, fi, oi))
+        for v in {v0, v1}:
+            links.setdefault(v, []).append(k)
+    used = [False] * len(items)
+    chains = []
+    for start in range(len(items)):
+        if used[start]:
+            continue
+        chain, problem = [], None
+        k, v = start, items[start][1]
+        while True:
+            used[k] = True
+            edge, v0, v1, fi, oi = items[k]
+            forward = v0 == v
+            chain.append((edge, forward, fi, oi))
+            v = v1 if forward else v0
+            nxt = [j for j in links[v] if not used[j]]
+            if len(links[v]) > 2 and problem is None:
+                problem = f"{len(links[v])} boundary edges meet at one vertex"
+            if not nxt:
+                if v != items[start][1] and problem is None:
+                    problem = "the boundary does not close"
+                break
+            k = nxt[0]
+        chains.append((chain, problem))
+    return chains
+
+
+def _face_normal(face, edge, t: float, p_mm) -> np.ndarray:
+    """Outward unit normal of ``face`` at the point of ``edge`` at parameter ``t`` (the
+    edge's p-curve on the face), falling back to a projection of ``p_mm``."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve2d
+    from OCP.BRepGProp import BRepGProp_Face
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    pf = BRepGProp_Face(face)
+    try:
+        uv = BRepAdaptor_Curve2d(edge, face).Value(t)
+        u, v = uv.X(), uv.Y()
+    except Exception:
+        u, v = _project_uv(face, p_mm)
+    pnt, vec = gp_Pnt(), gp_Vec()
+    pf.Normal(u, v, pnt, vec)
+    n = np.array(_xyz(vec))
+    return n / max(np.linalg.norm(n), 1e-30)
+
+
+def _project_uv(face, p_mm) -> tuple[float, float]:
+    from OCP.BRep import BRep_Tool
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+    from OCP.gp import gp_Pnt
+
+    proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(*p_mm), BRep_Tool.Surface_s(face))
+    return proj.LowerDistanceParameters()
+
+
+def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.ndarray:
+    """Normal of the wall beyond a blend face at ``p_mm``: the blend's neighbour that is
+    neither front nor blend, nearest to the point."""
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRepGProp import BRepGProp_Face
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    vtx = BRepBuilderAPI_MakeVertex(gp_Pnt(*p_mm)).Vertex()
+    best, best_d = None, math.inf
+    for j in sorted(neighbours.get(blend_i, ())):
+        if j == front_i or cls[j]["front"] or cls[j]["blend"]:
+            continue
+        d = BRepExtrema_DistShapeShape(vtx, _face(fmap, j + 1))
+        if d.IsDone() and d.Value() < best_d:
+            best, best_d = j, d.Value()
+    if best is None:
+        return None
+    u, v = _project_uv(_face(fmap, best + 1), p_mm)
+    pnt, vec = gp_Pnt(), gp_Vec()
+    BRepGProp_Face(_face(fmap, best + 1)).Normal(u, v, pnt, vec)
+    n = np.array(_xyz(vec))
+    return n / max(np.linalg.norm(n), 1e-30)
+
+
+def face_neighbours(cad: CadSolid, fmap) -> dict[int, set[int]]:
+    """Face index -> indices of the faces sharing an edge with it."""
+    emap, _ = _edge_faces(cad.shape)
+    out: dict[int, set[int]] = {}
+    for i in range(1, emap.Extent() + 1):
+        idx = {fmap.FindIndex(f) - 1 for f in emap.FindFromIndex(i)}
+        for a in idx:
+            out.setdefault(a, set()).update(idx - {a})
+    return out
+
+
+def cad_loops(cad: CadSolid, fmap, cls: dict, spacing: float) -> list:
+    """Every closed front-boundary chain as a :class:`CadLoop` (file frame, metres), or a
+    ``(problem, point (3,) [m])`` tuple for a chain that is not one simple closed loop."""
+    neighbours = face_neighbours(cad, fmap)
+    out = []
+    for chain, problem in boundary_chains(cad, fmap, cls):
+        if problem is not None:
+            out.append((problem, _chain_point(chain) * cad.scale))
+            continue
+        out.append(_sample_chain(cad, fmap, cls, neighbours, chain, spacing))
+    return out
+
+
+def _chain_point(chain) -> np.ndarray:
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+
+    c = BRepAdaptor_Curve(chain[0][0])
+    return np.array(_xyz(c.Value(0.5 * (c.FirstParameter() + c.LastParameter()))))
+
+
+def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_UniformAbscissa
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    pts, tans, nf, nw = [], [], [], []
+    step = spacing / cad.scale
+    for edge, forward, fi, oi in chain:
+        c = BRepAdaptor_Curve(edge)
+        a, b = c.FirstParameter(), c.LastParameter()
+        length = GCPnts_AbscissaPoint.Length_s(c, a, b)
+        n = max(2, int(math.ceil(length / step)) + 1)
+        ua = GCPnts_UniformAbscissa(c, n, a, b)
+        ts = [ua.Parameter(j) for j in range(1, ua.NbPoints() + 1)] if ua.IsDone() \
+            else list(np.linspace(a, b, n))
+        if not forward:
+            ts = ts[::-1]
+        face, other = _face(fmap, fi + 1), _face(fmap, oi + 1)
+        for t in ts[:-1]:
+            p, d = gp_Pnt(), gp_Vec()
+            c.D1(t, p, d)
+            pm = _xyz(p)
+            tan = np.array(_xyz(d)) * (1.0 if forward else -1.0)
+            n_face = _face_normal(face, edge, t, pm)
+            if cls[oi]["blend"]:
+                n_wall = _wall_normal(fmap, cls, neighbours, oi, fi, pm)
+                if n_wall is None:
+                    n_wall = _face_normal(other, edge, t, pm)
+            else:
+                n_wall = _face_normal(other, edge, t, pm)
+            pts.append(pm)
+            tans.append(tan / max(np.linalg.norm(tan), 1e-30))
+            nf.append(n_face)
+            nw.append(n_wall)
+    return CadLoop(p=np.array(pts) * cad.scale, t=np.array(tans), n_face=np.array(nf),
+                   n_wall=np.array(nw), edges=[e for e, *_ in chain],
+                   faces=[(fi, oi) for _, _, fi, oi in chain],
+                   blended=[bool(cls[oi]["blend"]) for *_, oi in chain],
+                   nurbs=join_nurbs(chain))
+
+
+def join_nurbs(chain):
+    """The chain's edges joined into one Geom_BSplineCurve (exact conversion of lines,
+    circles and B-splines, joined at the shared vertices), or None if OpenCASCADE refuses."""
+    from OCP.BRep import BRep_Tool
+    from OCP.Geom import Geom_TrimmedCurve
+    from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
+
+    comp = None
+    try:
+        for edge, forward, _, _ in chain:
+            curve, a, b = BRep_Tool.Curve_s(edge, 0.0, 1.0), *BRep_Tool.Range_s(edge)
+            bs = GeomConvert.CurveToBSplineCurve_s(Geom_TrimmedCurve(curve, a, b))
+            if not forward:
+                bs.Reverse()
+            if comp is None:
+                comp = GeomConvert_CompCurveToBSplineCurve(bs)
+            elif not comp.Add(bs, 1e-4, True):
+                return None
+        return comp.BSplineCurve()
+    except Exception:
+        return None
+
+
+def nurbs_arrays(curve, scale: float, X_HM: np.ndarray) -> dict[str, np.ndarray]:
+    """Poles (in H [m]), weights, flat knots and degree of a Geom_BSplineCurve."""
+    poles = np.array([_xyz(curve.Pole(i)) for i in range(1, curve.NbPoles() + 1)]) * scale
+    poles = poles @ X_HM[:3, :3].T + X_HM[:3, 3]
+    weights = np.array([curve.Weight(i) for i in range(1, curve.NbPoles() + 1)])
+    knots = []
+    for i in range(1, curve.NbKnots() + 1):
+        knots += [curve.Knot(i)] * curve.Multiplicity(i)
+    return {"poles": poles, "weights": weights, "knots": np.array(knots),
+            "degree": np.array(curve.Degree())}
