@@ -16,7 +16,7 @@ large window between pairs and a slot between the two bars of a pair).
 model has by construction. Run as a script to write all kinds into a folder.
 
 Dimensions [mm] (a 17 in class wheel, 430 mm over the flange): barrel 188-194 mm radius,
-flange to 215 mm; disc face at z = -12, centre boss at -6, back at -40; lip cone from
+flange to 215 mm; disc face at z = -12, the centre recessed to -18, back at -40; lip cone from
 (r 176, z -12) to (r 200, z 0); windows from r 82 to 184.
 """
 
@@ -49,9 +49,9 @@ class CadWheel:
 
 
 def _body():
-    from build123d import Plane, Polyline, Axis, make_face, revolve
+    from build123d import Axis, Plane, Polyline, make_face, revolve
 
-    prof = Polyline((0, -6), (70, -6), (80, Z_FACE), (176, Z_FACE), (200, 0), (215, 0),
+    prof = Polyline((0, -18), (70, -18), (80, Z_FACE), (176, Z_FACE), (200, 0), (215, 0),
                     (215, -10), (194, -16), (194, -200), (203, -205), (203, -212), (188, -212),
                     (188, Z_BACK), (0, Z_BACK), close=True)
     return revolve(Plane.XZ * make_face(prof), Axis.Z)

@@ -177,9 +177,11 @@ def read_cad(path: str | Path) -> CadSolid:
 
 def _checked(path: Path, shape, unit: str, kind: str) -> CadSolid:
     from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.collections import (
+        IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape,
+    )
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID
     from OCP.TopExp import TopExp
-    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
 
     solids, shells, faces = (TopTools_IndexedMapOfShape() for _ in range(3))
     TopExp.MapShapes_s(shape, TopAbs_SOLID, solids)
@@ -210,10 +212,12 @@ def tessellate(cad: CadSolid, chordal: float = DEFAULT_CHORDAL_TOLERANCE,
     by the face orientation (outward), vertices on shared edges merged."""
     from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.collections import (
+        IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape,
+    )
     from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
     from OCP.TopExp import TopExp
     from OCP.TopLoc import TopLoc_Location
-    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
 
     mesher = BRepMesh_IncrementalMesh(cad.shape, chordal / cad.scale, False, angular, True)
     mesher.Perform()
@@ -354,14 +358,14 @@ def classify_faces(cad: CadSolid, V_H, F, owner, fmap) -> dict:
 
 # --------------------------------------------------------------------------- loops
 def _edge_faces(shape):
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
-    from OCP.TopExp import TopExp
     from OCP.collections import (
         IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as EdgeFaces,
     )
     from OCP.collections import (
         IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape,
     )
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp
 
     emap = EdgeFaces()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
@@ -447,8 +451,8 @@ def _project_uv(face, p_mm) -> tuple[float, float]:
 def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.ndarray:
     """Normal of the wall beyond a blend face at ``p_mm``: the blend's neighbour that is
     neither front nor blend, nearest to the point."""
-    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
     from OCP.BRepGProp import BRepGProp_Face
     from OCP.gp import gp_Pnt, gp_Vec
 
@@ -534,6 +538,9 @@ def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
             tans.append(tan / max(np.linalg.norm(tan), 1e-30))
             nf.append(n_face)
             nw.append(n_wall)
+    pts, tans, nf, nw = (np.array(a) for a in (pts, tans, nf, nw))
+    keep = np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1) > 1e-4  # [mm] (tiny edges)
+    pts, tans, nf, nw = pts[keep], tans[keep], nf[keep], nw[keep]
     return CadLoop(p=np.array(pts) * cad.scale, t=np.array(tans), n_face=np.array(nf),
                    n_wall=np.array(nw), edges=[e for e, *_ in chain],
                    faces=[(fi, oi) for _, _, fi, oi in chain],
