@@ -38,13 +38,13 @@ from pathlib import Path
 import numpy as np
 
 from drakedeburr.errors import InputError
+from drakedeburr.hub.mesh_io import CAD_SUFFIXES
 
 __all__ = ["CAD_SUFFIXES", "CadSolid", "CadLoop", "read_cad", "tessellate", "cad_loops",
            "BLEND_MAX_WIDTH", "DEFAULT_CHORDAL_TOLERANCE"]
 
 log = logging.getLogger(__name__)
 
-CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 BLEND_MAX_WIDTH = 6.0e-3  # [m] widest fillet/chamfer strip taken for an edge blend
 DEFAULT_CHORDAL_TOLERANCE = 0.1e-3  # [m] tessellation of the collision geometry
 DEFAULT_ANGULAR_TOLERANCE = 0.2  # [rad]
@@ -104,6 +104,46 @@ def _quiet() -> None:
         printers.Value(i).SetTraceLevel(Message_Gravity.Message_Fail)
 
 
+def _captured(fn):
+    """(fn(), what OpenCASCADE wrote to stdout/stderr meanwhile): its readers write parse
+    errors straight to the process's file descriptors; the library only logs."""
+    import os
+    import sys
+    import tempfile
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with tempfile.TemporaryFile() as tmp:
+        try:
+            os.dup2(tmp.fileno(), 1)
+            os.dup2(tmp.fileno(), 2)
+            result = fn()
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+        tmp.seek(0)
+        said = tmp.read().decode("utf-8", "replace")
+    for line in said.splitlines():
+        if line.strip():
+            log.debug("OpenCASCADE: %s", line.strip())
+    return result, said
+
+
+def _said_errors(said: str, limit: int = 2) -> list[str]:
+    """The reader's error lines (ANSI colours and stars stripped)."""
+    import re
+
+    out = []
+    for line in said.splitlines():
+        line = re.sub(r"\x1b\[[0-9;]*m", "", line).strip(" *")
+        if "ERR" in line or "rror" in line:
+            out.append(re.sub(r"^ERR\s*", "", line))
+    return out[:limit]
+
+
 def _failed_entities(reader, limit: int = 3) -> list[str]:
     """'#N TYPE: message' of the entities the reader could not load (the STEP/IGES check)."""
     out = []
@@ -113,12 +153,11 @@ def _failed_entities(reader, limit: int = 3) -> list[str]:
         checks.Start()
         while checks.More() and len(out) < limit:
             ch = checks.Value()
-            if ch.HasFailed():
-                ent = ch.Entity()
-                num = model.Number(ent) if ent is not None else 0
-                what = model.TypeName(ent, False) if ent is not None else "file"
+            ent = ch.Entity()
+            if ch.HasFailed() and ent is not None and model.Number(ent) > 0:
                 msg = ch.CFail(1, True) if ch.NbFails() else ""
-                out.append(f"#{num} {what}: {msg}".strip())
+                out.append(f"entity #{model.Number(ent)} {model.TypeName(ent, False)}: "
+                           f"{msg}".strip(" :"))
             checks.Next()
     except Exception:  # the check list is a diagnosis only
         pass
@@ -159,20 +198,48 @@ def read_cad(path: str | Path) -> CadSolid:
         raise InputError(f"{path}: not a STEP or IGES file ({', '.join(CAD_SUFFIXES)})")
     if path.stat().st_size == 0:
         raise InputError(f"{path}: the file is empty")
-    _quiet()
+    _quiet()  # and _captured below: the parsers write to the file descriptors
     reader = STEPControl_Reader() if suffix in (".step", ".stp") else IGESControl_Reader()
     kind = "STEP" if suffix in (".step", ".stp") else "IGES"
-    status = reader.ReadFile(str(path))
+    status, said = _captured(lambda: reader.ReadFile(str(path)))
     if status != IFSelect_RetDone:
-        bad = _failed_entities(reader)
+        bad = _failed_entities(reader) + _said_errors(said)
         raise InputError(f"{path}: not a readable {kind} file ({status.name})"
                          + (f": {'; '.join(bad)}" if bad else ""))
     unit = _file_unit(reader, suffix)
-    if reader.TransferRoots() == 0:
+    n_roots, said = _captured(reader.TransferRoots)
+    if n_roots == 0:
         raise InputError(f"{path}: no {kind} entity could be turned into a shape"
-                         + "".join(f"; {b}" for b in _failed_entities(reader)))
+                         + "".join(f"; {b}" for b in _failed_entities(reader)
+                                   + _said_errors(said)))
+    for b in _failed_entities(reader):
+        log.warning("%s: %s", path, b)
     shape = reader.OneShape()
+    if kind == "STEP":
+        _all_faces_transferred(path, reader, shape, said)
     return _checked(path, shape, unit, kind)
+
+
+def _all_faces_transferred(path: Path, reader, shape, said: str) -> None:
+    """InputError naming the STEP face entities that did not become faces (a face whose
+    surface reference is missing or of the wrong type is dropped by the reader)."""
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+
+    model = reader.Model()
+    faces = [i for i in range(1, model.NbEntities() + 1)
+             if model.Value(i).DynamicType().Name() == "StepShape_AdvancedFace"]
+    n_shape, exp = 0, TopExp_Explorer(shape, TopAbs_FACE)
+    while exp.More():
+        n_shape += 1
+        exp.Next()
+    if n_shape >= len(faces):
+        return
+    bad = [f"entity #{i} ADVANCED_FACE: its surface reference is "
+           "missing or not a surface" for i in faces if model.Value(i).FaceGeometry() is None]
+    why = "; ".join(bad[:3]) or "; ".join(_said_errors(said)) or "see the file's faces"
+    raise InputError(f"{path}: {len(faces) - n_shape} of {len(faces)} faces did not transfer: "
+                     f"{why}")
 
 
 def _checked(path: Path, shape, unit: str, kind: str) -> CadSolid:

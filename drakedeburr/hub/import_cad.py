@@ -254,7 +254,8 @@ def read_cad_windows(path, options, chordal_tolerance: float = DEFAULT_CHORDAL_T
     notes.update(front={**front, "axis_from": axis_from},
                  min_window_width_mm=round(min_w * 1e3, 3), dropped=None)
     if not windows:
-        why = "; ".join(f"{o['kind']} at r = {o.get('radius_mm', 0):.0f} mm: {o['reason']}"
+        why = "; ".join(f"{o.get('kind', 'loop')} at r = {o.get('radius_mm', 0):.0f} mm: "
+                        f"{o['reason']}"
                         for o in notes["not_windows"] + notes["rejected"])
         raise NoCuttableWindow(f"{path}: no window in the B-rep: {why or 'no opening'}",
                                source=str(path), axis=X_MH[:3, 2],
