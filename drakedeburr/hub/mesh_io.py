@@ -30,7 +30,8 @@ READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or binary glTF (.glb)"
 #: native CAD formats and other mesh formats are refused with what to export instead
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 _CAD = (".x_t", ".sldprt", ".prt")
-OTHER_MESH_SUFFIXES = CAD_SUFFIXES + _CAD + (".3mf", ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz", ".gltf")
+OTHER_MESH_SUFFIXES = CAD_SUFFIXES + _CAD + (".3mf", ".fbx", ".3ds", ".blend", ".dxf", ".usd",
+                                             ".usdz", ".gltf")
 #: a command's file argument with one of these is a mesh: read, or refused by name when read
 MESH_TARGET_SUFFIXES = MESH_SUFFIXES + OTHER_MESH_SUFFIXES
 _WHY_NOT = {".gltf": "its geometry may sit in separate buffer files, which the import's cache "
