@@ -36,6 +36,10 @@ DRAFT_DEG = 3.0  # window wall draft (the opening narrows towards the back)
 EDGE_ROUND = 1.0  # [mm] fillet on the window's front edge
 CORNER = 7.0  # [mm] plan-view corner radius of a window
 Z_FACE, Z_BACK = -12.0, -40.0
+Z_CUT_TOP = 2.0  # the window cuts start (full size) this far above z = 0
+SPOKE_WIDTH = 34.0  # straight spokes, at the top of the cut [mm]
+PHASE_DEG = 9.0  # spoke k along 9 + 72 k deg (off the circles' seam at +-X: a kernel taper
+#                  failure there)
 
 
 @dataclass(frozen=True)
@@ -82,9 +86,9 @@ def _window_regions(kind):
     region = Circle(R_OUT) - Circle(R_IN)
     pockets = []
     for k in range(N_SPOKES):
-        a = 9.0 + 360.0 * k / N_SPOKES  # off the circles' seam at +-X (a kernel taper failure)
+        a = PHASE_DEG + 360.0 * k / N_SPOKES
         if kind == "straight":
-            region -= _band(34.0, 0, 200, a)
+            region -= _band(SPOKE_WIDTH, 0, 200, a)
             pockets.append(_band(16.0, 95, 165, a))
         elif kind == "y":
             region -= _band(30.0, 0, 125, a)
@@ -118,12 +122,13 @@ def build(kind: str):
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     wheel = _body()
     regions, pockets = _window_regions(kind)
-    depth = Z_BACK - 2.0
+    depth = Z_BACK - Z_CUT_TOP
     taper = DRAFT_DEG
     cuts = []
     for f in regions:
         f = _round_corners(f, CORNER)
-        cuts.append(extrude(Plane.XY.offset(2.0) * f, amount=2.0 - depth, dir=(0, 0, -1),
+        cuts.append(extrude(Plane.XY.offset(Z_CUT_TOP) * f, amount=Z_CUT_TOP - depth,
+                            dir=(0, 0, -1),
                             taper=taper))
     for c in cuts:
         wheel -= c
@@ -155,7 +160,7 @@ def _round_window_edges(wheel):
     return wheel.fillet(EDGE_ROUND, edges)
 
 
-def make_wheel(kind: str, out_dir: str | Path) -> CadWheel:
+def make_wheel(kind: str, out_dir: str | Path, formats=("step", "iges", "stl")) -> CadWheel:
     from build123d import export_step, export_stl
 
     out = Path(out_dir)
@@ -164,9 +169,10 @@ def make_wheel(kind: str, out_dir: str | Path) -> CadWheel:
     step = out / f"{kind}.step"
     export_step(wheel, str(step))
     iges = out / f"{kind}.iges"
-    _export_iges(wheel, iges)
+    if "iges" in formats:
+        _export_iges(wheel, iges)
     stl = {}
-    for name, (tol, ang) in STL_TOLERANCES.items():
+    for name, (tol, ang) in STL_TOLERANCES.items() if "stl" in formats else ():
         stl[name] = out / f"{kind}_{name}.stl"
         export_stl(wheel, str(stl[name]), tolerance=tol, angular_tolerance=ang)
     return CadWheel(kind, step, iges, stl, n, EDGE_ROUND)

@@ -456,8 +456,9 @@ def boundary_chains(cad: CadSolid, fmap, cls: dict):
         if len(idx) != 2 or cls[idx[0]]["front"] == cls[idx[1]]["front"]:
             continue
         fi, oi = (idx[0], idx[1]) if cls[idx[0]]["front"] else (idx[1], idx[0])
-        v0 = vmap.FindIndex(TopExp.FirstVertex_s(edge, True))
-        v1 = vmap.FindIndex(TopExp.LastVertex_s(edge, True))
+        # the vertices at the curve's first and last parameter (not the edge's orientation)
+        v0 = vmap.FindIndex(TopExp.FirstVertex_s(edge, False))
+        v1 = vmap.FindIndex(TopExp.LastVertex_s(edge, False))
         k = len(items)
         items.append((edge, v0, v1, fi, oi))
         for v in {v0, v1}:
