@@ -146,7 +146,8 @@ def _to_H(X_HM, v):
 def cad_windows(cad, V_H, F, owner, fmap, X_MH, options, min_w: float):
     """(windows [WindowEdge in H], loops kept (dicts with the NURBS), notes): the B-rep's
     front-boundary loops sorted into windows and the rest (see module doc)."""
-    from drakedeburr.hub.cad import cad_loops, classify_faces
+    from drakedeburr.hub.cad import classify_faces
+    from drakedeburr.hub.cad_loops import cad_loops
     from drakedeburr.hub.extract import _scene
 
     X_HM = np.linalg.inv(X_MH)
@@ -287,7 +288,7 @@ def _cache_key(sha: str, options, chordal: float) -> str:
 
 def _write_nurbs(target: Path, kept, cad, X_HM) -> None:
     """Add each loop's NURBS to ``edges.npz`` (rewritten atomically)."""
-    from drakedeburr.hub.cad import nurbs_arrays
+    from drakedeburr.hub.cad_loops import nurbs_arrays
     from drakedeburr.hub.files import write_npz
 
     with np.load(target / "edges.npz", allow_pickle=False) as data:
