@@ -10,7 +10,9 @@ Window loops (docs/hub.md, "CAD solids"): with the hub axis +Z_H known,
 1. every B-rep face is classified from its tessellation (area-weighted outward normal, share
    seen from the front along -Z_H) and its exact surface: a **blend** (fillet or chamfer) is
    a narrow face (2 area / perimeter <= :data:`BLEND_MAX_WIDTH`) that is convex (its principal
-   curvature bends away from the outward normal) or a plane at 20-70 deg to the axis; a
+   curvature bends away from the outward normal), a plane at 20-70 deg to the axis, or a
+   patch that faces the front on average but turns down to the wall (normals below 60 deg
+   from the axis: where two rounds meet); a
    **front** face is not a blend, faces the front (normal within 60 deg of +Z_H) and is seen
    from the front over at least half its area;
 2. the **front boundary** is every edge between a front face and a face that is not: on a
@@ -382,6 +384,8 @@ def classify_faces(cad: CadSolid, V_H, F, owner, fmap) -> dict:
     a_face = np.bincount(owner, area, n)
     nz = np.bincount(owner, 0.5 * cross[:, 2], n) / np.maximum(a_face, 1e-30)
     seen_share = np.bincount(owner, area * seen, n) / np.maximum(a_face, 1e-30)
+    nz_min = np.ones(n)  # lowest triangle normal of each face: a blend reaches the wall's
+    np.minimum.at(nz_min, owner, cross[:, 2] / np.maximum(2.0 * area, 1e-30))
     out = {}
     for i in range(n):
         face = _face(fmap, i + 1)
@@ -389,8 +393,11 @@ def classify_faces(cad: CadSolid, V_H, F, owner, fmap) -> dict:
         BRepGProp.LinearProperties_s(face, props)
         width = 2.0 * a_face[i] / max(props.Mass() * cad.scale, 1e-12)
         convex = _convex(face)
+        # narrow, and convex, or a chamfer plane, or turning from the front down to the
+        # wall (the corner patches where a round meets a round)
         blend = width <= BLEND_MAX_WIDTH and (
-            convex is True or (convex is None and 0.34 < nz[i] < 0.94))
+            convex is True or (convex is None and 0.34 < nz[i] < 0.94)
+            or (nz[i] >= _FRONT_COS > nz_min[i]))
         front = (not blend and nz[i] >= _FRONT_COS and seen_share[i] >= _SEEN_SHARE)
         out[i] = {"front": bool(front), "blend": bool(blend), "nz": float(nz[i]),
                   "width": float(width), "area": float(a_face[i]),
