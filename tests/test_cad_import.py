@@ -128,6 +128,11 @@ def test_the_loop_is_the_face_side_line_of_the_round_and_normals_are_exact(strai
         lateral_all.append(lateral)
         n_face_z.append(w.n_face_H[flank, 2])
         n_wall_z.append(w.n_wall_H[flank, 2])
+        # everywhere: the wall normal points into the opening and is no face normal
+        chord = np.roll(w.p_HE, -1, axis=0) - np.roll(w.p_HE, 1, axis=0)
+        left = np.c_[-chord[:, 1], chord[:, 0]] / np.linalg.norm(chord[:, :2], axis=1)[:, None]
+        assert np.einsum("ij,ij->i", w.n_wall_H[:, :2], left).min() > 0.5
+        assert np.einsum("ij,ij->i", w.n_wall_H, w.n_face_H).max() < 0.6
     lateral_all = np.concatenate(lateral_all)
     np.testing.assert_allclose(lateral_all, expected, atol=0.02)
     np.testing.assert_allclose(np.concatenate(n_face_z), 1.0, atol=1e-9)
@@ -222,3 +227,18 @@ def test_bad_cad_files_are_refused_naming_what_is_wrong(tmp_path, capsys):
         assert main(["-q", "hub", "import", str(f), "--out", str(tmp_path / "out")]) == 2, f
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and re.search(pattern, err[0]), err
+
+
+def test_cl_reads_a_step_wheel(straight, tmp_path):
+    """``drakedeburr cl WHEEL.step --json``: the windows of the B-rep, in the file's frame (mm)
+    and on its edges."""
+    import json
+
+    out = tmp_path / "cl.json"
+    assert main(["-q", "cl", str(straight.step), "--method", "proposed", "--json",
+                 str(out)]) == 0
+    view = json.loads(out.read_text())["input"]
+    assert view["unit"] == "mm" and len(view["edges"]) == straight.windows
+    shape_edges = _edges_compound(read_cad(straight.step).shape)
+    p = np.array(view["edges"][0]["points"])[::10]  # resampled at 2 mm along the 0.5 mm loop
+    assert _distances_mm(shape_edges, p).max() <= ON_EDGE_MM

@@ -132,8 +132,8 @@ def _project_uv(face, p_mm) -> tuple[float, float]:
 
 
 def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.ndarray:
-    """Normal of the wall beyond a blend face at ``p_mm``: the blend's neighbour that is
-    neither front nor blend, nearest to the point."""
+    """Normal of the wall beyond a blend face at ``p_mm``: of the faces next to the blend (or
+    next to a neighbouring blend) that are neither front nor blend, the nearest."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
     from OCP.BRepGProp import BRepGProp_Face
@@ -141,7 +141,11 @@ def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.
 
     vtx = BRepBuilderAPI_MakeVertex(gp_Pnt(*p_mm)).Vertex()
     best, best_d = None, math.inf
-    for j in sorted(neighbours.get(blend_i, ())):
+    ring = set(neighbours.get(blend_i, ()))
+    for j in list(ring):  # a corner patch: the wall lies beyond the neighbouring rounds
+        if cls[j]["blend"]:
+            ring |= neighbours.get(j, set())
+    for j in sorted(ring):
         if j == front_i or cls[j]["front"] or cls[j]["blend"]:
             continue
         d = BRepExtrema_DistShapeShape(vtx, _face(fmap, j + 1))
