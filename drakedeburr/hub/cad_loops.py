@@ -131,9 +131,12 @@ def _project_uv(face, p_mm) -> tuple[float, float]:
     return proj.LowerDistanceParameters()
 
 
-def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.ndarray:
+def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm,
+                 tangent) -> np.ndarray:
     """Normal of the wall beyond a blend face at ``p_mm``: of the faces next to the blend (or
-    next to a neighbouring blend) that are neither front nor blend, the nearest."""
+    next to a neighbouring blend) that are neither front nor blend, the one whose nearest
+    point lies across the loop (square to its ``tangent``), the nearer at a tie (at a
+    window's corner both walls are near)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
     from OCP.BRepGProp import BRepGProp_Face
@@ -149,8 +152,13 @@ def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm) -> np.
         if j == front_i or cls[j]["front"] or cls[j]["blend"]:
             continue
         d = BRepExtrema_DistShapeShape(vtx, _face(fmap, j + 1))
-        if d.IsDone() and d.Value() < best_d:
-            best, best_d = j, d.Value()
+        if not d.IsDone():
+            continue
+        q = np.array(_xyz(d.PointOnShape2(1))) - np.asarray(p_mm)
+        along = abs(float(q @ tangent)) / max(float(np.linalg.norm(q)), 1e-9)
+        score = along + 0.1 * d.Value()  # [mm]: 0.1 of the cosine per mm farther
+        if score < best_d:
+            best, best_d = j, score
     if best is None:
         return None
     u, v = _project_uv(_face(fmap, best + 1), p_mm)
@@ -216,7 +224,8 @@ def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
             tan = np.array(_xyz(d)) * (1.0 if forward else -1.0)
             n_face = _face_normal(face, edge, t, pm)
             if cls[oi]["blend"]:
-                n_wall = _wall_normal(fmap, cls, neighbours, oi, fi, pm)
+                n_wall = _wall_normal(fmap, cls, neighbours, oi, fi, pm,
+                                      tan / max(np.linalg.norm(tan), 1e-30))
                 if n_wall is None:
                     n_wall = _face_normal(other, edge, t, pm)
             else:
