@@ -32,7 +32,7 @@ __all__ = ["import_cad", "cad_windows", "CAD_IMPORT_VERSION"]
 
 log = logging.getLogger(__name__)
 
-CAD_IMPORT_VERSION = 4  # 4: the wall across the loop at corners; 3: 3: the wall beyond a corner patch; 2: corner patches are blends
+CAD_IMPORT_VERSION = 4  # 4: the wall across the loop at corners; 3: the wall beyond a corner patch; 2: corner patches are blends
 
 
 def _frame(cad, mesh, options):
