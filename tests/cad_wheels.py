@@ -17,7 +17,9 @@ model has by construction. Run as a script to write all kinds into a folder.
 
 Dimensions [mm] (a 17 in class wheel, 430 mm over the flange): barrel 188-194 mm radius,
 flange to 215 mm; disc face at z = -12, the centre recessed to -18, back at -40; lip cone from
-(r 176, z -12) to (r 200, z 0); windows from r 82 to 184.
+(r 176, z -12) to (r 200, z 0), the disc face running into it through a 20 mm round
+(``LIP_BLEND``); windows from r 82 to 184 with 7 mm plan corners (``CORNER``; half that where
+the kernel cannot round the window edges of 7, see ``CadWheel.corner_mm``).
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ R_IN, R_OUT = 82.0, 184.0  # window radial extent [mm]
 DRAFT_DEG = 3.0  # window wall draft (the opening narrows towards the back)
 EDGE_ROUND = 1.0  # [mm] fillet on the window's front edge
 CORNER = 7.0  # [mm] plan-view corner radius of a window
+LIP_BLEND = 20.0  # [mm] round between the disc face and the lip cone (profile)
 Z_FACE, Z_BACK = -12.0, -40.0
 Z_CUT_TOP = 2.0  # the window cuts start (full size) this far above z = 0
 SPOKE_WIDTH = 34.0  # straight spokes, at the top of the cut [mm]
@@ -50,15 +53,21 @@ class CadWheel:
     stl: dict
     windows: int  # windows by construction
     edge_round_mm: float
+    corner_mm: float  # plan-view corner radius of the windows (0: sharp)
 
 
 def _body():
-    from build123d import Axis, Plane, Polyline, make_face, revolve
+    """The revolved rim and disc; the disc face runs into the lip cone through a round of
+    LIP_BLEND (a tangent-continuous front surface, as a cast wheel's)."""
+    from build123d import Axis, Plane, Polyline, fillet, make_face, revolve
 
     prof = Polyline((0, -18), (70, -18), (80, Z_FACE), (176, Z_FACE), (200, 0), (215, 0),
                     (215, -10), (194, -16), (194, -200), (203, -205), (203, -212), (188, -212),
                     (188, Z_BACK), (0, Z_BACK), close=True)
-    return revolve(Plane.XZ * make_face(prof), Axis.Z)
+    face = make_face(prof)
+    crease = min(face.vertices(), key=lambda v: math.hypot(v.X - 176, v.Y - Z_FACE))
+    face = fillet([crease], LIP_BLEND)
+    return revolve(Plane.XZ * face, Axis.Z)
 
 
 def _band(width, r0, r1, angle, lateral=0.0):
@@ -103,30 +112,51 @@ def _window_regions(kind):
 
 
 def _round_corners(face, radius):
-    """Plan-view corner radii: ``radius``, smaller where the kernel cannot fit it."""
+    """Plan-view corner radii: ``radius``, smaller where the kernel cannot fit it. (build123d's
+    ``fillet`` of one face of a sketch returns every face of the sketch, the others unrounded:
+    the rounded face is the one with the original's centre.)"""
     from build123d import fillet
 
     for r in (radius, 0.5 * radius, 0.25 * radius):
         try:
-            return fillet(face.vertices(), r)
+            faces = fillet(face.vertices(), r).faces()
         except ValueError:
             continue
+        c = face.center()
+        return min(faces, key=lambda f: (f.center() - c).length)
     return face
 
 
-def build(kind: str):
-    """The wheel solid (build123d Part, mm) and its window count."""
-    from build123d import Cylinder, Plane, Pos, extrude
-
+def build(kind: str, corner: float | None = None):
+    """(the wheel solid (build123d Part, mm), its window count, the plan-view corner radius
+    [mm] its windows were cut with). The corner radius is ``corner``, else :data:`CORNER` or,
+    where the kernel cannot round the window edges of that (the Y wheel's narrow windows
+    between the arms), half of it, else sharp corners."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    tries = (corner,) if corner is not None else (CORNER, 0.5 * CORNER, 0.0)
+    for i, r in enumerate(tries):
+        try:
+            wheel, n = _build(kind, r)
+        except ValueError:
+            if i == len(tries) - 1:
+                raise
+            continue
+        return wheel, n, r
+    raise AssertionError("unreachable")
+
+
+def _build(kind: str, corner: float):
+    from build123d import Cylinder, Plane, Pos, extrude
+
     wheel = _body()
     regions, pockets = _window_regions(kind)
     depth = Z_BACK - Z_CUT_TOP
     taper = DRAFT_DEG
     cuts = []
     for f in regions:
-        f = _round_corners(f, CORNER)
+        if corner > 0:
+            f = _round_corners(f, corner)
         cuts.append(extrude(Plane.XY.offset(Z_CUT_TOP) * f, amount=Z_CUT_TOP - depth,
                             dir=(0, 0, -1),
                             taper=taper))
@@ -150,13 +180,17 @@ def _round_window_edges(wheel):
 
     front = [f for f in wheel.faces()
              if (f.geom_type == GeomType.PLANE and abs(f.center().Z - Z_FACE) < 1e-6)
-             or f.geom_type == GeomType.CONE]
-    edges = []
+             or f.geom_type in (GeomType.CONE, GeomType.TORUS)]
+    edges, seen = [], {}
     for f in front:
         for e in f.edges():
-            c = e.center()
-            if R_IN - 1 < math.hypot(c.X, c.Y) < R_OUT + 2 and e.length > 0.5:
-                edges.append(e)
+            seen[e] = seen.get(e, 0) + 1
+    for e, n in seen.items():
+        c = e.center()
+        # n == 2: the crease where the disc face meets the lip cone (over a spoke), no
+        # window edge
+        if n == 1 and R_IN - 1 < math.hypot(c.X, c.Y) < R_OUT + 2 and e.length > 0.5:
+            edges.append(e)
     return wheel.fillet(EDGE_ROUND, edges)
 
 
@@ -165,7 +199,7 @@ def make_wheel(kind: str, out_dir: str | Path, formats=("step", "iges", "stl")) 
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    wheel, n = build(kind)
+    wheel, n, corner = build(kind)
     step = out / f"{kind}.step"
     export_step(wheel, str(step))
     iges = out / f"{kind}.iges"
@@ -175,7 +209,7 @@ def make_wheel(kind: str, out_dir: str | Path, formats=("step", "iges", "stl")) 
     for name, (tol, ang) in STL_TOLERANCES.items() if "stl" in formats else ():
         stl[name] = out / f"{kind}_{name}.stl"
         export_stl(wheel, str(stl[name]), tolerance=tol, angular_tolerance=ang)
-    return CadWheel(kind, step, iges, stl, n, EDGE_ROUND)
+    return CadWheel(kind, step, iges, stl, n, EDGE_ROUND, corner)
 
 
 def _export_iges(wheel, path: Path) -> None:

@@ -157,9 +157,24 @@ def test_iges_reads_the_same_windows(straight, straight_windows):
         assert d.max() <= ON_EDGE_MM, d.max()  # on the STEP's B-rep edges
 
 
+def _loop_edges_compound(cw):
+    """The edges of the windows' B-rep loops (the front boundaries) as one compound."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    comp, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(comp)
+    for k in cw["kept"]:
+        for e in k["loop"].edges:
+            builder.Add(comp, e)
+    return comp
+
+
 def test_mesh_export_loops_near_the_brep_edges(straight, straight_windows):
     """Issue 42 item 5: loops from the fine STL export of the same wheel within its chordal
-    tolerance + 0.1 mm of the B-rep edges (the mesh extraction of drakedeburr.hub.extract)."""
+    tolerance + 0.1 mm of the B-rep's window edges (the edges the STEP loops run on; not any
+    B-rep edge: the disc face's crease 1.9 mm from a window's inner end is an edge too) - the
+    mesh extraction of drakedeburr.hub.extract."""
     from drakedeburr.hub.extract import extract_window_edges
     from drakedeburr.hub.mesh_io import load_hub_mesh
 
@@ -170,15 +185,17 @@ def test_mesh_export_loops_near_the_brep_edges(straight, straight_windows):
     except InputError as exc:
         pytest.xfail(f"mesh extraction refuses the CAD wheel's export: {exc}"[:300])
     assert len(res.windows) == straight.windows
-    edges = _edges_compound(read_cad(straight.step).shape)
-    worst = 0.0
+    edges = _loop_edges_compound(straight_windows)
+    d = []
     for w in res.windows:
         X = res.X_MH
-        p = (w.p_HE[::10] @ X[:3, :3].T + X[:3, 3]) * 1e3
-        worst = max(worst, float(_distances_mm(edges, p).max()))
+        d.append(_distances_mm(edges, (w.p_HE[::2] @ X[:3, :3].T + X[:3, 3]) * 1e3))
+    d = np.concatenate(d)
+    worst = float(d.max())
     if worst > tol + 0.1:
-        pytest.xfail(f"mesh loops reach {worst:.3f} mm from the B-rep edges (allowed "
-                     f"{tol + 0.1:.2f} mm): today's mesh extraction")
+        pytest.xfail(f"mesh loops reach {worst:.3f} mm from the B-rep window edges (allowed "
+                     f"{tol + 0.1:.2f} mm; {np.mean(d <= tol + 0.1):.1%} of the points within "
+                     "it): today's mesh extraction")
     assert worst <= tol + 0.1
 
 
@@ -242,3 +259,53 @@ def test_cl_reads_a_step_wheel(straight, tmp_path):
     shape_edges = _edges_compound(read_cad(straight.step).shape)
     p = np.array(view["edges"][0]["points"])[::10]  # resampled at 2 mm along the 0.5 mm loop
     assert _distances_mm(shape_edges, p).max() <= ON_EDGE_MM
+
+
+def test_loop_frames_are_square_and_turn_no_faster_than_the_corners(straight_windows):
+    """The frames the planner turns the tool with: per loop point t square to both normals
+    and along the loop, and from point to point (0.5 mm apart) turning no faster than the
+    wheel's tightest plan corner allows (the 7 mm corner radius less the 1 mm edge round on
+    either side): exact B-rep normals jump by up to 27 deg where the disc face meets the lip
+    cone and by a corner's whole turn where two walls meet."""
+    step_mm = ImportOptions().edge_spacing * 1e3
+    bound = step_mm / (cad_wheels.CORNER - 2 * cad_wheels.EDGE_ROUND)  # [rad] per step
+    for w in straight_windows["windows"]:
+        t, nw, nf = w.t_H, w.n_wall_H, w.n_face_H
+        np.testing.assert_allclose(np.linalg.norm(nw, axis=1), 1.0, atol=1e-9)
+        assert np.abs(np.einsum("ij,ij->i", t, nw)).max() < 1e-9
+        assert np.abs(np.einsum("ij,ij->i", t, nf)).max() < 1e-9
+        chord = np.roll(w.p_HE, -1, axis=0) - np.roll(w.p_HE, 1, axis=0)
+        assert np.einsum("ij,ij->i", t, chord).min() > 0
+        seg = np.linalg.norm(np.roll(w.p_HE, -1, axis=0) - w.p_HE, axis=1) * 1e3
+        assert seg.max() <= step_mm + 1e-6
+        for v in (t, nw, nf):
+            turn = np.arccos(np.clip(np.einsum("ij,ij->i", v, np.roll(v, -1, axis=0)), -1, 1))
+            assert turn.max() <= bound, (w.index, float(turn.max()), bound)
+
+
+def test_hub_import_folder_loads_with_the_loops_nurbs(straight, tmp_path):
+    """``hub import WHEEL.step``: the folder loads as a hub (load_hub, the hub edges' member
+    check), with the windows of the B-rep, and each loop's NURBS (poles, weights, knots in H)
+    evaluated independently (scipy's B-spline of the homogeneous poles) runs along the loop's
+    points within 0.02 mm both ways."""
+    from scipy.interpolate import BSpline
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.hub.import_cad import import_cad
+    from drakedeburr.hub.model import load_hub
+
+    res = import_cad(straight.step, tmp_path / "hubs")
+    hub = load_hub(res.dir)
+    assert len(hub.windows) == straight.windows
+    with np.load(res.dir / "edges.npz") as data:
+        for w in hub.windows:
+            poles, wts = data[f"w{w.index}_nurbs_poles"], data[f"w{w.index}_nurbs_weights"]
+            knots = data[f"w{w.index}_nurbs_knots"]
+            k = int(data[f"w{w.index}_nurbs_degree"].ravel()[0])  # stored as one float
+            u = np.linspace(knots[k], knots[-k - 1], 60000)
+            q = BSpline(knots, poles * wts[:, None], k)(u) / BSpline(knots, wts, k)(u)[:, None]
+            d_loop = cKDTree(q).query(w.p_HE)[0]
+            d_curve = cKDTree(w.p_HE).query(q)[0]
+            assert d_loop.max() * 1e3 <= ON_EDGE_MM, d_loop.max()
+            # the loop's points are 0.5 mm apart: a curve point is within half of that
+            assert d_curve.max() * 1e3 <= 0.25 + ON_EDGE_MM, d_curve.max()

@@ -42,7 +42,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.hub.mesh_io import CAD_SUFFIXES
 
 __all__ = ["CAD_SUFFIXES", "CadSolid", "read_cad", "tessellate", "barrel_axis", "classify_faces",
-           "BLEND_MAX_WIDTH", "DEFAULT_CHORDAL_TOLERANCE"]
+           "BLEND_MAX_WIDTH", "DEFAULT_CHORDAL_TOLERANCE", "face_at", "xyz"]
 
 log = logging.getLogger(__name__)
 
@@ -242,7 +242,7 @@ def _checked(path: Path, shape, unit: str, kind: str) -> CadSolid:
                     path, faces.Extent(), shells.Extent())
     if not BRepCheck_Analyzer(shape).IsValid():
         for i in range(1, faces.Extent() + 1):
-            if not BRepCheck_Analyzer(_face(faces, i)).IsValid():
+            if not BRepCheck_Analyzer(face_at(faces, i)).IsValid():
                 raise InputError(f"{path}: face {i} of {faces.Extent()} is not a valid "
                                  "B-rep face (OpenCASCADE BRepCheck); repair the model")
         raise InputError(f"{path}: the B-rep is not valid (OpenCASCADE BRepCheck: edges or "
@@ -272,14 +272,14 @@ def tessellate(cad: CadSolid, chordal: float = DEFAULT_CHORDAL_TOLERANCE,
     TopExp.MapShapes_s(cad.shape, TopAbs_FACE, fmap)
     V, F, owner, base = [], [], [], 0
     for i in range(1, fmap.Extent() + 1):
-        face = _face(fmap, i)
+        face = face_at(fmap, i)
         loc = TopLoc_Location()
         tri = BRep_Tool.Triangulation_s(face, loc)
         if tri is None:
             raise InputError(f"{cad.source}: face {i} could not be meshed at "
                              f"{chordal * 1e3:g} mm (OpenCASCADE BRepMesh)")
         trsf = loc.Transformation()
-        nodes = np.array([_xyz(tri.Node(j).Transformed(trsf))
+        nodes = np.array([xyz(tri.Node(j).Transformed(trsf))
                           for j in range(1, tri.NbNodes() + 1)])
         tris = np.array([tri.Triangle(j).Get() for j in range(1, tri.NbTriangles() + 1)]) - 1
         if face.Orientation() == TopAbs_REVERSED:
@@ -299,14 +299,15 @@ def tessellate(cad: CadSolid, chordal: float = DEFAULT_CHORDAL_TOLERANCE,
     return V, F[ok], owner[ok], fmap
 
 
-def _face(fmap, i: int):
+def face_at(fmap, i: int):
     """The i-th (1-based) face of an indexed map, as a TopoDS_Face."""
     from OCP.TopoDS import TopoDS
 
     return TopoDS.Face(fmap.FindKey(i))
 
 
-def _xyz(p) -> tuple[float, float, float]:
+def xyz(p) -> tuple[float, float, float]:
+    """The coordinates of an OpenCASCADE point or vector (gp_Pnt, gp_Vec, gp_Dir)."""
     return (p.X(), p.Y(), p.Z())
 
 
@@ -333,8 +334,8 @@ def barrel_axis(cad: CadSolid) -> tuple[np.ndarray, np.ndarray] | None:
         BRepGProp.SurfaceProperties_s(face, props)
         if props.Mass() > best_area:
             ax = surf.Cylinder().Axis()
-            best_area, best = props.Mass(), (np.array(_xyz(ax.Direction())),
-                                             np.array(_xyz(ax.Location())) * cad.scale)
+            best_area, best = props.Mass(), (np.array(xyz(ax.Direction())),
+                                             np.array(xyz(ax.Location())) * cad.scale)
     return best
 
 
@@ -391,7 +392,7 @@ def classify_faces(cad: CadSolid, V_H, F, owner, fmap) -> dict:
     np.minimum.at(nz_min, owner, cross[:, 2] / np.maximum(2.0 * area, 1e-30))
     out = {}
     for i in range(n):
-        face = _face(fmap, i + 1)
+        face = face_at(fmap, i + 1)
         props = GProp_GProps()
         BRepGProp.LinearProperties_s(face, props)
         width = 2.0 * a_face[i] / max(props.Mass() * cad.scale, 1e-12)

@@ -10,9 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drakedeburr.hub.cad import CadSolid, _face, _xyz
+from drakedeburr.hub.cad import CadSolid, face_at, xyz
 
-__all__ = ["CadLoop", "cad_loops", "boundary_chains", "join_nurbs", "nurbs_arrays"]
+__all__ = ["CadLoop", "cad_loops", "boundary_chains", "join_nurbs", "nurbs_arrays",
+           "continuous_frames", "SMOOTH_HALF_LENGTH"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,7 +119,7 @@ def _face_normal(face, edge, t: float, p_mm) -> np.ndarray:
         u, v = _project_uv(face, p_mm)
     pnt, vec = gp_Pnt(), gp_Vec()
     pf.Normal(u, v, pnt, vec)
-    n = np.array(_xyz(vec))
+    n = np.array(xyz(vec))
     return n / max(np.linalg.norm(n), 1e-30)
 
 
@@ -151,20 +152,20 @@ def _wall_normal(fmap, cls, neighbours, blend_i: int, front_i: int, p_mm,
     for j in sorted(ring):
         if j == front_i or cls[j]["front"] or cls[j]["blend"]:
             continue
-        d = BRepExtrema_DistShapeShape(vtx, _face(fmap, j + 1))
+        d = BRepExtrema_DistShapeShape(vtx, face_at(fmap, j + 1))
         if not d.IsDone():
             continue
-        q = np.array(_xyz(d.PointOnShape2(1))) - np.asarray(p_mm)
+        q = np.array(xyz(d.PointOnShape2(1))) - np.asarray(p_mm)
         along = abs(float(q @ tangent)) / max(float(np.linalg.norm(q)), 1e-9)
         score = along + 0.1 * d.Value()  # [mm]: 0.1 of the cosine per mm farther
         if score < best_d:
             best, best_d = j, score
     if best is None:
         return None
-    u, v = _project_uv(_face(fmap, best + 1), p_mm)
+    u, v = _project_uv(face_at(fmap, best + 1), p_mm)
     pnt, vec = gp_Pnt(), gp_Vec()
-    BRepGProp_Face(_face(fmap, best + 1)).Normal(u, v, pnt, vec)
-    n = np.array(_xyz(vec))
+    BRepGProp_Face(face_at(fmap, best + 1)).Normal(u, v, pnt, vec)
+    n = np.array(xyz(vec))
     return n / max(np.linalg.norm(n), 1e-30)
 
 
@@ -196,7 +197,7 @@ def _chain_point(chain) -> np.ndarray:
     from OCP.BRepAdaptor import BRepAdaptor_Curve
 
     c = BRepAdaptor_Curve(chain[0][0])
-    return np.array(_xyz(c.Value(0.5 * (c.FirstParameter() + c.LastParameter()))))
+    return np.array(xyz(c.Value(0.5 * (c.FirstParameter() + c.LastParameter()))))
 
 
 def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
@@ -216,12 +217,12 @@ def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
             else list(np.linspace(a, b, n))
         if not forward:
             ts = ts[::-1]
-        face, other = _face(fmap, fi + 1), _face(fmap, oi + 1)
+        face, other = face_at(fmap, fi + 1), face_at(fmap, oi + 1)
         for t in ts[:-1]:
             p, d = gp_Pnt(), gp_Vec()
             c.D1(t, p, d)
-            pm = _xyz(p)
-            tan = np.array(_xyz(d)) * (1.0 if forward else -1.0)
+            pm = xyz(p)
+            tan = np.array(xyz(d)) * (1.0 if forward else -1.0)
             n_face = _face_normal(face, edge, t, pm)
             if cls[oi]["blend"]:
                 n_wall = _wall_normal(fmap, cls, neighbours, oi, fi, pm,
@@ -237,11 +238,54 @@ def _sample_chain(cad, fmap, cls, neighbours, chain, spacing: float) -> CadLoop:
     pts, tans, nf, nw = (np.array(a) for a in (pts, tans, nf, nw))
     keep = np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1) > 1e-4  # [mm] (tiny edges)
     pts, tans, nf, nw = pts[keep], tans[keep], nf[keep], nw[keep]
+    exact_t = tans
+    nw, nf, tans = continuous_frames(pts * cad.scale, tans, nw, nf, spacing)
     return CadLoop(p=np.array(pts) * cad.scale, t=np.array(tans), n_face=np.array(nf),
                    n_wall=np.array(nw), edges=[e for e, *_ in chain],
+                   info={"exact_t": exact_t},
                    faces=[(fi, oi) for _, _, fi, oi in chain],
                    blended=[bool(cls[oi]["blend"]) for *_, oi in chain],
                    nurbs=join_nurbs(chain))
+
+
+#: [m] half-length of the running mean of the normals along a loop: the mesh import's
+#: (``import_mesh``: each normal averaged with 3 neighbours either side at its 0.5 mm spacing)
+SMOOTH_HALF_LENGTH = 1.5e-3
+
+
+def _unit_rows(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-30)
+
+
+def continuous_frames(p: np.ndarray, t: np.ndarray, n_wall: np.ndarray, n_face: np.ndarray,
+                      spacing: float, half_length: float = SMOOTH_HALF_LENGTH):
+    """(n_wall, n_face, t) (N, 3) of a closed loop ``p`` [m], continuous along it as the mesh
+    import's: the exact B-rep normals jump where the loop passes from one face pair to the
+    next (a crease of the front surface, a window corner where the walls of two sides meet,
+    the wall chosen beyond a corner patch of rounds), and the planner's frames, which turn the
+    tool with them, would jump too. Per point the wall normal is first made square to the
+    loop's exact tangent ``t`` (a wall normal nearly along the tangent is the wall of the next
+    side: the direction across the loop in the face stands in for it); both normals are then
+    averaged over ``half_length`` either side and ``t = n_wall x n_face``, turned along the
+    loop, as a mesh import's."""
+    from scipy.ndimage import uniform_filter1d
+
+    t = _unit_rows(np.asarray(t, float))
+    n_face = _unit_rows(np.asarray(n_face, float))
+    n_wall = np.asarray(n_wall, float)
+    across = _unit_rows(np.cross(n_face, t))  # in the face, square to the loop
+    across *= 1.0 if float(np.einsum("ij,ij->i", across, n_wall).sum()) >= 0 else -1.0
+    along = np.einsum("ij,ij->i", n_wall, t)
+    square = n_wall - along[:, None] * t
+    wrong = np.linalg.norm(square, axis=1) < 0.5  # within 30 deg of the tangent
+    square[wrong] = across[wrong]
+    size = 2 * max(1, int(round(half_length / spacing))) + 1
+    n_wall = _unit_rows(uniform_filter1d(_unit_rows(square), size, axis=0, mode="wrap"))
+    n_face = _unit_rows(uniform_filter1d(n_face, size, axis=0, mode="wrap"))
+    t_new = _unit_rows(np.cross(n_wall, n_face))
+    chord = np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0)
+    t_new[np.einsum("ij,ij->i", t_new, chord) < 0] *= -1.0
+    return n_wall, n_face, t_new
 
 
 def join_nurbs(chain):
@@ -269,11 +313,12 @@ def join_nurbs(chain):
 
 def nurbs_arrays(curve, scale: float, X_HM: np.ndarray) -> dict[str, np.ndarray]:
     """Poles (in H [m]), weights, flat knots and degree of a Geom_BSplineCurve."""
-    poles = np.array([_xyz(curve.Pole(i)) for i in range(1, curve.NbPoles() + 1)]) * scale
+    poles = np.array([xyz(curve.Pole(i)) for i in range(1, curve.NbPoles() + 1)]) * scale
     poles = poles @ X_HM[:3, :3].T + X_HM[:3, 3]
     weights = np.array([curve.Weight(i) for i in range(1, curve.NbPoles() + 1)])
     knots = []
     for i in range(1, curve.NbKnots() + 1):
         knots += [curve.Knot(i)] * curve.Multiplicity(i)
     return {"poles": poles, "weights": weights, "knots": np.array(knots),
-            "degree": np.array(curve.Degree())}
+            # a float: the hub loader takes float and text arrays only
+            "degree": np.array(float(curve.Degree()))}

@@ -32,9 +32,10 @@ __all__ = ["import_cad", "cad_windows", "CAD_IMPORT_VERSION"]
 
 log = logging.getLogger(__name__)
 
+# 5: normals square to the loop and continuous along it (cad_loops.continuous_frames);
 # 4: the wall across the loop at corners; 3: the wall beyond a corner patch; 2: corner
 # patches are blends
-CAD_IMPORT_VERSION = 4
+CAD_IMPORT_VERSION = 5
 
 
 def _frame(cad, mesh, options):
@@ -199,11 +200,11 @@ def _single_cylinder(fmap, loop) -> bool:
     from OCP.BRepAdaptor import BRepAdaptor_Surface
     from OCP.GeomAbs import GeomAbs_Cylinder
 
-    from drakedeburr.hub.cad import _face
+    from drakedeburr.hub.cad import face_at
 
     others = {o for _, o in loop.faces}
     return len(others) == 1 and BRepAdaptor_Surface(
-        _face(fmap, next(iter(others)) + 1)).GetType() == GeomAbs_Cylinder
+        face_at(fmap, next(iter(others)) + 1)).GetType() == GeomAbs_Cylinder
 
 
 def _signed_area(xy: np.ndarray) -> float:

@@ -1,4 +1,4 @@
-"""Tutorial 09: a STEP wheel - a CAD solid in, a verified robot program out.
+"""Tutorial 10: a STEP wheel - a CAD solid in, a verified robot program out.
 
 A wheel plant's design office sends the wheel as STEP (or IGES). The import reads the B-rep
 through OpenCASCADE, so the window loops are the model's own edges (lines, arcs, B-splines,
@@ -6,13 +6,13 @@ one NURBS per loop) and, on a rounded window edge, the line where the face meets
 the collision geometry is the B-rep tessellated at a stated chordal tolerance.
 
 1. the wheel: a parametric STEP wheel built with a CAD kernel (build123d, the test wheels of
-   ``tests/cad_wheels.py``: drafted windows with a 1 mm edge round that open into the rim's lip,
-   pockets behind the spokes); bring your own file instead;
+   ``tests/cad_wheels.py``: drafted windows with 7 mm corners and a 1 mm edge round that
+   open into the rim's lip, pockets behind the spokes); bring your own file instead;
 2. ``drakedeburr verify WHEEL.step -o PLAN``: import (units from the file, front side and its
    evidence, every opening that is no window with the reason), plan and verify;
-3. ``drakedeburr export PLAN -o Deburr.mod``: the program, only when the report passed (today
-   the straight wheel's window 0 fails the ``cone`` check by 2 mrad after a relaxed tilt box,
-   and export refuses: benchmarks/RESULTS.md "CAD wheels");
+3. ``drakedeburr export PLAN -o Deburr.mod``: the program, only when the report passed (the
+   straight wheel passes every required check: benchmarks/RESULTS.md "CAD wheels"; a report
+   that fails makes export refuse, which this step then shows instead);
 4. a window the burr cannot reach: the same wheel on a chuck 1.6 m from the robot; the report
    says per window what failed (out of the arm's reach) and ``export`` refuses.
 
@@ -84,9 +84,6 @@ def main() -> None:
     assert code in (0, 1), "a readable wheel ends in a report (pass or fail)"
 
     # 3. the program: only from a plan whose report passed ------------------------------------
-    # (benchmarks/RESULTS.md "CAD wheels": on the straight wheel window 0 plans in full but
-    # its report fails `cone` by 2 mrad after the recipe's tilt box was relaxed; export then
-    # refuses, which this step shows instead)
     program = out / "Deburr.mod"
     exported = run("export", str(plan), "-o", str(program))
     if code == 0:
