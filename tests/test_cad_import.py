@@ -234,7 +234,14 @@ def test_bad_cad_files_are_refused_naming_what_is_wrong(tmp_path, capsys):
         face.group(3) + ",", f"#{direction},")))
     nonsense = tmp_path / "nonsense.iges"
     nonsense.write_text("hello")
-    cases = [(cut, r"cut\.step: not a readable STEP file .*Line \d+"),
+    device = tmp_path / "zero.step"
+    device.symlink_to("/dev/zero")
+    big = tmp_path / "big.stp"
+    with open(big, "wb") as f:
+        f.truncate(2 << 30)  # sparse: no disk used
+    cases = [(device, r"zero\.step: CAD file is a character device; only regular files"),
+             (big, r"big\.stp: CAD file is 2 GiB, more than the mesh read limit of 1 GiB"),
+             (cut, r"cut\.step: not a readable STEP file .*Line \d+"),
              (broken, rf"broken\.step: 1 of 6 faces did not transfer: entity #{face.group(1)} "
                       r"ADVANCED_FACE"),
              (nonsense, r"nonsense\.iges: no IGES entity"),

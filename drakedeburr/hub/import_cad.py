@@ -315,6 +315,7 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
     """
     from manifold3d import Manifold
 
+    from drakedeburr._io import check_regular_file
     from drakedeburr.hub.import_mesh import (
         ImportedHub,
         ImportOptions,
@@ -330,8 +331,9 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
     t_start = time.perf_counter()
     options = options or ImportOptions()
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"CAD file {path} does not exist")
+    check_regular_file(path, "CAD file", "mesh")  # before hashing: no device, pipe or folder
     sha = _file_hash(path)
     key = _cache_key(sha, options, chordal_tolerance)
     name = _hub_name(path)
