@@ -125,7 +125,7 @@ def test_no_opening_and_bad_files(tmp_path):
         mut.extract_window_edges(box, source="box", axis_M=[0, 0, 1])
     bad = tmp_path / "x.step"
     bad.write_text("solid")
-    with pytest.raises(InputError, match="unsupported mesh type"):
+    with pytest.raises(InputError, match="a CAD solid"):
         load_hub_mesh(bad)
     with pytest.raises(FileNotFoundError):
         load_hub_mesh(tmp_path / "missing.stl")

@@ -123,8 +123,8 @@ def test_not_a_mesh_is_input_error(tmp_path, content, match):
 def test_unsupported_and_missing_files(tmp_path):
     f = tmp_path / "wheel.step"
     f.write_text("ISO-10303-21;")
-    with pytest.raises(InputError, match=r"wheel\.step.*unsupported"):
-        mut.import_mesh(f, tmp_path / "out")
+    with pytest.raises(InputError, match=r"wheel\.step: not a readable STEP file .*Line \d+"):
+        mut.import_mesh(f, tmp_path / "out")  # a STEP file goes to drakedeburr.hub.cad
     with pytest.raises(FileNotFoundError, match="missing.stl"):
         mut.import_mesh(tmp_path / "missing.stl", tmp_path / "out")
 
@@ -241,9 +241,14 @@ def test_gltf_and_off_read_as_the_stl(tmp_path):
         np.testing.assert_allclose(lm.mesh.bounds, ref.mesh.bounds, atol=1e-7)
     step = tmp_path / "hub.step"
     step.write_text("ISO-10303-21;")
-    with pytest.raises(InputError, match=r"hub\.step: unsupported mesh type '\.step' \(a CAD "
-                                         r"solid, not a triangle mesh\); export the hub as STL"):
+    with pytest.raises(InputError, match=r"hub\.step: a CAD solid \(B-rep\), not a triangle mesh: "
+                                         r"read it with drakedeburr\.hub\.cad"):
         load_hub_mesh(step)
+    native = tmp_path / "hub.sldprt"
+    native.write_text("x")
+    with pytest.raises(InputError, match=r"hub\.sldprt: unsupported mesh type '\.sldprt' \(a "
+                                         r"native CAD file; export STEP or IGES"):
+        load_hub_mesh(native)
     gltf = tmp_path / "hub.gltf"
     gltf.write_text("{}")
     with pytest.raises(InputError, match=r"hub\.gltf: .*separate buffer files.*\.glb"):

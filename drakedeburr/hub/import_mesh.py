@@ -518,9 +518,14 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     """
     from manifold3d import Manifold
 
+    from drakedeburr.hub.cad import CAD_SUFFIXES
     from drakedeburr.hub.import_output import import_summary, write_folder
     from drakedeburr.hub.mesh_io import check_mesh_file, load_hub_mesh
 
+    if Path(path).suffix.lower() in CAD_SUFFIXES:  # STEP/IGES: the B-rep's exact edges
+        from drakedeburr.hub.import_cad import import_cad
+
+        return import_cad(path, out_root, options=options, progress=progress)
     t_start = time.perf_counter()
     if options.refine not in ("cut", "coacd"):
         raise InputError(f"ImportOptions.refine must be 'cut' or 'coacd', got {options.refine!r}")

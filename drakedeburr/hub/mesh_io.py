@@ -16,6 +16,7 @@ import numpy as np
 from drakedeburr.errors import InputError
 
 __all__ = ["LoadedMesh", "load_hub_mesh", "MESH_SUFFIXES", "OTHER_MESH_SUFFIXES",
+           "CAD_SUFFIXES",
            "MESH_TARGET_SUFFIXES", "READABLE_FORMATS", "check_mesh_file"]
 
 log = logging.getLogger(__name__)
@@ -25,10 +26,12 @@ log = logging.getLogger(__name__)
 #: parts (a tyre and a rim, a scene graph) is read as one mesh with every part placed
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".dae", ".glb")
 READABLE_FORMATS = "STL, OBJ, PLY, OFF, COLLADA (.dae) or binary glTF (.glb)"
-#: files a user may bring that are not read: CAD solids (B-rep) and other mesh formats; they
-#: are refused with what to export instead
-_CAD = (".step", ".stp", ".iges", ".igs", ".x_t", ".sldprt", ".prt")
-OTHER_MESH_SUFFIXES = _CAD + (".3mf", ".fbx", ".3ds", ".blend", ".dxf", ".usd", ".usdz", ".gltf")
+#: STEP/IGES solids are read by drakedeburr.hub.cad (exact B-rep edges), not as a mesh;
+#: native CAD formats and other mesh formats are refused with what to export instead
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+_CAD = (".x_t", ".sldprt", ".prt")
+OTHER_MESH_SUFFIXES = CAD_SUFFIXES + _CAD + (".3mf", ".fbx", ".3ds", ".blend", ".dxf", ".usd",
+                                             ".usdz", ".gltf")
 #: a command's file argument with one of these is a mesh: read, or refused by name when read
 MESH_TARGET_SUFFIXES = MESH_SUFFIXES + OTHER_MESH_SUFFIXES
 _WHY_NOT = {".gltf": "its geometry may sit in separate buffer files, which the import's cache "
@@ -97,8 +100,12 @@ def load_hub_mesh(path: str | Path, unit: str | None = None) -> LoadedMesh:
     path = Path(path)
     check_mesh_file(path)
     suffix = path.suffix.lower()
+    if suffix in CAD_SUFFIXES:
+        raise InputError(f"{path}: a CAD solid (B-rep), not a triangle mesh: read it with "
+                         "drakedeburr.hub.cad (`hub import`, `verify` and `cl` do)")
     if suffix not in MESH_SUFFIXES:
-        what = _WHY_NOT.get(suffix, "a CAD solid, not a triangle mesh" if suffix in _CAD
+        what = _WHY_NOT.get(suffix, "a native CAD file; export STEP or IGES (read here) or "
+                            "a mesh" if suffix in _CAD
                             else "not a format read here")
         raise InputError(f"{path}: unsupported mesh type {path.suffix!r} ({what}); export the "
                          f"hub as {READABLE_FORMATS}")

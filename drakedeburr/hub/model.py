@@ -110,8 +110,9 @@ def resolve_hub_dir(name_or_dir: str | Path) -> Path:
     return _resolve(name_or_dir)
 
 
-#: the arrays of a hub's ``edges.npz``
-_EDGE_ARRAYS = re.compile(r"kinds|w\d{1,4}_(?:p_HE|t_H|n_wall_H|n_face_H)")
+#: the arrays of a hub's ``edges.npz`` (a CAD import adds each loop's NURBS)
+_EDGE_ARRAYS = re.compile(
+    r"kinds|w\d{1,4}_(?:p_HE|t_H|n_wall_H|n_face_H|nurbs_(?:poles|weights|knots|degree))")
 
 
 def _read_edges(path: Path, n_windows: int) -> tuple[WindowEdge, ...]:

@@ -46,12 +46,14 @@ def _windows_and_view(args: argparse.Namespace):
 
     from drakedeburr.hub.extract import extract_window_edges, resample_loop
     from drakedeburr.hub.inputview import input_view, input_view_of_hub
-    from drakedeburr.hub.mesh_io import MESH_TARGET_SUFFIXES, load_hub_mesh
+    from drakedeburr.hub.mesh_io import CAD_SUFFIXES, MESH_TARGET_SUFFIXES, load_hub_mesh
     from drakedeburr.hub.model import load_hub
     from drakedeburr.hub.types import WindowEdge
     from drakedeburr.units import m_from_mm
 
     path = Path(args.source)
+    if path.suffix.lower() in CAD_SUFFIXES:  # STEP/IGES: the B-rep's exact edges
+        return _cad_windows_and_view(path, args)
     if path.suffix.lower() in MESH_TARGET_SUFFIXES:  # read, or refused by name
         lm = load_hub_mesh(path, unit=args.unit)
         res = extract_window_edges(
@@ -69,6 +71,29 @@ def _windows_and_view(args: argparse.Namespace):
     windows = [WindowEdge(index=w.index, kind=w.kind, p_HE=resample_loop(w.p_HE, 2.0e-3))
                for w in hub.windows]
     return windows, input_view_of_hub(hub), f"hub {hub.name}"
+
+
+def _cad_windows_and_view(path, args: argparse.Namespace):
+    """:func:`_windows_and_view` of a STEP/IGES file: the B-rep's window loops, resampled at
+    the planners' 2 mm like a mesh's."""
+    from drakedeburr.hub.extract import resample_loop
+    from drakedeburr.hub.import_cad import read_cad_windows
+    from drakedeburr.hub.import_mesh import ImportOptions
+    from drakedeburr.hub.inputview import input_view
+    from drakedeburr.hub.types import WindowEdge
+    from drakedeburr.units import m_from_mm
+
+    width = args.min_window_width_mm
+    options = ImportOptions(front=args.front, burr_diameter=m_from_mm(args.burr_mm),
+                            clearance=m_from_mm(args.clearance_mm),
+                            min_window_width=None if width is None else m_from_mm(width))
+    cw = read_cad_windows(path, options)
+    windows = [WindowEdge(index=w.index, kind=w.kind, p_HE=resample_loop(w.p_HE, 2.0e-3))
+               for w in cw["windows"]]
+    notes = cw["notes"]
+    view = input_view(windows, cw["X_MH"], "mm", front=notes["front"],
+                      not_windows=notes["not_windows"] + notes["rejected"], source=str(path))
+    return windows, view, str(path)
 
 
 def _check_source(source: str) -> None:
