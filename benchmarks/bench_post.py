@@ -45,6 +45,10 @@ from drakedeburr.robots import IRB1600_10_120, fk_opw  # noqa: E402
 from drakedeburr.robots import IRB1600_10_120_ROBOT as ROBOT  # noqa: E402
 from drakedeburr.robots.opw_ik import ik_opw  # noqa: E402
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick",)
+
 BASELINE_COMMIT = "9ccafa3"  # main before the complete-CAM-post work
 WOBJ = [700.0, 0.0, 300.0, 0.0, 0.0, 30.0]
 GOTO = re.compile(r"^\s*GOTO\s*/\s*([^,]+),([^,]+),([^,\s]+)")

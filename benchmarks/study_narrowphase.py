@@ -25,6 +25,10 @@ from drakedeburr.verify.kinematics import VerifyKinematics
 from drakedeburr.verify.sampling import _samples
 from drakedeburr.verify.sweep import sweep
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--every", "20")
+
 
 def support(shape, X: np.ndarray, n: np.ndarray, hull: dict, key) -> float:
     """max over the shape (pose X in world) of n . x (:class:`ShapeSupport`, cached)."""
