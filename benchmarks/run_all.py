@@ -183,7 +183,8 @@ def render(benches: list[Benchmark], sections: dict[str, str]) -> str:
     sections of benchmarks that no longer exist are dropped)."""
     index = ["| benchmark | purpose |", "|---|---|"]
     for b in benches:
-        first = re.split(r"(?<=[.:;])\s", b.purpose, maxsplit=1)[0]
+        first = re.split(r"(?<=[.?])\s", b.purpose, maxsplit=1)[0]
+        first = first if len(first) <= 110 else first[:107].rsplit(" ", 1)[0] + " ..."
         index.append(f"| [{b.name}](#{b.name.replace('.', '')}) | {first} |")
     body = [sections.get(b.name) or placeholder(b) for b in benches]
     return HEADER + "\n" + "\n".join(index) + "\n\n" + "\n".join(body)
