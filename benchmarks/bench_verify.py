@@ -33,7 +33,7 @@ from drakedeburr.verify import cut_geometry, distances, program, sampling
 from drakedeburr.verify.checks import config_for_plan, verify_sampled
 
 # run_all.py: the reference run and a fast one (benchmarks/README.md)
-FULL_ARGS = ()
+FULL_ARGS = ("--cli",)
 QUICK_ARGS = ("--quick",)
 
 #: the previous implementation of the distance stage (main before the certificate)
