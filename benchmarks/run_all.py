@@ -149,6 +149,7 @@ def run_one(bench: Benchmark, quick: bool, timeout: float | None) -> tuple[str, 
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
     env["PYTHONUNBUFFERED"] = "1"
     commit = git_commit()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     t0 = time.perf_counter()
     try:
         proc = subprocess.run([sys.executable, str(HERE / bench.name), *args], cwd=ROOT,
@@ -159,13 +160,13 @@ def run_one(bench: Benchmark, quick: bool, timeout: float | None) -> tuple[str, 
         out = exc.stdout.decode() if isinstance(exc.stdout, bytes) else (exc.stdout or "")
         err = f"stopped after the {timeout:.0f} s timeout"
     took = time.perf_counter() - t0
-    mode = ("quick (2 shared cores: a fast regeneration; the reference run is "
-            f"`{bench.command(False)}`)" if quick and bench.quick_args != bench.full_args
-            else "full")
+    mode = (f"quick (a fast regeneration; the reference run is `{bench.command(False)}`)"
+            if quick and bench.quick_args != bench.full_args else "full")
     status = "exit 0" if rc == 0 else ("timed out" if rc is None else f"exit {rc} (FAILED)")
     lines = [f"## {bench.name}", "", bench.purpose, "",
              f"- command: `{bench.command(quick)}`", f"- mode: {mode}",
-             f"- commit: {commit}", f"- took: {took:.0f} s wall, {status}", "",
+             f"- commit: {commit}", f"- took: {took:.0f} s wall, {status}",
+             f"- machine: {os.cpu_count()} cores, load average {load:.1f} at the start", "",
              FENCE + "text", out.rstrip(), FENCE]
     if rc != 0:
         tail = "\n".join(err.rstrip().splitlines()[-15:])
