@@ -28,7 +28,7 @@ from drakedeburr.config import load_config
 
 # run_all.py: the reference run and a fast one (benchmarks/README.md)
 FULL_ARGS = ("--accel-sweep",)
-QUICK_ARGS = ("--quick",)
+QUICK_ARGS = ("--quick", "--accel-sweep")
 
 
 def _table(rows, header):
