@@ -224,13 +224,15 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     todo = [by_name[n] for n in wanted] if wanted else benches
     out = Path(args.output)
-    sections = split_sections(out.read_text()) if out.exists() else {}
     rc = 0
     try:
         for bench in todo:
             print(f"run_all: {bench.command(args.quick)}", flush=True)
-            sections[bench.name], ok = run_one(bench, args.quick, args.timeout)
+            section, ok = run_one(bench, args.quick, args.timeout)
             rc |= int(not ok)
+            # the file as it is now (another run may have written its sections meanwhile)
+            sections = split_sections(out.read_text()) if out.exists() else {}
+            sections[bench.name] = section
             write_atomic(out, render(benches, sections))
     except KeyboardInterrupt:
         return 130
