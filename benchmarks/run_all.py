@@ -127,14 +127,18 @@ def split_sections(text: str) -> dict[str, str]:
     return {k: "\n".join(v).rstrip() + "\n" for k, v in sections.items()}
 
 
-def git_commit() -> str:
-    """HEAD, with a note when the code a benchmark runs differs from it."""
+def git_commit(bench: str) -> str:
+    """HEAD, with a note when the code benchmark ``bench`` runs (the package, the benchmark's
+    own file and the helpers of this folder) differs from it."""
+    others = [f":!benchmarks/{p.name}" for pattern in PATTERNS for p in HERE.glob(pattern)
+              if p.name != bench]
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
                               text=True, check=True).stdout.strip()
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--", "drakedeburr", "benchmarks",
-             ":!benchmarks/RESULTS.md", ":!benchmarks/README.md"],
+             ":!benchmarks/RESULTS.md", ":!benchmarks/README.md", ":!benchmarks/run_all.py",
+             *others],
             cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown (git not available)"
@@ -148,7 +152,7 @@ def run_one(bench: Benchmark, quick: bool, timeout: float | None) -> tuple[str, 
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
     env["PYTHONUNBUFFERED"] = "1"
-    commit = git_commit()
+    commit = git_commit(bench.name)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     t0 = time.perf_counter()
     try:
