@@ -147,8 +147,14 @@ def git_commit(bench: str) -> str:
 
 def run_one(bench: Benchmark, quick: bool, timeout: float | None) -> tuple[str, bool]:
     """Run ``bench``: its section of RESULTS.md, and whether it exited 0."""
-    tmp = tempfile.mkdtemp(prefix=f"run_all_{bench.name[:-3]}_")
-    args = [a.replace("{tmp}", tmp) for a in bench.args(quick)]
+    with tempfile.TemporaryDirectory(prefix=f"run_all_{bench.name[:-3]}_",
+                                     ignore_cleanup_errors=True) as tmp:
+        return _run_in(bench, quick, timeout, [a.replace("{tmp}", tmp)
+                                               for a in bench.args(quick)])
+
+
+def _run_in(bench: Benchmark, quick: bool, timeout: float | None,
+            args: list[str]) -> tuple[str, bool]:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
     env["PYTHONUNBUFFERED"] = "1"
