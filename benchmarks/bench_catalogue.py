@@ -21,6 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ("--seed", "1601", "--count", "60", "-j", "2", "--out", "{tmp}")
+QUICK_ARGS = (
+    "--seed", "1601", "--count", "1", "-j", "1", "--cells", "tool_in_hand", "--out", "{tmp}",
+)
+
 
 def _one_hub(args: tuple[int, int, str]) -> str:
     from drakedeburr.hub.randomhub import random_catalogue

@@ -29,6 +29,10 @@ import tempfile
 import time
 from pathlib import Path
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick",)
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)

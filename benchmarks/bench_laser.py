@@ -23,6 +23,10 @@ from drakedeburr.laser import FeatureSettings, plan_contour, plan_hole  # noqa: 
 from drakedeburr.laser import shapes as S  # noqa: E402
 from drakedeburr.laser.hole import ServoLimits  # noqa: E402
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick",)
+
 
 def _rate(fn, min_time: float) -> float:
     fn()  # warm-up: lazy imports, cached TOPP-RA plant

@@ -40,6 +40,10 @@ from drakedeburr.orientation import OrientOptions, problem_for, solve_problem
 from drakedeburr.orientation.commands import cl_points_from_edge
 from drakedeburr.orientation.models import make_problem
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick", "--no-busy", "--repeats", "3")
+
 
 def _solver_caches():
     """Every functools cache of the exact solver's modules (the band layout tables)."""

@@ -23,6 +23,10 @@ from drakedeburr.hub.types import WindowEdge
 from drakedeburr.path import METHODS, PlannerParams, cl_table
 from drakedeburr.path.synthetic import hub_like_window
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick",)
+
 ap = argparse.ArgumentParser()
 ap.add_argument("--quick", action="store_true", help="analytic windows and one hub only")
 ap.add_argument("--hubs", default="", help="comma-separated bundled hubs only (e.g. the demo's "

@@ -26,6 +26,10 @@ import numpy as np
 
 from drakedeburr.config import load_config
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ("--accel-sweep",)
+QUICK_ARGS = ("--quick", "--accel-sweep")
+
 
 def _table(rows, header):
     w = [max(len(str(r[i])) for r in rows + [header]) for i in range(len(header))]

@@ -45,6 +45,10 @@ from drakedeburr.robots import IRB1600_10_120, fk_opw  # noqa: E402
 from drakedeburr.robots import IRB1600_10_120_ROBOT as ROBOT  # noqa: E402
 from drakedeburr.robots.opw_ik import ik_opw  # noqa: E402
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--quick",)
+
 BASELINE_COMMIT = "9ccafa3"  # main before the complete-CAM-post work
 WOBJ = [700.0, 0.0, 300.0, 0.0, 0.0, 30.0]
 GOTO = re.compile(r"^\s*GOTO\s*/\s*([^,]+),([^,]+),([^,\s]+)")
@@ -71,16 +75,18 @@ def make_cam_file(path: Path, n: int, seed: int = 0) -> Path:
 
 
 def load_baseline() -> types.SimpleNamespace | None:
-    """The previous reader, spin solver and CL post, from git, as modules of this process."""
+    """The previous reader, spin solver and CL post, from git, as modules of this process,
+    with the modules they import from that commit's ``drakedeburr.post`` (the analytic IK and
+    the program record lived there then: loaded from git too, in dependency order)."""
     mods = {}
-    for name in ("cl_reader", "tool_axis", "cl_post"):
+    for name in ("opw", "opw_ik", "program", "cl_reader", "tool_axis", "cl_post"):
         try:
             src = subprocess.run(
                 ["git", "-C", str(REPO), "show", f"{BASELINE_COMMIT}:drakedeburr/post/{name}.py"],
                 capture_output=True, text=True, check=True).stdout
         except (OSError, subprocess.CalledProcessError):
             return None
-        src = re.sub(r"from drakedeburr\.post\.(cl_reader|tool_axis) import",
+        src = re.sub(r"from drakedeburr\.post\.(opw|opw_ik|program|cl_reader|tool_axis) import",
                      r"from baseline_\1 import", src)
         spec = importlib.util.spec_from_loader(f"baseline_{name}", loader=None)
         mod = importlib.util.module_from_spec(spec)

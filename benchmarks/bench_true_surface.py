@@ -21,6 +21,10 @@ import time
 
 import numpy as np
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--hubs", "h5_straight", "--repeat", "3", "--windows", "0")
+
 MODULE = "drakedeburr/cell/true_surface.py"
 
 

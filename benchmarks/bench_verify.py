@@ -32,6 +32,10 @@ import numpy as np
 from drakedeburr.verify import cut_geometry, distances, program, sampling
 from drakedeburr.verify.checks import config_for_plan, verify_sampled
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ("--cli",)
+QUICK_ARGS = ("--quick",)
+
 #: the previous implementation of the distance stage (main before the certificate)
 BASELINE = "2de1f4b"
 ROOT = Path(__file__).resolve().parent.parent

@@ -34,6 +34,10 @@ import numpy as np
 
 from drakedeburr.config import load_config
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ("--hub", "h5_straight", "--window", "0")
+QUICK_ARGS = ("--hub", "h5_straight", "--window", "0")
+
 V_BAND = 0.143  # [m/s] inside +-5 % of 150 mm/s
 V_DIP = 0.050  # [m/s] the dip's slowest speed
 HALF_SPAN = 0.05  # [m] optimised stretch: the slowest point +- this

@@ -13,6 +13,7 @@ Run:  PYTHONPATH=. python benchmarks/study_narrowphase.py [--plan DIR] [--every 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -24,6 +25,12 @@ from drakedeburr.verify.distances import pair_scene_of
 from drakedeburr.verify.kinematics import VerifyKinematics
 from drakedeburr.verify.sampling import _samples
 from drakedeburr.verify.sweep import sweep
+
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = (  # the window-0 plan bench_verify.py --quick leaves (run_all runs it first)
+    "--plan", "/tmp/bench_verify_plans/tool_in_hand_h5_straight_quick", "--every", "20",
+)
 
 
 def support(shape, X: np.ndarray, n: np.ndarray, hull: dict, key) -> float:
@@ -63,6 +70,9 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=5)
     ap.add_argument("--below", type=float, default=6.0, help="readings below this [mm]")
     args = ap.parse_args()
+    if not (Path(args.plan) / "plan.json").is_file():
+        raise SystemExit(f"study_narrowphase: no plan at {args.plan}: run "
+                         "benchmarks/bench_verify.py (--quick for the _quick folder) first")
     plan = load_plan(args.plan)
     config = config_for_plan(plan)
     cell = load_plan_cell(plan)

@@ -23,6 +23,10 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+# run_all.py: the reference run and a fast one (benchmarks/README.md)
+FULL_ARGS = ()
+QUICK_ARGS = ("--hubs", "h5_straight", "--cells", "tool_in_hand")
+
 RULES = ("frame", "joint_cost")
 
 

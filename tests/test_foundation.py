@@ -110,7 +110,22 @@ def test_atomic_write_gives_normal_permissions(tmp_path):
 
 
 def test_every_public_name_resolves():
-    """Each name re-exported at the top level exists in the module it is mapped to."""
+    """Each name re-exported at the top level is the object its defining module holds under
+    that name (a class or function, not renamed), or a value of a drakedeburr type."""
+    import importlib
+    import inspect
+
+    from drakedeburr.resources import hub_names
+
     for name in drakedeburr.__all__:
-        if name != "__version__":
-            assert getattr(drakedeburr, name) is not None, name
+        obj = getattr(drakedeburr, name)
+        if name == "__version__":
+            assert obj == drakedeburr.__version__ and obj.count(".") == 2, obj
+        elif inspect.isclass(obj) or inspect.isfunction(obj):
+            assert obj.__name__ == name, (name, obj.__name__)
+            assert obj.__module__.startswith("drakedeburr."), (name, obj.__module__)
+            assert getattr(importlib.import_module(obj.__module__), name) is obj, name
+        elif isinstance(obj, str):  # DEFAULT_HUB
+            assert obj in hub_names(), (name, obj)
+        else:  # BURR, IRB1600_10_120: instances of the package's own records
+            assert type(obj).__module__.startswith("drakedeburr."), (name, type(obj))

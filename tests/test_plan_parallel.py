@@ -12,13 +12,28 @@ from drakedeburr.resources import hub_names
 pytestmark = pytest.mark.skipif("h5_straight" not in hub_names(), reason="no bundled hub")
 
 
-def test_worker_count():
+def test_worker_count(monkeypatch):
+    import os
+
+    from drakedeburr.errors import InputError
     from drakedeburr.plan.parallel import worker_count
 
+    monkeypatch.delenv("DRAKEDEBURR_WORKERS", raising=False)
     assert worker_count(1, 5) == 1
     assert worker_count(8, 3) == 3
     assert worker_count(None, 1) == 1
-    assert worker_count(None, 64) >= 1
+    if hasattr(os, "sched_getaffinity"):  # unrequested: the cores this process may use
+        monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 2, 5})
+        assert worker_count(None, 64) == 3
+        assert worker_count(None, 2) == 2  # at most one per window
+    monkeypatch.setenv("DRAKEDEBURR_WORKERS", "4")  # the variable wins over the cores
+    assert worker_count(None, 64) == 4
+    assert worker_count(None, 3) == 3
+    assert worker_count(2, 64) == 2  # an explicit request wins over the variable
+    for bad in ("0", "two"):
+        monkeypatch.setenv("DRAKEDEBURR_WORKERS", bad)
+        with pytest.raises(InputError, match="DRAKEDEBURR_WORKERS"):
+            worker_count(None, 5)
 
 
 @pytest.mark.slow

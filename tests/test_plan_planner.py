@@ -90,9 +90,11 @@ def test_plan_has_no_failures_and_the_expected_structure(planned):
     assert plan.failures == ()
     assert [s.kind for s in plan.segments] == ["home", "approach", "cut", "retract", "home"]
     cut = [t for t in plan.targets if t.segment == "cut"]
-    # every CL point in order; via targets (cl_index -1) only between them
+    # every CL point in order; via targets (cl_index -1) only between them: the cut starts
+    # and ends on a CL point, and whatever lies between two CL points is a via
     assert [t.cl_index for t in cut if t.cl_index >= 0] == list(range(1, len(wt)))
-    assert all(t.cl_index == -1 for t in cut if t.cl_index < 0) and cut[-1].cl_index >= 0
+    assert cut[0].cl_index == 1 and cut[-1].cl_index == len(wt) - 1
+    assert {t.cl_index for t in cut} <= set(range(1, len(wt))) | {-1}
     assert sum(t.cl_index < 0 for t in cut) == plan.meta["windows"][0]["via_targets"]
     assert plan.targets[0].motion == "joint" and cut[0].motion == "linear"
     assert np.all(np.diff(plan.trajectory.t) > 0)

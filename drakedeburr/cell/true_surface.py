@@ -26,10 +26,10 @@ cone's deepest point, its in-centre (depth = in-radius): a sample whose in-centr
 a collision piece (which contains the material) keeps the pieces' reading, unless the hub's
 mesh is closed and consistently oriented and the in-centre lies outside it by the generalised
 winding number (libigl): a convex piece may bridge a concave corner or a fillet by more than
-the model excess (r271128_007: in-centres 1.6 mm outside the material, inside a piece). The largest
-depth over the surface is found by branch and bound over its triangles
-(:func:`true_surface_distances`); the reading is the bound's upper end, a lower bound of the
-signed distance within ``tolerance`` of it.
+the model excess (on an unseen catalogue hub, in-centres 1.6 mm outside the material lay
+inside a piece). The largest depth over the surface is found by branch and bound over its
+triangles (:func:`true_surface_distances`); the reading is the bound's upper end, a lower
+bound of the signed distance within ``tolerance`` of it.
 """
 
 from __future__ import annotations

@@ -45,26 +45,24 @@ points), the L-BFGS-B fallback in none.
 
 Why hand-written rather than a library (measured on h5_split windows 0 / 1, M = 204 / 76
 CL points, CPU time, 2 shared cores): the target is >= 100x faster than the source's PSO,
-whose 50 x 200 evaluations take ~300 / ~120 ms, i.e. an exact solve of ~1-3 ms. The
-previous version solved the Newton sub-problems as box QPs in a Drake ``MathematicalProgram``
-(Clarabel): ~5 ms fixed cost per QP, 25-186 ms per window. One Drake solve of the whole
+whose 50 x 200 evaluations take ~300 / ~120 ms, i.e. an exact solve of ~1-3 ms. The Newton
+sub-problems as box QPs in a Drake ``MathematicalProgram`` (Clarabel): ~5 ms fixed cost per
+QP, 25-186 ms per window. One Drake solve of the whole
 problem with the analytic gradient and a bounding box: SNOPT 1330 / 130 ms, IPOPT (quasi-
 Newton Hessian) hits its iteration limit after 100 / 38 s. scipy L-BFGS-B with the exact
 gradient: 324 / 116 evaluations, 540 / 115 ms (the problem is ill-conditioned: a discrete
-Laplacian along the loop, condition ~M^2). (Those figures were measured before theta_A's sign
-was flipped; L-BFGS-B re-run after it: 276 / 111 evaluations, same optimum within 3e-11.) This
-method: 6-8 Newton steps (11-17 banded solves), ~2.0 / ~1.3 ms CPU for a first solve of a
-fresh problem, see benchmarks/RESULTS.md.
+Laplacian along the loop, condition ~M^2; 276 / 111 evaluations with the current sign of
+theta_A, the same optimum within 3e-11). This method: 6-8 Newton steps (11-17 banded solves),
+~2.0 / ~1.3 ms CPU for a first solve of a fresh problem (``benchmarks/bench_orientation.py``).
 
-Cost per call (issue 19: the ratio to PSO must hold on a busy machine too): the solve is ~600
+Cost per call (the ratio to PSO must hold on a busy machine too): the solve is ~600
 small numpy / LAPACK calls, so it is written for a low fixed cost per call - no threaded BLAS
 anywhere (a dense G = C^T C product and OpenBLAS thread hand-offs made a first solve take
 5-20 ms on a loaded machine, the "22x under load"), G's bands in O(M), band layout tables
 built in few calls and cached per size, the model and the whole iteration in band numbering,
 LAPACK / BLAS on Fortran-ordered band arrays in place (no copies), ``ndarray.take`` and
-``count_nonzero`` instead of numpy's Python-level wrappers. The iterates are those of the
-previous implementation (tests/test_orientation_reference.py: the stored optima of 13 solves
-reproduced to 1e-12).
+``count_nonzero`` instead of numpy's Python-level wrappers. The iterates are pinned by
+tests/test_orientation_reference.py (the stored optima of 13 solves reproduced to 1e-12).
 
 ``paper`` model: its global minimum is known in closed form - any constant pair inside the box
 has objective 0 (the degeneracy documented in models.py) - so the exact solver returns the

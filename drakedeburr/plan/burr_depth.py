@@ -1,29 +1,32 @@
-"""How deep the burr goes into the hub along a planned window, and the tool points moved out
-where it would go deeper than the verifier allows.
+"""How deep the burr goes into the hub along a planned window, and the tool points moved out where
+it would go deeper than the verifier allows.
 
 The CL targets put the flank's cutting circle ``depth_of_cut`` into the material from the
 deburring line along the wall's normal (:func:`drakedeburr.plan.targets.tool_point_H`). On a
-square edge under a flank at about 45 degrees the line is the deepest point the flank
-reaches. Not so where:
+square edge under a flank at about 45 degrees the line is the deepest point the flank reaches.
+Not so where:
 
 * the edge is rounded: the line is the round's face-side tangent line (docs/hub.md) and the
   round below it stands out into the opening, by up to its radius under a steep flank;
-* the edge is acute: on a dished face the face falls toward the opening (r271128_017: the face
-  normal 38 degrees off the hub axis, 53 degrees of material at the edge), and a flank about
+* the edge is acute: on a dished face the face falls toward the opening, and a flank about
   parallel to the face lies in it over a band several millimetres wide.
 
-On r271128_017 the burr went 1.39-1.63 mm into the material against the verifier's
-``burr_contact`` bound of depth of cut + ``edge_deviation`` (1.37 mm), at 445 samples of four
-windows, and nothing in planning read it. So a planned window is read the way the verifier
-reads it (the burr head's cone against the hub's triangle mesh,
-:func:`drakedeburr.cell.true_surface.true_surface_distances`), on the executed approach, cut
-and retract. Where it goes deeper than the bound less :data:`MARGIN`, those CL targets' tool
-points move out of the material along the reading's gradient (forward differences over
-0.1 mm) by the excess over the gradient's size, spread to the neighbouring targets, and the
+So a planned window is read the way the verifier reads it (the burr head's cone against the
+hub's triangle mesh, :func:`drakedeburr.cell.true_surface.true_surface_distances`), on the
+executed approach, cut and retract, against the verifier's ``burr_contact`` bound (depth of cut
++ ``edge_deviation``). Where it goes deeper than that bound less :data:`MARGIN`, those CL
+targets' tool points move out of the material along the reading's gradient (forward differences
+over 0.1 mm) by the excess over the gradient's size, spread to the neighbouring targets, and the
 window is planned again (at most :data:`ROUNDS` times). The deburring line stays engaged:
 ``burr_engagement`` accepts it from just touching (-``edge_deviation``) and a tool point never
-moves by more than the depth of cut. The move is a departure from the recipe and recorded as
-one (``WindowStats.chamfer_relief``, ``plan.meta["recipe_deviations"]``).
+moves by more than the depth of cut. The move is a departure from the recipe and recorded as one
+(``WindowStats.chamfer_relief``, ``plan.meta["recipe_deviations"]``).
+
+Design notes: on an unseen catalogue hub with a 62 mm dish (hub r271128_017 of ``drakedeburr hub
+random --seed 271128``: the face normal 38 degrees off the hub axis, 53 degrees of material at
+the edge) the burr went 1.39-1.63 mm into the material against the verifier's ``burr_contact``
+bound of depth of cut + ``edge_deviation`` (1.37 mm), at 445 samples of four windows, while
+nothing in planning read it; this module is the planner's reading of it.
 """
 
 from __future__ import annotations
@@ -137,7 +140,7 @@ def relieved_offsets(hub_model, X_HT: np.ndarray, p_HQ: np.ndarray, offset: np.n
         return offset, worst
     # the excess' gradient in the tool's position (forward differences): the way out of the
     # material, which a steep flank on a round, or a flank lying along a dished face at an
-    # acute edge (r271128_017: along the hub axis, not the wall normal), decide
+    # acute edge of a dished face (along the hub axis, not the wall normal), decide
     grad = np.zeros((len(over), 3))
     for k, e in enumerate(np.eye(3)):
         Xs = X[over].copy()

@@ -105,16 +105,17 @@ def between_samples_error(kin, cut, cp, cone: tuple | None = None
         angle [rad] by which the tool axis leaves its cone there: ``cone`` = (CL target points
         (K, 3), their cone axes (K, 3) tip -> spindle, half-angle), read on the moves as the
         verifier does; -inf without ``cone``; largest distance [m] of the tool point from the
-        program's moves, read as the verifier's ``path_deviation``). Where the program's moves
-        are shorter than the sampling and turn the tool, the spline cannot follow its
-        orientation kinks (measured on h5_split's tight corners: 0.1-0.37 mm moves turning
-        25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm).
-        Where the wrist turns fast while the tool point barely moves (a near stop), the
-        spline's tool point leaves the line between two samples: 0.059 mm between two
-        samples 0.23 mm apart on a relaxed window of catalogue hub 271128_046. The cone reading
-        is a guard: at the corner where an unseen hub's cut left the verifier's cone (0.16 rad
-        of cone turn between two CL points), the spline between the samples stayed inside; the
-        cause was the reading of the cone itself (:data:`drakedeburr.plan.cut_path.PIN_MARGIN`).
+        program's moves, read as the verifier's ``path_deviation``).
+
+    Design notes: where the program's moves are shorter than the sampling and turn the tool,
+    the spline cannot follow its orientation kinks (h5_split's tight corners: 0.1-0.37 mm moves
+    turning 25-50 mrad read 11 mrad off the program at 0.25 mm sampling, 6.6 mrad at 0.125 mm).
+    Where the wrist turns fast while the tool point barely moves (a near stop), the spline's
+    tool point leaves the line between two samples (0.059 mm between two samples 0.23 mm apart
+    on a relaxed window of a catalogue hub). The cone reading is a guard: where a cut left the
+    verifier's cone at a corner (0.16 rad of cone turn between two CL points), the spline
+    between the samples stayed inside; the cause was the reading of the cone itself
+    (:data:`drakedeburr.plan.cut_path.PIN_MARGIN`).
     """
     sp = joint_spline(cut.s, cut.q)
     ds = np.diff(cut.s)

@@ -160,9 +160,11 @@ class PlanContext:
         travels ``dense_step`` between samples, and a point passing a hub edge or vertex at
         distance d dips up to step^2 / (8 d) below the chord of its two samples' readings (the
         distance along the pass is sqrt(d^2 + s^2)): 3.9 um at 0.25 mm and 2 mm; plus the
-        readings' numerical slack. At the limit itself, a plan passed the planner's samples and
-        failed the verifier's by 0.1 um (unseen hub r112726_000); the verifier still proves the
-        clearance over the whole trajectory (``clearance_certificate``)."""
+        readings' numerical slack. The verifier still proves the clearance over the whole
+        trajectory (``clearance_certificate``).
+
+        Design note: a bound at the limit itself let a plan of an unseen catalogue hub pass the
+        planner's samples and fail the verifier's by 0.1 um."""
         from drakedeburr.plan.kinematics import DISTANCE_SLACK
 
         d = self.min_clearance

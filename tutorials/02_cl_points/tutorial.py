@@ -19,7 +19,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from drakedeburr.hub.types import WindowEdge  # noqa: E402
-from drakedeburr.path import METHODS, cl_table, fit_edge_curve, format_table, plan_all  # noqa: E402
+from drakedeburr.path import (  # noqa: E402
+    METHODS,
+    PlannerParams,
+    cl_table,
+    fit_edge_curve,
+    format_table,
+    plan_all,
+)
 from drakedeburr.path.synthetic import hub_like_window  # noqa: E402
 
 ap = argparse.ArgumentParser(description=__doc__)
@@ -57,6 +64,49 @@ for name, path in paths.items():
     print(f"{name:20s} {m['count']:4d} points  c_v {m['cv']:.3f} (all pairs "
           f"{m['cv_pairwise']:.3f})  max chord height {m['max_chord_height_m'] * 1e3:.4f} mm  "
           f"max chord {m['max_chord_length_m'] * 1e3:.2f} mm")
+
+# 3b. the figures checked independently: every CL point on the curve, and each chord's height
+# and length read here by sampling the curve between neighbouring CL points (not the planners'
+# own metric), against the threshold each method promises
+P = PlannerParams()
+PROMISES = {"isoparametric": ("height", "length"), "adaptive": ("height", "length"),
+            "equal_chord_height": ("height",), "proposed": ()}
+
+
+def chords(path):
+    """Per span of the closed CL sequence: (largest distance of the curve from the chord [m],
+    chord length [m]), the curve sampled 400 times per span."""
+    u0, u1 = path.u, np.append(path.u[1:], path.u[0] + 1.0)
+    a, b = curve.position(u0), curve.position(u1)
+    s = np.linspace(0.0, 1.0, 401)
+    c = curve.position(u0[:, None] + s[None] * (u1 - u0)[:, None])  # (M, 401, 3)
+    ab = b - a
+    f = np.clip(np.einsum("mj,msj->ms", ab, c - a[:, None]) / np.sum(ab * ab, 1)[:, None], 0, 1)
+    height = np.linalg.norm(c - (a[:, None] + f[..., None] * ab[:, None]), axis=2).max(axis=1)
+    return height, np.linalg.norm(ab, axis=1)
+
+
+for name, path in paths.items():
+    np.testing.assert_allclose(curve.position(path.u), path.p_HC, atol=1e-9)
+    assert np.all(np.diff(path.u) > 0) and 0 <= path.u[0] and path.u[-1] < 1, name
+    height, length = chords(path)
+    m = path.metrics
+    # the planner's figure is the one read here (its own search is finer than 400 samples)
+    assert height.max() <= m["max_chord_height_m"] + 1e-9, (name, height.max())
+    assert height.max() >= 0.98 * m["max_chord_height_m"], (name, height.max())
+    np.testing.assert_allclose(length.max(), m["max_chord_length_m"], rtol=1e-9)
+    assert m["count"] == len(path.u)
+    if "height" in PROMISES[name]:
+        assert height.max() <= P.delta_max, (name, height.max())
+    if "length" in PROMISES[name]:
+        assert length.max() <= P.l_max + 1e-12, (name, length.max())
+# the adaptive planner spends at most the proposed method's count (its budget) where that count
+# is feasible, i.e. where the proposed plan itself keeps both thresholds
+proposed = paths["proposed"].metrics
+if proposed["max_chord_height_m"] <= P.delta_max and proposed["max_chord_length_m"] <= P.l_max:
+    assert paths["adaptive"].metrics["count"] <= proposed["count"]
+print(f"checked: every CL point on the curve; chord height <= {P.delta_max * 1e3:.2f} mm and "
+      f"chord <= {P.l_max * 1e3:.0f} mm where the method promises it")
 
 # 4. the Tab. 1-2 style table for all windows (library call = `drakedeburr cl`), and a plot
 if not args.test_mode:

@@ -89,9 +89,19 @@ def main() -> None:
         d = d_mm * 1e-3
         prog = plan_hole(Circle(diameter=d, lead_in=min(0.3 * d, 2e-3)),
                          spacing=min(0.2e-3, d / 8), limits=limits)
-        t, _, p_C, _ = prog.sample(1e-4)
+        t, _q, p_C, _ = prog.sample(1e-4)
         on = t >= prog.t[np.argmax(prog.contour.is_cut)]
         err = np.abs(np.linalg.norm(p_C[on] - g.p_CHome, axis=1) - d / 2).max()
+        # key figures, re-read from the forward-kinematics samples: the hole within the
+        # source's +-0.1 mm, the TCP never faster than the feed, the servos within their limit
+        # (finite differences of the sampled positions and angles, not the timing's own speed)
+        dt = np.diff(t)
+        v_fd = np.linalg.norm(np.diff(p_C, axis=0), axis=1) / dt
+        qd_fd = np.abs(np.diff(_q, axis=0)) / dt[:, None]
+        assert err < 0.1e-3, (d_mm, err)
+        assert v_fd.max() <= limits.feed * (1 + 1e-6), (d_mm, v_fd.max())
+        assert qd_fd.max() <= limits.velocity * (1 + 1e-6), (d_mm, qd_fd.max())
+        assert np.isclose(prog.contour.perimeter, np.pi * d, rtol=1e-9)
         report.append({"diameter_mm": d_mm, "points": len(prog.q),
                        "cycle_time_s": round(prog.duration, 4),
                        "max_speed_m_min": round(float(prog.v_tcp.max() * 60), 3),
@@ -103,8 +113,21 @@ def main() -> None:
               Slot(length=0.020, width=0.006, lead_in=0.002),
               Keyhole(head_diameter=0.012, slot_width=0.005, slot_length=0.010, lead_in=0.003),
               Hexagon(across_flats=0.017, lead_in=0.004)]
+    exact_area = {  # [m^2]: the rectangle's four corners rounded, the hexagon across flats
+        "rectangle": 0.016 * 0.010 - (4 - np.pi) * 0.002**2,
+        "hexagon": np.sqrt(3) / 2 * 0.017**2,
+    }
     for shape in others:
         prog = plan_hole(shape, spacing=0.2e-3, limits=limits)
+        c = prog.contour
+        cut = c.p_P[c.is_cut]
+        shoelace = 0.5 * abs(np.dot(cut[:, 0], np.roll(cut[:, 1], -1))
+                             - np.dot(cut[:, 1], np.roll(cut[:, 0], -1)))
+        if shape.kind in exact_area:
+            # the sampled polygon loses at most one sagitta (spacing^2 / 8 r, r = 2 mm) along
+            # the perimeter; the contour's own area is the exact one
+            assert abs(shoelace - exact_area[shape.kind]) <= c.perimeter * 0.2e-3**2 / (8 * 2e-3)
+            assert np.isclose(c.area, exact_area[shape.kind], rtol=1e-9), shape.kind
         write_ls(out / f"hole_{shape.kind}.ls", hole_program_ls(prog, f"hole_{shape.kind}"))
         print(f"  {shape.kind:10s}: perimeter {prog.contour.perimeter * 1e3:6.2f} mm, area "
               f"{prog.contour.area * 1e6:7.2f} mm^2, cycle {prog.duration:.3f} s")
@@ -121,6 +144,9 @@ def main() -> None:
     fig.savefig(out / "tcp_speed_power.png", dpi=110)
     plt.close(fig)
     free = ~power.clamped & (power.v_tcp > 1e-3)
+    # the command is proportional to the TCP speed wherever no clamp acts: constant energy/length
+    e = power.energy_per_length[free]
+    assert free.any() and power.clamped.any() and np.ptp(e) <= 1e-9 * e.max(), (e.min(), e.max())
     print(f"  energy per length, unclamped: {power.energy_per_length[free].min():.3f} .. "
           f"{power.energy_per_length[free].max():.3f} V s/m")
     write_ls(out / "hole_rectangle_sharp.ls", hole_program_ls(prog, "hole_rect_sharp"))
