@@ -3,8 +3,12 @@ export gate): the file read back equals the plan's program line by line
 (:func:`program_file_item`), and the motion the controller makes of it
 (:func:`drakedeburr.programs.controller.controller_motion`: joints from the written poses and
 configuration by the vendor's rule, straight lines, the vendor's corners) reaches the verified
-joints, runs within the path tolerance of the verified motion, keeps the clearance at its
-samples and its zones; the values the cell must hold are named (:func:`controller_items`)."""
+joints, runs within the path tolerance of the verified motion and keeps its zones; that motion
+is then sampled like a plan (:func:`controller_sampled`: the same
+:class:`~drakedeburr.verify.sampling.SampledPlan` every plan check reads) and the registry's own
+checks run on it: the clearance certificate, the cone, the edge deviation, the burr's contact
+and the joint limits (:data:`CONTROLLER_CHECKS`); the values the cell must hold are named
+(:func:`controller_items`)."""
 
 from __future__ import annotations
 
@@ -12,7 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["program_file_item", "controller_items", "program_items"]
+__all__ = ["program_file_item", "controller_items", "program_items", "controller_sampled",
+           "CONTROLLER_CHECKS"]
+
+#: the registry checks (:mod:`drakedeburr.verify.registry`) run on the controller's motion,
+#: reported as ``controller_<name>``
+CONTROLLER_CHECKS = ("clearance_certificate", "cone", "edge_deviation", "burr_contact",
+                     "joint_position")
 
 
 def program_file_item(plan, actual, cell=None):
@@ -160,18 +170,136 @@ def _zones_item(expected, actual, n):
         "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)")
 
 
-def controller_items(plan, actual, cell=None, tol=None) -> list:
+def _controller_trajectory(motion, actual, velocity: np.ndarray):
+    """The controller's joints as a :class:`~drakedeburr.plan.types.JointTrajectory`: straight
+    in joint space between its samples (a joint move's joints are interpolated so; a linear
+    move's every ``dense_step`` of TCP travel), timed at the programmed TCP speed or the
+    joints' top speed, whichever is slower (the timing only orders the samples: no timing
+    check reads it)."""
+    from drakedeburr.plan.types import JointTrajectory
+
+    q = motion.q_path
+    dq = np.abs(np.diff(q, axis=0))
+    dp = np.linalg.norm(np.diff(motion.X_path[:, :3, 3], axis=0), axis=1)
+    v = np.array([actual.moves[int(i)].speed or np.inf for i in motion.move[1:]])
+    dt = np.maximum.reduce([(dq / velocity).max(axis=1), dp / v, np.full(len(dp), 1e-4)])
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    c = np.zeros((4, len(dt), 6))  # cubic layout, linear pieces
+    c[2], c[3] = np.diff(q, axis=0) / dt[:, None], q[:-1]
+    return JointTrajectory(t=t, c=c)
+
+
+def _chord_deviation(motion) -> np.ndarray:
+    """(6,) the joints' largest departure from the chords between the controller's samples
+    [rad], from their second differences (/ 8: the midpoint of a parabola through three
+    samples); joint moves are straight in joint space."""
+    q, move = motion.q_path, motion.move
+    if len(q) < 3:
+        return np.zeros(6)
+    d2 = np.abs(q[2:] - 2 * q[1:-1] + q[:-2]) / 8.0
+    same = (move[2:] == move[:-2])
+    return d2[same].max(axis=0, initial=0.0) if same.any() else np.zeros(6)
+
+
+def controller_sampled(plan, expected, actual, motion, cell, config, hub_model=None):
+    """The controller's motion as a :class:`~drakedeburr.verify.sampling.SampledPlan`: the plan
+    with its trajectory replaced by the controller's joints (:func:`_controller_trajectory`)
+    and its segments timed on them, sampled by
+    :func:`~drakedeburr.verify.sampling.sample_plan` as a plan is -> (sampled, None), or
+    (None, why not) where the controller's motion stops before the program's end."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.types import PlanSegment
+    from drakedeburr.verify.sampling import JointLimits, sample_plan
+
+    move_of = _target_moves(plan, expected)
+    if len(move_of) < len(plan.targets) or not len(motion.q_path):
+        return None, "the plan's targets are not all moves of the program"
+    last = {int(j): i for i, j in enumerate(motion.move)}
+    missing = [k for k, j in move_of.items() if j not in last or np.isnan(motion.q[j]).any()]
+    if missing:
+        return None, (f"the controller's motion stops before target {missing[0]} (move "
+                      f"{move_of[missing[0]] + 1})")
+    traj = _controller_trajectory(motion, actual, JointLimits.of_cell(cell).velocity)
+    T = np.array([traj.t[last[move_of[k]]] for k in range(len(plan.targets))])
+    segments = tuple(PlanSegment(s.window_index, s.kind, s.target_range,
+                                 (float(T[max(s.target_range[0] - 1, 0)]),
+                                  float(T[s.target_range[1] - 1])))
+                     for s in plan.segments)
+    c_plan = replace(plan, trajectory=traj, segments=segments)
+    windows = sorted({s.window_index for s in plan.segments if s.kind == "cut"})
+    return sample_plan(c_plan, config, cell=cell, hub_model=hub_model,
+                       expected_windows=windows), None
+
+
+def _controller_checks(sp, config, motion, why: str | None) -> list:
+    """:data:`CONTROLLER_CHECKS` on the controller's sampled motion, as ``controller_<name>``;
+    the joint limits and the clearance certificate less what the controller's joints may
+    depart from the chords between its samples (:func:`_chord_deviation`)."""
+    from dataclasses import replace
+
+    from drakedeburr.verify.registry import CHECKS
+    from drakedeburr.verify.report import CheckItem
+
+    by_name = {c.name: c for c in CHECKS}
+    if sp is None:
+        return [CheckItem(f"controller_{n}", False, None, None, "-", "<=",
+                          detail=f"not measurable: {why}") for n in CONTROLLER_CHECKS]
+    dev = _chord_deviation(motion)
+    scene_reach = _largest_reach(sp.cell)
+    e = 2.0 * scene_reach * float(dev.sum())  # both geometries of a pair may move
+    out = []
+    for n in CONTROLLER_CHECKS:
+        item = by_name[n].run(sp, config)
+        extra = ""
+        if n == "joint_position" and item.value is not None:
+            v = float(item.value) - float(dev.max())
+            item = replace(item, value=v, passed=v >= 0.0)
+            extra = (f"; less {dev.max():.2e} rad the joints may depart from the chords "
+                     f"between the controller's {len(motion.q_path)} samples")
+        elif n == "clearance_certificate" and item.value is not None:
+            v = float(item.value) - e
+            item = replace(item, value=v, passed=bool(item.passed and v >= item.limit))
+            extra = (f"; less {e * 1e3:.2e} mm: the controller's joints depart from the chords "
+                     f"between its samples by at most {dev.max():.2e} rad (second differences),"
+                     f" times 2 x {scene_reach:.3f} m reach")
+        out.append(replace(item, name=f"controller_{n}", required=True,
+                           detail=f"on the controller's motion: {item.detail}{extra}"))
+    return out
+
+
+def _largest_reach(cell) -> float:
+    """[m] the largest distance of any robot-carried geometry from any joint axis (the pair
+    scene's track bounds, ball radius included)."""
+    from drakedeburr.verify.distances import pair_scene_of
+
+    tr = pair_scene_of(cell).tracks
+    return float(np.max(np.asarray(tr.reach) + np.asarray(tr.rho)[:, None], initial=0.0))
+
+
+
+def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
     """Report items of the program as the controller runs it
     (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
     poses and configuration equal the verified ones, no stop or jump on the way, the straight
-    lines it runs within the path tolerance of the verified motion, clearance at its samples,
-    zones the controller keeps, and (information) every value the cell must hold."""
-    from drakedeburr.config import default_tolerances
+    lines it runs within the path tolerance of the verified motion, the registry's checks on
+    its motion (:data:`CONTROLLER_CHECKS`: clearance certificate, cone, edge deviation, burr
+    contact, joint limits), zones the controller keeps, and (information) every value the
+    cell must hold. ``config``: the run's (default: the plan's recipe with ``tol``);
+    ``cell``/``hub_model``: already loaded (default: loaded here)."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs.controller import controller_motion
     from drakedeburr.verify.report import CheckItem
 
-    tol = tol or default_tolerances()
+    if config is None:
+        from drakedeburr.verify.checks import config_for_plan
+
+        config = config_for_plan(plan, tolerances=tol)
+    tol = tol or config.tolerances
+    if cell is None:
+        from drakedeburr.cell.station import load_plan_cell
+
+        cell = load_plan_cell(plan)
     expected = plan_program(plan, actual.name, cell=cell)
     X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
     motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
@@ -192,21 +320,9 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
         detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
         "runs it: no stop, jump or unreachable point"))
     items.append(_path_item(plan, expected, actual, n, tol))
-    if cell is not None and len(motion.q_path):
-        from drakedeburr.verify.distances import DistanceProbe
-
-        probe = DistanceProbe(cell, 4 * tol.min_clearance, tol)
-        best, where = np.inf, None
-        for k, q in enumerate(motion.q_path):
-            r = probe.measure(q)
-            if r.clearance < best:
-                best, where = r.clearance, (k, r.clearance_pair)
-        mv = int(motion.move[where[0]]) if where else 0
-        items.append(CheckItem(
-            "controller_clearance", best >= tol.min_clearance, float(best), tol.min_clearance,
-            "m", ">=", pair=where[1] if where and where[1] != ("", "") else None,
-            detail=f"at {len(motion.q_path)} samples of the controller's motion (not the "
-            f"certificate); closest on move {mv + 1}"))
+    cfg = config if config.tolerances is tol else _with_tolerances(config, tol)
+    sp, why = controller_sampled(plan, expected, actual, motion, cell, cfg, hub_model)
+    items += _controller_checks(sp, cfg, motion, why)
     items.append(_zones_item(expected, actual, n))
     used = ", ".join(f"{k} from the {v}" for k, v in motion.frames_used.items())
     items.append(CheckItem("controller_setup", True, None, None, "-", "info", required=False,
@@ -214,10 +330,17 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
     return items
 
 
-def program_items(plan, actual, cell=None, tol=None) -> list:
+def _with_tolerances(config, tol):
+    from dataclasses import replace
+
+    return replace(config, tolerances=tol)
+
+
+def program_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
     """Every program item: :func:`program_file_item` then :func:`controller_items`."""
     if isinstance(actual, (str, Path)):
         from drakedeburr.programs import read_program
 
         actual = read_program(str(actual))
-    return [program_file_item(plan, actual, cell), *controller_items(plan, actual, cell, tol)]
+    return [program_file_item(plan, actual, cell),
+            *controller_items(plan, actual, cell, tol, config, hub_model)]

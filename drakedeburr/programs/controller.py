@@ -20,13 +20,14 @@ adjacent moves, FANUC CNT bound); the samples follow the programmed lines.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from drakedeburr.programs.program import JOINT
 from drakedeburr.robots import (
+    JointLimits,
     RobotSpec,
     configuration_of,
     fk_opw,
@@ -66,8 +67,19 @@ class ControllerMotion:
     frames_used: dict
 
 
+def _beyond(limits: JointLimits) -> JointLimits:
+    """The limits widened by half a turn: the joints a controller's continuous motion can be
+    driven to before it stops at a limit (the joint item reports where they leave the limits;
+    within half a turn every 2 pi variant is a different configuration)."""
+    return JointLimits(tuple(np.asarray(limits.lower) - np.pi),
+                       tuple(np.asarray(limits.upper) + np.pi))
+
+
 def _nearest(spec: RobotSpec, X_BF: np.ndarray, q_prev: np.ndarray) -> np.ndarray | None:
-    cand = joint_candidates(ik_opw(spec.opw, X_BF).q[0], spec.kinematics.limits)
+    """The IK solution nearest ``q_prev`` (the joints follow continuously), inside the limits or
+    beyond them (:func:`_beyond`: a straight line that drives a joint past its limit is shown,
+    not replaced by a jump to another turn)."""
+    cand = joint_candidates(ik_opw(spec.opw, X_BF).q[0], _beyond(spec.kinematics.limits))
     if cand.shape[0] == 0:
         return None
     return cand[select_solution(cand, q_prev, travel_weights(spec.opw))]
@@ -179,8 +191,12 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
         try:
             q_conf = joints_from_configuration(kin, X_target, vendor, m.configuration)
         except Exception as exc:  # InputError: no solution has that configuration
-            if not linear[i] or q_prev is None or vendor == "abb":
-                problems.append(f"{where}: {exc}")
+            try:  # one beyond the limits: the controller refuses it at the limit (joint item)
+                q_conf = joints_from_configuration(replace(kin, limits=_beyond(kin.limits)),
+                                                   X_target, vendor, m.configuration)
+            except Exception:
+                if not linear[i] or q_prev is None or vendor == "abb":
+                    problems.append(f"{where}: {exc}")
         if not linear[i] or q_prev is None:
             if q_conf is None:
                 break
