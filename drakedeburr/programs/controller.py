@@ -57,6 +57,9 @@ class ControllerMotion:
         move: (M,) the move (0-based) each sample belongs to.
         problems: one line each, "file:line: move n: what".
         frames_used: item -> "program" (stated in the file) or "cell" (not stated: assumed).
+        q_mid: (M, 6) [rad] per sample, the joints halfway along the motion from the previous
+            sample (solved there on a linear move; the mean of the two on a joint move, which
+            is straight in joint space; the sample itself at the first).
     """
 
     q: np.ndarray
@@ -65,6 +68,7 @@ class ControllerMotion:
     move: np.ndarray
     problems: tuple[str, ...]
     frames_used: dict
+    q_mid: np.ndarray | None = None
 
 
 def _beyond(limits: JointLimits) -> JointLimits:
@@ -108,9 +112,12 @@ def _frames(read, X_FT, X_RO, problems: list) -> tuple[dict, dict]:
     return frames, used
 
 
-def _line_poses(X_I, zone, linear, i, samples, step):
+def _line_poses(X_I, zone, linear, i, samples, step, fractions=None):
     """Sample poses (4, 4) of linear move i in the interpolated frame: the straight line from
-    target i-1 to i, orientation slerped, the corners at both ends blended by their zones."""
+    target i-1 to i, orientation slerped, the corners at both ends blended by their zones;
+    every ``step`` of travel (at least ``samples``), and in each corner at a quarter, half,
+    three quarters and all of its zone from the target (its chords then follow the
+    parabola); or at the shares ``fractions`` of the move."""
     n = len(X_I)
     A, B = X_I[i - 1][:3, 3], X_I[i][:3, 3]
     L = float(np.linalg.norm(B - A))
@@ -126,9 +133,15 @@ def _line_poses(X_I, zone, linear, i, samples, step):
     u_prev = unit(A - X_I[i - 2][:3, 3]) if r_in else None
     u_next = unit(X_I[i + 1][:3, 3] - B) if r_out else None
     k_n = max(samples, int(np.ceil(L / step)))
+    f_all = np.arange(1, k_n + 1) / k_n
+    if L > 0:  # the corners' own points: where each leaves / joins the line and between
+        share = np.array([0.25, 0.5, 0.75, 1.0])
+        f_all = np.concatenate([f_all, share * r_in / L, 1.0 - share * r_out / L])
+        f_all = np.unique(f_all[(f_all > 0) & (f_all <= 1)])
+    if fractions is not None:
+        f_all = np.asarray(fractions, float)
     out = []
-    for k in range(1, k_n + 1):
-        f = k / k_n
+    for f in f_all:
         p = A + f * (B - A)
         if r_in and f * L < r_in:
             p = _corner(A, u_prev, u, r_in, f * L, incoming=False)
@@ -139,6 +152,28 @@ def _line_poses(X_I, zone, linear, i, samples, step):
         X[:3, 3] = p
         out.append((f, X))
     return out
+
+
+def _follow_line(spec, flange, poses, q_prev, where: str, problems: list):
+    """The joints along the sample poses of a linear move, each the IK solution nearest the
+    one before (from ``q_prev``) -> (joints, flange poses), or None where the line leaves the
+    arm's reach (noted in ``problems``, as jumps of more than :data:`JUMP` are)."""
+    qs, Xs, q_run = [], [], q_prev
+    for f, X in poses:
+        q = _nearest(spec, flange(X), q_run)
+        if q is None:
+            problems.append(f"{where}: the straight line to the target leaves the arm's "
+                            f"reach or limits at {f:.0%} of the move")
+            return None
+        jump = float(np.abs(q - q_run).max())
+        if jump > JUMP:
+            problems.append(f"{where}: the joints jump {np.degrees(jump):.1f} deg on the "
+                            f"straight line at {f:.0%} of the move (posture change or "
+                            "singularity)")
+        qs.append(q)
+        Xs.append(flange(X))
+        q_run = q
+    return qs, Xs
 
 
 def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
@@ -182,7 +217,7 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
     linear = np.array([m.move_type != JOINT for m in moves])
     zone = np.array([m.zone for m in moves])
     q_t = np.full((n, 6), np.nan)
-    q_path, X_path, move = [], [], []
+    q_path, X_path, move, chord = [], [], [], []
     q_prev = None
     for i, m in enumerate(moves):
         where = f"{m.target_file}:{m.config_line or m.target_line}: move {i + 1}"
@@ -206,26 +241,22 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
             q_path += qs
             X_path += [fk_opw(spec.opw, q) for q in qs]
             move += [i] * len(qs)
+            chord += [q_conf] if q_prev is None else \
+                [0.5 * (a + b) for a, b in zip([q_prev, *qs[:-1]], qs, strict=True)]
             q_prev = q_conf
             continue
         poses = _line_poses(X_I, zone, linear, i, samples, step)
-        qs, Xs, q_run = [], [], q_prev
-        for f, X in poses:
-            q = _nearest(spec, flange(X), q_run)
-            if q is None:
-                problems.append(f"{where}: the straight line to the target leaves the arm's "
-                                f"reach or limits at {f:.0%} of the move")
-                break
-            jump = float(np.abs(q - q_run).max())
-            if jump > JUMP:
-                problems.append(f"{where}: the joints jump {np.degrees(jump):.1f} deg on the "
-                                f"straight line at {f:.0%} of the move (posture change or "
-                                "singularity)")
-            qs.append(q)
-            Xs.append(flange(X))
-            q_run = q
-        if len(qs) < len(poses):
+        line = _follow_line(spec, flange, poses, q_prev, where, problems)
+        if line is None:
             break
+        qs, Xs = line
+        f_all = np.array([f for f, _ in poses])
+        f_mid = 0.5 * (np.concatenate([[0.0], f_all[:-1]]) + f_all)
+        q_a = [q_path[-1]] + qs[:-1]
+        for X, qa, qb in zip((X for _, X in _line_poses(X_I, zone, linear, i, samples, step,
+                                                         f_mid)), q_a, qs, strict=True):
+            q_m = _nearest(spec, flange(X), qa)
+            chord.append(0.5 * (qa + qb) if q_m is None else q_m)
         q_exact = _nearest(spec, X_target, q_prev)
         q_t[i] = q_exact if q_exact is not None else np.nan
         if vendor == "abb" and q_exact is not None and \
@@ -240,4 +271,4 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
     return ControllerMotion(q=q_t, q_path=np.array(q_path).reshape(-1, 6),
                             X_path=np.array(X_path).reshape(-1, 4, 4),
                             move=np.array(move, dtype=int), problems=tuple(problems),
-                            frames_used=used)
+                            frames_used=used, q_mid=np.array(chord).reshape(-1, 6))
