@@ -32,7 +32,6 @@ from drakedeburr.robots import (
     configuration_of,
     fk_opw,
     ik_opw,
-    joint_candidates,
     joints_from_configuration,
     select_solution,
     travel_weights,
@@ -43,6 +42,7 @@ __all__ = ["ControllerMotion", "controller_motion", "JUMP"]
 #: [rad] a joint step between two samples of a linear move larger than this is a posture
 #: change (or a singularity) the controller cannot make on a straight line
 JUMP = 0.5
+_TWO_PI = 2.0 * np.pi
 _VENDOR = {"rapid": "abb", "krl": "kuka", "ls": "fanuc"}
 
 
@@ -83,9 +83,25 @@ def _nearest(spec: RobotSpec, X_BF: np.ndarray, q_prev: np.ndarray) -> np.ndarra
     """The IK solution nearest ``q_prev`` (the joints follow continuously), inside the limits or
     beyond them (:func:`_beyond`: a straight line that drives a joint past its limit is shown,
     not replaced by a jump to another turn)."""
-    cand = joint_candidates(ik_opw(spec.opw, X_BF).q[0], _beyond(spec.kinematics.limits))
-    if cand.shape[0] == 0:
+    return _nearest_of(spec, ik_opw(spec.opw, X_BF).q[0], q_prev)
+
+
+def _nearest_of(spec: RobotSpec, sols: np.ndarray, q_prev: np.ndarray) -> np.ndarray | None:
+    """:func:`drakedeburr.robots.select_solution` over every 2 pi turn of the IK branches
+    ``sols`` (8, 6) inside :func:`_beyond` limits (:func:`drakedeburr.robots.joint_candidates`),
+    without listing the turns: the rule's costs add up per joint, so per branch the turn of
+    each joint nearest ``q_prev`` within the limits is the branch's best candidate."""
+    lim = _beyond(spec.kinematics.limits)
+    lo, hi = np.asarray(lim.lower), np.asarray(lim.upper)
+    sols = sols[~np.any(np.isnan(sols), axis=1)]
+    kmin = np.ceil((lo - sols) / _TWO_PI - 1e-12)
+    kmax = np.floor((hi - sols) / _TWO_PI + 1e-12)
+    ok = np.all(kmin <= kmax, axis=1)
+    if not ok.any():
         return None
+    sols, kmin, kmax = sols[ok], kmin[ok], kmax[ok]
+    k = np.clip(np.round((np.asarray(q_prev) - sols) / _TWO_PI), kmin, kmax)
+    cand = sols + _TWO_PI * k
     return cand[select_solution(cand, q_prev, travel_weights(spec.opw))]
 
 
@@ -141,14 +157,15 @@ def _line_poses(X_I, zone, linear, i, samples, step, fractions=None):
     if fractions is not None:
         f_all = np.asarray(fractions, float)
     out = []
-    for f in f_all:
+    R_all = slerp(f_all).as_matrix()
+    for f, R in zip(f_all, R_all, strict=True):
         p = A + f * (B - A)
         if r_in and f * L < r_in:
             p = _corner(A, u_prev, u, r_in, f * L, incoming=False)
         elif r_out and (1 - f) * L < r_out:
             p = _corner(B, u, u_next, r_out, (1 - f) * L, incoming=True)
         X = np.eye(4)
-        X[:3, :3] = slerp([f]).as_matrix()[0]
+        X[:3, :3] = R
         X[:3, 3] = p
         out.append((f, X))
     return out
@@ -159,8 +176,10 @@ def _follow_line(spec, flange, poses, q_prev, where: str, problems: list):
     one before (from ``q_prev``) -> (joints, flange poses), or None where the line leaves the
     arm's reach (noted in ``problems``, as jumps of more than :data:`JUMP` are)."""
     qs, Xs, q_run = [], [], q_prev
-    for f, X in poses:
-        q = _nearest(spec, flange(X), q_run)
+    X_BF = [flange(X) for _, X in poses]
+    sols = ik_opw(spec.opw, np.array(X_BF)).q  # every pose at once
+    for (f, _), X_f, sol in zip(poses, X_BF, sols, strict=True):
+        q = _nearest_of(spec, sol, q_run)
         if q is None:
             problems.append(f"{where}: the straight line to the target leaves the arm's "
                             f"reach or limits at {f:.0%} of the move")
@@ -171,7 +190,7 @@ def _follow_line(spec, flange, poses, q_prev, where: str, problems: list):
                             f"straight line at {f:.0%} of the move (posture change or "
                             "singularity)")
         qs.append(q)
-        Xs.append(flange(X))
+        Xs.append(X_f)
         q_run = q
     return qs, Xs
 
@@ -253,9 +272,10 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
         f_all = np.array([f for f, _ in poses])
         f_mid = 0.5 * (np.concatenate([[0.0], f_all[:-1]]) + f_all)
         q_a = [q_path[-1]] + qs[:-1]
-        for X, qa, qb in zip((X for _, X in _line_poses(X_I, zone, linear, i, samples, step,
-                                                         f_mid)), q_a, qs, strict=True):
-            q_m = _nearest(spec, flange(X), qa)
+        mids = _line_poses(X_I, zone, linear, i, samples, step, f_mid)
+        sols = ik_opw(spec.opw, np.array([flange(X) for _, X in mids])).q
+        for sol, qa, qb in zip(sols, q_a, qs, strict=True):
+            q_m = _nearest_of(spec, sol, qa)
             chord.append(0.5 * (qa + qb) if q_m is None else q_m)
         q_exact = _nearest(spec, X_target, q_prev)
         q_t[i] = q_exact if q_exact is not None else np.nan
