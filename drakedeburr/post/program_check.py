@@ -25,9 +25,10 @@ CONTROLLER_CHECKS = ("clearance_certificate", "cone", "edge_deviation", "burr_co
                      "joint_position")
 
 
-def program_file_item(plan, actual, cell=None):
+def program_file_item(plan, actual, cell=None, expected=None):
     """A required report item: the program (a file, or as read by :func:`_read_program_file`)
-    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
+    compared with the plan's own program (``expected``, default
+    :func:`drakedeburr.post.export.plan_program`; :func:`drakedeburr.programs.compare_programs`),
     every difference named by line."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs import compare_programs
@@ -38,7 +39,7 @@ def program_file_item(plan, actual, cell=None):
 
         actual = read_program(str(actual))
     path = actual.files[0]
-    expected = plan_program(plan, actual.name, cell=cell)
+    expected = expected if expected is not None else plan_program(plan, actual.name, cell=cell)
     found = compare_programs(expected, actual)
     lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
     return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
@@ -247,7 +248,8 @@ def _controller_checks(sp, config, why: str | None) -> list:
     return out
 
 
-def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
+def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=None,
+                     expected=None) -> list:
     """Report items of the program as the controller runs it
     (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
     poses and configuration equal the verified ones, no stop or jump on the way, the straight
@@ -255,7 +257,7 @@ def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=N
     its motion (:data:`CONTROLLER_CHECKS`: clearance certificate, cone, edge deviation, burr
     contact, joint limits), zones the controller keeps, and (information) every value the
     cell must hold. ``config``: the run's (default: the plan's recipe with ``tol``);
-    ``cell``/``hub_model``: already loaded (default: loaded here)."""
+    ``cell``/``hub_model``/``expected`` (the plan's program): already made (default: here)."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs.controller import controller_motion
     from drakedeburr.verify.report import CheckItem
@@ -269,7 +271,8 @@ def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=N
         from drakedeburr.cell.station import load_plan_cell
 
         cell = load_plan_cell(plan)
-    expected = plan_program(plan, actual.name, cell=cell)
+    if expected is None:
+        expected = plan_program(plan, actual.name, cell=cell)
     X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
     motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
                                step=tol.dense_step)
@@ -306,10 +309,18 @@ def _with_tolerances(config, tol):
 
 
 def program_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
-    """Every program item: :func:`program_file_item` then :func:`controller_items`."""
+    """Every program item: :func:`program_file_item` then :func:`controller_items` (the plan's
+    program made once for both)."""
+    from drakedeburr.post.export import plan_program
+
     if isinstance(actual, (str, Path)):
         from drakedeburr.programs import read_program
 
         actual = read_program(str(actual))
-    return [program_file_item(plan, actual, cell),
-            *controller_items(plan, actual, cell, tol, config, hub_model)]
+    if cell is None:
+        from drakedeburr.cell.station import load_plan_cell
+
+        cell = load_plan_cell(plan)
+    expected = plan_program(plan, actual.name, cell=cell)
+    return [program_file_item(plan, actual, cell, expected),
+            *controller_items(plan, actual, cell, tol, config, hub_model, expected)]
