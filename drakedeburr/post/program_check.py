@@ -3,8 +3,12 @@ export gate): the file read back equals the plan's program line by line
 (:func:`program_file_item`), and the motion the controller makes of it
 (:func:`drakedeburr.programs.controller.controller_motion`: joints from the written poses and
 configuration by the vendor's rule, straight lines, the vendor's corners) reaches the verified
-joints, runs within the path tolerance of the verified motion, keeps the clearance at its
-samples and its zones; the values the cell must hold are named (:func:`controller_items`)."""
+joints, runs within the path tolerance of the verified motion and keeps its zones; that motion
+is then sampled like a plan (:func:`controller_sampled`: the same
+:class:`~drakedeburr.verify.sampling.SampledPlan` every plan check reads) and the registry's own
+checks run on it: the clearance certificate, the cone, the edge deviation, the burr's contact
+and the joint limits (:data:`CONTROLLER_CHECKS`); the values the cell must hold are named
+(:func:`controller_items`)."""
 
 from __future__ import annotations
 
@@ -12,12 +16,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["program_file_item", "controller_items", "program_items"]
+__all__ = ["program_file_item", "controller_items", "program_items", "controller_sampled",
+           "CONTROLLER_CHECKS"]
+
+#: the registry checks (:mod:`drakedeburr.verify.registry`) run on the controller's motion,
+#: reported as ``controller_<name>``
+CONTROLLER_CHECKS = ("clearance_certificate", "cone", "edge_deviation", "burr_contact",
+                     "joint_position")
 
 
-def program_file_item(plan, actual, cell=None):
+def program_file_item(plan, actual, cell=None, expected=None):
     """A required report item: the program (a file, or as read by :func:`_read_program_file`)
-    compared with the plan's own program (:func:`drakedeburr.programs.compare_programs`),
+    compared with the plan's own program (``expected``, default
+    :func:`drakedeburr.post.export.plan_program`; :func:`drakedeburr.programs.compare_programs`),
     every difference named by line."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs import compare_programs
@@ -28,7 +39,7 @@ def program_file_item(plan, actual, cell=None):
 
         actual = read_program(str(actual))
     path = actual.files[0]
-    expected = plan_program(plan, actual.name, cell=cell)
+    expected = expected if expected is not None else plan_program(plan, actual.name, cell=cell)
     found = compare_programs(expected, actual)
     lines = [f"{d.file}:{d.line}: {d.item}: expected {d.expected}, got {d.got}" for d in found]
     return CheckItem("program_file", not found, float(len(found)), 0.0, "count", "<=",
@@ -160,19 +171,108 @@ def _zones_item(expected, actual, n):
         "every zone within half of its adjacent moves (FANUC: CNT only where its bound holds)")
 
 
-def controller_items(plan, actual, cell=None, tol=None) -> list:
+def _controller_trajectory(motion, actual, velocity: np.ndarray):
+    """The controller's joints as a :class:`~drakedeburr.plan.types.JointTrajectory`: between
+    consecutive samples the quadratic through the joints at both and halfway
+    (:attr:`~drakedeburr.programs.controller.ControllerMotion.q_mid`: solved there on a linear
+    move; a joint move is straight in joint space), so the certificate's rate bounds and the
+    joint limits' extremes cover the joints between the samples; timed at the programmed TCP
+    speed or the joints' top speed, whichever is slower (the timing only orders the samples:
+    no timing check reads it)."""
+    from drakedeburr.plan.types import JointTrajectory
+
+    q = motion.q_path
+    qa, qb, qm = q[:-1], q[1:], motion.q_mid[1:]
+    dq = np.maximum(np.abs(qb - qa), 2.0 * np.abs(qm - 0.5 * (qa + qb)))
+    dp = np.linalg.norm(np.diff(motion.X_path[:, :3, 3], axis=0), axis=1)
+    v = np.array([actual.moves[int(i)].speed or np.inf for i in motion.move[1:]])
+    dt = np.maximum.reduce([(dq / velocity).max(axis=1), dp / v, np.full(len(dp), 1e-4)])
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    h = dt[:, None]
+    c = np.zeros((4, len(dt), 6))  # cubic layout, quadratic pieces, highest power first
+    c[1] = (2.0 * qa - 4.0 * qm + 2.0 * qb) / h ** 2
+    c[2] = (-3.0 * qa + 4.0 * qm - qb) / h
+    c[3] = qa
+    return JointTrajectory(t=t, c=c)
+
+
+def controller_sampled(plan, expected, actual, motion, cell, config, hub_model=None):
+    """The controller's motion as a :class:`~drakedeburr.verify.sampling.SampledPlan`: the plan
+    with its trajectory replaced by the controller's joints (:func:`_controller_trajectory`)
+    and its segments timed on them, sampled by
+    :func:`~drakedeburr.verify.sampling.sample_plan` as a plan is -> (sampled, None), or
+    (None, why not) where the controller's motion stops before the program's end."""
+    from dataclasses import replace
+
+    from drakedeburr.plan.types import PlanSegment
+    from drakedeburr.verify.sampling import JointLimits, sample_plan
+
+    move_of = _target_moves(plan, expected)
+    if len(move_of) < len(plan.targets) or not len(motion.q_path):
+        return None, "the plan's targets are not all moves of the program"
+    last = {int(j): i for i, j in enumerate(motion.move)}
+    missing = [k for k, j in move_of.items() if j not in last or np.isnan(motion.q[j]).any()]
+    if missing:
+        return None, (f"the controller's motion stops before target {missing[0]} (move "
+                      f"{move_of[missing[0]] + 1})")
+    traj = _controller_trajectory(motion, actual, JointLimits.of_cell(cell).velocity)
+    T = np.array([traj.t[last[move_of[k]]] for k in range(len(plan.targets))])
+    segments = tuple(PlanSegment(s.window_index, s.kind, s.target_range,
+                                 (float(T[max(s.target_range[0] - 1, 0)]),
+                                  float(T[s.target_range[1] - 1])))
+                     for s in plan.segments)
+    c_plan = replace(plan, trajectory=traj, segments=segments)
+    windows = sorted({s.window_index for s in plan.segments if s.kind == "cut"})
+    return sample_plan(c_plan, config, cell=cell, hub_model=hub_model,
+                       expected_windows=windows), None
+
+
+def _controller_checks(sp, config, why: str | None) -> list:
+    """:data:`CONTROLLER_CHECKS` on the controller's sampled motion, as ``controller_<name>``;
+    between its samples the motion is the quadratic through the joints solved at both and
+    halfway (:func:`_controller_trajectory`)."""
+    from dataclasses import replace
+
+    from drakedeburr.verify.registry import CHECKS
+    from drakedeburr.verify.report import CheckItem
+
+    by_name = {c.name: c for c in CHECKS}
+    if sp is None:
+        return [CheckItem(f"controller_{n}", False, None, None, "-", "<=",
+                          detail=f"not measurable: {why}") for n in CONTROLLER_CHECKS]
+    out = []
+    for n in CONTROLLER_CHECKS:
+        item = by_name[n].run(sp, config)
+        out.append(replace(item, name=f"controller_{n}", required=True,
+                           detail=f"on the controller's motion: {item.detail}"))
+    return out
+
+
+def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=None,
+                     expected=None) -> list:
     """Report items of the program as the controller runs it
     (:func:`drakedeburr.programs.controller.controller_motion`): joints solved from the written
     poses and configuration equal the verified ones, no stop or jump on the way, the straight
-    lines it runs within the path tolerance of the verified motion, clearance at its samples,
-    zones the controller keeps, and (information) every value the cell must hold."""
-    from drakedeburr.config import default_tolerances
+    lines it runs within the path tolerance of the verified motion, the registry's checks on
+    its motion (:data:`CONTROLLER_CHECKS`: clearance certificate, cone, edge deviation, burr
+    contact, joint limits), zones the controller keeps, and (information) every value the
+    cell must hold. ``config``: the run's (default: the plan's recipe with ``tol``);
+    ``cell``/``hub_model``/``expected`` (the plan's program): already made (default: here)."""
     from drakedeburr.post.export import plan_program
     from drakedeburr.programs.controller import controller_motion
     from drakedeburr.verify.report import CheckItem
 
-    tol = tol or default_tolerances()
-    expected = plan_program(plan, actual.name, cell=cell)
+    if config is None:
+        from drakedeburr.verify.checks import config_for_plan
+
+        config = config_for_plan(plan, tolerances=tol)
+    tol = tol or config.tolerances
+    if cell is None:
+        from drakedeburr.cell.station import load_plan_cell
+
+        cell = load_plan_cell(plan)
+    if expected is None:
+        expected = plan_program(plan, actual.name, cell=cell)
     X_RO = np.linalg.solve(expected.X_BR, expected.X_WO)
     motion = controller_motion(actual, expected.spec, X_FT=expected.X_FT, X_RO=X_RO,
                                step=tol.dense_step)
@@ -192,21 +292,9 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
         detail="; ".join(motion.problems[:6]) or "every move reached the way the controller "
         "runs it: no stop, jump or unreachable point"))
     items.append(_path_item(plan, expected, actual, n, tol))
-    if cell is not None and len(motion.q_path):
-        from drakedeburr.verify.distances import DistanceProbe
-
-        probe = DistanceProbe(cell, 4 * tol.min_clearance, tol)
-        best, where = np.inf, None
-        for k, q in enumerate(motion.q_path):
-            r = probe.measure(q)
-            if r.clearance < best:
-                best, where = r.clearance, (k, r.clearance_pair)
-        mv = int(motion.move[where[0]]) if where else 0
-        items.append(CheckItem(
-            "controller_clearance", best >= tol.min_clearance, float(best), tol.min_clearance,
-            "m", ">=", pair=where[1] if where and where[1] != ("", "") else None,
-            detail=f"at {len(motion.q_path)} samples of the controller's motion (not the "
-            f"certificate); closest on move {mv + 1}"))
+    cfg = config if config.tolerances is tol else _with_tolerances(config, tol)
+    sp, why = controller_sampled(plan, expected, actual, motion, cell, cfg, hub_model)
+    items += _controller_checks(sp, cfg, why)
     items.append(_zones_item(expected, actual, n))
     used = ", ".join(f"{k} from the {v}" for k, v in motion.frames_used.items())
     items.append(CheckItem("controller_setup", True, None, None, "-", "info", required=False,
@@ -214,10 +302,25 @@ def controller_items(plan, actual, cell=None, tol=None) -> list:
     return items
 
 
-def program_items(plan, actual, cell=None, tol=None) -> list:
-    """Every program item: :func:`program_file_item` then :func:`controller_items`."""
+def _with_tolerances(config, tol):
+    from dataclasses import replace
+
+    return replace(config, tolerances=tol)
+
+
+def program_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
+    """Every program item: :func:`program_file_item` then :func:`controller_items` (the plan's
+    program made once for both)."""
+    from drakedeburr.post.export import plan_program
+
     if isinstance(actual, (str, Path)):
         from drakedeburr.programs import read_program
 
         actual = read_program(str(actual))
-    return [program_file_item(plan, actual, cell), *controller_items(plan, actual, cell, tol)]
+    if cell is None:
+        from drakedeburr.cell.station import load_plan_cell
+
+        cell = load_plan_cell(plan)
+    expected = plan_program(plan, actual.name, cell=cell)
+    return [program_file_item(plan, actual, cell, expected),
+            *controller_items(plan, actual, cell, tol, config, hub_model, expected)]

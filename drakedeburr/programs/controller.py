@@ -20,18 +20,18 @@ adjacent moves, FANUC CNT bound); the samples follow the programmed lines.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from drakedeburr.programs.program import JOINT
 from drakedeburr.robots import (
+    JointLimits,
     RobotSpec,
     configuration_of,
     fk_opw,
     ik_opw,
-    joint_candidates,
     joints_from_configuration,
     select_solution,
     travel_weights,
@@ -42,6 +42,7 @@ __all__ = ["ControllerMotion", "controller_motion", "JUMP"]
 #: [rad] a joint step between two samples of a linear move larger than this is a posture
 #: change (or a singularity) the controller cannot make on a straight line
 JUMP = 0.5
+_TWO_PI = 2.0 * np.pi
 _VENDOR = {"rapid": "abb", "krl": "kuka", "ls": "fanuc"}
 
 
@@ -56,6 +57,9 @@ class ControllerMotion:
         move: (M,) the move (0-based) each sample belongs to.
         problems: one line each, "file:line: move n: what".
         frames_used: item -> "program" (stated in the file) or "cell" (not stated: assumed).
+        q_mid: (M, 6) [rad] per sample, the joints halfway along the motion from the previous
+            sample (solved there on a linear move; the mean of the two on a joint move, which
+            is straight in joint space; the sample itself at the first).
     """
 
     q: np.ndarray
@@ -64,12 +68,40 @@ class ControllerMotion:
     move: np.ndarray
     problems: tuple[str, ...]
     frames_used: dict
+    q_mid: np.ndarray | None = None
+
+
+def _beyond(limits: JointLimits) -> JointLimits:
+    """The limits widened by half a turn: the joints a controller's continuous motion can be
+    driven to before it stops at a limit (the joint item reports where they leave the limits;
+    within half a turn every 2 pi variant is a different configuration)."""
+    return JointLimits(tuple(np.asarray(limits.lower) - np.pi),
+                       tuple(np.asarray(limits.upper) + np.pi))
 
 
 def _nearest(spec: RobotSpec, X_BF: np.ndarray, q_prev: np.ndarray) -> np.ndarray | None:
-    cand = joint_candidates(ik_opw(spec.opw, X_BF).q[0], spec.kinematics.limits)
-    if cand.shape[0] == 0:
+    """The IK solution nearest ``q_prev`` (the joints follow continuously), inside the limits or
+    beyond them (:func:`_beyond`: a straight line that drives a joint past its limit is shown,
+    not replaced by a jump to another turn)."""
+    return _nearest_of(spec, ik_opw(spec.opw, X_BF).q[0], q_prev)
+
+
+def _nearest_of(spec: RobotSpec, sols: np.ndarray, q_prev: np.ndarray) -> np.ndarray | None:
+    """:func:`drakedeburr.robots.select_solution` over every 2 pi turn of the IK branches
+    ``sols`` (8, 6) inside :func:`_beyond` limits (:func:`drakedeburr.robots.joint_candidates`),
+    without listing the turns: the rule's costs add up per joint, so per branch the turn of
+    each joint nearest ``q_prev`` within the limits is the branch's best candidate."""
+    lim = _beyond(spec.kinematics.limits)
+    lo, hi = np.asarray(lim.lower), np.asarray(lim.upper)
+    sols = sols[~np.any(np.isnan(sols), axis=1)]
+    kmin = np.ceil((lo - sols) / _TWO_PI - 1e-12)
+    kmax = np.floor((hi - sols) / _TWO_PI + 1e-12)
+    ok = np.all(kmin <= kmax, axis=1)
+    if not ok.any():
         return None
+    sols, kmin, kmax = sols[ok], kmin[ok], kmax[ok]
+    k = np.clip(np.round((np.asarray(q_prev) - sols) / _TWO_PI), kmin, kmax)
+    cand = sols + _TWO_PI * k
     return cand[select_solution(cand, q_prev, travel_weights(spec.opw))]
 
 
@@ -96,9 +128,12 @@ def _frames(read, X_FT, X_RO, problems: list) -> tuple[dict, dict]:
     return frames, used
 
 
-def _line_poses(X_I, zone, linear, i, samples, step):
+def _line_poses(X_I, zone, linear, i, samples, step, fractions=None):
     """Sample poses (4, 4) of linear move i in the interpolated frame: the straight line from
-    target i-1 to i, orientation slerped, the corners at both ends blended by their zones."""
+    target i-1 to i, orientation slerped, the corners at both ends blended by their zones;
+    every ``step`` of travel (at least ``samples``), and in each corner at a quarter, half,
+    three quarters and all of its zone from the target (its chords then follow the
+    parabola); or at the shares ``fractions`` of the move."""
     n = len(X_I)
     A, B = X_I[i - 1][:3, 3], X_I[i][:3, 3]
     L = float(np.linalg.norm(B - A))
@@ -114,19 +149,50 @@ def _line_poses(X_I, zone, linear, i, samples, step):
     u_prev = unit(A - X_I[i - 2][:3, 3]) if r_in else None
     u_next = unit(X_I[i + 1][:3, 3] - B) if r_out else None
     k_n = max(samples, int(np.ceil(L / step)))
+    f_all = np.arange(1, k_n + 1) / k_n
+    if L > 0:  # the corners' own points: where each leaves / joins the line and between
+        share = np.array([0.25, 0.5, 0.75, 1.0])
+        f_all = np.concatenate([f_all, share * r_in / L, 1.0 - share * r_out / L])
+        f_all = np.unique(f_all[(f_all > 0) & (f_all <= 1)])
+    if fractions is not None:
+        f_all = np.asarray(fractions, float)
     out = []
-    for k in range(1, k_n + 1):
-        f = k / k_n
+    R_all = slerp(f_all).as_matrix()
+    for f, R in zip(f_all, R_all, strict=True):
         p = A + f * (B - A)
         if r_in and f * L < r_in:
             p = _corner(A, u_prev, u, r_in, f * L, incoming=False)
         elif r_out and (1 - f) * L < r_out:
             p = _corner(B, u, u_next, r_out, (1 - f) * L, incoming=True)
         X = np.eye(4)
-        X[:3, :3] = slerp([f]).as_matrix()[0]
+        X[:3, :3] = R
         X[:3, 3] = p
         out.append((f, X))
     return out
+
+
+def _follow_line(spec, flange, poses, q_prev, where: str, problems: list):
+    """The joints along the sample poses of a linear move, each the IK solution nearest the
+    one before (from ``q_prev``) -> (joints, flange poses), or None where the line leaves the
+    arm's reach (noted in ``problems``, as jumps of more than :data:`JUMP` are)."""
+    qs, Xs, q_run = [], [], q_prev
+    X_BF = [flange(X) for _, X in poses]
+    sols = ik_opw(spec.opw, np.array(X_BF)).q  # every pose at once
+    for (f, _), X_f, sol in zip(poses, X_BF, sols, strict=True):
+        q = _nearest_of(spec, sol, q_run)
+        if q is None:
+            problems.append(f"{where}: the straight line to the target leaves the arm's "
+                            f"reach or limits at {f:.0%} of the move")
+            return None
+        jump = float(np.abs(q - q_run).max())
+        if jump > JUMP:
+            problems.append(f"{where}: the joints jump {np.degrees(jump):.1f} deg on the "
+                            f"straight line at {f:.0%} of the move (posture change or "
+                            "singularity)")
+        qs.append(q)
+        Xs.append(X_f)
+        q_run = q
+    return qs, Xs
 
 
 def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
@@ -170,7 +236,7 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
     linear = np.array([m.move_type != JOINT for m in moves])
     zone = np.array([m.zone for m in moves])
     q_t = np.full((n, 6), np.nan)
-    q_path, X_path, move = [], [], []
+    q_path, X_path, move, chord = [], [], [], []
     q_prev = None
     for i, m in enumerate(moves):
         where = f"{m.target_file}:{m.config_line or m.target_line}: move {i + 1}"
@@ -179,8 +245,12 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
         try:
             q_conf = joints_from_configuration(kin, X_target, vendor, m.configuration)
         except Exception as exc:  # InputError: no solution has that configuration
-            if not linear[i] or q_prev is None or vendor == "abb":
-                problems.append(f"{where}: {exc}")
+            try:  # one beyond the limits: the controller refuses it at the limit (joint item)
+                q_conf = joints_from_configuration(replace(kin, limits=_beyond(kin.limits)),
+                                                   X_target, vendor, m.configuration)
+            except Exception:
+                if not linear[i] or q_prev is None or vendor == "abb":
+                    problems.append(f"{where}: {exc}")
         if not linear[i] or q_prev is None:
             if q_conf is None:
                 break
@@ -190,26 +260,23 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
             q_path += qs
             X_path += [fk_opw(spec.opw, q) for q in qs]
             move += [i] * len(qs)
+            chord += [q_conf] if q_prev is None else \
+                [0.5 * (a + b) for a, b in zip([q_prev, *qs[:-1]], qs, strict=True)]
             q_prev = q_conf
             continue
         poses = _line_poses(X_I, zone, linear, i, samples, step)
-        qs, Xs, q_run = [], [], q_prev
-        for f, X in poses:
-            q = _nearest(spec, flange(X), q_run)
-            if q is None:
-                problems.append(f"{where}: the straight line to the target leaves the arm's "
-                                f"reach or limits at {f:.0%} of the move")
-                break
-            jump = float(np.abs(q - q_run).max())
-            if jump > JUMP:
-                problems.append(f"{where}: the joints jump {np.degrees(jump):.1f} deg on the "
-                                f"straight line at {f:.0%} of the move (posture change or "
-                                "singularity)")
-            qs.append(q)
-            Xs.append(flange(X))
-            q_run = q
-        if len(qs) < len(poses):
+        line = _follow_line(spec, flange, poses, q_prev, where, problems)
+        if line is None:
             break
+        qs, Xs = line
+        f_all = np.array([f for f, _ in poses])
+        f_mid = 0.5 * (np.concatenate([[0.0], f_all[:-1]]) + f_all)
+        q_a = [q_path[-1]] + qs[:-1]
+        mids = _line_poses(X_I, zone, linear, i, samples, step, f_mid)
+        sols = ik_opw(spec.opw, np.array([flange(X) for _, X in mids])).q
+        for sol, qa, qb in zip(sols, q_a, qs, strict=True):
+            q_m = _nearest_of(spec, sol, qa)
+            chord.append(0.5 * (qa + qb) if q_m is None else q_m)
         q_exact = _nearest(spec, X_target, q_prev)
         q_t[i] = q_exact if q_exact is not None else np.nan
         if vendor == "abb" and q_exact is not None and \
@@ -224,4 +291,4 @@ def controller_motion(read, spec: RobotSpec, X_FT: np.ndarray | None = None,
     return ControllerMotion(q=q_t, q_path=np.array(q_path).reshape(-1, 6),
                             X_path=np.array(X_path).reshape(-1, 4, 4),
                             move=np.array(move, dtype=int), problems=tuple(problems),
-                            frames_used=used)
+                            frames_used=used, q_mid=np.array(chord).reshape(-1, 6))

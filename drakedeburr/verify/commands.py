@@ -281,7 +281,8 @@ def _run_verify(args: argparse.Namespace) -> int:
     if program is not None:
         from drakedeburr.post.program_check import program_items
 
-        items = (*report.items, *program_items(plan, program, cell, config.tolerances))
+        items = (*report.items, *program_items(plan, program, cell, config.tolerances,
+                                               config=config))
         report = replace(report, items=items,
                          passed=all(i.passed for i in items if i.required))
     written = ()
