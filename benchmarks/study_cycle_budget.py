@@ -38,6 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
+FULL_ARGS = ("/tmp/bench_verify_plans/tool_in_hand_h5_straight",)  # bench_verify.py's plan
+QUICK_ARGS = (  # the window-0 plan bench_verify.py --quick leaves (run_all runs it first)
+    "/tmp/bench_verify_plans/tool_in_hand_h5_straight_quick",)
+
 
 def least_j6_range(kin, X_HT: np.ndarray, q_branch: np.ndarray, *, n_spin: int = 72,
                    max_step: int = 2, wrist_margin: float = 0.15) -> tuple[float, float, dict]:

@@ -11,7 +11,7 @@ the collision geometry is the B-rep tessellated at a stated chordal tolerance.
 2. ``drakedeburr verify WHEEL.step -o PLAN``: import (units from the file, front side and its
    evidence, every opening that is no window with the reason), plan and verify;
 3. ``drakedeburr export PLAN -o Deburr.mod``: the program, only when the report passed (the
-   straight wheel passes every required check: benchmarks/RESULTS.md "CAD wheels"; a report
+   straight wheel passes every required check: docs/hub.md "CAD wheels, measured"; a report
    that fails makes export refuse, which this step then shows instead);
 4. a window the burr cannot reach: the same wheel on a chuck 1.6 m from the robot; the report
    says per window what failed (out of the arm's reach) and ``export`` refuses.
