@@ -124,6 +124,8 @@ def test_robot_mode_writes_the_plate_as_uframe_and_the_arms_config(tmp_path, cap
                  "--corner-radius", "10", "--plate", "750,-50,150,0,0,45", "-o",
                  str(out)]) == 0
     text = out.read_text()
+    from test_laser_feature import _ls_frame  # the LS frame parser written there
+
     assert _ls_frame(text, "UFRAME") == pytest.approx([750, -50, 150, 0, 0, 45])
     assert "!UFRAME" not in text  # set by statements, not left to remarks
     configs = set(re.findall(r"CONFIG : '([^']*)'", text))
@@ -131,18 +133,3 @@ def test_robot_mode_writes_the_plate_as_uframe_and_the_arms_config(tmp_path, cap
     assert main(["laser", "shape", "rectangle", "--width", "200", "--height", "100",
                  "--robot", "irb1600", "-o", str(out)]) == 2
     assert "abb controller" in capsys.readouterr().err
-
-
-def _ls_frame(text: str, label: str, n: int = 1) -> list[float]:
-    """X, Y, Z [mm], W, P, R [deg] a FANUC LS program sets ``label[n]`` to: the ``PR[k,i]=v``
-    statements before ``label[n]=PR[k]`` (parsed here, not by the package's reader)."""
-    lines = [ln.split(":", 1)[1].strip().rstrip(";").strip() for ln in text.splitlines()
-             if re.match(r"\s*\d+:", ln)]
-    end = next(i for i, ln in enumerate(lines) if re.fullmatch(rf"{label}\[{n}\]=PR\[\d+\]", ln))
-    pr = re.fullmatch(rf"{label}\[{n}\]=PR\[(\d+)\]", lines[end]).group(1)
-    vals = {}
-    for ln in lines[:end]:
-        m = re.fullmatch(rf"PR\[{pr},([1-6])\]=(-?[\d.]+)", ln)
-        if m:
-            vals[int(m.group(1))] = float(m.group(2))
-    return [vals[i] for i in range(1, 7)]
