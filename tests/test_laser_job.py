@@ -40,8 +40,9 @@ def _X(v):
 
 
 def _frame(text, label):
-    d = dict(re.findall(rf"!{label}\[1\] ([XYZWPR])=(-?[\d.]+) ;", text))
-    return _X([float(d[k]) for k in "XYZWPR"])
+    from test_laser_feature import _ls_frame  # the PR statements, parsed there
+
+    return _X(_ls_frame(text, label))
 
 
 def _points(text):

@@ -502,19 +502,16 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     """Turn a hub mesh file into a hub model folder under ``out_root`` (see module doc).
 
     Args:
-        path: mesh file of one wheel hub (closed or not, metres or millimetres; a tyre around
-            it is dropped).
+        path: mesh file of one hub (closed or not, m or mm; a tyre around it is dropped); a
+            STEP/IGES file goes to :func:`drakedeburr.hub.import_cad.import_cad`.
         out_root: parent folder; the hub folder is ``out_root/<name>_<hash12>``.
-        options: import settings.
-        progress: optional callback (done, total, label).
+        options: import settings. progress: optional callback (done, total, label).
 
-    Returns:
-        The ImportedHub (``cached`` when the folder already existed for this file + options).
+    Returns: the ImportedHub (``cached`` when the folder already existed for this file +
+        options).
 
-    Raises:
-        FileNotFoundError: no such file.
-        InputError: not a readable mesh, not wheel-sized, or no plausible window found (the
-            message names the file, every opening and why it was not used).
+    Raises: FileNotFoundError (no such file); InputError: not a readable mesh, not
+        wheel-sized, or no window found (the message names the file, each opening and why).
     """
     from manifold3d import Manifold
 
@@ -523,8 +520,7 @@ def import_mesh(path: str | Path, out_root: str | Path, *,
     from drakedeburr.hub.mesh_io import check_mesh_file, load_hub_mesh
 
     if Path(path).suffix.lower() in CAD_SUFFIXES:  # STEP/IGES: the B-rep's exact edges
-        from drakedeburr.hub.import_cad import import_cad
-
+        from drakedeburr.hub.import_cad import import_cad  # noqa: I001 (OCP only for CAD)
         return import_cad(path, out_root, options=options, progress=progress)
     t_start = time.perf_counter()
     if options.refine not in ("cut", "coacd"):
