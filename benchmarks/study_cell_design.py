@@ -23,8 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
-FULL_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights", "-50,0,50")
-QUICK_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights", "-50,0,50")
+FULL_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=-50,0,50", "--out", "{tmp}/study")
+QUICK_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=-50,0,50", "--out", "{tmp}/study")
 
 TARGETS = {"cycle_ratio": 1.15, "feed_held_worst": 0.85, "worst_j6_deg": 30.0}
 

@@ -1,0 +1,139 @@
+"""The cell-design study (drakedeburr.cell.study, drakedeburr.cell.commands): candidate scenario
+files checked by building their cells (FK of the tool and hub frames against the bundled cell's,
+turned and lifted by an independently built wedge), read back from the file, ranked, and a
+quick real study through the CLI whose recommended file is loaded and checked."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import drakedeburr.cell.study as mut
+from drakedeburr.cell.station import load_cell
+from drakedeburr.cell.tools import FLOATING_SPINDLE
+from drakedeburr.errors import InputError
+from drakedeburr.hub import DEFAULT_HUB
+
+CANDIDATES = [mut.MountCandidate(math.radians(30), 0.0, -0.05),
+              mut.MountCandidate(math.radians(60), 0.05, 0.05)]
+
+
+def _rot_y(a: float) -> np.ndarray:
+    """A turn about +Y by ``a`` (right hand), built from its axis-angle form (Rodrigues)."""
+    k = np.array([0.0, 1.0, 0.0])
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(a) * K + (1 - math.cos(a)) * K @ K
+
+
+def _X_FT(cell, q) -> np.ndarray:
+    return (cell.X_WF(q).inverse() @ cell.X_WT(q)).GetAsMatrix4()
+
+
+@pytest.fixture(scope="module")
+def bundled():
+    return load_cell("tool_in_hand", DEFAULT_HUB)
+
+
+@pytest.mark.parametrize("c", CANDIDATES, ids=lambda c: c.name)
+def test_candidate_scenario_round_trips(tmp_path, c):
+    f = mut.write_candidate_scenario(c, tmp_path / "a.yaml")
+    back = mut.candidate_from_scenario(f)
+    assert back.name == c.name
+    assert abs(back.mount_angle - c.mount_angle) < 1e-9
+    assert abs(back.offset - c.offset) < 1e-9
+    assert abs(back.fixture_shift - c.fixture_shift) < 1e-9
+    # written again from what was read: the same file
+    g = mut.write_candidate_scenario(back, tmp_path / "b.yaml")
+    assert g.read_text() == f.read_text()
+
+
+@pytest.mark.parametrize("c", CANDIDATES, ids=lambda c: c.name)
+def test_candidate_cell_tool_and_hub_frames(tmp_path, bundled, c):
+    cell = load_cell(mut.write_candidate_scenario(c, tmp_path / "c.yaml"), DEFAULT_HUB)
+    q = np.array(bundled.q_home)
+    X_FT, X_FT_ref = _X_FT(cell, q), _X_FT(bundled, q)
+    z_F = X_FT[:3, 2]  # the burr axis in the flange frame
+    assert math.degrees(math.acos(z_F[2])) == pytest.approx(math.degrees(c.mount_angle),
+                                                            abs=1e-6)
+    assert abs(z_F[1]) < 1e-9 and z_F[0] > 0  # tilted about +Y_F, tip towards +X_F
+    # the bundled tool frame turned by the wedge about +Y_F and lifted off the flange face
+    wedge = c.mount_angle - math.radians(45)
+    lift = c.offset + FLOATING_SPINDLE.plate_radius * abs(math.sin(wedge))
+    R = _rot_y(wedge)
+    np.testing.assert_allclose(X_FT[:3, :3], R @ X_FT_ref[:3, :3], atol=1e-9)
+    np.testing.assert_allclose(X_FT[:3, 3], R @ X_FT_ref[:3, 3] + [0, 0, lift], atol=1e-9)
+    # the hub face moved with the fixture along +Z_W only
+    dp = cell.X_WH(q).translation() - bundled.X_WH(q).translation()
+    np.testing.assert_allclose(dp, [0, 0, c.fixture_shift], atol=1e-9)
+
+
+def test_bundled_candidate_is_the_bundled_cell(tmp_path, bundled):
+    c = mut.MountCandidate()
+    assert c.is_bundled() and c.name == "m45_o000_f+000"
+    cell = load_cell(mut.write_candidate_scenario(c, tmp_path / "c.yaml"), DEFAULT_HUB)
+    q = np.array(bundled.q_home)
+    np.testing.assert_allclose(_X_FT(cell, q), _X_FT(bundled, q), atol=1e-12)
+
+
+def test_candidates_out_of_range_are_refused():
+    with pytest.raises(InputError, match="mount angle"):
+        mut.MountCandidate(math.radians(100))
+    with pytest.raises(InputError, match="offset"):
+        mut.MountCandidate(offset=-0.01)
+    with pytest.raises(InputError, match="fixture"):
+        mut.MountCandidate(fixture_shift=0.5)
+
+
+def test_ranking_and_recommendation(tmp_path):
+    """A failing candidate is listed with its failing check and never recommended, however fast;
+    equal cycles (within 10 ms) are ranked by the wrist travel, then by name."""
+    cands = mut.candidate_grid((30, 45, 60), (0,), (0,))
+    figures = {  # name -> (passed, cycle s, travel deg)
+        "m30_o000_f+000": (False, 10.0, 50.0),
+        "m45_o000_f+000": (True, 20.004, 120.0),
+        "m60_o000_f+000": (True, 20.001, 110.0)}
+
+    def evaluate(c, f):
+        assert mut.candidate_from_scenario(f).name == c.name
+        ok, cycle, travel = figures[c.name]
+        return {"passed": ok, "failing": [] if ok else ["clearance"], "cycle_s": cycle,
+                "worst_wrist_travel_deg": travel}
+
+    res = mut.run_study(cands, evaluate, tmp_path)
+    names = [r["name"] for r in res["ranking"]]
+    assert names == ["m60_o000_f+000", "m45_o000_f+000", "m30_o000_f+000"]
+    assert res["ranking"][-1]["failing"] == ["clearance"]
+    assert res["recommended"] == "m60_o000_f+000"
+    rec = mut.candidate_from_scenario(res["recommended_scenario"])
+    assert rec.mount_angle == pytest.approx(math.radians(60), abs=1e-9)
+    # nothing passes: nothing recommended, no file
+    figures.update({k: (False, *v[1:]) for k, v in figures.items()})
+    res = mut.run_study(cands, evaluate, tmp_path / "none")
+    assert res["recommended"] is None and not (tmp_path / "none" / "recommended.yaml").exists()
+
+
+@pytest.mark.slow
+def test_cell_study_quick_cli(tmp_path):
+    """Two real candidates on window 0: the recommended file is the first-ranked passing
+    candidate's cell, its tool frame at the recommended angle."""
+    from drakedeburr.cli import main
+
+    out = tmp_path / "study"
+    assert main(["cell", "study", "--quick", "-o", str(out)]) == 0
+    doc = json.loads((out / "study.json").read_text())
+    ranking = doc["ranking"]
+    assert len(ranking) == 2 and doc["windows"] == [0]
+    best = ranking[0]
+    assert best["passed"] and doc["recommended"] == best["name"]
+    passing = [r for r in ranking if r["passed"]]
+    assert all(best["cycle_s"] <= r["cycle_s"] + mut.CYCLE_QUANTUM_S for r in passing)
+    for r in ranking:  # the figures are the verifier's, in range
+        assert 0.0 < r["feed_held_worst"] <= 1.0 and r["cycle_ratio"] >= 1.0
+        j = r["j4_j6_deg_per_window"]["0"]
+        assert r["worst_wrist_travel_deg"] == pytest.approx(sum(j))
+    rec = mut.candidate_from_scenario(out / "recommended.yaml")
+    assert rec.name == best["name"]
+    cell = load_cell(out / "recommended.yaml", DEFAULT_HUB)
+    z_F = _X_FT(cell, np.array(cell.q_home))[:3, 2]
+    assert math.acos(z_F[2]) == pytest.approx(best["mount_angle"], abs=1e-9)
