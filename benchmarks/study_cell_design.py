@@ -23,8 +23,11 @@ import tempfile
 import time
 from pathlib import Path
 
-FULL_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=-50,0,50", "--out", "{tmp}/study")
-QUICK_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=-50,0,50", "--out", "{tmp}/study")
+FULL_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=0,50,-50",
+             "--out", "{tmp}/study")
+# the grid is the study (--quick, two candidates on one window, is for tests)
+QUICK_ARGS = ("--angles", "30,45,60", "--offsets", "0,50", "--fixture-heights=0,50,-50",
+              "--out", "{tmp}/study")
 
 TARGETS = {"cycle_ratio": 1.15, "feed_held_worst": 0.85, "worst_j6_deg": 30.0}
 
@@ -71,11 +74,22 @@ def main(argv=None) -> int:
                                     number_list(args.fixture_heights, "--fixture-heights"))
     out = Path(args.out or tempfile.mkdtemp(prefix="study_cell_design_"))
     t0 = time.perf_counter()
-    result = run_study(candidates, lambda c, f: evaluate_candidate(c, f, hub, windows), out)
+    print("as evaluated (candidate, passed, cycle s, ratio, feed held, worst J6 deg, "
+          "worst J4+J5+J6 deg, failing):", flush=True)
+
+    def evaluate(c, f):
+        r = evaluate_candidate(c, f, hub, windows)
+        print(f"  {c.name} {r['passed']} {r.get('cycle_s')} {r.get('cycle_ratio')} "
+              f"{r.get('feed_held_worst')} {r.get('worst_j6_deg')} "
+              f"{r.get('worst_wrist_travel_deg')} {r.get('failing')}", flush=True)
+        return r
+
+    result = run_study(candidates, evaluate, out)
     took = time.perf_counter() - t0
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
     ranking = result["ranking"]
+    print()
     print(f"## cell design study: hub {hub}, windows "
           f"{'all' if windows is None else ','.join(map(str, windows))}, tool in hand, "
           f"{len(candidates)} candidates in {took:.0f} s")

@@ -104,9 +104,11 @@ class MountCandidate:
 
 def candidate_grid(angles_deg: Sequence[float], offsets_mm: Sequence[float],
                    fixture_shifts_mm: Sequence[float]) -> list[MountCandidate]:
-    """Every combination, in a fixed order (angle, offset, fixture shift)."""
+    """Every combination, fixture height outermost, then offset, then angle, each in the order
+    given (the ranking does not depend on it; a study cut short has compared the mounts at the
+    first height)."""
     return [MountCandidate(math.radians(a), o * 1e-3, f * 1e-3)
-            for a in angles_deg for o in offsets_mm for f in fixture_shifts_mm]
+            for f in fixture_shifts_mm for o in offsets_mm for a in angles_deg]
 
 
 def quick_grid() -> list[MountCandidate]:
