@@ -137,3 +137,19 @@ def test_cell_study_quick_cli(tmp_path):
     cell = load_cell(out / "recommended.yaml", DEFAULT_HUB)
     z_F = _X_FT(cell, np.array(cell.q_home))[:3, 2]
     assert math.acos(z_F[2]) == pytest.approx(best["mount_angle"], abs=1e-9)
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--angles", "30,x"], "--angles '30,x': expected comma-separated numbers"),
+    (["--angles", "30,30"], "expected distinct finite numbers"),
+    (["--angles", "120"], "mount angle must be within [0, 90] deg"),
+    (["--offsets", "-10"], "mount offset must be within [0, 200] mm"),
+    (["--windows", "99"], "has no window 99")])
+def test_cell_study_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, says):
+    from drakedeburr.cli import main
+
+    out = tmp_path / "study"
+    assert main(["cell", "study", *argv, "-o", str(out)]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1 and says in err[0], err
+    assert not out.exists()

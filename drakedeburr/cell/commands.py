@@ -151,7 +151,8 @@ def register(subparsers) -> None:
     s.add_argument("--offsets", default="0,50", help="mount stand-offs [mm] (default "
                                                      "%(default)s)")
     s.add_argument("--fixture-heights", default="-50,0,50",
-                   help="fixture height changes [mm] (default %(default)s)")
+                   help="fixture height changes [mm], a list starting with a minus sign "
+                        "written --fixture-heights=-50,0 (default %(default)s)")
     s.add_argument("--windows", default=None, help="comma-separated windows (default all)")
     s.add_argument("--quick", action="store_true",
                    help="two candidates (45 and 60 deg), window 0 only (tests)")
