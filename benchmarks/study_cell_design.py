@@ -59,19 +59,10 @@ def main(argv=None) -> int:
     logging.basicConfig(level=logging.INFO, stream=sys.stderr,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
-    from drakedeburr import argcheck
-    from drakedeburr.cell.commands import evaluate_candidate, number_list, study_table
-    from drakedeburr.cell.study import candidate_grid, quick_grid, run_study
-    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.cell.commands import evaluate_candidate, study_setup, study_table
+    from drakedeburr.cell.study import run_study
 
-    hub = args.hub or DEFAULT_HUB
-    windows = argcheck.parse_windows(args.windows)
-    if args.quick:
-        candidates, windows = quick_grid(), windows or (0,)
-    else:
-        candidates = candidate_grid(number_list(args.angles, "--angles"),
-                                    number_list(args.offsets, "--offsets"),
-                                    number_list(args.fixture_heights, "--fixture-heights"))
+    hub, windows, candidates = study_setup(args)
     out = Path(args.out or tempfile.mkdtemp(prefix="study_cell_design_"))
     t0 = time.perf_counter()
     print("as evaluated (candidate, passed, cycle s, ratio, feed held, worst J6 deg, "

@@ -14,7 +14,7 @@ import math
 import time
 from pathlib import Path
 
-__all__ = ["register", "evaluate_candidate", "number_list", "study_table"]
+__all__ = ["register", "evaluate_candidate", "number_list", "study_setup", "study_table"]
 
 
 def evaluate_candidate(candidate, scenario_file: Path, hub: str,
@@ -102,10 +102,15 @@ def number_list(text: str, option: str) -> tuple[float, ...]:
     return values
 
 
-def _run_study(args: argparse.Namespace) -> int:
+def study_setup(args: argparse.Namespace) -> tuple:
+    """(hub, windows or None, candidates) from the study's options (``hub``, ``windows``,
+    ``quick``, ``angles``, ``offsets``, ``fixture_heights``), checked.
+
+    Raises:
+        InputError: a list is malformed, a candidate out of range, a window not the hub's.
+    """
     from drakedeburr import argcheck
-    from drakedeburr._io import atomic_write_json
-    from drakedeburr.cell.study import candidate_grid, quick_grid, run_study
+    from drakedeburr.cell.study import candidate_grid, quick_grid
     from drakedeburr.hub import DEFAULT_HUB
     from drakedeburr.resources import resolve_hub_dir
 
@@ -119,6 +124,15 @@ def _run_study(args: argparse.Namespace) -> int:
                                     number_list(args.offsets, "--offsets"),
                                     number_list(args.fixture_heights, "--fixture-heights"))
     argcheck.check_windows(windows, argcheck.hub_windows(hub), Path(hub).name)
+    return hub, windows, candidates
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from drakedeburr import argcheck
+    from drakedeburr._io import atomic_write_json
+    from drakedeburr.cell.study import run_study
+
+    hub, windows, candidates = study_setup(args)
     out = argcheck.output_folder(Path(args.out), "-o/--out")
     result = run_study(candidates, lambda c, f: evaluate_candidate(c, f, hub, windows), out)
     result.update(hub=str(hub), windows=None if windows is None else list(windows))
