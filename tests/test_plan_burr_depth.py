@@ -152,7 +152,7 @@ def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readi
         worst = next(calls)
         return offset + (np.array([0.0, 0.0, 1e-4]) if worst > 0 else 0.0), worst
 
-    monkeypatch.setattr(mut, "_plan_window_at", fake_at)
+    monkeypatch.setattr(mut, "plan_window_pass", fake_at)
     monkeypatch.setattr(burr_depth, "relieved_offsets", fake_relief)
     monkeypatch.setattr(burr_depth, "hub_model_of", lambda d: None)
     monkeypatch.setattr(mut, "replace", lambda obj, **kw: SimpleNamespace(**kw))

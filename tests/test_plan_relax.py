@@ -328,23 +328,23 @@ def test_a_clean_window_is_planned_with_the_frame_rule_and_again_only_when_slow(
 @pytest.mark.parametrize("least_mm", [1.9, 2.1])
 def test_a_fail_fast_cut_under_the_clearance_is_abandoned_before_its_program(
         monkeypatch, fail_fast, least_mm):
-    """execute_cut: a tracked cut that stays under the clearance (after its axis is pinned)
-    fails this recipe whatever its program and timing would be; fail-fast (the first pass and
-    the relaxed variants) abandons it there, with the tracking's records; a full pass, or a
-    clear cut, goes on to the program."""
-    from drakedeburr.plan import cut as mut
-    from drakedeburr.plan import program_fit
+    """execute_cut (the window pass's steps 3-4): a tracked cut that stays under the clearance
+    (after its axis is pinned) fails this recipe whatever its program and timing would be;
+    fail-fast (the first pass and the relaxed variants) abandons it there, with the tracking's
+    records; a full pass, or a clear cut, goes on to the program."""
+    from drakedeburr.plan import cut
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.results import IkStep
 
     n = 50
     dist = np.full(n, least_mm * 1e-3 + 0.2e-3)
     dist[20:24] = least_mm * 1e-3
     rec = FailureRecord(0, "dense", "clearance")
 
-    def track(ctx, wt, wik, good, order, X_ik, step, records):
-        if dist.min() < ctx.cut_clearance:
-            records.append(rec)
-        return mut._Try(cp=None, cut=SimpleNamespace(ok=np.ones(n, bool)), dist=dist,
-                        spin_mode="ik")
+    def track(ctx, wt, ik, step):
+        records = (rec,) if dist.min() < ctx.cut_clearance else ()
+        return cut._Try(cp=None, cut=SimpleNamespace(ok=np.ones(n, bool)), dist=dist,
+                        spin_mode="ik", records=records)
 
     class Fitted(Exception):
         pass
@@ -352,17 +352,17 @@ def test_a_fail_fast_cut_under_the_clearance_is_abandoned_before_its_program(
     def fit(*args, **kwargs):
         raise Fitted
 
-    monkeypatch.setattr(mut, "_track_cut", track)
-    monkeypatch.setattr(program_fit, "fit_program", fit)
+    monkeypatch.setattr(mut, "track_cut", track)
+    monkeypatch.setattr(mut, "fit_program", fit)
     ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
                       config=SimpleNamespace(tolerances=SimpleNamespace(min_clearance=2e-3)),
                       options=PlanOptions(fail_fast=fail_fast))
-    wik = SimpleNamespace(X_HT=np.zeros((3, 4, 4)))
-    call = functools.partial(mut.execute_cut, ctx, SimpleNamespace(window_index=0), wik,
-                             np.arange(3), np.arange(3), 0.0, [])
+    ik = IkStep(status=WindowStatus.OK, wik=SimpleNamespace(X_HT=np.zeros((3, 4, 4))),
+                good=np.arange(3), order=np.arange(3), failures=(), seconds=0.0, starts=1)
+    call = functools.partial(mut.execute_cut, ctx, SimpleNamespace(window_index=0), ik)
     if fail_fast and least_mm < 2.0:
         out = call()
-        assert out.status is WindowStatus.ABANDONED and out.failures == [rec]
+        assert out.status is WindowStatus.ABANDONED and out.failures == (rec,)
     else:
         with pytest.raises(Fitted):
             call()

@@ -22,7 +22,7 @@ from drakedeburr.plan.program_reading import (
     rot_angle,
     slerp_pairs,
 )
-from drakedeburr.plan.results import ExecutedCut, WindowStatus
+from drakedeburr.plan.results import ExecutedCut, ProgramFit, WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["fit_program", "via_samples", "add_vias", "conform_to_program"]
@@ -30,11 +30,13 @@ __all__ = ["fit_program", "via_samples", "add_vias", "conform_to_program"]
 log = logging.getLogger(__name__)
 
 
-def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refine: bool):
-    """The program of the tracked cut ``tr`` (module docstring): an :class:`ExecutedCut`,
-    "finer" (``refine`` and the trajectory would stray from the program between the samples,
-    :func:`drakedeburr.plan.cut.between_samples_error`), or
+def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, refine: bool) -> ProgramFit:
+    """Step 4 of a window pass: the program of the tracked cut ``tr`` (module docstring),
+    :class:`ProgramFit` with its :class:`ExecutedCut`, with ``finer`` (``refine`` and the
+    trajectory would stray from the program between the samples,
+    :func:`drakedeburr.plan.cut.between_samples_error`), or with status
     ``WindowStatus.PROGRAM_FAILED`` (a program target is unreachable; recorded)."""
+    records: list[FailureRecord] = []
     w, kin, tol = wt.window_index, ctx.kin, ctx.config.tolerances
     cp, cut, dist = tr.cp, tr.cut, tr.dist
     fillets: list = []
@@ -60,13 +62,13 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
                                      reason="program target unreachable with the smoothed "
                                             "orientation"))
     if bad.size:
-        return WindowStatus.PROGRAM_FAILED
+        return ProgramFit(status=WindowStatus.PROGRAM_FAILED, failures=tuple(records))
     if refine:
         err, out_of_cone, dev = between_samples_error(
             kin, cut, cp, (cp.X_target[~via, :3, 3], wt.cone_retract_H[order],
                            wt.cone_half_angle))
         if err > 0.8 * tol.orientation_match or out_of_cone > 0.0 or dev > ctx.program_position:
-            return "finer"
+            return ProgramFit(status=WindowStatus.OK, finer=True)
     stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > tol.orientation_match:
         k = int(np.argmax(stray))
@@ -76,8 +78,8 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
             tried=(f"{int(via.sum())} via targets", "orientation pulled onto the program"),
             reason=f"program orientation strays {1e3 * stray[k]:.1f} mrad from the executed cut "
                    f"(via targets: {int(via.sum())})"))
-    return ExecutedCut(cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via,
-                       fillets=tuple(fillets))
+    return ProgramFit(status=WindowStatus.OK, failures=tuple(records), executed=ExecutedCut(
+        cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via, fillets=tuple(fillets)))
 
 
 def via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
