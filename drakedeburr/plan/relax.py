@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
+from drakedeburr.plan.options import RunMode
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
@@ -129,14 +130,14 @@ def window_ladder(edge, params, plan_one) -> list:
     return out
 
 
-def plan_ladder(ctx, item) -> list:
+def plan_ladder(ctx, item, mode: RunMode = RunMode.FULL) -> list:
     """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters), each variant by
-    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` (a task for
+    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode`` (a task for
     :func:`drakedeburr.plan.parallel.map_windows`)."""
     from drakedeburr.plan.window import plan_window
 
     edge, params = item
-    return window_ladder(edge, params, functools.partial(plan_window, ctx))
+    return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode))
 
 
 def long_reach():

@@ -31,7 +31,7 @@ class WindowStatus(enum.Enum):
     PROGRAM_FAILED = "program_failed"  # a program target unreachable: skipped
     APPROACH_FAILED = "approach_failed"  # approach or retract unreachable: skipped
     # failed under the recipe at an IK target or with its executed cut under the clearance,
-    # the rest not planned (PlanOptions.fail_fast: relaxation comes next, and the window is
+    # the rest not planned (RunMode.FAIL_FAST: relaxation comes next, and the window is
     # planned in full if none is kept)
     ABANDONED = "abandoned"
 

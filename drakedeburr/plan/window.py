@@ -21,7 +21,7 @@ from drakedeburr.plan.cut import track_cut
 from drakedeburr.plan.finish import finish_window
 from drakedeburr.plan.ik import seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
-from drakedeburr.plan.options import PlanContext
+from drakedeburr.plan.options import PlanContext, RunMode
 from drakedeburr.plan.program_fit import fit_program
 from drakedeburr.plan.results import CutStep, CutTargets, IkStep, WindowPlan, WindowStatus
 from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -49,11 +49,12 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
     return ctx.kin.q_home.copy() if q_ref is None else np.asarray(q_ref, float)
 
 
-def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
-    """Approach, cut and retract of one window (module docstring)."""
+def plan_window(ctx: PlanContext, wt: WindowTargets,
+                mode: RunMode = RunMode.FULL) -> WindowPlan:
+    """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
     q_from = window_reference(ctx, wt)
-    first = _plan_window_once(ctx, wt, q_from)
-    if ctx.options.report_only or not needs_other_rule(first, ctx.options.retry_in_band):
+    first = _plan_window_once(ctx, wt, q_from, mode)
+    if mode is RunMode.REPORT_ONLY or not needs_other_rule(first, ctx.options.retry_in_band):
         return first
     other, ctx2 = _other_rule(ctx)
     if first.status.planned and not first.failures:  # clean but slow: the other rule may wind
@@ -63,7 +64,7 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     elif first.status is not WindowStatus.ABANDONED:
         log.debug("window %d: %d failure records; planning it again with the %r warm-start "
                   "spin", wt.window_index, len(first.failures), other)
-    return better_of(first, _plan_window_once(ctx2, wt, q_from))
+    return better_of(first, _plan_window_once(ctx2, wt, q_from, mode))
 
 
 def needs_other_rule(first: WindowPlan, retry_in_band: float) -> bool:
@@ -137,15 +138,17 @@ def _known(q: np.ndarray, seeds: list) -> bool:
     return any(s is not None and np.max(np.abs(q - s)) < 1e-6 for s in seeds)
 
 
-def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.ndarray,
-              p_HQ: np.ndarray, lift: float):
+def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, targets: CutTargets,
+              mode: RunMode):
     """The window's IK from the best of its start configurations (each start is judged by its
     failures and by whether the executed motion between the targets stays on the branch and
     inside the joint limits: a cheap analytic pre-check)."""
     kin, opt = ctx.kin, ctx.options
+    loop, p_HQ, lift = targets.loop, targets.p_HQ, targets.lift
+    fail_fast, report_only = mode is RunMode.FAIL_FAST, mode is RunMode.REPORT_ONLY
     m = len(wt)
     seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.retract_H[0], q_from)
-    if opt.report_only:
+    if report_only:
         seeds = seeds[:1]
     wik, best_score = None, 0
     tracked_back: set[int] = set()
@@ -153,7 +156,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
                                 wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=opt.ik,
-                                q_first=q_first, lift=lift, stop_at_failure=opt.fail_fast)
+                                q_first=q_first, lift=lift, stop_at_failure=fail_fast)
         reached = np.flatnonzero(trial.ok)
         dense_ok = bool(len(reached) > 1 and np.all(track_poses(
             kin, trial.X_HT[reached], trial.q[reached[0]], opt.dense_step).ok))
@@ -165,7 +168,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         # targets no pose in the cone can reach (the IK's probe): no other start fixes those
         unreachable = sum(1 for f in trial.failures if "cone_best_clearance" in f.where)
         if score == unreachable and trial is wik:
-            say = log.debug if opt.fail_fast else log.warning  # fail-fast: relaxation next
+            say = log.debug if fail_fast else log.warning  # fail-fast: relaxation next
             say("window %d: %d targets unreachable with %.1f mm clearance by any tool axis in "
                 "the cone; reported", wt.window_index, unreachable,
                 1e3 * opt.ik.min_distance_floor)
@@ -178,14 +181,14 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         # may lie far from the reference, and the moves to and from the window with it)
         first_fail = int(trial.failures[0].point) if trial.failures else None
         if (first_fail is not None and first_fail not in tracked_back and len(tracked_back) < 2
-                and not opt.report_only):
+                and not report_only):
             tracked_back.add(first_fail)
             back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial, first_fail)
             if back is not None and not _known(back, seeds):
                 seeds.append(back)
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
         wound = rewound_start(kin, trial, q_first)
-        if wound is not None and not _known(wound, seeds) and not opt.report_only:
+        if wound is not None and not _known(wound, seeds) and not report_only:
             seeds.insert(attempt + 1, wound)
     return wik, len(seeds)
 
@@ -214,15 +217,16 @@ def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: 
     return back.q[-1].copy() if back.ok.all() else None
 
 
-def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
+def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
+                      mode: RunMode) -> WindowPlan:
     """One planning pass of a window (see :func:`plan_window`), its chamfer leg relieved where
     the burr would reach deeper into the hub than the verifier allows
     (:mod:`drakedeburr.plan.burr_depth`)."""
     from drakedeburr.plan import burr_depth
 
     offset = np.zeros((len(wt), 3))
-    result = plan_window_pass(ctx, wt, q_from, offset)
-    if not result.status.planned or ctx.options.report_only:
+    result = plan_window_pass(ctx, wt, q_from, offset, mode)
+    if not result.status.planned or mode is RunMode.REPORT_ONLY:
         return result
     hub = burr_depth.hub_model_of(str(ctx.cell.hub_sdf.parent))
     r_c, _lift = contact_geometry(ctx.options.contact_radius)
@@ -245,7 +249,7 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
                  1e3 * (worst + bound - burr_depth.MARGIN), 1e3 * bound,
                  1e3 * burr_depth.MARGIN, int(np.sum(np.any(new != offset, axis=1))),
                  1e3 * float(np.linalg.norm(new, axis=1).max()))
-        retry = plan_window_pass(ctx, wt, q_from, new)
+        retry = plan_window_pass(ctx, wt, q_from, new, mode)
         if not retry.status.planned or len(retry.failures) > len(result.failures):
             log.info("window %d: the moved tool points did not plan; kept the last plan",
                      wt.window_index)
@@ -270,7 +274,7 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
 
 
 def plan_window_pass(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
-                     offset: np.ndarray) -> WindowPlan:
+                     offset: np.ndarray, mode: RunMode = RunMode.FULL) -> WindowPlan:
     """THE window pipeline: one planning pass of a window, its CL targets' tool points moved by
     ``offset`` (M, 3) [m] (:mod:`drakedeburr.plan.burr_depth`; zero: the recipe's). Each step
     returns a typed result with its status; the pass stops at the first that does not plan.
@@ -282,16 +286,16 @@ def plan_window_pass(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
     5. approach, retract, timing and figures (:func:`drakedeburr.plan.finish.finish_window`).
     """
     targets = cut_targets(ctx, wt, offset)
-    ik = ik_step(ctx, wt, q_from, targets)
+    ik = ik_step(ctx, wt, q_from, targets, mode)
     if not ik.status.planned:
         return WindowPlan.skipped(wt.window_index, ik.status, list(ik.failures))
-    cut = execute_cut(ctx, wt, ik)
+    cut = execute_cut(ctx, wt, ik, mode)
     if not cut.status.planned:
         return WindowPlan.skipped(wt.window_index, cut.status, [*ik.failures, *cut.failures])
     return finish_window(ctx, wt, ik, cut)
 
 
-def execute_cut(ctx: PlanContext, wt, ik: IkStep) -> CutStep:
+def execute_cut(ctx: PlanContext, wt, ik: IkStep, mode: RunMode = RunMode.FULL) -> CutStep:
     """Steps 3-4 of a window pass (:func:`plan_window_pass`): the
     window's executed cut and its program (:mod:`drakedeburr.plan.cut`), sampled every
     ``options.dense_step`` of travel and again at half that where the program has moves the
@@ -303,9 +307,9 @@ def execute_cut(ctx: PlanContext, wt, ik: IkStep) -> CutStep:
         records = list(tr.records)
         if not np.all(tr.cut.ok):
             return _cut_step(WindowStatus.MOTION_FAILED, None, records, t1)
-        if ctx.options.fail_fast and np.any(tr.dist < ctx.cut_clearance):
+        if mode is RunMode.FAIL_FAST and np.any(tr.dist < ctx.cut_clearance):
             # the window fails this recipe (the pinned axis and tightened blends did not
-            # clear the hub): relaxed next (PlanOptions.fail_fast), its program and timing
+            # clear the hub): relaxed next (RunMode.FAIL_FAST), its program and timing
             # not made (on an unseen hub they were ~40 s a window and spin rule)
             log.debug("window %d: the executed cut stays under the clearance; abandoned for "
                       "a milder recipe", wt.window_index)
@@ -342,20 +346,20 @@ def cut_targets(ctx: PlanContext, wt: WindowTargets, offset: np.ndarray) -> CutT
     return CutTargets(loop=loop, p_HQ=p_HQ, lift=lift)
 
 
-def ik_step(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
-            targets: CutTargets) -> IkStep:
+def ik_step(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, targets: CutTargets,
+            mode: RunMode = RunMode.FULL) -> IkStep:
     """Step 2 of :func:`plan_window_pass`: the window's IK from its best start; it stops the
     window (IK_FAILED) when fewer than half the targets or not the first are reached, and
     (ABANDONED) at any failed target in a fail-fast pass."""
     m, loop = len(wt), targets.loop
     t0 = time.perf_counter()
-    wik, n_starts = _solve_ik(ctx, wt, q_from, loop, targets.p_HQ, targets.lift)
+    wik, n_starts = _solve_ik(ctx, wt, q_from, targets, mode)
     t_ik = time.perf_counter() - t0
     failures = [replace(rec, point=int(loop[rec.point])) for rec in wik.failures]
     # only the targets that met every constraint (a failed point's row holds its best attempt)
     good = np.flatnonzero(wik.ok)
     status = WindowStatus.DEGRADED if failures else WindowStatus.OK
-    if ctx.options.fail_fast and failures:
+    if mode is RunMode.FAIL_FAST and failures:
         status = WindowStatus.ABANDONED
     elif len(good) < (m + 1) // 2 or 0 not in good:
         failures.append(FailureRecord(
