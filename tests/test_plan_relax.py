@@ -467,3 +467,19 @@ def test_moved_tool_points_are_a_recipe_deviation():
     relief["excess_left_mm"] = 0.02
     rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
     assert "still 0.020 mm too deep" in rec["reason"]
+
+
+def test_the_relaxation_and_home_import_no_planner_module():
+    """relax makes its variants' tool paths by drakedeburr.plan.tool_paths.tool_path, the
+    function the planner's own targets use, not by a planner private: no import circle
+    planner -> relax/home -> planner (an import inside a function counts)."""
+    import ast
+    import inspect
+
+    from drakedeburr.plan import home, relax, tool_paths
+
+    for mod in (relax, home, tool_paths):
+        tree = ast.parse(inspect.getsource(mod))
+        mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+        assert "drakedeburr.plan.planner" not in mods, mod.__name__
+    assert planner.tool_path is tool_paths.tool_path

@@ -47,22 +47,17 @@ from drakedeburr.plan.parallel import (
 from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
+from drakedeburr.plan.tool_paths import CL_COUNT_BUDGET, CL_DELTA, tool_path
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
+__all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub", "CL_DELTA",
+           "CL_COUNT_BUDGET"]
 
 log = logging.getLogger(__name__)
 
 Progress = Callable[[int, int, str], None] | None
 
-# CL targets of the real chain: the path stage's ``adaptive`` segmentation at 0.03 mm chord
-# height (the executed linear moves stay within it of the edge curve), with the FEWEST points
-# that meet it and L_max (count budget 1): long chords on straight edges, short ones in fillets.
-# The default budget (the proposed method's count) spreads ~2.3x as many points evenly; the
-# robot gains nothing from them (every move is linear and blended), and each costs an IK solve.
-CL_DELTA = 0.03e-3
-CL_COUNT_BUDGET = 1
 
 
 def plan_windows(
@@ -381,7 +376,7 @@ def _window_targets(edge, source: str, params: ProcessParameters):
     (None, why) when its ToolPath cannot give targets."""
     if source in ("toolpath", "auto"):
         try:
-            return WindowTargets.from_tool_path(_tool_path(edge, params)), None
+            return WindowTargets.from_tool_path(tool_path(edge, params)), None
         except InputError as exc:
             return None, str(exc)
         except ImportError as exc:
@@ -390,22 +385,6 @@ def _window_targets(edge, source: str, params: ProcessParameters):
             log.warning("window %d: path/orientation stage unavailable (%s); using the "
                         "ground-truth edge with a fixed tilt instead", edge.index, exc)
     return WindowTargets.from_window_edge(edge, params=params), None
-
-
-def _tool_path(edge, params: ProcessParameters):
-    """CL points and tool axes of one window by the path and orientation stages."""
-    from scipy.spatial import cKDTree
-
-    from drakedeburr.orientation.orient import orient_window
-    from drakedeburr.path import fit_edge_curve, plan_cl
-    from drakedeburr.path.cl_planning import PlannerParams
-
-    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
-    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
-                                                            count_budget=CL_COUNT_BUDGET),
-                 window_index=edge.index, kind=edge.kind)
-    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
-    return orient_window(cl, edge.n_wall_H[nearest], params=params)
 
 
 def plan_hub(

@@ -164,19 +164,26 @@ def _pulled(cp, tol: float, ramp: float):
     return X, ch, on, float(err.max())
 
 
+#: travel over which the pulled orientation fades back to the smooth one [m]
+CONFORM_RAMP = 1.5e-3
+#: how far inside its cone the pulled tool axis stays [rad]
+CONFORM_CONE_MARGIN = 1e-3
+
+
 def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: np.ndarray,
-                       half_angle: float, ramp: float = 1.5e-3, cone_margin: float = 1e-3):
+                       half_angle: float):
     """Where the program's orientation still strays more than ``ctx.program_orientation``
     after the vias (moves too short for a via: a tight corner of a small window, 0.25-0.5 mm
     moves over which the smooth executed orientation turns unevenly), the executed orientation
     is pulled onto the program's (each move's slerp, as a controller runs it) there, fading
-    back to the smooth one over ``ramp`` of travel either side. The targets keep their poses
+    back to the smooth one over ``CONFORM_RAMP`` of travel either side. The targets keep their poses
     (the program is unchanged); the joints are re-tracked and the change is kept only if they
     stay reachable, without jumps and at least as clear of the hub as the smooth cut was (or
-    the clearance bound), and only if the tool axis stays ``cone_margin`` inside its cone
+    the clearance bound), and only if the tool axis stays ``CONFORM_CONE_MARGIN`` inside its cone
     (``cone_axis`` per dense sample, tip -> spindle) or no farther out than the smooth cut's:
     near a tight corner the chord of a slerp can cut across the turning cone. Returns
     (CutPath, DensePath, distances), changed or not."""
+    ramp, cone_margin = CONFORM_RAMP, CONFORM_CONE_MARGIN
     pulled = _pulled(cp, ctx.program_orientation, ramp)
     if pulled is None:
         return cp, cut, dist

@@ -113,7 +113,7 @@ def window_ladder(edge, params, plan_one) -> list:
     """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
     box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
     record -> [(box, WindowTargets, result)] in the order planned."""
-    from drakedeburr.plan.planner import _tool_path
+    from drakedeburr.plan.tool_paths import tool_path
     from drakedeburr.plan.window_targets import WindowTargets
 
     out = []
@@ -122,7 +122,7 @@ def window_ladder(edge, params, plan_one) -> list:
         if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
             continue  # not milder than the recipe's own box
         p = replace(params, bounds_large=box, bounds_small=box)
-        wt = WindowTargets.from_tool_path(_tool_path(edge, p))
+        wt = WindowTargets.from_tool_path(tool_path(edge, p))
         res = plan_one(wt)
         out.append((box, wt, res))
         if not res.failures:
