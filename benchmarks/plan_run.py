@@ -23,9 +23,9 @@ STAGES = [
     ("targets (CL + orientation)", "drakedeburr.plan.planner", "window_targets_for_hub"),
     ("hub placement", "drakedeburr.plan.placement", "place_hub"),
     ("IK at CL targets", "drakedeburr.plan.window", "solve_window_ik"),
-    ("executed cut + clearance + program", "drakedeburr.plan.cut", "execute_cut"),
+    ("executed cut + clearance + program", "drakedeburr.plan.window", "execute_cut"),
     ("fillet repair", "drakedeburr.plan.fillets", "repair_fillets"),
-    ("approach/retract + timing", "drakedeburr.plan.finish", "finish_window"),
+    ("approach/retract + timing", "drakedeburr.plan.window", "finish_window"),
     ("transitions", "drakedeburr.plan.planner", "joint_stretch"),
 ]
 

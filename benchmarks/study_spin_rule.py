@@ -52,16 +52,16 @@ def study_hub(hub: str, scenario: str) -> list[dict]:
     records: list[dict] = []
     original = W.plan_window
 
-    def both(ctx, wt):
+    def both(ctx, wt, mode=W.RunMode.FULL):
         q_from = W.window_reference(ctx, wt)
-        if ctx.options.report_only:
-            return W._plan_window_once(ctx, wt, q_from)
+        if mode is W.RunMode.REPORT_ONLY:
+            return W._plan_window_once(ctx, wt, q_from, mode)
         plans, rec = {}, {}
         for rule in RULES:
             c = replace(ctx, options=replace(ctx.options,
                                              ik=replace(ctx.options.ik, seed_spin=rule)))
             t0 = time.process_time()
-            plans[rule] = W._plan_window_once(c, wt, q_from)
+            plans[rule] = W._plan_window_once(c, wt, q_from, mode)
             rec[rule] = _summary(plans[rule], time.process_time() - t0)
         records.append(dict(window=wt.window_index, results=rec,
                             retry_in_band=ctx.options.retry_in_band))

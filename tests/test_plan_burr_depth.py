@@ -140,7 +140,7 @@ def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readi
               retract_H=np.tile([0, 0, 1.0], (m, 1)), depth_of_cut=DEPTH, closed=True)
     planned = []
 
-    def fake_at(ctx, wt_, q_from, offset):
+    def fake_at(ctx, wt_, q_from, offset, mode):
         planned.append(offset.copy())
         st = SimpleNamespace(kind="cut", timed=SimpleNamespace(q=np.zeros((4, 6))))
         return WindowPlan(window=3, status=WindowStatus.OK, stretches=[st],
@@ -152,7 +152,7 @@ def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readi
         worst = next(calls)
         return offset + (np.array([0.0, 0.0, 1e-4]) if worst > 0 else 0.0), worst
 
-    monkeypatch.setattr(mut, "_plan_window_at", fake_at)
+    monkeypatch.setattr(mut, "plan_window_pass", fake_at)
     monkeypatch.setattr(burr_depth, "relieved_offsets", fake_relief)
     monkeypatch.setattr(burr_depth, "hub_model_of", lambda d: None)
     monkeypatch.setattr(mut, "replace", lambda obj, **kw: SimpleNamespace(**kw))
@@ -160,7 +160,7 @@ def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readi
         options=PlanOptions(workers=1), cell=SimpleNamespace(hub_sdf=Path("/hub/hub.sdf")),
         kin=SimpleNamespace(X_HT_from_q=lambda q: np.tile(np.eye(4), (len(q), 1, 1))),
         config=SimpleNamespace(tolerances=SimpleNamespace(edge_deviation=0.17e-3)))
-    out = mut._plan_window_once(ctx, wt, np.zeros(6))
+    out = mut._plan_window_once(ctx, wt, np.zeros(6), mut.RunMode.FULL)
     assert len(planned) == min(len(readings), burr_depth.ROUNDS + 1)
     relief = getattr(out.stats, "chamfer_relief", None)
     assert (relief is not None) == moved

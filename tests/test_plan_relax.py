@@ -14,9 +14,9 @@ import pytest
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.plan import planner
-from drakedeburr.plan.options import PlanContext, PlanOptions
+from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
 from drakedeburr.plan.relax import TILT_STEPS, relax_windows, window_ladder
-from drakedeburr.plan.results import WindowStatus
+from drakedeburr.plan.results import CutTargets, WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
 
@@ -177,7 +177,7 @@ def test_every_failing_window_climbs_its_own_ladder_and_all_at_once():
 def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch):
     """The first pass abandons window 0 at an unreachable target (with relaxation on): every
     start and both spin rules failed there. No milder box helps: it is planned in full once,
-    for its report (abandoning off, report_only: the first start, every target), before the
+    for its report (RunMode.REPORT_ONLY: the first start, every target), before the
     plan is assembled; the relaxation record says what was tried."""
     from drakedeburr.plan import relax
 
@@ -187,14 +187,13 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
     in_full = SimpleNamespace(status=WindowStatus.DEGRADED, failures=abandoned.failures * 3)
     calls = []
 
-    def fake_plan_all(ctx, windows, workers, progress):
-        calls.append((ctx.options.fail_fast, ctx.options.report_only,
-                      [w.window_index for w in windows]))
+    def fake_plan_pass(ctx, windows, mode, progress):
+        calls.append((mode, [w.window_index for w in windows]))
         return [in_full for _ in windows]
 
     assembled = []
     monkeypatch.setattr(relax, "relax_windows", lambda *a: ({}, {0: [("box", "ik: x")]}))
-    monkeypatch.setattr(planner, "plan_all_windows", fake_plan_all)
+    monkeypatch.setattr(planner, "_plan_pass", fake_plan_pass)
     monkeypatch.setattr(planner, "_assemble_windows",
                         lambda ctx, w, results, p, t: assembled.append(list(results))
                         or _plan(f for r in results for f in r.failures))
@@ -203,26 +202,27 @@ def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch)
                       options=PlanOptions(workers=1))
     hub = SimpleNamespace(windows=[SimpleNamespace(index=0)])
     out = planner._relax(ctx, hub, wts, [abandoned], None, 0.0)
-    assert calls == [(False, True, [0])]
+    assert calls == [(RunMode.REPORT_ONLY, [0])]
     assert assembled == [[in_full]]
     assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"
     assert "both spin rules stopped at a first failure" in out.failures[-1].reason
 
 
 def test_a_report_only_window_is_planned_once(monkeypatch):
-    """report_only: one pass (no second spin rule), from the first start configuration only
+    """RunMode.REPORT_ONLY: one pass (no second spin rule), from the first start configuration only
     (no further seeds, no rewound start, no start tracked back), whatever its failures."""
     from drakedeburr.plan import window as mut
     from drakedeburr.plan.results import WindowPlan
 
     rec = FailureRecord(0, "ik", "x")
     plans = []
-    monkeypatch.setattr(mut, "_plan_window_once", lambda ctx, wt, q: plans.append(
+    monkeypatch.setattr(mut, "_plan_window_once", lambda ctx, wt, q, mode: plans.append(
         WindowPlan(0, WindowStatus.DEGRADED, failures=[rec])) or plans[-1])
     monkeypatch.setattr(mut, "window_reference", lambda ctx, wt: None)
     ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None, config=None,
-                      options=PlanOptions(report_only=True))
-    assert mut.plan_window(ctx, SimpleNamespace(window_index=0)) is plans[0]
+                      options=PlanOptions())
+    assert mut.plan_window(ctx, SimpleNamespace(window_index=0), RunMode.REPORT_ONLY) \
+        is plans[0]
     assert len(plans) == 1
     # the IK from the first of the window's start configurations only
     starts = []
@@ -243,8 +243,9 @@ def test_a_report_only_window_is_planned_once(monkeypatch):
         starts.clear()
         backs.clear()
         ctx = PlanContext(cell=None, kin=SimpleNamespace(), checker=None, free_checker=None,
-                          config=None, options=PlanOptions(report_only=report_only))
-        mut._solve_ik(ctx, wt, np.zeros(6), np.array([0, 0]), np.zeros((2, 3)), 0.0)
+                          config=None, options=PlanOptions())
+        mut._solve_ik(ctx, wt, np.zeros(6), CutTargets(np.array([0, 0]), np.zeros((2, 3)), 0.0),
+                      RunMode.REPORT_ONLY if report_only else RunMode.FULL)
         assert [float(q[0]) for q in starts] == n, report_only
         assert len(backs) == (0 if report_only else 1)
 
@@ -263,7 +264,7 @@ class _Window(SimpleNamespace):
     ("degraded", "degraded-fewer", "second"),  # both in full: the one with fewer records
 ])
 def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first, second, kept):
-    """plan_window with fail_fast: it returns a window plan only where planning in full would
+    """plan_window in RunMode.FAIL_FAST: it returns a window plan only where planning in full would
     return the same one; otherwise ABANDONED (relaxed, or planned in full by _relax)."""
     from drakedeburr.plan import window as mut
     from drakedeburr.plan.results import WindowPlan
@@ -277,11 +278,11 @@ def test_a_fail_fast_window_keeps_only_what_a_full_pass_would(monkeypatch, first
     made = iter([make[first](), make[second]()])
     plans = []
     monkeypatch.setattr(mut, "_plan_window_once",
-                        lambda ctx, wt, q: plans.append(next(made)) or plans[-1])
+                        lambda ctx, wt, q, mode: plans.append(next(made)) or plans[-1])
     monkeypatch.setattr(mut, "window_reference", lambda ctx, wt: None)
     ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None, config=None,
-                      options=PlanOptions(fail_fast=True))
-    out = mut.plan_window(ctx, SimpleNamespace(window_index=0))
+                      options=PlanOptions())
+    out = mut.plan_window(ctx, SimpleNamespace(window_index=0), RunMode.FAIL_FAST)
     assert len(plans) == 2
     if kept == "second":
         assert out is plans[1]
@@ -309,7 +310,7 @@ def test_a_clean_window_is_planned_with_the_frame_rule_and_again_only_when_slow(
             speed_in_band_fraction=0.8, cut_seconds=cut_second))])
     out_plans, rules = [], []
 
-    def once(ctx, wt, q):
+    def once(ctx, wt, q, mode):
         rules.append(ctx.options.ik.seed_spin)
         out_plans.append(next(made))
         return out_plans[-1]
@@ -328,23 +329,23 @@ def test_a_clean_window_is_planned_with_the_frame_rule_and_again_only_when_slow(
 @pytest.mark.parametrize("least_mm", [1.9, 2.1])
 def test_a_fail_fast_cut_under_the_clearance_is_abandoned_before_its_program(
         monkeypatch, fail_fast, least_mm):
-    """execute_cut: a tracked cut that stays under the clearance (after its axis is pinned)
-    fails this recipe whatever its program and timing would be; fail-fast (the first pass and
-    the relaxed variants) abandons it there, with the tracking's records; a full pass, or a
-    clear cut, goes on to the program."""
-    from drakedeburr.plan import cut as mut
-    from drakedeburr.plan import program_fit
+    """execute_cut (the window pass's steps 3-4): a tracked cut that stays under the clearance
+    (after its axis is pinned) fails this recipe whatever its program and timing would be;
+    fail-fast (the first pass and the relaxed variants) abandons it there, with the tracking's
+    records; a full pass, or a clear cut, goes on to the program."""
+    from drakedeburr.plan import cut
+    from drakedeburr.plan import window as mut
+    from drakedeburr.plan.results import IkStep
 
     n = 50
     dist = np.full(n, least_mm * 1e-3 + 0.2e-3)
     dist[20:24] = least_mm * 1e-3
     rec = FailureRecord(0, "dense", "clearance")
 
-    def track(ctx, wt, wik, good, order, X_ik, step, records):
-        if dist.min() < ctx.cut_clearance:
-            records.append(rec)
-        return mut._Try(cp=None, cut=SimpleNamespace(ok=np.ones(n, bool)), dist=dist,
-                        spin_mode="ik")
+    def track(ctx, wt, ik, step):
+        records = (rec,) if dist.min() < ctx.cut_clearance else ()
+        return cut._Try(cp=None, cut=SimpleNamespace(ok=np.ones(n, bool)), dist=dist,
+                        spin_mode="ik", records=records)
 
     class Fitted(Exception):
         pass
@@ -352,17 +353,18 @@ def test_a_fail_fast_cut_under_the_clearance_is_abandoned_before_its_program(
     def fit(*args, **kwargs):
         raise Fitted
 
-    monkeypatch.setattr(mut, "_track_cut", track)
-    monkeypatch.setattr(program_fit, "fit_program", fit)
+    monkeypatch.setattr(mut, "track_cut", track)
+    monkeypatch.setattr(mut, "fit_program", fit)
     ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
                       config=SimpleNamespace(tolerances=SimpleNamespace(min_clearance=2e-3)),
-                      options=PlanOptions(fail_fast=fail_fast))
-    wik = SimpleNamespace(X_HT=np.zeros((3, 4, 4)))
-    call = functools.partial(mut.execute_cut, ctx, SimpleNamespace(window_index=0), wik,
-                             np.arange(3), np.arange(3), 0.0, [])
+                      options=PlanOptions())
+    ik = IkStep(status=WindowStatus.OK, wik=SimpleNamespace(X_HT=np.zeros((3, 4, 4))),
+                good=np.arange(3), order=np.arange(3), failures=(), seconds=0.0, starts=1)
+    call = functools.partial(mut.execute_cut, ctx, SimpleNamespace(window_index=0), ik,
+                             RunMode.FAIL_FAST if fail_fast else RunMode.FULL)
     if fail_fast and least_mm < 2.0:
         out = call()
-        assert out.status is WindowStatus.ABANDONED and out.failures == [rec]
+        assert out.status is WindowStatus.ABANDONED and out.failures == (rec,)
     else:
         with pytest.raises(Fitted):
             call()
@@ -465,3 +467,19 @@ def test_moved_tool_points_are_a_recipe_deviation():
     relief["excess_left_mm"] = 0.02
     rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
     assert "still 0.020 mm too deep" in rec["reason"]
+
+
+def test_the_relaxation_and_home_import_no_planner_module():
+    """relax makes its variants' tool paths by drakedeburr.plan.tool_paths.tool_path, the
+    function the planner's own targets use, not by a planner private: no import circle
+    planner -> relax/home -> planner (an import inside a function counts)."""
+    import ast
+    import inspect
+
+    from drakedeburr.plan import home, relax, tool_paths
+
+    for mod in (relax, home, tool_paths):
+        tree = ast.parse(inspect.getsource(mod))
+        mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+        assert "drakedeburr.plan.planner" not in mods, mod.__name__
+    assert planner.tool_path is tool_paths.tool_path

@@ -13,7 +13,6 @@ axis would leave its cone between the samples, the cut is sampled again at half 
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -27,12 +26,13 @@ from drakedeburr.plan.program_reading import (
     moves_in_order,
     program_orientation_error,
 )
-from drakedeburr.plan.results import WindowPlan, WindowStatus
+from drakedeburr.plan.results import IkStep
 from drakedeburr.plan.spin import optimize_spin, spin_frames
 from drakedeburr.plan.timing import joint_spline
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["execute_cut", "between_samples_error", "clearance_records", "motion_records"]
+__all__ = ["track_cut", "cone_of_cut", "between_samples_error", "clearance_records",
+           "motion_records"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,7 @@ class _Try:
     cut: DensePath
     dist: np.ndarray
     spin_mode: str
+    records: tuple[FailureRecord, ...] = ()  # the tracking's: joint jumps, clearance
 
 
 def clearance_records(window: int, checker, cut, dist: np.ndarray,
@@ -131,45 +132,6 @@ def between_samples_error(kin, cut, cp, cone: tuple | None = None
     return err, float(np.max(angle_between(c, -X[:, :3, 2])) - half), dev
 
 
-def execute_cut(ctx: PlanContext, wt, wik, good: np.ndarray, order: np.ndarray, t_ik: float,
-                failures: list[FailureRecord]) -> WindowPlan:
-    """The window's executed cut, program, approach, retract and timing (module docstring),
-    sampled every ``options.dense_step`` of travel and again at half that where the program has
-    moves the sampling cannot resolve."""
-    from drakedeburr.plan.program_fit import fit_program
-
-    step = ctx.options.dense_step
-    t1 = time.perf_counter()
-    X_ik = wik.X_HT[good]
-    while True:
-        records: list[FailureRecord] = []
-        tr = _track_cut(ctx, wt, wik, good, order, X_ik, step, records)
-        if not np.all(tr.cut.ok):
-            return WindowPlan.skipped(wt.window_index, WindowStatus.MOTION_FAILED,
-                                      failures + records)
-        if ctx.options.fail_fast and np.any(tr.dist < ctx.cut_clearance):
-            # the window fails this recipe (the pinned axis and tightened blends did not
-            # clear the hub): relaxed next (PlanOptions.fail_fast), its program and timing
-            # not made (on an unseen hub they were ~40 s a window and spin rule)
-            log.debug("window %d: the executed cut stays under the clearance; abandoned for "
-                      "a milder recipe", wt.window_index)
-            return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED,
-                                      failures + records)
-        out = fit_program(ctx, wt, tr, order, records, refine=step == ctx.options.dense_step)
-        if out == "finer":
-            step *= 0.5
-            log.debug("window %d: between its samples the cut would stray from the program or "
-                      "its cone; sampling it every %.3f mm", wt.window_index,
-                     step * 1e3)
-            continue
-        if isinstance(out, WindowStatus):
-            return WindowPlan.skipped(wt.window_index, out, failures + records)
-        from drakedeburr.plan.finish import finish_window
-
-        return finish_window(ctx, wt, wik, good, order, X_ik, out, failures + records, t_ik,
-                             time.perf_counter() - t1)
-
-
 def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: int):
     """The cut path with its spin: searched (:func:`optimize_spin`) or the IK's, smoothed.
     Returns (CutPath, spin mode used)."""
@@ -194,11 +156,14 @@ def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: 
     return replace(cp, X_HT=X_sp, X_target=X_tg), spin_mode
 
 
-def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
-               records: list) -> _Try:
-    """Track the executed cut at sampling ``step``; where samples come too close to the hub,
-    pin the axis and tighten the blends around them and try again (up to 6 times)."""
+def track_cut(ctx: PlanContext, wt, ik: IkStep, step: float) -> _Try:
+    """Step 3 of a window pass (:func:`drakedeburr.plan.window.execute_cut`): track the
+    executed cut at sampling ``step``; where samples come too close to the hub, pin the axis
+    and tighten the blends around them and try again (up to 6 times). Its records (joint
+    jumps, clearance) are in ``_Try.records``."""
     opt, kin, w = ctx.options, ctx.kin, wt.window_index
+    wik, good, order, X_ik = ik.wik, ik.good, ik.order, ik.X_ik
+    records: list[FailureRecord] = []
     pin = None
     spin_mode = "search"
     dev = np.full(len(order), opt.blend_deviation)
@@ -240,7 +205,7 @@ def _track_cut(ctx: PlanContext, wt, wik, good, order, X_ik, step: float,
         if dist is None:  # left the loop before measuring this cut (joint jumps)
             dist = ctx.checker.min_distances_along(cut.q, ctx.min_clearance + 1e-3)
         records += clearance_records(w, ctx.checker, cut, dist, ctx.cut_clearance)
-    return _Try(cp=cp, cut=cut, dist=dist, spin_mode=spin_mode)
+    return _Try(cp=cp, cut=cut, dist=dist, spin_mode=spin_mode, records=tuple(records))
 
 
 def _pin_and_tighten(cp, low: np.ndarray, step: float, pin, dev: np.ndarray, n: int):

@@ -11,7 +11,15 @@ from drakedeburr.plan.cut_path import least_axis_curvature
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import rot_angle
-from drakedeburr.plan.results import ExecutedCut, Stretch, WindowPlan, WindowStats, WindowStatus
+from drakedeburr.plan.results import (
+    CutStep,
+    ExecutedCut,
+    IkStep,
+    Stretch,
+    WindowPlan,
+    WindowStats,
+    WindowStatus,
+)
 from drakedeburr.plan.stretch import make_target, time_cartesian
 from drakedeburr.plan.transitions import approach_pose
 from drakedeburr.plan.types import FailureRecord
@@ -104,8 +112,9 @@ def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray,
     return out
 
 
-def _stats(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut, timed_cut,
+def _stats(ctx: PlanContext, wt, ik: IkStep, ex: ExecutedCut, timed_cut,
            fit_dev) -> WindowStats:
+    wik, good, order, X_ik = ik.wik, ik.good, ik.order, ik.X_ik
     q_deg = np.degrees(ex.cut.q)
     v_g = ctx.process.grinding_speed
     v_cut = timed_cut.v_tcp[1:-1]
@@ -154,10 +163,12 @@ def _band_bound(ctx: PlanContext, ex: ExecutedCut, timed_cut) -> float | None:
     return float(np.mean(ok)) if len(v) else 0.0
 
 
-def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
-                  failures: list, t_ik: float, t_dense: float) -> WindowPlan:
-    """Approach/retract, timing and statistics of a window whose cut is tracked."""
-    w = wt.window_index
+def finish_window(ctx: PlanContext, wt, ik: IkStep, cut: CutStep) -> WindowPlan:
+    """Step 5 of a window pass (:func:`drakedeburr.plan.window.plan_window_pass`):
+    approach/retract, timing and statistics of a window whose cut ``cut`` and program are
+    made from its IK ``ik``. Its failure records: the IK's, the cut's, then its own."""
+    w, ex, wik, order = wt.window_index, cut.executed, ik.wik, ik.order
+    failures = [*ik.failures, *cut.failures]
     paths = _approach_and_retract(ctx, wt, ex, failures)
     if paths is None:
         return WindowPlan.skipped(w, WindowStatus.APPROACH_FAILED, failures)
@@ -171,7 +182,7 @@ def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
     timed_cut, fit_dev = time_cartesian(ctx, ex.cut.q, ex.cut.s, ex.cut.X_HT,
                                         ctx.process.grinding_speed, interpolate=True)
     timed_ret, _ = time_cartesian(ctx, ret.q, ret.s, ret.X_HT, v_app)
-    seconds = {"window": w, "ik_seconds": t_ik, "dense_seconds": t_dense,
+    seconds = {"window": w, "ik_seconds": ik.seconds, "dense_seconds": cut.seconds,
                "timing_seconds": time.perf_counter() - t2,
                "ik_seconds_per_point": wik.stats.get("seconds_per_point")}
     i0 = int(order[0])
@@ -185,7 +196,7 @@ def finish_window(ctx: PlanContext, wt, wik, good, order, X_ik, ex: ExecutedCut,
         Stretch("retract", w, timed_ret, [make_target(ctx.kin, ret.q[-1], w, "retract", -1,
                                                       v_app, "linear")]),
     ]
-    stats = _stats(ctx, wt, wik, good, order, X_ik, ex, timed_cut, fit_dev)
+    stats = _stats(ctx, wt, ik, ex, timed_cut, fit_dev)
     status = WindowStatus.DEGRADED if failures else WindowStatus.OK
     return WindowPlan(window=w, status=status, stretches=stretches, stats=stats,
                       q_start=q_app[0], failures=failures, seconds=seconds)

@@ -8,6 +8,7 @@ acceptance bounds (clearance, wrist margin, program orientation) from its tolera
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass, field
 
@@ -18,7 +19,27 @@ from drakedeburr.plan.fillets import FilletOptions
 from drakedeburr.plan.ik import IkOptions
 from drakedeburr.plan.timing import TimingLimits
 
-__all__ = ["PlanOptions", "PlanContext"]
+__all__ = ["PlanOptions", "PlanContext", "RunMode"]
+
+
+class RunMode(enum.Enum):
+    """How a window pass is run: an argument of :func:`drakedeburr.plan.window.plan_window`
+    (the hub policy's passes choose it, :mod:`drakedeburr.plan.planner`), not a planner
+    setting; never recorded in the plan.
+
+    ``FULL``: every target, every start configuration, both spin rules. ``FAIL_FAST``: stop a
+    window's IK pass at its first failed target, and a window whose executed cut stays under
+    the clearance after its axis is pinned (the window fails under the recipe whatever the
+    rest does: status ``ABANDONED``), instead of planning the rest of it; the other start
+    seeds and spin rule are still tried, each stopping at its first failure (the first pass of
+    a hub with relaxation on, and the relaxed variants). ``REPORT_ONLY``: plan a window once,
+    for its report: the first start configuration and the IK's own spin rule, every target
+    tried (a window the fail-fast pass abandoned and no relaxation cut: it fails whichever
+    start fails least, so the search for that start is not made)."""
+
+    FULL = "full"
+    FAIL_FAST = "fail_fast"
+    REPORT_ONLY = "report_only"
 
 
 @dataclass(frozen=True)
@@ -80,19 +101,6 @@ class PlanOptions:
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
             the cores this process may use, 1: one after the other here). The plan is the
             same whatever the number (it is not recorded in the plan).
-        fail_fast: stop a window's IK pass at its first failed target, and a window whose
-            executed cut stays under the clearance after its axis is pinned (the window fails
-            under the recipe whatever the rest does: status ``ABANDONED``), instead of planning
-            the rest of it; the other start seeds and spin rule are still tried, each stopping
-            at its first failure. Set by ``plan_hub`` for its first pass when ``relax`` is on:
-            a window that fails is relaxed, and planned once for its report
-            (``report_only``) if no relaxation is kept.
-            Not recorded in the plan.
-        report_only: plan a window once, for its report: the first start configuration and
-            the IK's own spin rule, every target tried. Set by ``plan_hub`` for a window the
-            fail-fast pass abandoned (every start and both rules failed) and no relaxation cut:
-            the window fails whichever start fails least, so the search for that start is not
-            made. Not recorded in the plan.
     """
 
     ik: IkOptions = field(default_factory=IkOptions)
@@ -120,8 +128,6 @@ class PlanOptions:
     placement: bool = True
     relax: bool = True
     workers: int | None = None
-    fail_fast: bool = False
-    report_only: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.acceleration_scale) and self.acceleration_scale > 0):

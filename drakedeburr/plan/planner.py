@@ -23,6 +23,7 @@ the flange. Failures are :class:`drakedeburr.plan.types.FailureRecord` in ``Plan
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from collections.abc import Callable, Sequence
@@ -35,7 +36,7 @@ from drakedeburr.config import Config, ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
-from drakedeburr.plan.options import PlanContext, PlanOptions
+from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
 from drakedeburr.plan.parallel import (
     map_calls,
     map_windows,
@@ -46,22 +47,17 @@ from drakedeburr.plan.parallel import (
 from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
+from drakedeburr.plan.tool_paths import CL_COUNT_BUDGET, CL_DELTA, tool_path
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub"]
+__all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub", "CL_DELTA",
+           "CL_COUNT_BUDGET"]
 
 log = logging.getLogger(__name__)
 
 Progress = Callable[[int, int, str], None] | None
 
-# CL targets of the real chain: the path stage's ``adaptive`` segmentation at 0.03 mm chord
-# height (the executed linear moves stay within it of the edge curve), with the FEWEST points
-# that meet it and L_max (count budget 1): long chords on straight edges, short ones in fillets.
-# The default budget (the proposed method's count) spreads ~2.3x as many points evenly; the
-# robot gains nothing from them (every move is linear and blended), and each costs an IK solve.
-CL_DELTA = 0.03e-3
-CL_COUNT_BUDGET = 1
 
 
 def plan_windows(
@@ -213,7 +209,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
         options=jsonable({k: v for k, v in asdict(ctx.options).items()
-                          if k not in ("workers", "fail_fast", "report_only")}),
+                          if k != "workers"}),
         **({"tool": ctx.cell.tool, "tool_title": tool_variant(ctx.cell.tool).title}
            if ctx.cell.tool not in (None, DEFAULT_TOOL) else {}),
     )
@@ -235,10 +231,10 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
     plans (windows are planned independently); the hub's plan is assembled from them.
 
     ``results`` (the first pass, one per window) may hold windows abandoned at their first
-    failure (``WindowStatus.ABANDONED``, ``PlanOptions.fail_fast``): an IK target every start
+    failure (``WindowStatus.ABANDONED``, ``RunMode.FAIL_FAST``): an IK target every start
     configuration failed, or an executed cut under the clearance, with both spin rules. Those
     not replaced by a kept relaxation are planned in full here, once, for the report
-    (``PlanOptions.report_only``: the first start, the IK's own rule; its failure records say
+    (``RunMode.REPORT_ONLY``: the first start, the IK's own rule; its failure records say
     where the window fails and by how much)."""
     from drakedeburr.plan import relax
 
@@ -249,21 +245,19 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
             first.setdefault(f.window, str(f))
     failing = [wt.window_index for wt in wts if wt.window_index in first
                and wt.window_index in edges]
-    full = _opts(ctx, fail_fast=False)
     results = list(results)
 
     def complete(ks) -> None:  # abandoned windows planned in full, once, for their report
         ks = [k for k in ks if results[k].status is WindowStatus.ABANDONED]
         if ks:
-            done = plan_all_windows(_opts(full, report_only=True), [wts[k] for k in ks],
-                                    ctx.options.workers, None)
+            done = _plan_pass(ctx, [wts[k] for k in ks], RunMode.REPORT_ONLY, None)
             for k, r in zip(ks, done, strict=True):
                 results[k] = r
 
     params = ctx.config.process
     accepted, tried = ({}, {}) if not failing else relax.relax_windows(
         [edges[w] for w in failing], params, first,
-        lambda es: map_windows(_opts(ctx, fail_fast=True), relax.plan_ladder,
+        lambda es: map_windows(ctx, functools.partial(relax.plan_ladder, mode=RunMode.FAIL_FAST),
                                [(e, params) for e in es], ctx.options.workers,
                                name=lambda item: f"window {item[0].index}'s milder recipes"))
     abandoned = {wt.window_index for wt, r in zip(wts, results, strict=True)
@@ -283,13 +277,13 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
                 for wt in wts]
         res2 = [accepted[wt.window_index][1] if wt.window_index in accepted else r
                 for wt, r in zip(wts, results, strict=True)]
-        relaxed = _assemble_windows(full, wts2, res2, progress, t_start)
+        relaxed = _assemble_windows(ctx, wts2, res2, progress, t_start)
         # the default's windows' records (an abandoned window's: its first ones) bound its
         # count from below: fewer than that is fewer than the default; else assemble it
         kept = len(relaxed.failures) < sum(len(r.failures) for r in results)
         if not kept:
             complete(range(len(wts)))
-            plan = _assemble_windows(full, wts, results, progress, t_start)
+            plan = _assemble_windows(ctx, wts, results, progress, t_start)
             kept = len(relaxed.failures) < len(plan.failures)  # both without in-vain records
         if kept:
             deviations = [accepted[w][2] for w in failing if w in accepted]
@@ -299,7 +293,7 @@ def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: f
                         "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
             plan = relaxed
     if plan is None:
-        plan = _assemble_windows(full, wts, results, progress, t_start)
+        plan = _assemble_windows(ctx, wts, results, progress, t_start)
     if in_vain:  # said with the failures of whichever plan is kept
         plan = replace(plan, failures=(*plan.failures, *in_vain))
     return plan
@@ -324,9 +318,14 @@ def _relief_record(stats: dict) -> dict:
     ).record()
 
 
-def _opts(ctx: PlanContext, **changes) -> PlanContext:
-    """``ctx`` with its planner options changed."""
-    return replace(ctx, options=replace(ctx.options, **changes))
+def _plan_pass(ctx: PlanContext, wts: Sequence[WindowTargets], mode: RunMode,
+               progress: Progress) -> list:
+    """Every window of ``wts`` planned in run mode ``mode`` (in their order, on the pool's
+    workers: :func:`drakedeburr.plan.parallel.map_windows`)."""
+    from drakedeburr.plan.window import plan_window
+
+    return map_windows(ctx, functools.partial(plan_window, mode=mode), wts, ctx.options.workers,
+                       progress, name=lambda wt: f"window {wt.window_index}")
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",
@@ -377,7 +376,7 @@ def _window_targets(edge, source: str, params: ProcessParameters):
     (None, why) when its ToolPath cannot give targets."""
     if source in ("toolpath", "auto"):
         try:
-            return WindowTargets.from_tool_path(_tool_path(edge, params)), None
+            return WindowTargets.from_tool_path(tool_path(edge, params)), None
         except InputError as exc:
             return None, str(exc)
         except ImportError as exc:
@@ -386,22 +385,6 @@ def _window_targets(edge, source: str, params: ProcessParameters):
             log.warning("window %d: path/orientation stage unavailable (%s); using the "
                         "ground-truth edge with a fixed tilt instead", edge.index, exc)
     return WindowTargets.from_window_edge(edge, params=params), None
-
-
-def _tool_path(edge, params: ProcessParameters):
-    """CL points and tool axes of one window by the path and orientation stages."""
-    from scipy.spatial import cKDTree
-
-    from drakedeburr.orientation.orient import orient_window
-    from drakedeburr.path import fit_edge_curve, plan_cl
-    from drakedeburr.path.cl_planning import PlannerParams
-
-    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
-    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
-                                                            count_budget=CL_COUNT_BUDGET),
-                 window_index=edge.index, kind=edge.kind)
-    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
-    return orient_window(cl, edge.n_wall_H[nearest], params=params)
 
 
 def plan_hub(
@@ -527,8 +510,8 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     # _relax plans it in full if no relaxation is kept
     if only is not None:
         wts = [wt for wt in wts if wt.window_index in only]
-    results = plan_all_windows(_opts(ctx, fail_fast=options.relax), wts,
-                               options.workers, progress)
+    results = _plan_pass(ctx, wts, RunMode.FAIL_FAST if options.relax else RunMode.FULL,
+                         progress)
     if options.relax and any(r.failures for r in results):
         plan = _relax(ctx, hub_model, wts, results, progress, t_windows)
     else:

@@ -22,7 +22,7 @@ from drakedeburr.plan.program_reading import (
     rot_angle,
     slerp_pairs,
 )
-from drakedeburr.plan.results import ExecutedCut, WindowStatus
+from drakedeburr.plan.results import ExecutedCut, ProgramFit, WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["fit_program", "via_samples", "add_vias", "conform_to_program"]
@@ -30,11 +30,13 @@ __all__ = ["fit_program", "via_samples", "add_vias", "conform_to_program"]
 log = logging.getLogger(__name__)
 
 
-def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refine: bool):
-    """The program of the tracked cut ``tr`` (module docstring): an :class:`ExecutedCut`,
-    "finer" (``refine`` and the trajectory would stray from the program between the samples,
-    :func:`drakedeburr.plan.cut.between_samples_error`), or
+def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, refine: bool) -> ProgramFit:
+    """Step 4 of a window pass: the program of the tracked cut ``tr`` (module docstring),
+    :class:`ProgramFit` with its :class:`ExecutedCut`, with ``finer`` (``refine`` and the
+    trajectory would stray from the program between the samples,
+    :func:`drakedeburr.plan.cut.between_samples_error`), or with status
     ``WindowStatus.PROGRAM_FAILED`` (a program target is unreachable; recorded)."""
+    records: list[FailureRecord] = []
     w, kin, tol = wt.window_index, ctx.kin, ctx.config.tolerances
     cp, cut, dist = tr.cp, tr.cut, tr.dist
     fillets: list = []
@@ -60,13 +62,13 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
                                      reason="program target unreachable with the smoothed "
                                             "orientation"))
     if bad.size:
-        return WindowStatus.PROGRAM_FAILED
+        return ProgramFit(status=WindowStatus.PROGRAM_FAILED, failures=tuple(records))
     if refine:
         err, out_of_cone, dev = between_samples_error(
             kin, cut, cp, (cp.X_target[~via, :3, 3], wt.cone_retract_H[order],
                            wt.cone_half_angle))
         if err > 0.8 * tol.orientation_match or out_of_cone > 0.0 or dev > ctx.program_position:
-            return "finer"
+            return ProgramFit(status=WindowStatus.OK, finer=True)
     stray = program_orientation_error(cp.X_HT, cp.X_target)[0]
     if stray.max() > tol.orientation_match:
         k = int(np.argmax(stray))
@@ -76,8 +78,8 @@ def fit_program(ctx: PlanContext, wt, tr, order: np.ndarray, records: list, refi
             tried=(f"{int(via.sum())} via targets", "orientation pulled onto the program"),
             reason=f"program orientation strays {1e3 * stray[k]:.1f} mrad from the executed cut "
                    f"(via targets: {int(via.sum())})"))
-    return ExecutedCut(cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via,
-                       fillets=tuple(fillets))
+    return ProgramFit(status=WindowStatus.OK, failures=tuple(records), executed=ExecutedCut(
+        cp=cp, cut=cut, dist=dist, q_targets=q_targets, via=via, fillets=tuple(fillets)))
 
 
 def via_samples(X: np.ndarray, X_targets: np.ndarray, target_index: np.ndarray,
@@ -162,19 +164,26 @@ def _pulled(cp, tol: float, ramp: float):
     return X, ch, on, float(err.max())
 
 
+#: travel over which the pulled orientation fades back to the smooth one [m]
+CONFORM_RAMP = 1.5e-3
+#: how far inside its cone the pulled tool axis stays [rad]
+CONFORM_CONE_MARGIN = 1e-3
+
+
 def conform_to_program(ctx: PlanContext, cp, cut, dist, window: int, cone_axis: np.ndarray,
-                       half_angle: float, ramp: float = 1.5e-3, cone_margin: float = 1e-3):
+                       half_angle: float):
     """Where the program's orientation still strays more than ``ctx.program_orientation``
     after the vias (moves too short for a via: a tight corner of a small window, 0.25-0.5 mm
     moves over which the smooth executed orientation turns unevenly), the executed orientation
     is pulled onto the program's (each move's slerp, as a controller runs it) there, fading
-    back to the smooth one over ``ramp`` of travel either side. The targets keep their poses
+    back to the smooth one over ``CONFORM_RAMP`` of travel either side. The targets keep their poses
     (the program is unchanged); the joints are re-tracked and the change is kept only if they
     stay reachable, without jumps and at least as clear of the hub as the smooth cut was (or
-    the clearance bound), and only if the tool axis stays ``cone_margin`` inside its cone
+    the clearance bound), and only if the tool axis stays ``CONFORM_CONE_MARGIN`` inside its cone
     (``cone_axis`` per dense sample, tip -> spindle) or no farther out than the smooth cut's:
     near a tight corner the chord of a slerp can cut across the turning cone. Returns
     (CutPath, DensePath, distances), changed or not."""
+    ramp, cone_margin = CONFORM_RAMP, CONFORM_CONE_MARGIN
     pulled = _pulled(cp, ctx.program_orientation, ramp)
     if pulled is None:
         return cp, cut, dist

@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
+from drakedeburr.plan.options import RunMode
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
@@ -112,7 +113,7 @@ def window_ladder(edge, params, plan_one) -> list:
     """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
     box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
     record -> [(box, WindowTargets, result)] in the order planned."""
-    from drakedeburr.plan.planner import _tool_path
+    from drakedeburr.plan.tool_paths import tool_path
     from drakedeburr.plan.window_targets import WindowTargets
 
     out = []
@@ -121,7 +122,7 @@ def window_ladder(edge, params, plan_one) -> list:
         if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
             continue  # not milder than the recipe's own box
         p = replace(params, bounds_large=box, bounds_small=box)
-        wt = WindowTargets.from_tool_path(_tool_path(edge, p))
+        wt = WindowTargets.from_tool_path(tool_path(edge, p))
         res = plan_one(wt)
         out.append((box, wt, res))
         if not res.failures:
@@ -129,14 +130,14 @@ def window_ladder(edge, params, plan_one) -> list:
     return out
 
 
-def plan_ladder(ctx, item) -> list:
+def plan_ladder(ctx, item, mode: RunMode = RunMode.FULL) -> list:
     """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters), each variant by
-    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` (a task for
+    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode`` (a task for
     :func:`drakedeburr.plan.parallel.map_windows`)."""
     from drakedeburr.plan.window import plan_window
 
     edge, params = item
-    return window_ladder(edge, params, functools.partial(plan_window, ctx))
+    return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode))
 
 
 def long_reach():

@@ -17,7 +17,8 @@ import numpy as np
 from drakedeburr.plan.timing import TimedPath
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["WindowStatus", "Stretch", "ExecutedCut", "WindowStats", "WindowPlan", "PlanStats"]
+__all__ = ["WindowStatus", "Stretch", "ExecutedCut", "WindowStats", "WindowPlan", "PlanStats",
+           "CutTargets", "IkStep", "ProgramFit", "CutStep"]
 
 
 class WindowStatus(enum.Enum):
@@ -30,7 +31,7 @@ class WindowStatus(enum.Enum):
     PROGRAM_FAILED = "program_failed"  # a program target unreachable: skipped
     APPROACH_FAILED = "approach_failed"  # approach or retract unreachable: skipped
     # failed under the recipe at an IK target or with its executed cut under the clearance,
-    # the rest not planned (PlanOptions.fail_fast: relaxation comes next, and the window is
+    # the rest not planned (RunMode.FAIL_FAST: relaxation comes next, and the window is
     # planned in full if none is kept)
     ABANDONED = "abandoned"
 
@@ -70,6 +71,72 @@ class ExecutedCut:
     q_targets: np.ndarray
     via: np.ndarray
     fillets: tuple = ()
+
+
+@dataclass(frozen=True, eq=False)
+class CutTargets:
+    """Step 1 of a window pass (:func:`drakedeburr.plan.window.plan_window_pass`): the IK's
+    targets. ``loop``: (L,) CL index of each target in solving order (a closed window ends on
+    a second copy of CL 0); ``p_HQ``: (L, 3) centre of the cutting circle at each [m], in H;
+    ``lift``: how far below T on the axis that centre lies [m]."""
+
+    loop: np.ndarray
+    p_HQ: np.ndarray
+    lift: float
+
+
+@dataclass(frozen=True, eq=False)
+class IkStep:
+    """Step 2 of a window pass: the window's IK from its best start configuration.
+
+    Attributes:
+        status: OK / DEGRADED (go on, DEGRADED with failure records), IK_FAILED or ABANDONED
+            (the window stops here).
+        wik: the :class:`drakedeburr.plan.ik.WindowIk` kept.
+        good: rows of ``wik`` that met every constraint; order: (G,) their CL indices.
+        failures: the IK's records (CL indices), plus the window's own when it stops.
+        seconds: time the IK took [s]; starts: start configurations tried.
+    """
+
+    status: WindowStatus
+    wik: object
+    good: np.ndarray
+    order: np.ndarray
+    failures: tuple[FailureRecord, ...]
+    seconds: float
+    starts: int
+
+    @property
+    def X_ik(self) -> np.ndarray:
+        """(G, 4, 4) the IK's tool poses in H at the reached targets."""
+        return self.wik.X_HT[self.good]
+
+
+@dataclass(frozen=True, eq=False)
+class ProgramFit:
+    """Step 4 of a window pass (:func:`drakedeburr.plan.program_fit.fit_program`): the program
+    of a tracked cut. ``executed``: the cut and its program (None unless ``status`` is OK);
+    ``status``: OK or PROGRAM_FAILED; ``finer``: the trajectory would stray from the program
+    between the samples, so the cut is to be sampled again at half the step (``executed`` is
+    None); ``failures``: the program's records."""
+
+    status: WindowStatus
+    executed: ExecutedCut | None = None
+    finer: bool = False
+    failures: tuple[FailureRecord, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class CutStep:
+    """Steps 3-4 of a window pass (:func:`drakedeburr.plan.window.execute_cut`): the tracked cut
+    and its program at the finest sampling needed. ``status``: OK / DEGRADED (go on),
+    MOTION_FAILED, PROGRAM_FAILED or ABANDONED (stop); ``failures``: the tracking's and the
+    program's records; ``seconds``: time taken [s]."""
+
+    status: WindowStatus
+    executed: ExecutedCut | None
+    failures: tuple[FailureRecord, ...]
+    seconds: float
 
 
 @dataclass(frozen=True)

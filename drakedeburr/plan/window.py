@@ -17,15 +17,19 @@ from dataclasses import replace
 
 import numpy as np
 
+from drakedeburr.plan.cut import track_cut
+from drakedeburr.plan.finish import finish_window
 from drakedeburr.plan.ik import seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
-from drakedeburr.plan.options import PlanContext
-from drakedeburr.plan.results import WindowPlan, WindowStatus
+from drakedeburr.plan.options import PlanContext, RunMode
+from drakedeburr.plan.program_fit import fit_program
+from drakedeburr.plan.results import CutStep, CutTargets, IkStep, WindowPlan, WindowStatus
 from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "needs_other_rule", "better_of", "rewound_start"]
+__all__ = ["plan_window", "plan_window_pass", "cut_targets", "ik_step", "execute_cut",
+           "needs_other_rule", "better_of", "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -45,11 +49,12 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
     return ctx.kin.q_home.copy() if q_ref is None else np.asarray(q_ref, float)
 
 
-def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
-    """Approach, cut and retract of one window (module docstring)."""
+def plan_window(ctx: PlanContext, wt: WindowTargets,
+                mode: RunMode = RunMode.FULL) -> WindowPlan:
+    """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
     q_from = window_reference(ctx, wt)
-    first = _plan_window_once(ctx, wt, q_from)
-    if ctx.options.report_only or not needs_other_rule(first, ctx.options.retry_in_band):
+    first = _plan_window_once(ctx, wt, q_from, mode)
+    if mode is RunMode.REPORT_ONLY or not needs_other_rule(first, ctx.options.retry_in_band):
         return first
     other, ctx2 = _other_rule(ctx)
     if first.status.planned and not first.failures:  # clean but slow: the other rule may wind
@@ -59,7 +64,7 @@ def plan_window(ctx: PlanContext, wt: WindowTargets) -> WindowPlan:
     elif first.status is not WindowStatus.ABANDONED:
         log.debug("window %d: %d failure records; planning it again with the %r warm-start "
                   "spin", wt.window_index, len(first.failures), other)
-    return better_of(first, _plan_window_once(ctx2, wt, q_from))
+    return better_of(first, _plan_window_once(ctx2, wt, q_from, mode))
 
 
 def needs_other_rule(first: WindowPlan, retry_in_band: float) -> bool:
@@ -133,15 +138,17 @@ def _known(q: np.ndarray, seeds: list) -> bool:
     return any(s is not None and np.max(np.abs(q - s)) < 1e-6 for s in seeds)
 
 
-def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.ndarray,
-              p_HQ: np.ndarray, lift: float):
+def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, targets: CutTargets,
+              mode: RunMode):
     """The window's IK from the best of its start configurations (each start is judged by its
     failures and by whether the executed motion between the targets stays on the branch and
     inside the joint limits: a cheap analytic pre-check)."""
     kin, opt = ctx.kin, ctx.options
+    loop, p_HQ, lift = targets.loop, targets.p_HQ, targets.lift
+    fail_fast, report_only = mode is RunMode.FAIL_FAST, mode is RunMode.REPORT_ONLY
     m = len(wt)
     seeds = _seeds(ctx, wt, p_HQ[0] + lift * wt.retract_H[0], q_from)
-    if opt.report_only:
+    if report_only:
         seeds = seeds[:1]
     wik, best_score = None, 0
     tracked_back: set[int] = set()
@@ -149,7 +156,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
                                 wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
                                 window_index=wt.window_index, options=opt.ik,
-                                q_first=q_first, lift=lift, stop_at_failure=opt.fail_fast)
+                                q_first=q_first, lift=lift, stop_at_failure=fail_fast)
         reached = np.flatnonzero(trial.ok)
         dense_ok = bool(len(reached) > 1 and np.all(track_poses(
             kin, trial.X_HT[reached], trial.q[reached[0]], opt.dense_step).ok))
@@ -161,7 +168,7 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         # targets no pose in the cone can reach (the IK's probe): no other start fixes those
         unreachable = sum(1 for f in trial.failures if "cone_best_clearance" in f.where)
         if score == unreachable and trial is wik:
-            say = log.debug if opt.fail_fast else log.warning  # fail-fast: relaxation next
+            say = log.debug if fail_fast else log.warning  # fail-fast: relaxation next
             say("window %d: %d targets unreachable with %.1f mm clearance by any tool axis in "
                 "the cone; reported", wt.window_index, unreachable,
                 1e3 * opt.ik.min_distance_floor)
@@ -174,14 +181,14 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, loop: np.
         # may lie far from the reference, and the moves to and from the window with it)
         first_fail = int(trial.failures[0].point) if trial.failures else None
         if (first_fail is not None and first_fail not in tracked_back and len(tracked_back) < 2
-                and not opt.report_only):
+                and not report_only):
             tracked_back.add(first_fail)
             back = _backward_seed(ctx, wt, loop, p_HQ, lift, trial, first_fail)
             if back is not None and not _known(back, seeds):
                 seeds.append(back)
         # a wrist that wound into a J4/J6 limit: the same start a full turn the other way next
         wound = rewound_start(kin, trial, q_first)
-        if wound is not None and not _known(wound, seeds) and not opt.report_only:
+        if wound is not None and not _known(wound, seeds) and not report_only:
             seeds.insert(attempt + 1, wound)
     return wik, len(seeds)
 
@@ -210,15 +217,16 @@ def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: 
     return back.q[-1].copy() if back.ok.all() else None
 
 
-def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -> WindowPlan:
+def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
+                      mode: RunMode) -> WindowPlan:
     """One planning pass of a window (see :func:`plan_window`), its chamfer leg relieved where
     the burr would reach deeper into the hub than the verifier allows
     (:mod:`drakedeburr.plan.burr_depth`)."""
     from drakedeburr.plan import burr_depth
 
     offset = np.zeros((len(wt), 3))
-    result = _plan_window_at(ctx, wt, q_from, offset)
-    if not result.status.planned or ctx.options.report_only:
+    result = plan_window_pass(ctx, wt, q_from, offset, mode)
+    if not result.status.planned or mode is RunMode.REPORT_ONLY:
         return result
     hub = burr_depth.hub_model_of(str(ctx.cell.hub_sdf.parent))
     r_c, _lift = contact_geometry(ctx.options.contact_radius)
@@ -241,7 +249,7 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
                  1e3 * (worst + bound - burr_depth.MARGIN), 1e3 * bound,
                  1e3 * burr_depth.MARGIN, int(np.sum(np.any(new != offset, axis=1))),
                  1e3 * float(np.linalg.norm(new, axis=1).max()))
-        retry = _plan_window_at(ctx, wt, q_from, new)
+        retry = plan_window_pass(ctx, wt, q_from, new, mode)
         if not retry.status.planned or len(retry.failures) > len(result.failures):
             log.info("window %d: the moved tool points did not plan; kept the last plan",
                      wt.window_index)
@@ -265,12 +273,68 @@ def _plan_window_once(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray) -
     return result
 
 
-def _plan_window_at(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
-                    offset: np.ndarray) -> WindowPlan:
-    """One planning pass of a window, its CL targets' tool points moved by ``offset`` (M, 3)
-    [m] (:mod:`drakedeburr.plan.burr_depth`; zero: the recipe's)."""
-    from drakedeburr.plan.cut import execute_cut
+def plan_window_pass(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
+                     offset: np.ndarray, mode: RunMode = RunMode.FULL) -> WindowPlan:
+    """THE window pipeline: one planning pass of a window, its CL targets' tool points moved by
+    ``offset`` (M, 3) [m] (:mod:`drakedeburr.plan.burr_depth`; zero: the recipe's). Each step
+    returns a typed result with its status; the pass stops at the first that does not plan.
 
+    1. targets: the IK's targets, the tool points of the CL points (:func:`cut_targets`);
+    2. IK from the best start configuration ranked from ``q_from`` (:func:`ik_step`);
+    3.-4. the tracked cut and its program, sampled finer where needed
+       (:func:`execute_cut`);
+    5. approach, retract, timing and figures (:func:`drakedeburr.plan.finish.finish_window`).
+    """
+    targets = cut_targets(ctx, wt, offset)
+    ik = ik_step(ctx, wt, q_from, targets, mode)
+    if not ik.status.planned:
+        return WindowPlan.skipped(wt.window_index, ik.status, list(ik.failures))
+    cut = execute_cut(ctx, wt, ik, mode)
+    if not cut.status.planned:
+        return WindowPlan.skipped(wt.window_index, cut.status, [*ik.failures, *cut.failures])
+    return finish_window(ctx, wt, ik, cut)
+
+
+def execute_cut(ctx: PlanContext, wt, ik: IkStep, mode: RunMode = RunMode.FULL) -> CutStep:
+    """Steps 3-4 of a window pass (:func:`plan_window_pass`): the
+    window's executed cut and its program (:mod:`drakedeburr.plan.cut`), sampled every
+    ``options.dense_step`` of travel and again at half that where the program has moves the
+    sampling cannot resolve (:attr:`ProgramFit.finer`)."""
+    step = ctx.options.dense_step
+    t1 = time.perf_counter()
+    while True:
+        tr = track_cut(ctx, wt, ik, step)
+        records = list(tr.records)
+        if not np.all(tr.cut.ok):
+            return _cut_step(WindowStatus.MOTION_FAILED, None, records, t1)
+        if mode is RunMode.FAIL_FAST and np.any(tr.dist < ctx.cut_clearance):
+            # the window fails this recipe (the pinned axis and tightened blends did not
+            # clear the hub): relaxed next (RunMode.FAIL_FAST), its program and timing
+            # not made (on an unseen hub they were ~40 s a window and spin rule)
+            log.debug("window %d: the executed cut stays under the clearance; abandoned for "
+                      "a milder recipe", wt.window_index)
+            return _cut_step(WindowStatus.ABANDONED, None, records, t1)
+        fit = fit_program(ctx, wt, tr, ik.order, refine=step == ctx.options.dense_step)
+        if fit.finer:
+            step *= 0.5
+            log.debug("window %d: between its samples the cut would stray from the program or "
+                      "its cone; sampling it every %.3f mm", wt.window_index,
+                     step * 1e3)
+            continue
+        records += fit.failures
+        if not fit.status.planned:
+            return _cut_step(fit.status, None, records, t1)
+        status = WindowStatus.DEGRADED if records else WindowStatus.OK
+        return _cut_step(status, fit.executed, records, t1)
+
+
+def _cut_step(status: WindowStatus, executed, records: list, t1: float) -> CutStep:
+    return CutStep(status=status, executed=executed, failures=tuple(records),
+                   seconds=time.perf_counter() - t1)
+
+
+def cut_targets(ctx: PlanContext, wt: WindowTargets, offset: np.ndarray) -> CutTargets:
+    """Step 1 of :func:`plan_window_pass`: the IK's targets of a window."""
     r_c, lift = contact_geometry(ctx.options.contact_radius)
     m = len(wt)
     # the loop closes on a second copy of CL 0 solved last (warm-started from CL M-1): the burr
@@ -279,19 +343,30 @@ def _plan_window_at(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
     # the IK ties the centre of the cutting circle (``lift`` below T on the axis) to its target
     p_HQ = (tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
             + offset)[loop]
+    return CutTargets(loop=loop, p_HQ=p_HQ, lift=lift)
+
+
+def ik_step(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, targets: CutTargets,
+            mode: RunMode = RunMode.FULL) -> IkStep:
+    """Step 2 of :func:`plan_window_pass`: the window's IK from its best start; it stops the
+    window (IK_FAILED) when fewer than half the targets or not the first are reached, and
+    (ABANDONED) at any failed target in a fail-fast pass."""
+    m, loop = len(wt), targets.loop
     t0 = time.perf_counter()
-    wik, n_starts = _solve_ik(ctx, wt, q_from, loop, p_HQ, lift)
+    wik, n_starts = _solve_ik(ctx, wt, q_from, targets, mode)
     t_ik = time.perf_counter() - t0
     failures = [replace(rec, point=int(loop[rec.point])) for rec in wik.failures]
-    if ctx.options.fail_fast and failures:
-        return WindowPlan.skipped(wt.window_index, WindowStatus.ABANDONED, failures)
     # only the targets that met every constraint (a failed point's row holds its best attempt)
     good = np.flatnonzero(wik.ok)
-    if len(good) < (m + 1) // 2 or 0 not in good:
+    status = WindowStatus.DEGRADED if failures else WindowStatus.OK
+    if mode is RunMode.FAIL_FAST and failures:
+        status = WindowStatus.ABANDONED
+    elif len(good) < (m + 1) // 2 or 0 not in good:
         failures.append(FailureRecord(
             window=wt.window_index, kind="window", value=float(len(good)), limit=float(m + 1),
             unit="count", reason=f"IK reached only {len(good)} of {m + 1} targets; window "
                                  "skipped",
             tried=(f"{n_starts} start configurations", f"spin rule {ctx.options.ik.seed_spin}")))
-        return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, failures)
-    return execute_cut(ctx, wt, wik, good, loop[good], t_ik, failures)
+        status = WindowStatus.IK_FAILED
+    return IkStep(status=status, wik=wik, good=good, order=loop[good], failures=tuple(failures),
+                  seconds=t_ik, starts=n_starts)

@@ -1,0 +1,34 @@
+"""A window's ToolPath by the path and orientation stages: its CL points (the path stage's
+adaptive segmentation) and tool axes (the orientation stage), as the planner's targets
+(:func:`drakedeburr.plan.planner.window_targets_for_hub`) and the recipe relaxation's milder
+variants (:mod:`drakedeburr.plan.relax`) are made."""
+
+from __future__ import annotations
+
+from drakedeburr.config import ProcessParameters
+
+__all__ = ["CL_DELTA", "CL_COUNT_BUDGET", "tool_path"]
+
+# CL targets of the real chain: the path stage's ``adaptive`` segmentation at 0.03 mm chord
+# height (the executed linear moves stay within it of the edge curve), with the FEWEST points
+# that meet it and L_max (count budget 1): long chords on straight edges, short ones in fillets.
+# The default budget (the proposed method's count) spreads ~2.3x as many points evenly; the
+# robot gains nothing from them (every move is linear and blended), and each costs an IK solve.
+CL_DELTA = 0.03e-3
+CL_COUNT_BUDGET = 1
+
+
+def tool_path(edge, params: ProcessParameters):
+    """CL points and tool axes of one window by the path and orientation stages."""
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.orientation.orient import orient_window
+    from drakedeburr.path import fit_edge_curve, plan_cl
+    from drakedeburr.path.cl_planning import PlannerParams
+
+    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+    cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
+                                                            count_budget=CL_COUNT_BUDGET),
+                 window_index=edge.index, kind=edge.kind)
+    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
+    return orient_window(cl, edge.n_wall_H[nearest], params=params)
