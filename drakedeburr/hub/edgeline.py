@@ -12,12 +12,18 @@ along -Z_H at ``step`` spacing sample the surface seen from the front: height z(
 normal n(s). From the outline outward a profile crosses, in this order: what is seen through
 the opening's wider front part (a drafted wall, anything below), the edge band (round,
 chamfer), then the face. A sample belongs to the face when its normal is less than
-``WALL_ANGLE`` off the axis (walls are steeper), does not differ by more than
+``WALL_ANGLE`` off the axis (walls are steeper) and it is not on a drafted flank (more than
+``FLANK_ANGLE`` off the axis with the surface climbing by more than ``FLANK_RISE`` before it
+turns gentler than that: a wall of the opening seen from the front, whose top is the front
+boundary; a real rim's spoke flanks are drafted 12-14 deg, 76-78 deg off the axis), does not
+differ by more than
 ``BAND_ANGLE`` from the normal ``lag`` further out (the band turns faster), and the profile
 does not jump there (a step of more than ``JUMP`` between samples is a wall hidden from the
 front). The edge point is the first sample of the first run of ``run`` face samples, unless
 the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
-wider front part): then the first run after that step.
+wider front part): then the first run after that step. A profile goes ``FAR_REACH`` times
+``reach`` out (a 40 mm tall drafted flank's top lies 10-12 mm out); nearly every profile finds
+its face within the first millimetres.
 
 **Noise.** A profile reads the face start on its own 0.1 mm grid from the facets of a
 tessellated round, so neighbouring profiles can disagree by a facet. The band width (outline to
@@ -29,7 +35,7 @@ chamfer changes over millimetres, not between profiles 0.5 mm apart.
 turns down a spoke flank, along the rim's lip): neighbouring edge points then differ in height
 by more than their plan-view distance. Such a stretch is not an error: the points between them
 are filled in along the straight segment and moved onto the nearest mesh surface
-(:func:`_bridge`), so the loop follows the flank. A profile that finds no face within ``reach``
+(:func:`_bridge`), so the loop follows the flank. A profile that finds no face within its length
 takes the band of its neighbours (periodic interpolation along the loop) and reads the surface
 there, or the outline point itself (where the surface seen from the front ends).
 
@@ -52,8 +58,8 @@ __all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANG
 BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
 WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
 FLANK_ANGLE = math.radians(60.0)  # steeper (off the axis) and climbing FLANK_RISE: a flank
-FLANK_RISE = 3e-3  # [m] (see _face_start)
-FAR_REACH = 3.0  # a profile with no face within its reach looks this many times as far
+FLANK_RISE = 3e-3  # [m] a flank's climb to the next gentle sample that makes it a wall
+FAR_REACH = 3.0  # a profile walks this many times its `reach` out (module doc)
 JUMP = 0.8e-3  # [m] height step between two samples (0.1 mm apart) that is a hidden wall
 MAX_BRIDGE_GAP = 10e-3  # [m] a gap this wide left in a filled stretch: the loop is not closed
 CROSS_DZ = 1e-3  # [m] plan-view crossings closer than this in height are self-intersections
@@ -194,7 +200,8 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
         scene: open3d RaycastingScene of the mesh in H [m].
         outline_xy: (M, 2) refined CCW outline of the opening [m].
         z0: ray origin height above the mesh [m].
-        step: profile sample spacing [m]; reach: how far out the profile goes [m].
+        step: profile sample spacing [m]; reach: how far out the profile goes, times
+            ``FAR_REACH`` [m].
         lag_length: the band test compares normals this far apart [m].
         run_length: the face must continue this far past the edge point [m].
         ledge_length: a face stretch this close before a step up is a ledge [m].
@@ -214,7 +221,7 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
         c = outline_xy.mean(axis=0)
         return EdgeLine(None, band, outline_xy,
                         f"no front boundary: no surface seen from the front within "
-                        f"{reach * 1e3:.0f} mm of the opening's outline (around "
+                        f"{FAR_REACH * reach * 1e3:.0f} mm of the opening's outline (around "
                         f"({c[0] * 1e3:.0f}, {c[1] * 1e3:.0f}) mm)", figures)
     rows = np.flatnonzero(ok)
     band[rows] = s[first[ok]]
