@@ -1,6 +1,6 @@
 import sys, pickle, numpy as np
 from drakedeburr.hub import load_hub
-from drakedeburr.plan.planner import _tool_path
+from drakedeburr.plan.tool_paths import tool_path as _tool_path
 from drakedeburr.plan.window_targets import WindowTargets
 hub = load_hub(sys.argv[1]); w = int(sys.argv[2])
 tp = _tool_path(hub.windows[w], hub.process)
