@@ -94,6 +94,32 @@ def test_a_box_not_milder_than_the_recipes_is_skipped():
     assert len(calls) == 2
 
 
+def test_a_box_whose_tool_path_gives_no_targets_is_said_and_the_next_is_tried(monkeypatch):
+    """A real wheel's corner where a milder box points the axis into the part: the tool path
+    raises InputError; the ladder records it and goes on (the hub still gets its report)."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan import tool_paths
+
+    edge, params = _edge("large"), ProcessParameters()
+    real, first = tool_paths.tool_path, TILT_STEPS[0]
+
+    def tool_path(e, p):
+        if p.bounds_large == first:
+            raise InputError("window 1, CL 53: the tool axis points into the hub")
+        return real(e, p)
+
+    monkeypatch.setattr(tool_paths, "tool_path", tool_path)
+    seen = []
+    wt, dev, tried = relaxed_targets(edge, params, "ik: unreachable",
+                                     lambda wt: seen.append(wt) or _plan([]))
+    assert len(seen) == 1 and wt is seen[0]          # the second box was planned and kept
+    b = seen[0].tool_path.bounds
+    assert (b.theta_min, b.theta_max) == (TILT_STEPS[1].theta_min, TILT_STEPS[1].theta_max)
+    assert tried == [(f"theta box {first.theta_min:.2f}-{first.theta_max:.2f} rad",
+                      "no targets: window 1, CL 53: the tool axis points into the hub")]
+    assert dev.used == f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"
+
+
 @pytest.mark.parametrize("relaxed_failures, kept", [(1, "relaxed"), (2, "default"), (3, "default")])
 def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatch,
                                                                       relaxed_failures, kept):

@@ -98,6 +98,9 @@ def relax_windows(edges, params, failed_reasons: dict, ladders):
     accepted, tried = {}, {e.index: [] for e in edges}
     for edge, ladder in zip(edges, ladders(list(edges)), strict=True):
         for box, wt, res in ladder:
+            if wt is None:  # the milder box gives no targets (res: why)
+                tried[edge.index].append((_box(box), res))
+                continue
             log.info("window %d: relaxed to %s: %d failure records", edge.index, _box(box),
                      len(res.failures))
             if not res.failures:
@@ -112,7 +115,10 @@ def relax_windows(edges, params, failed_reasons: dict, ladders):
 def window_ladder(edge, params, plan_one) -> list:
     """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
     box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
-    record -> [(box, WindowTargets, result)] in the order planned."""
+    record -> [(box, WindowTargets, result)] in the order planned; a box whose tool path gives
+    no targets (InputError: e.g. an axis into the part) is ``(box, None, why)`` and the next box
+    is tried, so the window keeps its first-pass failure and the hub its report."""
+    from drakedeburr.errors import InputError
     from drakedeburr.plan.tool_paths import tool_path
     from drakedeburr.plan.window_targets import WindowTargets
 
@@ -122,7 +128,12 @@ def window_ladder(edge, params, plan_one) -> list:
         if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
             continue  # not milder than the recipe's own box
         p = replace(params, bounds_large=box, bounds_small=box)
-        wt = WindowTargets.from_tool_path(tool_path(edge, p))
+        try:
+            wt = WindowTargets.from_tool_path(tool_path(edge, p))
+        except InputError as exc:
+            log.info("window %d: %s gives no targets: %s", edge.index, _box(box), exc)
+            out.append((box, None, f"no targets: {exc}"))
+            continue
         res = plan_one(wt)
         out.append((box, wt, res))
         if not res.failures:
