@@ -78,9 +78,9 @@ def test_step_loops_lie_on_the_brep_edges_and_count_the_windows(straight, straig
     cw = straight_windows
     assert len(cw["windows"]) == straight.windows == 5
     kinds = sorted(o["kind"] for o in cw["notes"]["not_windows"])
-    assert kinds == ["centre bore"] + ["round hole"] * 5, kinds  # bore + 5 lug holes
+    assert kinds == ["centre bore"] + ["lug hole"] * 5, kinds
     assert all(o["width_mm"] == pytest.approx(14.0, abs=0.3)  # the Ø14 lug holes
-               for o in cw["notes"]["not_windows"] if o["kind"] == "round hole")
+               for o in cw["notes"]["not_windows"] if o["kind"] == "lug hole")
     edges = _edges_compound(read_cad(straight.step).shape)
     worst = 0.0
     for w, k in zip(cw["windows"], cw["kept"], strict=True):
@@ -199,19 +199,66 @@ def test_mesh_export_loops_near_the_brep_edges(straight, straight_windows):
     assert worst <= tol + 0.1
 
 
-def test_y_wheel_counts_every_through_opening(tmp_path):
-    """5 Y spokes: 5 large windows between the spokes and 5 small ones between the arms of
-    each Y; the blind pockets behind the spokes are not openings. Every through-opening the
-    construction made is a window or named with its measured width against the burr's need."""
-    from drakedeburr.hub.openings import min_window_width
+def _inscribed_width_mm(p_H: np.ndarray) -> float:
+    """Diameter [mm] of the largest circle inside the loop's plan polygon (shapely's
+    maximum_inscribed_circle: independent of the import's raster)."""
+    import shapely
 
+    poly = shapely.Polygon(p_H[:, :2] * 1e3)
+    return 2.0 * shapely.maximum_inscribed_circle(poly, 0.01).length
+
+
+def _check_spoked(wheel, cw, windows: int):
+    """``windows`` windows, the other openings the bore and the 5 lug holes, the loops on the
+    B-rep's edges, each window's width as measured by the import (within its 0.25 mm raster)."""
+    assert len(cw["windows"]) == windows
+    kinds = sorted(o["kind"] for o in cw["notes"]["not_windows"])
+    assert kinds[:6] == ["centre bore"] + ["lug hole"] * 5, kinds
+    edges = _edges_compound(read_cad(wheel.step).shape)
+    for w, loop in zip(cw["windows"], cw["notes"]["loops"], strict=True):
+        d = _distances_mm(edges, _in_file_mm(cw, w.p_HE[::25]))
+        assert d.max() <= ON_EDGE_MM, (w.index, d.max())
+        assert loop["width_mm"] == pytest.approx(_inscribed_width_mm(w.p_HE), abs=0.3)
+
+
+def test_y_wheel_loops_on_the_brep_edges_and_every_window(tmp_path):
+    """5 Y spokes: 5 large windows between the spokes and 5 small ones (~17 mm) between the
+    arms of each Y, all of them windows a burr of the tool library fits; the blind pockets
+    behind the spokes are not openings."""
     wheel = cad_wheels.make_wheel("y", tmp_path, formats=("step",))
     cw = read_cad_windows(wheel.step, ImportOptions())
-    narrow = [o for o in cw["notes"]["not_windows"] if o["kind"] == "too narrow"]
-    assert len(cw["windows"]) + len(narrow) == wheel.windows == 10
-    need = min_window_width() * 1e3
-    assert all(o["width_mm"] < need and f"{need:.1f} mm" in o["reason"] for o in narrow)
-    assert not [o for o in cw["notes"]["not_windows"] if o["kind"] == "blind"]
+    _check_spoked(wheel, cw, wheel.windows)
+    assert wheel.windows == 10 and len(cw["notes"]["not_windows"]) == 6  # no blind one
+
+
+def test_twin_slot_only_the_small_burr_fits_is_a_window(tmp_path):
+    """Twin spokes with a 12 mm slot between the bars: the loop (the face-side line of the
+    1 mm round) is the slot less the 3 deg draft over the 14 mm down to the face plus the
+    round's set-back on both sides wide, 12.4 mm: the 12 mm burr (needs 16 mm with the 2 mm
+    clearance) does not fit, the 6 mm one (10 mm) does. With the tool library all 10 openings
+    are windows; with the 12 mm burr alone the 5 slots are refused, each with its measured
+    width and the burr's need."""
+    from drakedeburr.hub.openings import burr_need
+
+    slot = 12.0
+    wheel = cad_wheels.make_wheel("twin", tmp_path, formats=("step",), slot=slot)
+    draft = math.radians(cad_wheels.DRAFT_DEG)
+    setback = cad_wheels.EDGE_ROUND * math.tan(0.5 * (math.pi / 2 - draft))
+    width = slot - 2 * (cad_wheels.Z_CUT_TOP - cad_wheels.Z_FACE) * math.tan(draft) + 2 * setback
+    assert burr_need(6e-3) * 1e3 < width < burr_need(12e-3) * 1e3
+    cw = read_cad_windows(wheel.step, ImportOptions())
+    _check_spoked(wheel, cw, wheel.windows)
+    assert cw["notes"]["burrs_mm"] == [6.0, 12.0]
+    slots = [k["width_mm"] for k in cw["notes"]["loops"] if k["width_mm"] < 20]
+    assert len(slots) == 5 and np.allclose(slots, width, atol=0.3), (slots, width)
+    alone = read_cad_windows(wheel.step, ImportOptions(burr_diameters=(12e-3,)))
+    _check_spoked(wheel, alone, 5)
+    narrow = [o for o in alone["notes"]["not_windows"] if o["kind"] == "too narrow"]
+    assert len(narrow) == 5
+    for o in narrow:
+        measured = float(re.search(r"(?:opening|vent slot) ([\d.]+) mm wide", o["reason"]).group(1))
+        assert measured == pytest.approx(width, abs=0.3)
+        assert "the 12 mm burr needs 16.0 mm" in o["reason"] and "6 mm" not in o["reason"]
 
 
 def _box_step(tmp_path) -> Path:
