@@ -14,7 +14,8 @@
    width and each burr's need), not a simple closed loop).
 5. Collision pieces and the folder exactly as for a closed mesh
    (:func:`drakedeburr.hub.import_common.collision_pieces`, ``import_output.write_folder``);
-   mass properties from the B-rep; the loops' NURBS are stored in ``edges.npz`` too (``w{i}_nurbs_poles/weights/knots/degree``, in H [m]).
+   mass properties from the B-rep; the loops' NURBS are stored in ``edges.npz`` too
+   (``w{i}_nurbs_poles/weights/knots/degree``, in H [m]).
 """
 
 from __future__ import annotations
