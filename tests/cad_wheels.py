@@ -102,7 +102,7 @@ def _window_regions(kind, slot=TWIN_SLOT):
             region -= _band(SPOKE_WIDTH, 0, 200, a)
             pockets.append(_band(16.0, 95, 165, a))
         elif kind == "y":
-            region -= _band(30.0, 0, 125, a)
+            region -= _band(30.0, 0, 140, a)  # the trunk ends inside the arms (no step)
             region -= _arm(a, -1)
             region -= _arm(a, 1)
             pockets.append(_band(14.0, 95, 120, a))
