@@ -41,6 +41,7 @@ LIP_BLEND = 20.0  # [mm] round between the disc face and the lip cone (profile)
 Z_FACE, Z_BACK = -12.0, -40.0
 Z_CUT_TOP = 2.0  # the window cuts start (full size) this far above z = 0
 SPOKE_WIDTH = 34.0  # straight spokes, at the top of the cut [mm]
+TWIN_BAR, TWIN_SLOT = 13.0, 18.0  # twin spokes: bar width, slot between the bars [mm]
 PHASE_DEG = 9.0  # spoke k along 9 + 72 k deg (off the circles' seam at +-X: a kernel taper
 #                  failure there)
 
@@ -88,8 +89,9 @@ def _arm(a, s):
     return fork * Rot(0, 0, a + s * 16.0) * Rectangle(95, 18.0, align=(Align.MIN, Align.CENTER))
 
 
-def _window_regions(kind):
-    """2-D faces of every window (plan view, mm) and the bands under which pockets go."""
+def _window_regions(kind, slot=TWIN_SLOT):
+    """2-D faces of every window (plan view, mm) and the bands under which pockets go;
+    ``slot``: the twin spokes' slot width at the top of the cut [mm]."""
     from build123d import Circle
 
     region = Circle(R_OUT) - Circle(R_IN)
@@ -100,14 +102,14 @@ def _window_regions(kind):
             region -= _band(SPOKE_WIDTH, 0, 200, a)
             pockets.append(_band(16.0, 95, 165, a))
         elif kind == "y":
-            region -= _band(30.0, 0, 125, a)
+            region -= _band(30.0, 0, 140, a)  # the trunk ends inside the arms (no step)
             region -= _arm(a, -1)
             region -= _arm(a, 1)
             pockets.append(_band(14.0, 95, 120, a))
-        else:  # twin: two parallel bars with an 18 mm slot between them
+        else:  # twin: two parallel bars with a ``slot`` between them
             for s in (-1, 1):
-                region -= _band(13.0, 0, 200, a, lateral=s * 15.5)
-                pockets.append(_band(8.0, 100, 160, a, lateral=s * 15.5))
+                region -= _band(TWIN_BAR, 0, 200, a, lateral=s * 0.5 * (slot + TWIN_BAR))
+                pockets.append(_band(8.0, 100, 160, a, lateral=s * 0.5 * (slot + TWIN_BAR)))
     return region.faces(), pockets
 
 
@@ -127,17 +129,17 @@ def _round_corners(face, radius):
     return face
 
 
-def build(kind: str, corner: float | None = None):
+def build(kind: str, corner: float | None = None, slot: float = TWIN_SLOT):
     """(the wheel solid (build123d Part, mm), its window count, the plan-view corner radius
     [mm] its windows were cut with). The corner radius is ``corner``, else :data:`CORNER` or,
     where the kernel cannot round the window edges of that (the Y wheel's narrow windows
-    between the arms), half of it, else sharp corners."""
+    between the arms), half of it, else sharp corners. ``slot``: the twin spokes' slot [mm]."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     tries = (corner,) if corner is not None else (CORNER, 0.5 * CORNER, 0.0)
     for i, r in enumerate(tries):
         try:
-            wheel, n = _build(kind, r)
+            wheel, n = _build(kind, r, slot)
         except ValueError:
             if i == len(tries) - 1:
                 raise
@@ -146,11 +148,11 @@ def build(kind: str, corner: float | None = None):
     raise AssertionError("unreachable")
 
 
-def _build(kind: str, corner: float):
+def _build(kind: str, corner: float, slot: float = TWIN_SLOT):
     from build123d import Cylinder, Plane, Pos, extrude
 
     wheel = _body()
-    regions, pockets = _window_regions(kind)
+    regions, pockets = _window_regions(kind, slot)
     depth = Z_BACK - Z_CUT_TOP
     taper = DRAFT_DEG
     cuts = []
@@ -194,12 +196,15 @@ def _round_window_edges(wheel):
     return wheel.fillet(EDGE_ROUND, edges)
 
 
-def make_wheel(kind: str, out_dir: str | Path, formats=("step", "iges", "stl")) -> CadWheel:
+def make_wheel(kind: str, out_dir: str | Path, formats=("step", "iges", "stl"),
+               slot: float = TWIN_SLOT) -> CadWheel:
+    """Write the wheel ``kind`` (module doc); ``slot``: the twin spokes' slot width [mm] at
+    the top of the cut (a slot the 12 mm burr does not fit and the 6 mm one does: 12)."""
     from build123d import export_step, export_stl
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    wheel, n, corner = build(kind)
+    wheel, n, corner = build(kind, slot=slot)
     step = out / f"{kind}.step"
     export_step(wheel, str(step))
     iges = out / f"{kind}.iges"

@@ -78,9 +78,9 @@ def test_step_loops_lie_on_the_brep_edges_and_count_the_windows(straight, straig
     cw = straight_windows
     assert len(cw["windows"]) == straight.windows == 5
     kinds = sorted(o["kind"] for o in cw["notes"]["not_windows"])
-    assert kinds == ["centre bore"] + ["round hole"] * 5, kinds  # bore + 5 lug holes
+    assert kinds == ["centre bore"] + ["lug hole"] * 5, kinds
     assert all(o["width_mm"] == pytest.approx(14.0, abs=0.3)  # the Ø14 lug holes
-               for o in cw["notes"]["not_windows"] if o["kind"] == "round hole")
+               for o in cw["notes"]["not_windows"] if o["kind"] == "lug hole")
     edges = _edges_compound(read_cad(straight.step).shape)
     worst = 0.0
     for w, k in zip(cw["windows"], cw["kept"], strict=True):
@@ -174,7 +174,18 @@ def test_mesh_export_loops_near_the_brep_edges(straight, straight_windows):
     """Issue 42 item 5: loops from the fine STL export of the same wheel within its chordal
     tolerance + 0.1 mm of the B-rep's window edges (the edges the STEP loops run on; not any
     B-rep edge: the disc face's crease 1.9 mm from a window's inner end is an edge too) - the
-    mesh extraction of drakedeburr.hub.extract."""
+    mesh extraction of drakedeburr.hub.extract.
+
+    Why it fails today (measured, fine STL): in windows 3 and 4 the mesh loop runs along the
+    disc face's crease at r = 80 mm (0.1 mm from that B-rep edge, 1.877 mm from the window's
+    loop). Between the window's 1 mm round (face-side line at r = 81.8 mm) and that crease the
+    disc face is a 1.8 mm strip; ``hub.edgeline._face_start`` calls a sample face only when
+    its normal agrees within BAND_ANGLE with the one ``lag_length`` (1 mm) further out and
+    ``run_length`` (1 mm) of such samples follow: the last 1 mm of the strip compares with the
+    31 deg slope beyond the crease, so only 0.8 mm of the strip reads as face, no run, and the
+    edge is read beyond the crease. Elsewhere the worst point is 0.156 mm off (at the lip and
+    the corners, 2 % of the points over 0.15 mm). Both are in the mesh extraction
+    (hub/edgeline.py), not in the CAD import."""
     from drakedeburr.hub.extract import extract_window_edges
     from drakedeburr.hub.mesh_io import load_hub_mesh
 
@@ -195,23 +206,81 @@ def test_mesh_export_loops_near_the_brep_edges(straight, straight_windows):
     if worst > tol + 0.1:
         pytest.xfail(f"mesh loops reach {worst:.3f} mm from the B-rep window edges (allowed "
                      f"{tol + 0.1:.2f} mm; {np.mean(d <= tol + 0.1):.1%} of the points within "
-                     "it): today's mesh extraction")
+                     "it): hub.edgeline reads a face strip narrower than its band test's lag "
+                     "+ run beside a crease as band (docstring)")
     assert worst <= tol + 0.1
 
 
-def test_y_wheel_counts_every_through_opening(tmp_path):
-    """5 Y spokes: 5 large windows between the spokes and 5 small ones between the arms of
-    each Y; the blind pockets behind the spokes are not openings. Every through-opening the
-    construction made is a window or named with its measured width against the burr's need."""
-    from drakedeburr.hub.openings import min_window_width
+def _inscribed_width_mm(p_H: np.ndarray) -> float:
+    """Diameter [mm] of the largest circle inside the loop's plan polygon (shapely's
+    maximum_inscribed_circle: independent of the import's raster)."""
+    import shapely
 
+    poly = shapely.Polygon(p_H[:, :2] * 1e3)
+    return 2.0 * shapely.maximum_inscribed_circle(poly, 0.01).length
+
+
+def _check_spoked(wheel, cw, windows: int, corner_mm: float):
+    """``windows`` windows, the other openings the bore and the 5 lug holes, the loops on the
+    B-rep's edges, each window's width as measured by the import (within its 0.25 mm raster),
+    and the frames turning no faster from point to point than plan corners of ``corner_mm``
+    less the 1 mm edge round on either side allow (a sharp step in a window's outline, as the
+    Y spoke's trunk standing 1.9 mm proud of its arms once made, turned them 21 deg in
+    0.5 mm: the planned tool axis left its cone there, window 4 of the Y wheel)."""
+    assert len(cw["windows"]) == windows
+    kinds = sorted(o["kind"] for o in cw["notes"]["not_windows"])
+    assert kinds[:6] == ["centre bore"] + ["lug hole"] * 5, kinds
+    edges = _edges_compound(read_cad(wheel.step).shape)
+    step_mm = ImportOptions().edge_spacing * 1e3
+    bound = step_mm / (corner_mm - 2 * cad_wheels.EDGE_ROUND)  # [rad] per step
+    for w, loop in zip(cw["windows"], cw["notes"]["loops"], strict=True):
+        d = _distances_mm(edges, _in_file_mm(cw, w.p_HE[::25]))
+        assert d.max() <= ON_EDGE_MM, (w.index, d.max())
+        assert loop["width_mm"] == pytest.approx(_inscribed_width_mm(w.p_HE), abs=0.3)
+        for v in (w.t_H, w.n_wall_H, w.n_face_H):
+            turn = np.arccos(np.clip(np.einsum("ij,ij->i", v, np.roll(v, -1, axis=0)), -1, 1))
+            assert turn.max() <= bound, (w.index, float(turn.max()), bound)
+
+
+def test_y_wheel_loops_on_the_brep_edges_and_every_window(tmp_path):
+    """5 Y spokes: 5 large windows between the spokes and 5 small ones (~17 mm) between the
+    arms of each Y, all of them windows a burr of the tool library fits; the blind pockets
+    behind the spokes are not openings."""
     wheel = cad_wheels.make_wheel("y", tmp_path, formats=("step",))
     cw = read_cad_windows(wheel.step, ImportOptions())
-    narrow = [o for o in cw["notes"]["not_windows"] if o["kind"] == "too narrow"]
-    assert len(cw["windows"]) + len(narrow) == wheel.windows == 10
-    need = min_window_width() * 1e3
-    assert all(o["width_mm"] < need and f"{need:.1f} mm" in o["reason"] for o in narrow)
-    assert not [o for o in cw["notes"]["not_windows"] if o["kind"] == "blind"]
+    _check_spoked(wheel, cw, wheel.windows, wheel.corner_mm)
+    assert wheel.windows == 10 and len(cw["notes"]["not_windows"]) == 6  # no blind one
+
+
+def test_twin_slot_only_the_small_burr_fits_is_a_window(tmp_path):
+    """Twin spokes with a 12 mm slot between the bars: the loop (the face-side line of the
+    1 mm round) is the slot less the 3 deg draft over the 14 mm down to the face plus the
+    round's set-back on both sides wide, 12.4 mm: the 12 mm burr (needs 16 mm with the 2 mm
+    clearance) does not fit, the 6 mm one (10 mm) does. With the tool library all 10 openings
+    are windows; with the 12 mm burr alone the 5 slots are refused, each with its measured
+    width and the burr's need."""
+    from drakedeburr.hub.openings import burr_need
+
+    slot = 12.0
+    wheel = cad_wheels.make_wheel("twin", tmp_path, formats=("step",), slot=slot)
+    draft = math.radians(cad_wheels.DRAFT_DEG)
+    setback = cad_wheels.EDGE_ROUND * math.tan(0.5 * (math.pi / 2 - draft))
+    width = slot - 2 * (cad_wheels.Z_CUT_TOP - cad_wheels.Z_FACE) * math.tan(draft) + 2 * setback
+    assert burr_need(6e-3) * 1e3 < width < burr_need(12e-3) * 1e3
+    cw = read_cad_windows(wheel.step, ImportOptions())
+    # the kernel cannot fit the 7 mm plan corners into the 12 mm slot: half of it there
+    _check_spoked(wheel, cw, wheel.windows, 0.5 * cad_wheels.CORNER)
+    assert cw["notes"]["burrs_mm"] == [6.0, 12.0]
+    slots = [k["width_mm"] for k in cw["notes"]["loops"] if k["width_mm"] < 20]
+    assert len(slots) == 5 and np.allclose(slots, width, atol=0.3), (slots, width)
+    alone = read_cad_windows(wheel.step, ImportOptions(burr_diameters=(12e-3,)))
+    _check_spoked(wheel, alone, 5, wheel.corner_mm)
+    narrow = [o for o in alone["notes"]["not_windows"] if o["kind"] == "too narrow"]
+    assert len(narrow) == 5
+    for o in narrow:
+        measured = float(re.search(r"(?:opening|vent slot) ([\d.]+) mm wide", o["reason"]).group(1))
+        assert measured == pytest.approx(width, abs=0.3)
+        assert "the 12 mm burr needs 16.0 mm" in o["reason"] and "6 mm" not in o["reason"]
 
 
 def _box_step(tmp_path) -> Path:

@@ -9,11 +9,13 @@
    :mod:`drakedeburr.hub.front` on the tessellation). The origin moves onto the centre's front
    face as for a mesh.
 4. Window loops on the exact edges (:func:`drakedeburr.hub.cad.cad_loops`); every other loop is
-   listed with what it is (centre bore, the rim's outer edge, a blind pocket, a hole narrower
-   than the burr needs, not a simple closed loop).
-5. Collision pieces and the folder exactly as for a closed mesh (``import_mesh._collision``,
-   ``import_output.write_folder``); mass properties from the B-rep; the loops' NURBS are
-   stored in ``edges.npz`` too (``w{i}_nurbs_poles/weights/knots/degree``, in H [m]).
+   listed with what it is (centre bore, the rim's outer edge, a blind pocket, a lug hole (one
+   cylindrical wall), an opening no burr of the tool library fits with the clearance (its
+   width and each burr's need), not a simple closed loop).
+5. Collision pieces and the folder exactly as for a closed mesh
+   (:func:`drakedeburr.hub.import_common.collision_pieces`, ``import_output.write_folder``);
+   mass properties from the B-rep; the loops' NURBS are stored in ``edges.npz`` too
+   (``w{i}_nurbs_poles/weights/knots/degree``, in H [m]).
 """
 
 from __future__ import annotations
@@ -26,16 +28,31 @@ import numpy as np
 
 from drakedeburr.errors import InputError, NoCuttableWindow
 from drakedeburr.hub.cad import DEFAULT_CHORDAL_TOLERANCE
+from drakedeburr.hub.import_common import (
+    ImportedHub,
+    cache_slot,
+    collision_pieces,
+    front_origin_offset,
+    judged_burrs,
+    narrow_reason,
+    ray_scene,
+    wall_line,
+    wheel_diameter,
+)
 from drakedeburr.hub.types import WindowEdge
 
 __all__ = ["import_cad", "cad_windows", "CAD_IMPORT_VERSION"]
 
 log = logging.getLogger(__name__)
 
+# 6: openings judged by every burr of the tool library, lug holes by their geometry;
 # 5: normals square to the loop and continuous along it (cad_loops.continuous_frames);
 # 4: the wall across the loop at corners; 3: the wall beyond a corner patch; 2: corner
 # patches are blends
-CAD_IMPORT_VERSION = 5
+CAD_IMPORT_VERSION = 6
+#: [m] widest round hole (one cylindrical wall, within half the wheel's radius of the axis)
+#: that is a lug hole, as a mesh import's bolt pattern (hub.openings)
+LUG_MAX_WIDTH = 35e-3
 
 
 def _frame(cad, mesh, options):
@@ -84,14 +101,14 @@ def _raster(xy: np.ndarray, pixel: float = 0.25e-3):
     return 2.0 * float(d.max()), np.array([gx[k[1]], gy[k[0]]]), float(inside.sum()) * pixel ** 2
 
 
-def _describe(loop_H, cls, scene, z_top, min_w, r_outer) -> tuple[str, str, dict]:
-    """(kind, reason, figures) of one loop in H: kind "window" or what else it is."""
+def _describe(loop_H, scene, z_top, judge, r_outer) -> tuple[str, str, dict]:
+    """(kind, reason, figures) of one loop in H: kind "window" or what else it is; ``judge``
+    is (burrs [m], clearance [m], narrowest window [m])."""
     import open3d as o3d
+    from matplotlib.path import Path as MPath
 
     p = loop_H["p"]
     xy = p[:, :2]
-    from matplotlib.path import Path as MPath
-
     centre = xy.mean(axis=0)
     figures = {"center_xy_mm": [round(float(v) * 1e3, 2) for v in centre],
                "radius_mm": round(float(np.linalg.norm(centre)) * 1e3, 2),
@@ -110,11 +127,15 @@ def _describe(loop_H, cls, scene, z_top, min_w, r_outer) -> tuple[str, str, dict
         return ("blind", f"not a through-opening: a ray along the axis through it meets the "
                 f"solid {(z_top - t) * 1e3:.1f} mm above the origin (pocket or recess)",
                 figures)
+    radius = float(np.linalg.norm(centre))
+    if loop_H.get("cylinder") and width <= LUG_MAX_WIDTH and radius <= 0.5 * r_outer:
+        return "lug hole", (f"round {width * 1e3:.1f} mm hole (one cylindrical wall) on a "
+                            f"{2 * radius * 1e3:.1f} mm circle: a lug hole"), figures
+    burrs, clearance, min_w = judge
     if width < min_w:
-        walls = {o for _, o in loop_H["faces"]}
-        kind = "round hole" if len(walls) == 1 and loop_H.get("cylinder") else "too narrow"
-        return (kind, f"{width * 1e3:.1f} mm wide (inscribed), narrower than the "
-                f"{min_w * 1e3:.1f} mm the burr needs", figures)
+        u = np.linalg.svd(xy - centre, full_matrices=False)[2][0]
+        what = "vent slot" if np.ptp((xy - centre) @ u) > 3.0 * width else "opening"
+        return "too narrow", narrow_reason(width, burrs, clearance, min_w, what), figures
     return "window", "", figures
 
 
@@ -146,16 +167,16 @@ def _to_H(X_HM, v):
     return v @ X_HM[:3, :3].T
 
 
-def cad_windows(cad, V_H, F, owner, fmap, X_MH, options, min_w: float):
+def cad_windows(cad, V_H, F, owner, fmap, X_MH, options, judge):
     """(windows [WindowEdge in H], loops kept (dicts with the NURBS), notes): the B-rep's
-    front-boundary loops sorted into windows and the rest (see module doc)."""
+    front-boundary loops sorted into windows and the rest (see module doc); ``judge`` is
+    (burrs [m], clearance [m], narrowest window [m]) (:func:`_judge`)."""
     from drakedeburr.hub.cad import classify_faces
     from drakedeburr.hub.cad_loops import cad_loops
-    from drakedeburr.hub.extract import _scene
 
     X_HM = np.linalg.inv(X_MH)
     cls = classify_faces(cad, V_H, F, owner, fmap)
-    scene = _scene(V_H, F)
+    scene = ray_scene(V_H, F)
     z_top = float(V_H[:, 2].max()) + 0.01
     r_outer = float(np.linalg.norm(V_H[:, :2], axis=1).max())
     kept, not_windows, rejected = [], [], []
@@ -168,7 +189,7 @@ def cad_windows(cad, V_H, F, owner, fmap, X_MH, options, min_w: float):
             continue
         p = _to_H(X_HM, loop.p) + X_HM[:3, 3]
         d = {"p": p, "faces": loop.faces, "cylinder": _single_cylinder(fmap, loop)}
-        kind, reason, figures = _describe(d, cls, scene, z_top, min_w, r_outer)
+        kind, reason, figures = _describe(d, scene, z_top, judge, r_outer)
         if kind != "window":
             if kind != "outer edge":
                 not_windows.append({"kind": kind, "reason": reason, **figures})
@@ -233,6 +254,18 @@ def _mass(cad, X_HM, density: float):
     return vol * density, R @ com_M + X_HM[:3, 3], 0.5 * (I_H + I_H.T), vol
 
 
+def _judge(options) -> tuple[tuple[float, ...], float, float]:
+    """(burrs [m] smallest first, clearance [m], narrowest window [m]) an opening is judged by:
+    every burr of the tool library (:func:`drakedeburr.hub.import_common.judged_burrs`), the
+    smallest need unless ``options.min_window_width`` is given."""
+    from drakedeburr.hub.openings import min_window_width
+
+    burrs = judged_burrs(options.burr_diameter, options.burr_diameters)
+    min_w = (options.min_window_width if options.min_window_width is not None
+             else min_window_width(burrs, options.clearance))
+    return burrs, options.clearance, min_w
+
+
 def read_cad_windows(path, options, chordal_tolerance: float = DEFAULT_CHORDAL_TOLERANCE):
     """Steps 1-4 of the module doc (no collision pieces): a dict with ``cad``, the
     tessellation ``V_H``/``F`` in H [m], ``X_MH`` (origin on the centre's front face),
@@ -241,22 +274,21 @@ def read_cad_windows(path, options, chordal_tolerance: float = DEFAULT_CHORDAL_T
     import trimesh
 
     from drakedeburr.hub.cad import read_cad, tessellate
-    from drakedeburr.hub.import_mesh import _diameter, _front_origin_offset, _scene
-    from drakedeburr.hub.openings import min_window_width
 
     path = Path(path)
     cad = read_cad(path)
     V, F, owner, fmap = tessellate(cad, chordal_tolerance)
     mesh = trimesh.Trimesh(V, F, process=False)
-    diameter = _diameter(path, mesh, options.axis_M, f"{cad.unit}, converted to mm")
+    diameter = wheel_diameter(path, mesh, options.axis_M, f"{cad.unit}, converted to mm")
     X_MH, front, axis_from = _frame(cad, mesh, options)
     X_HM = np.linalg.inv(X_MH)
     V_H = V @ X_HM[:3, :3].T + X_HM[:3, 3]
-    min_w = (options.min_window_width if options.min_window_width is not None
-             else min_window_width(options.burr_diameter, options.clearance))
-    windows, kept, notes = cad_windows(cad, V_H, F, owner, fmap, X_MH, options, min_w)
+    judge = _judge(options)
+    min_w = judge[2]
+    windows, kept, notes = cad_windows(cad, V_H, F, owner, fmap, X_MH, options, judge)
     notes.update(front={**front, "axis_from": axis_from},
-                 min_window_width_mm=round(min_w * 1e3, 3), dropped=None)
+                 min_window_width_mm=round(min_w * 1e3, 3),
+                 burrs_mm=[round(b * 1e3, 3) for b in judge[0]], dropped=None)
     if not windows:
         why = "; ".join(f"{o.get('kind', 'loop')} at r = {o.get('radius_mm', 0):.0f} mm: "
                         f"{o['reason']}"
@@ -268,7 +300,7 @@ def read_cad_windows(path, options, chordal_tolerance: float = DEFAULT_CHORDAL_T
         raise InputError(f"{path}: found {len(windows)} windows, expected "
                          f"{options.expected_windows}")
     r_inner = min(float(np.linalg.norm(w.p_HE[:, :2], axis=1).min()) for w in windows)
-    dz = _front_origin_offset(_scene(V_H, F), r_inner, float(V_H[:, 2].max()) + 0.01)
+    dz = front_origin_offset(ray_scene(V_H, F), r_inner, float(V_H[:, 2].max()) + 0.01)
     X_MH[:3, 3] += dz * X_MH[:3, 2]
     V_H = np.round(V_H - [0.0, 0.0, dz], 7) + 0.0
     windows = [WindowEdge(index=w.index, kind=w.kind, p_HE=w.p_HE - [0.0, 0.0, dz],
@@ -276,17 +308,6 @@ def read_cad_windows(path, options, chordal_tolerance: float = DEFAULT_CHORDAL_T
     return {"cad": cad, "V_H": V_H, "F": F, "X_MH": X_MH, "windows": windows, "kept": kept,
             "notes": notes, "closed": bool(mesh.is_watertight), "diameter": diameter,
             "min_w": min_w}
-
-
-def _cache_key(sha: str, options, chordal: float) -> str:
-    import hashlib
-    import json
-
-    from drakedeburr.hub.import_mesh import _options_json
-
-    blob = json.dumps({"sha256": sha, "options": _options_json(options), "chordal": chordal,
-                       "cad_version": CAD_IMPORT_VERSION}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
 
 
 def _write_nurbs(target: Path, kept, cad, X_HM) -> None:
@@ -316,16 +337,7 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
     from manifold3d import Manifold
 
     from drakedeburr._io import check_regular_file
-    from drakedeburr.hub.import_mesh import (
-        ImportedHub,
-        ImportOptions,
-        _collision,
-        _file_hash,
-        _from_cache,
-        _hub_name,
-        _scene,
-        _wall_line,
-    )
+    from drakedeburr.hub.import_mesh import ImportOptions
     from drakedeburr.hub.import_output import import_summary, write_folder
 
     t_start = time.perf_counter()
@@ -334,12 +346,10 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
     if not path.exists():
         raise FileNotFoundError(f"CAD file {path} does not exist")
     check_regular_file(path, "CAD file", "mesh")  # before hashing: no device, pipe or folder
-    sha = _file_hash(path)
-    key = _cache_key(sha, options, chordal_tolerance)
-    name = _hub_name(path)
     out_root = Path(out_root)
-    target = out_root / f"{name}_{key[:12]}"
-    cached = _from_cache(target, key, name, path, sha, t_start)
+    sha, key, name, target, cached = cache_slot(path, out_root, options, t_start,
+                                                chordal=chordal_tolerance,
+                                                cad_version=CAD_IMPORT_VERSION)
     if cached is not None:
         return cached
     steps = 5
@@ -350,10 +360,11 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
         "cad", "V_H", "F", "X_MH", "windows", "kept", "notes"))
     X_HM = np.linalg.inv(X_MH)
     closed, diameter = cw["closed"], cw["diameter"]
-    walls = [_wall_line(innermost_outline(_scene(V_H, F), w.p_HE), w.p_HE) for w in windows]
+    scene = ray_scene(V_H, F)
+    walls = [wall_line(innermost_outline(scene, w.p_HE), w.p_HE) for w in windows]
     if progress is not None:
         progress(2, steps, "collision pieces (CoACD)" if closed else "collision pieces (shell)")
-    pieces, coll = _collision(path, V_H, F, walls, closed, options, progress, steps)
+    pieces, coll = collision_pieces(path, V_H, F, walls, closed, options, progress, steps)
     if progress is not None:
         progress(3, steps, "write folder")
     hulls = [Manifold.hull_points(pv) for pv in pieces]

@@ -89,14 +89,15 @@ def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H
              diameter, mass, com, windows, pieces, hull_volume, coll) -> dict:
     """The content of summary.json (the bundled hubs' keys plus ``import``)."""
     from drakedeburr.hub.import_collision import coacd_version
-    from drakedeburr.hub.import_mesh import IMPORT_VERSION, _options_json
+    from drakedeburr.hub.import_common import options_json
+    from drakedeburr.hub.import_mesh import IMPORT_VERSION
 
     return {
         "name": name,
         "import": {"source": str(path.resolve()), "sha256": sha, "cache_key": key,
                    "version": IMPORT_VERSION, "unit": unit, "closed_mesh": closed,
                    "axis_estimated": bool(options.axis_M is None),
-                   "X_MH": np.round(X_MH, 9).tolist(), "options": _options_json(options),
+                   "X_MH": np.round(X_MH, 9).tolist(), "options": options_json(options),
                    "front": notes.get("front"),
                    "min_window_width_mm": notes["min_window_width_mm"],
                    "burrs_mm": notes.get("burrs_mm"),
