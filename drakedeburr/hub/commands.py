@@ -248,13 +248,15 @@ def _add_front_and_burr(p) -> None:
                         "along; default auto: decided from lug seats, barrel, mounting face "
                         "and dish, with the evidence reported")
     p.add_argument("--burr-mm", type=_POSITIVE_MM, default=_burr_mm(),
-                   help="burr diameter, > 0: narrower openings are not windows (default "
-                        "%(default)s)")
+                   help="burr diameter, > 0 (default %(default)s: the standard burr, and an "
+                        "opening it does not fit is judged by the tool library's small burr "
+                        "before it is refused; another value: that burr alone)")
     p.add_argument("--clearance-mm", type=_NONNEGATIVE_MM,
                    default=round(default_tolerances().min_clearance * 1e3, 6),
                    help="clearance the burr needs to the walls, >= 0 (default %(default)s)")
     p.add_argument("--min-window-width-mm", type=_POSITIVE_MM,
-                   help="narrowest window, > 0; default max(burr + 2 clearance, 2.5 burr)")
+                   help="narrowest window, > 0; default the smallest need of the burrs "
+                        "judged (head diameter + 2 x clearance)")
 
 
 def register(subparsers) -> None:
