@@ -37,7 +37,7 @@ from drakedeburr.verify.motion_bounds import (
     rate_bounds,
     track_interval_bounds,
 )
-from drakedeburr.verify.pair_scene import CLEARANCE, SELF
+from drakedeburr.verify.pair_scene import CLEARANCE, SELF, checked_scene
 from drakedeburr.verify.sweep import class_limits, resolution_target
 
 __all__ = ["ClassCertificate", "ClearanceCertificate", "certify", "certify_alongside", "METHOD"]
@@ -321,8 +321,6 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
         if alongside is not None:
             alongside()
         return certify(scene, traj, sweep, tol)
-    from drakedeburr.verify.sweep import certify_in_worker
-
     def here(k: int):
         return alongside() if k == 0 else certify(scene, traj, sweep, tol)
 
@@ -340,3 +338,10 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
 
     return map_tasks(2, here, remote, workers, done,
                      name=lambda k: "the clearance certificate" if k else "alongside")[1]
+
+
+def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep, tol):
+    """A pool worker's task: the certificate of a sweep (:func:`certify`) in the same cell
+    -> (certificate, its reading tally)."""
+    scene = checked_scene(recipe, fingerprint, digest, tol)
+    return certify(scene, traj, sweep, tol), scene.tally

@@ -46,7 +46,7 @@ from drakedeburr.verify.motion_bounds import (
     rate_bounds,
     relative_pose,
 )
-from drakedeburr.verify.pair_scene import CLEARANCE, SELF, PairScene
+from drakedeburr.verify.pair_scene import CLEARANCE, SELF, PairScene, checked_scene, warm_scene
 
 __all__ = ["Sweep", "sweep", "track_motion", "class_limits", "resolution_target"]
 
@@ -385,9 +385,6 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
     return _merge(scene, t, q, parts, results)
 
 
-_WORKER_SCENE: dict = {}  # in a pool worker: the caller's cell and its PairScene
-
-
 def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
     """Have the pool's idle workers build ``cell``'s pair scene now (from its recorded
     ``load_args``), so that they are ready when the sweep of ``n_samples`` hands them parts;
@@ -396,7 +393,7 @@ def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
     if recipe is not None and len(part_bounds(n_samples)) > 1:
         from drakedeburr.plan.parallel import cell_fingerprint, warm_pool
 
-        warm_pool(_warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
+        warm_pool(warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
 
 
 def warm_workers_for_plan(plan, workers: int | None = None) -> None:
@@ -408,44 +405,14 @@ def warm_workers_for_plan(plan, workers: int | None = None) -> None:
     from drakedeburr.cell.recipe import plan_cell_args
     from drakedeburr.plan.parallel import warm_pool
 
-    warm_pool(_warm_scene, (plan_cell_args(plan), None), workers)
-
-
-def _worker_scene(recipe: dict, fingerprint: str | None) -> PairScene:
-    from drakedeburr.plan.parallel import worker_cell
-    from drakedeburr.verify.distances import pair_scene_of
-
-    return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
-
-
-def _warm_scene(recipe: dict, fingerprint: str | None) -> None:
-    _worker_scene(recipe, fingerprint)
+    warm_pool(warm_scene, (plan_cell_args(plan), None), workers)
 
 
 def _part_in_worker(recipe: dict, fingerprint: str, digest: str, traj, t: np.ndarray,
                     q: np.ndarray, tol):
     """A pool worker's task: one part read in the same cell -> (_Part, its reading tally)."""
-    scene = _checked_scene(recipe, fingerprint, digest, tol)
+    scene = checked_scene(recipe, fingerprint, digest, tol)
     return _sweep_part(scene, traj, t, q, tol), scene.tally
-
-
-def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep: Sweep, tol):
-    """A pool worker's task: the certificate of a sweep (:func:`drakedeburr.verify.certificate.
-    certify`) in the same cell -> (certificate, its reading tally)."""
-    from drakedeburr.verify.certificate import certify
-
-    scene = _checked_scene(recipe, fingerprint, digest, tol)
-    return certify(scene, traj, sweep, tol), scene.tally
-
-
-def _checked_scene(recipe: dict, fingerprint: str, digest: str, tol) -> PairScene:
-    """In a worker: the caller's pair scene (refused when its digest differs), with the
-    tolerances set and a fresh reading tally."""
-    scene = _worker_scene(recipe, fingerprint)
-    if scene.digest() != digest:
-        raise RuntimeError("the worker's pair scene differs from the caller's")
-    scene.use_tolerances(tol)
-    return scene
 
 
 def _merge(scene: PairScene, t: np.ndarray, q: np.ndarray, parts: list, res: list) -> Sweep:
