@@ -158,37 +158,41 @@ class _Graph:
                         yield hit[0], node.lineno, hit[1]
 
     def cycles(self) -> list[list[str]]:
-        """Strongly connected components of more than one module (Tarjan, iterative)."""
-        index, low, stack, on, out = {}, {}, [], set(), []
-        for root in sorted(self.trees):
-            if root in index:
-                continue
-            work = [(root, iter(sorted({t for t, _, _ in self.edges[root]})))]
-            index[root] = low[root] = len(index)
-            stack.append(root)
-            on.add(root)
-            while work:
-                v, children = work[-1]
-                w = next(children, None)
-                if w is None:
-                    work.pop()
-                    if work:
-                        low[work[-1][0]] = min(low[work[-1][0]], low[v])
-                    if low[v] == index[v]:
-                        comp = []
-                        while not comp or comp[-1] != v:
-                            comp.append(stack.pop())
-                            on.discard(comp[-1])
-                        if len(comp) > 1:
-                            out.append(sorted(comp))
-                elif w not in index:
-                    index[w] = low[w] = len(index)
-                    stack.append(w)
-                    on.add(w)
-                    work.append((w, iter(sorted({t for t, _, _ in self.edges[w]}))))
-                elif w in on:
-                    low[v] = min(low[v], index[w])
-        return out
+        return _cycles({m: {t for t, _, _ in e} for m, e in self.edges.items()})
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one node (Tarjan, iterative)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+    for root in sorted(edges):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(edges[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, children = work[-1]
+            w = next(children, None)
+            if w is None:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while not comp or comp[-1] != v:
+                        comp.append(stack.pop())
+                        on.discard(comp[-1])
+                    if len(comp) > 1:
+                        out.append(sorted(comp))
+            elif w not in index:
+                index[w] = low[w] = len(index)
+                stack.append(w)
+                on.add(w)
+                work.append((w, iter(sorted(edges.get(w, ())))))
+            elif w in on:
+                low[v] = min(low[v], index[w])
+    return out
 
 
 #: modules whose circles, private imports or long parameter lists are being rewritten by the
@@ -198,6 +202,38 @@ PENDING = {
     "hub/import_cad.py", "hub/import_mesh.py", "hub/import_output.py",
     "plan/window.py", "plan/cut.py", "plan/planner.py", "plan/relax.py", "plan/home.py",
     "plan/finish.py", "plan/program_fit.py",
+}
+#: private names of hub/ (its owners' branches, #42) still read across modules; pending #45
+#: items 1-2 / #42 merge
+PENDING_PRIVATE = {
+    "hub/import_collision.py drakedeburr.hub.collision._merge_pieces",
+    "hub/import_collision.py drakedeburr.hub.collision._Piece",
+    "path/commands.py drakedeburr.hub.commands._add_front_and_burr",
+    "verify/commands.py drakedeburr.hub.commands._add_front_and_burr",
+}
+#: functions over 8 parameters not yet given their records (#45 item 4), with their count: a
+#: ratchet -- none may be added, none may grow, and a fixed one must leave the list
+PENDING_PARAMETERS = {
+    "cell/narrowphase.py certified_distance": 9, "cell/reach.py survey_reach": 9,
+    "cell/reach.py _solve_target": 10, "frames/normals.py inner_normals_from_cloud": 9,
+    "frames/normals.py _fit_point": 12, "hub/extract.py extract_window_edges": 12,
+    "hub/openings.py find_openings": 9, "hub/scan.py simulate_scan": 13,
+    "laser/robot_job.py plan_job": 9, "orientation/commands.py run_orient": 9,
+    "orientation/models.py make_problem": 9, "plan/cut_path.py smooth_axes": 11,
+    "plan/cut_path.py cut_path": 12, "plan/feed_program.py _limit_rows": 10,
+    "plan/feed_program.py _program": 10, "plan/feed_program.py hold_feed": 12,
+    "plan/fillets.py stretch_kto": 11, "plan/fillets.py orientation_by_kto": 12,
+    "plan/fillets.py _repair_one": 11, "plan/fillets.py _stretch_frames": 9,
+    "plan/ik.py _solve_point": 12, "plan/ik.py solve_window_ik": 15,
+    "plan/ik_seeds.py clearance_seed": 11, "plan/ik_seeds.py analytic_accept": 10,
+    "plan/ik_seeds.py _probe_candidates": 9, "plan/ik_seeds.py cone_clearance_probe": 15,
+    "plan/ik_seeds.py _probe": 15, "plan/ik_seeds.py _refine_near_miss": 15,
+    "plan/placement.py place_hub": 9, "plan/spin.py optimize_spin": 11,
+    "plan/stretch.py make_target": 10, "post/cl_interpreter.py arc_points": 9,
+    "post/cl_post.py program_from_cl": 15, "post/cl_post.py post_cl_file": 9,
+    "post/cl_reader.py iter_cl_moves": 10, "post/tool_axis.py solve_tool_axis_path": 10,
+    "post/virtual_tcp_post.py post_cl_file_virtual_tcp": 10, "programs/ls.py _move": 9,
+    "programs/program.py from_poses": 10, "verify/batch.py verify_all": 12,
 }
 
 
@@ -225,7 +261,9 @@ def test_no_private_name_imported_across_modules():
             if imported is None:
                 modules[target.rsplit(".", 1)[-1]] = target
             elif imported.startswith("_") and not imported.startswith("__") and target != name:
-                wrong.append(f"{f.relative_to(ROOT)}:{line} {target}.{imported}")
+                found = f"{f.relative_to(ROOT)} {target}.{imported}"
+                if found not in PENDING_PRIVATE:
+                    wrong.append(f"{found} (line {line})")
         for node in ast.walk(tree):
             if isinstance(node, (ast.Import, ast.ImportFrom)):
                 for a in node.names:
@@ -247,16 +285,18 @@ def _parameter_count(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
 
 
 def test_no_function_over_8_parameters():
-    wrong = []
+    found = {}
     for f, tree in _modules():
         if str(f.relative_to(ROOT)) in PENDING:
             continue
         for node in ast.walk(tree):
             if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
                     and _parameter_count(node) > 8):
-                wrong.append(f"{f.relative_to(ROOT)}:{node.lineno} {node.name} "
-                             f"{_parameter_count(node)}")
+                found[f"{f.relative_to(ROOT)} {node.name}"] = _parameter_count(node)
+    wrong = {k: n for k, n in found.items() if n > PENDING_PARAMETERS.get(k, 8)}
+    fixed = sorted(set(PENDING_PARAMETERS) - set(found))
     assert not wrong, wrong
+    assert not fixed, f"within 8 parameters now, remove from PENDING_PARAMETERS: {fixed}"
 
 
 def test_the_rules_see_what_they_claim():
@@ -272,5 +312,8 @@ def test_the_rules_see_what_they_claim():
     assert lazy == {"load": "p.io", "save": "p.io"}
     fn = ast.parse("def g(self, a, b=1, *c, d, **e): pass").body[0]
     assert _parameter_count(fn) == 5
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}) == [
+        ["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
     demo = {(t, n) for t, _, n in _graph().edges["drakedeburr.demo"]}
     assert ("drakedeburr.plan.io", "save_plan") in demo  # ``from drakedeburr.plan import``
