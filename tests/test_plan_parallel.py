@@ -87,25 +87,26 @@ def test_a_worker_never_takes_a_rewritten_model_for_the_callers(tmp_path):
     import shutil
 
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.plan.parallel import worker_cell
     from drakedeburr.resources import hub_dir
 
     hub = tmp_path / "hub"
     shutil.copytree(hub_dir("h5_straight"), hub)
     first = load_cell("tool_in_hand", hub)
-    recipe, fp1 = dict(first._cache["load_args"]), cell_fingerprint(first)
+    recipe, fp1 = dict(first.recipe), geometry_digest(first)
     cache: dict = {}
     cell, built = worker_cell(recipe, fp1, cache, lambda c: "built")
-    assert cell_fingerprint(cell) == fp1 and built == "built"
+    assert geometry_digest(cell) == fp1 and built == "built"
     assert worker_cell(recipe, fp1, cache, lambda c: "again")[0] is cell  # kept
     piece = hub / "collision" / "piece_000.obj"  # the hub regenerated: one piece smaller
     lines = [(" ".join(["v"] + [repr(0.7 * float(x)) for x in ln.split()[1:4]])
               if ln.startswith("v ") else ln) for ln in piece.read_text().splitlines()]
     piece.write_text("\n".join(lines) + "\n")
-    fp2 = cell_fingerprint(load_cell("tool_in_hand", hub))
+    fp2 = geometry_digest(load_cell("tool_in_hand", hub))
     assert fp2 != fp1
     cell2, _ = worker_cell(recipe, fp2, cache, lambda c: "built")
-    assert cell2 is not cell and cell_fingerprint(cell2) == fp2
+    assert cell2 is not cell and geometry_digest(cell2) == fp2
     with pytest.raises(RuntimeError, match="differs"):
         worker_cell(recipe, fp1, cache, lambda c: "built")
 
@@ -199,7 +200,8 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
 
     from drakedeburr.cell.recipe import plan_cell_args
     from drakedeburr.cell.station import load_plan_cell
-    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.plan.parallel import worker_cell
 
     X = np.eye(4)
     X[:3, 3] = [0.001, -0.002, 0.0]  # as a placement search leaves it, in plan.json (lists)
@@ -211,11 +213,11 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     def key(r):
         return repr(sorted((k, repr(v)) for k, v in r.items()))
 
-    assert key(recipe) == key(cell._cache["load_args"])
+    assert key(recipe) == key(cell.recipe)
     cache: dict = {}
     warm, _ = worker_cell(recipe, None, cache, lambda c: "built")  # the warm-up
-    assert worker_cell(recipe, cell_fingerprint(cell), cache, lambda c: "again")[0] is warm
-    assert cell_fingerprint(warm) == cell_fingerprint(cell)
+    assert worker_cell(recipe, geometry_digest(cell), cache, lambda c: "again")[0] is warm
+    assert geometry_digest(warm) == geometry_digest(cell)
 
 
 def test_a_task_that_cannot_be_sent_runs_here(caplog):

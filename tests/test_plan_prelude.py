@@ -63,7 +63,7 @@ def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkey
         assert _by_worker(caplog) == ["placement candidate 1: done by a worker"]
         assert _same_placement(alone, both)
         # the winner's cell is this process's, with the chosen pose
-        assert np.array_equal(both.cell._cache["load_args"]["hub_pose"], both.hub_pose)
+        assert np.array_equal(both.cell.recipe["hub_pose"], both.hub_pose)
         caplog.clear()
         monkeypatch.setenv("DRAKEDEBURR_WORKERS", "2")
         shared = window_targets_for_hub(hub, params=config.process)

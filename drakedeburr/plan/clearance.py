@@ -122,8 +122,8 @@ def _reach_row(P: np.ndarray, rho: float, b: int, axes: list, o: np.ndarray) -> 
 
 
 def motion_bound(cell) -> MotionBound:
-    """The :class:`MotionBound` of a loaded cell (read at ``q_home``; cached on the cell)."""
-    cached = cell._cache.get("motion_bound")
+    """The :class:`MotionBound` of a loaded cell (read at ``q_home``; kept in ``cell.memo``)."""
+    cached = cell.memo.motion_bound
     if cached is not None:
         return cached
     from pydrake.geometry import Role
@@ -170,7 +170,7 @@ def motion_bound(cell) -> MotionBound:
         c_B[i] = X_BW[:3, :3] @ c + X_BW[:3, 3]
     out = MotionBound(row={gid: i for i, gid in enumerate(gids)}, level=level, reach=reach,
                       body=body_of, c_B=c_B, radius=radius, tree=KinematicTree(plant))
-    cell._cache["motion_bound"] = out
+    cell.memo.motion_bound = out
     return out
 
 

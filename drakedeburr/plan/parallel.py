@@ -7,7 +7,7 @@ windows are independent tasks. This process plans windows from the front of the 
 ``workers - 1`` worker processes (:mod:`drakedeburr.plan.worker`: started with the interpreter,
 not forked - Drake is not fork-safe - and not through ``multiprocessing``, which would run the
 caller's main script again in each) take them from the back. Each worker builds the same cell
-from the arguments it was loaded with (``cell._cache["load_args"]``, recorded by
+from the arguments it was loaded with (``Cell.recipe``, recorded by
 :func:`drakedeburr.cell.load_cell`) once and keeps it, and the workers stay up for later runs;
 the log records a worker emits while planning a window are handed back and emitted here.
 
@@ -21,6 +21,8 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Callable, Sequence
+
+from drakedeburr.cell.fingerprint import geometry_digest
 
 __all__ = ["plan_all_windows", "map_windows", "map_tasks", "map_calls", "warm_pool", "worker_count",
            "shutdown_pool", "running_workers"]
@@ -59,38 +61,8 @@ def _env_workers(text: str) -> int:
 
 
 def _recipe(ctx) -> dict | None:
-    args = ctx.cell._cache.get("load_args")
+    args = ctx.cell.recipe
     return None if args is None else dict(args)
-
-
-def cell_fingerprint(cell) -> str:
-    """A digest of a cell's geometry (~30 ms, kept in the cell's cache): every proximity
-    geometry's name, shape kind, hull or bounding points in its frame and world pose at the
-    default configuration, and the cell's home and joint limits. Two processes that built the
-    same cell agree on it; a model rewritten at the same path (a hub regenerated) changes it,
-    so a worker's cell kept from an earlier run is never taken for the caller's."""
-    fp = cell._cache.get("fingerprint")
-    if fp is None:
-        import hashlib
-
-        import numpy as np
-        from pydrake.geometry import Role
-
-        from drakedeburr.cell.narrowphase import box_points
-
-        plant, inspector = cell.plant, cell.scene_graph.model_inspector()
-        pc = plant.CreateDefaultContext()
-        h = hashlib.sha256()
-        for g in sorted(inspector.GetAllGeometryIds(Role.kProximity), key=lambda g: g.get_value()):
-            shape = inspector.GetShape(g)
-            X = plant.EvalBodyPoseInWorld(pc, plant.GetBodyFromFrameId(inspector.GetFrameId(
-                g))).multiply(inspector.GetPoseInFrame(g)).GetAsMatrix4()
-            h.update(f"{inspector.GetName(g)}|{type(shape).__name__}".encode())
-            h.update(np.ascontiguousarray(box_points(shape)).tobytes() + X.tobytes())
-        for arr in (cell.q_home, cell.q_lower, cell.q_upper):
-            h.update(np.ascontiguousarray(arr, float).tobytes())
-        fp = cell._cache["fingerprint"] = h.hexdigest()
-    return fp
 
 
 def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) -> tuple:
@@ -103,10 +75,10 @@ def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) ->
 
     key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
     got = cache.get(key)
-    if got is None or fingerprint not in (None, cell_fingerprint(got[0])):
+    if got is None or fingerprint not in (None, geometry_digest(got[0])):
         cache.clear()
         cell = load_cell(**recipe)
-        if fingerprint not in (None, cell_fingerprint(cell)):
+        if fingerprint not in (None, geometry_digest(cell)):
             raise RuntimeError("the worker's cell differs from the caller's")
         got = cache[key] = (cell, build(cell))
     return got
@@ -493,7 +465,7 @@ def map_windows(ctx, fn: Callable, items: Sequence, workers: int | None,
         return fn(ctx, items[k])
 
     def remote(k: int) -> tuple:
-        return _in_run_context, (recipe, cell_fingerprint(ctx.cell), ctx.config, ctx.options,
+        return _in_run_context, (recipe, geometry_digest(ctx.cell), ctx.config, ctx.options,
                                  ctx.q_refs, fn, items[k], level)
 
     def done(k: int, value):

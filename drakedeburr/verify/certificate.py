@@ -314,9 +314,10 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
     readings are added to this scene's tally before the method is written."""
     from dataclasses import replace
 
-    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks, running_workers
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.plan.parallel import map_tasks, running_workers
 
-    recipe = scene.cell._cache.get("load_args")
+    recipe = scene.cell.recipe
     if alongside is None or recipe is None or not running_workers():
         if alongside is not None:
             alongside()
@@ -328,7 +329,7 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
         if k == 0:
             return None
         lean = replace(sweep, X=np.empty((0,)))  # the poses (~30 MB): certify reads none
-        return certify_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+        return certify_in_worker, (dict(recipe), geometry_digest(scene.cell), scene.digest(),
                                    traj, lean, tol)
 
     def done(k: int, value):

@@ -280,7 +280,7 @@ class PairScene:
 
     def digest(self) -> str:
         """A digest of what the readings depend on: the cell's geometry
-        (:func:`drakedeburr.plan.parallel.cell_fingerprint`), geometry names, pairs,
+        (:func:`drakedeburr.cell.fingerprint.geometry_digest`), geometry names, pairs,
         classes, tracks, the fixed geometry's and the home configuration's poses (two
         processes that built the same cell agree on it, so one may read parts of a sweep for
         the other)."""
@@ -288,9 +288,9 @@ class PairScene:
         if d is None:
             import hashlib
 
-            from drakedeburr.plan.parallel import cell_fingerprint
+            from drakedeburr.cell.fingerprint import geometry_digest
 
-            h = hashlib.sha256((cell_fingerprint(self.cell) + "\n".join(self.names)).encode())
+            h = hashlib.sha256((geometry_digest(self.cell) + "\n".join(self.names)).encode())
             for arr in (self.a, self.b, self.cls, self.track, self.X_home, self.tracks.reach,
                         *(X for X in self._X_fixed if X is not None)):
                 h.update(np.ascontiguousarray(arr).tobytes())
@@ -302,10 +302,10 @@ class PairScene:
 
 
 def pair_scene_of(cell) -> PairScene:
-    """The cell's :class:`PairScene`, built once per cell (kept in the cell's cache)."""
-    scene = cell._cache.get("verify.pair_scene")
+    """The cell's :class:`PairScene`, built once per cell (kept in ``cell.memo``)."""
+    scene = cell.memo.pair_scene
     if scene is None:
-        scene = cell._cache["verify.pair_scene"] = PairScene(cell)
+        scene = cell.memo.pair_scene = PairScene(cell)
     return scene
 
 

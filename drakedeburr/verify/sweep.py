@@ -352,11 +352,12 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
         workers: processes (:func:`drakedeburr.plan.parallel.worker_count`; None: the cores);
         the parts are the same whatever the count, and so is the result.
     """
-    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.plan.parallel import map_tasks
 
     scene.use_tolerances(tol)  # readings held to rigorous bounds (cell.narrowphase)
     parts, n = part_bounds(len(t)), len(t)
-    recipe = scene.cell._cache.get("load_args")
+    recipe = scene.cell.recipe
     read = [0]
 
     def finished(k: int, part: _Part) -> _Part:
@@ -371,7 +372,7 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
 
     def remote(k: int) -> tuple:
         a, b = parts[k]
-        return _part_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+        return _part_in_worker, (dict(recipe), geometry_digest(scene.cell), scene.digest(),
                                  traj, t[a:b + 1], q[a:b + 1], tol)
 
     def done(k: int, value) -> _Part:
@@ -387,13 +388,14 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
 
 def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
     """Have the pool's idle workers build ``cell``'s pair scene now (from its recorded
-    ``load_args``), so that they are ready when the sweep of ``n_samples`` hands them parts;
+    ``Cell.recipe``), so that they are ready when the sweep of ``n_samples`` hands them parts;
     nothing when that sweep is one part or the cell cannot be built again."""
-    recipe = cell._cache.get("load_args")
+    recipe = cell.recipe
     if recipe is not None and len(part_bounds(n_samples)) > 1:
-        from drakedeburr.plan.parallel import cell_fingerprint, warm_pool
+        from drakedeburr.cell.fingerprint import geometry_digest
+        from drakedeburr.plan.parallel import warm_pool
 
-        warm_pool(warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
+        warm_pool(warm_scene, (dict(recipe), geometry_digest(cell)), workers)
 
 
 def warm_workers_for_plan(plan, workers: int | None = None) -> None:
