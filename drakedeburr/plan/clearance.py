@@ -206,8 +206,8 @@ def _counted(checker, mb: MotionBound) -> tuple:
     (bodies (B,) plant body indices, members: per body its geometry rows, solo (B,): a pair
     with a fixed geometry counts, pairs (P, 2): body pairs with a pair between them that
     counts, centre (B, 3) and radius (B,): per body a ball in its frame holding all its
-    geometries). Cached on the checker with ``mb``."""
-    cached = checker.__dict__.get("_counted")
+    geometries). Kept on the checker (``ClearanceChecker.counted``) with ``mb``."""
+    cached = checker.counted
     if cached is not None and cached[0] is mb:
         return cached[1]
     mv = np.flatnonzero(mb.level > 0)
@@ -229,7 +229,7 @@ def _counted(checker, mb: MotionBound) -> tuple:
     radius = np.array([np.max(np.linalg.norm(mb.c_B[m] - c, axis=1) + mb.radius[m])
                        for m, c in zip(members, centre, strict=True)])
     out = (bodies, members, solo, pairs, centre, radius)
-    checker.__dict__["_counted"] = (mb, out)
+    checker.counted = (mb, out)
     return out
 
 
