@@ -17,7 +17,7 @@ ORDER = ("hub", "path", "frames", "orientation", "robots", "programs", "cell", "
          "verify", "post", "laser")
 #: modules shared by every stage (configuration, units, errors, I/O, model lookup, lazy
 #: re-exports)
-BASE = {"config", "units", "errors", "_io", "resources", "_lazy"}
+BASE = {"config", "units", "errors", "_io", "resources", "_lazy", "pool", "pool_worker"}
 
 
 def _modules():

@@ -34,10 +34,10 @@ def _by_worker(caplog) -> list[str]:
 
 
 def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkeypatch, tmp_path):
+    from drakedeburr import pool as parallel
     from drakedeburr.cell.station import load_cell
     from drakedeburr.config import load_config
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan import parallel
     from drakedeburr.plan.placement import place_hub
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
 
@@ -47,7 +47,7 @@ def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkey
     wts = window_targets_for_hub(hub, params=config.process)  # this process alone
     alone = place_hub(cell, hub, wts, config, PlanOptions(workers=1))
     parallel.shutdown_pool(kill=True)
-    caplog.set_level(logging.DEBUG, logger="drakedeburr.plan.parallel")
+    caplog.set_level(logging.DEBUG, logger="drakedeburr.pool")
     try:
         # a worker running and idle (map_calls uses only those): this process's task waits
         # until the worker has done the other

@@ -77,7 +77,7 @@ def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
     sweep this process reads alone, array for array, and the same narrow-phase tally."""
     import select
 
-    import drakedeburr.plan.parallel as parallel
+    import drakedeburr.pool as parallel
     import drakedeburr.verify.sweep as sweep_mod
 
     cell, _ = vs.cell_and_hub()

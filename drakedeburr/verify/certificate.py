@@ -308,14 +308,14 @@ def _method(scene) -> str:
 def certify_alongside(scene, traj, sweep, tol, alongside=None,
                       workers: int | None = None) -> ClearanceCertificate:
     """:func:`certify`, made on a running pool worker (the sweep's: it holds the same pair
-    scene, checked by its digest; ``workers`` as :func:`drakedeburr.plan.parallel.map_tasks`)
+    scene, checked by its digest; ``workers`` as :func:`drakedeburr.pool.map_tasks`)
     while this process runs ``alongside()``; without a worker, ``alongside()`` then
     :func:`certify` here. The same certificate either way: the worker's
     readings are added to this scene's tally before the method is written."""
     from dataclasses import replace
 
     from drakedeburr.cell.fingerprint import geometry_digest
-    from drakedeburr.plan.parallel import map_tasks, running_workers
+    from drakedeburr.pool import map_tasks, running_workers
 
     recipe = scene.cell.recipe
     if alongside is None or recipe is None or not running_workers():

@@ -176,11 +176,11 @@ _FIGURES = {"theta": _fig_theta, "joints": _fig_joints, "speed": _fig_speed,
 def figures_and_replay(report: VerificationReport, plan=None, cell=None,
                        workers: int | None = None) -> tuple[dict[str, str], str | None]:
     """(:func:`report_figures`, :func:`meshcat_replay_html` of ``plan`` or None without one),
-    made at once when a pool worker is running (:func:`drakedeburr.plan.parallel.map_tasks`;
+    made at once when a pool worker is running (:func:`drakedeburr.pool.map_tasks`;
     ``workers`` as there): the figures there while this process records the replay; none is
     started for them (a worker's start-up costs more than the figures). The same figures
     wherever they are drawn (deterministic SVG)."""
-    from drakedeburr.plan.parallel import map_tasks, running_workers
+    from drakedeburr.pool import map_tasks, running_workers
 
     if plan is None:
         return report_figures(report), None
@@ -195,7 +195,7 @@ def figures_and_replay(report: VerificationReport, plan=None, cell=None,
 def warm_plotting(workers: int | None = None) -> None:
     """Have the pool's idle running workers import matplotlib now (~0.3 s), so that
     :func:`figures_and_replay` finds it loaded there; starts no worker."""
-    from drakedeburr.plan.parallel import warm_pool
+    from drakedeburr.pool import warm_pool
 
     warm_pool(_import_pyplot, (), workers, start=False)
 

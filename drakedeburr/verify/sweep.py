@@ -22,7 +22,7 @@ the sample reads. At each sample, per class:
 The samples are read in *parts* of ~2000 (:func:`part_bounds`, a function of the sample count
 alone), neighbours sharing one sample; each part starts its own tracking, so the parts are
 independent tasks: this process reads them from the front while the machine's other cores
-(:func:`drakedeburr.plan.parallel.map_tasks`, workers that build the same cell) read them from
+(:func:`drakedeburr.pool.map_tasks`, workers that build the same cell) read them from
 the back, and the result is the same on one core or many. Where two parts share a sample, the
 class minimum is exact in both, and the bounds kept are the smaller of the two (each valid).
 Fresh heaps also read fewer pairs than one long run (86.7k against 102k readings on the
@@ -349,11 +349,11 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
     Args:
         scene: the cell's pairs. traj: the joint trajectory; t (N,) [s], q (N, nq) [rad]: the
         samples on it. tol: the tolerances. progress: optional callback (done, total).
-        workers: processes (:func:`drakedeburr.plan.parallel.worker_count`; None: the cores);
+        workers: processes (:func:`drakedeburr.pool.worker_count`; None: the cores);
         the parts are the same whatever the count, and so is the result.
     """
     from drakedeburr.cell.fingerprint import geometry_digest
-    from drakedeburr.plan.parallel import map_tasks
+    from drakedeburr.pool import map_tasks
 
     scene.use_tolerances(tol)  # readings held to rigorous bounds (cell.narrowphase)
     parts, n = part_bounds(len(t)), len(t)
@@ -393,7 +393,7 @@ def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
     recipe = cell.recipe
     if recipe is not None and len(part_bounds(n_samples)) > 1:
         from drakedeburr.cell.fingerprint import geometry_digest
-        from drakedeburr.plan.parallel import warm_pool
+        from drakedeburr.pool import warm_pool
 
         warm_pool(warm_scene, (dict(recipe), geometry_digest(cell)), workers)
 
@@ -405,7 +405,7 @@ def warm_workers_for_plan(plan, workers: int | None = None) -> None:
     part a worker reads later is still checked against this process's cell
     (:func:`_part_in_worker`)."""
     from drakedeburr.cell.recipe import plan_cell_args
-    from drakedeburr.plan.parallel import warm_pool
+    from drakedeburr.pool import warm_pool
 
     warm_pool(warm_scene, (plan_cell_args(plan), None), workers)
 
