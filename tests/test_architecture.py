@@ -16,8 +16,9 @@ ROOT = Path(drakedeburr.__file__).parent
 ORDER = ("hub", "path", "frames", "orientation", "robots", "programs", "cell", "viz", "plan",
          "verify", "post", "laser")
 #: modules shared by every stage (configuration, units, errors, I/O, model lookup, lazy
-#: re-exports)
-BASE = {"config", "units", "errors", "_io", "resources", "_lazy", "pool", "pool_worker"}
+#: re-exports, the process pool, command-line argument checks)
+BASE = {"config", "units", "errors", "_io", "resources", "_lazy", "pool", "pool_worker",
+        "argcheck"}
 
 
 def _modules():
