@@ -78,7 +78,7 @@ def bench_format(fmt: str, hub: str, plans: Path, quick: bool) -> tuple[float, f
     from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.config import default_tolerances
     from drakedeburr.post import program_check
-    from drakedeburr.post.export import plan_program
+    from drakedeburr.post.program_check import plan_program
     from drakedeburr.programs import controller, read_program, write_program
     from drakedeburr.verify.checks import QUICK_SAMPLING, config_for_plan, verify_plan
 

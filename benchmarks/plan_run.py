@@ -85,7 +85,7 @@ def main() -> None:
     plan = plan_hub(config, options=options)
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     try:  # the worker processes' CPU counts once they have ended
-        from drakedeburr.plan.parallel import shutdown_pool
+        from drakedeburr.pool import shutdown_pool
 
         shutdown_pool()
     except ImportError:

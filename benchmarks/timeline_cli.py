@@ -30,7 +30,7 @@ STAGES = [
     ("drakedeburr.verify.distances", "pair_scene_of"),
     ("drakedeburr.verify.sweep", "sweep"),
     ("drakedeburr.verify.certificate", "certify_alongside"),
-    ("drakedeburr.verify.report", "write_report_files"),
+    ("drakedeburr.verify.html", "write_report_files"),
     ("drakedeburr.verify.html", "meshcat_replay_html"),
     ("drakedeburr.verify.html", "report_figures"),
     ("drakedeburr.plan.planner", "window_targets_for_hub"),

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from drakedeburr.errors import InputError
 
-__all__ = ["number", "input_file", "output_file", "output_folder", "free_space",
+__all__ = ["number", "six_numbers", "input_file", "output_file", "output_folder", "free_space",
            "parse_windows", "check_windows", "hub_windows", "MB", "scheduler_address",
            "separate_outputs"]
 
@@ -138,6 +138,15 @@ def free_space(path: str | Path, need: int, option: str) -> None:
 
         raise InputError(f"{path}: {option}: {size_text(free)} free on {where}, the output "
                          f"needs about {size_text(need)}")
+
+
+def six_numbers(text: str) -> list[float]:
+    """An argparse type: ``x,y,z,rx,ry,rz`` (commas or semicolons) as numbers."""
+    parts = [p for p in text.replace(";", ",").split(",") if p.strip()]
+    try:
+        return [float(p) for p in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected x,y,z,rx,ry,rz numbers, got {text!r}") from None
 
 
 def parse_windows(text: str | None, option: str = "--windows") -> tuple[int, ...] | None:

@@ -76,7 +76,7 @@ def run_demo(
     from drakedeburr.post.export import ExportRefused, export_plan
     from drakedeburr.programs import plan_robot
     from drakedeburr.verify import verify_plan
-    from drakedeburr.verify.report import write_report_files
+    from drakedeburr.verify.html import write_report_files
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

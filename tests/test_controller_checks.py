@@ -16,8 +16,7 @@ import pytest
 import verify_support as vs
 from scipy.spatial.transform import Rotation
 
-from drakedeburr.post.export import plan_program
-from drakedeburr.post.program_check import CONTROLLER_CHECKS, program_items
+from drakedeburr.post.program_check import CONTROLLER_CHECKS, plan_program, program_items
 from drakedeburr.programs import read_program, write_program
 from drakedeburr.robots import abb_confdata, fk_opw
 from drakedeburr.verify.distances import DistanceProbe

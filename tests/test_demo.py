@@ -34,8 +34,7 @@ def test_demo_writes_outputs_and_gates_the_program_on_verification(tmp_path):
     from drakedeburr.programs import read_program
 
     plan = load_plan(folder)
-    from drakedeburr.post.export import plan_program
-    from drakedeburr.post.program_check import _target_moves
+    from drakedeburr.post.program_check import _target_moves, plan_program
 
     moves = read_program(program).moves
     # one move per target, home included, plus via points where a joint move bends

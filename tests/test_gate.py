@@ -21,7 +21,7 @@ import verify_support as vs
 from drakedeburr.cli import main
 from drakedeburr.plan.io import load_plan, plan_digest, save_plan
 from drakedeburr.verify.gate import gate
-from drakedeburr.verify.report import write_report_files
+from drakedeburr.verify.html import write_report_files
 
 
 @pytest.fixture(scope="module")

@@ -87,7 +87,7 @@ def test_the_verifier_cell_and_check_follow_the_plan_home():
     from drakedeburr.cell.station import load_plan_cell
     from drakedeburr.errors import InputError
     from drakedeburr.verify.checks_motion import start_end_home
-    from drakedeburr.verify.sampling import JointLimits
+    from drakedeburr.verify.types import JointLimits
 
     plan = vs.good_plan()
     q0 = np.asarray(plan.trajectory.q[0], float)

@@ -16,7 +16,7 @@ def test_worker_count(monkeypatch):
     import os
 
     from drakedeburr.errors import InputError
-    from drakedeburr.plan.parallel import worker_count
+    from drakedeburr.pool import worker_count
 
     monkeypatch.delenv("DRAKEDEBURR_WORKERS", raising=False)
     assert worker_count(1, 5) == 1
@@ -68,7 +68,7 @@ def test_worker_count_reads_the_environment(monkeypatch):
     """$DRAKEDEBURR_WORKERS sets the default pool (a batch or a test suite that already fills
     the cores); an explicit request wins; at most one process per window; nonsense refused."""
     from drakedeburr.errors import InputError
-    from drakedeburr.plan.parallel import worker_count
+    from drakedeburr.pool import worker_count
 
     monkeypatch.setenv("DRAKEDEBURR_WORKERS", "3")
     assert worker_count(None, 5) == 3 and worker_count(None, 2) == 2
@@ -86,26 +86,27 @@ def test_a_worker_never_takes_a_rewritten_model_for_the_callers(tmp_path):
     whose fresh build still differs from the caller's cell refuses the task."""
     import shutil
 
+    from drakedeburr.cell.fingerprint import geometry_digest
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+    from drakedeburr.plan.parallel import worker_cell
     from drakedeburr.resources import hub_dir
 
     hub = tmp_path / "hub"
     shutil.copytree(hub_dir("h5_straight"), hub)
     first = load_cell("tool_in_hand", hub)
-    recipe, fp1 = dict(first._cache["load_args"]), cell_fingerprint(first)
+    recipe, fp1 = dict(first.recipe), geometry_digest(first)
     cache: dict = {}
     cell, built = worker_cell(recipe, fp1, cache, lambda c: "built")
-    assert cell_fingerprint(cell) == fp1 and built == "built"
+    assert geometry_digest(cell) == fp1 and built == "built"
     assert worker_cell(recipe, fp1, cache, lambda c: "again")[0] is cell  # kept
     piece = hub / "collision" / "piece_000.obj"  # the hub regenerated: one piece smaller
     lines = [(" ".join(["v"] + [repr(0.7 * float(x)) for x in ln.split()[1:4]])
               if ln.startswith("v ") else ln) for ln in piece.read_text().splitlines()]
     piece.write_text("\n".join(lines) + "\n")
-    fp2 = cell_fingerprint(load_cell("tool_in_hand", hub))
+    fp2 = geometry_digest(load_cell("tool_in_hand", hub))
     assert fp2 != fp1
     cell2, _ = worker_cell(recipe, fp2, cache, lambda c: "built")
-    assert cell2 is not cell and cell_fingerprint(cell2) == fp2
+    assert cell2 is not cell and geometry_digest(cell2) == fp2
     with pytest.raises(RuntimeError, match="differs"):
         worker_cell(recipe, fp1, cache, lambda c: "built")
 
@@ -115,7 +116,7 @@ def test_map_tasks_runs_failed_tasks_here_and_does_not_wait_for_a_warm_up():
     waited for (its reply is dropped by a later call); a task the worker fails runs here."""
     import time
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     parallel.shutdown_pool(kill=True)
     try:
@@ -140,7 +141,7 @@ def test_a_worker_gets_its_next_task_while_this_process_is_busy(tmp_path):
     process's tasks, the worker would do one and the wait would time out."""
     from pathlib import Path
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     parallel.shutdown_pool(kill=True)
     files = [tmp_path / f"task{k}" for k in range(5)]
@@ -168,7 +169,7 @@ def test_a_task_only_this_process_runs(tmp_path):
     task waits for the worker to have done tasks 1 and 2."""
     from pathlib import Path
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     files = [tmp_path / f"task{k}" for k in range(4)]
     ran_here = []
@@ -197,9 +198,10 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     key), and a cell built by the warm-up (no fingerprint yet) is kept for the checked task."""
     from types import SimpleNamespace
 
+    from drakedeburr.cell.fingerprint import geometry_digest
     from drakedeburr.cell.recipe import plan_cell_args
     from drakedeburr.cell.station import load_plan_cell
-    from drakedeburr.plan.parallel import cell_fingerprint, worker_cell
+    from drakedeburr.plan.parallel import worker_cell
 
     X = np.eye(4)
     X[:3, 3] = [0.001, -0.002, 0.0]  # as a placement search leaves it, in plan.json (lists)
@@ -211,11 +213,11 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     def key(r):
         return repr(sorted((k, repr(v)) for k, v in r.items()))
 
-    assert key(recipe) == key(cell._cache["load_args"])
+    assert key(recipe) == key(cell.recipe)
     cache: dict = {}
     warm, _ = worker_cell(recipe, None, cache, lambda c: "built")  # the warm-up
-    assert worker_cell(recipe, cell_fingerprint(cell), cache, lambda c: "again")[0] is warm
-    assert cell_fingerprint(warm) == cell_fingerprint(cell)
+    assert worker_cell(recipe, geometry_digest(cell), cache, lambda c: "again")[0] is warm
+    assert geometry_digest(warm) == geometry_digest(cell)
 
 
 def test_a_task_that_cannot_be_sent_runs_here(caplog):
@@ -223,11 +225,11 @@ def test_a_task_that_cannot_be_sent_runs_here(caplog):
     sent) is run here with a warning; the worker stays up."""
     import logging
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     parallel.shutdown_pool(kill=True)
     try:
-        with caplog.at_level(logging.WARNING, logger="drakedeburr.plan.parallel"):
+        with caplog.at_level(logging.WARNING, logger="drakedeburr.pool"):
             out = parallel.map_tasks(3, lambda k: ("here", k),
                                      lambda k: (divmod, (lambda: 0, 1)), 2)
         assert parallel.running_workers() == 1
@@ -238,7 +240,7 @@ def test_a_task_that_cannot_be_sent_runs_here(caplog):
 
 
 #: run by a worker (builtins.exec, ``mark`` a path in its globals): marks that it runs, writes
-#: half a pickled reply on the caller's stream (drakedeburr.plan.worker.STATE, the worker
+#: half a pickled reply on the caller's stream (drakedeburr.pool_worker.STATE, the worker
 #: module running as __main__), then dies
 HALF_A_REPLY = """
 import os, pickle, sys
@@ -258,7 +260,7 @@ def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog, tm
     have started."""
     import logging
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     mark = tmp_path / "started"
 
@@ -269,7 +271,7 @@ def test_a_reply_cut_short_is_an_error_and_never_reaches_a_later_call(caplog, tm
 
     parallel.shutdown_pool(kill=True)
     try:
-        with caplog.at_level(logging.WARNING, logger="drakedeburr.plan.parallel"):
+        with caplog.at_level(logging.WARNING, logger="drakedeburr.pool"):
             out = parallel.map_tasks(2, here, lambda k: (exec, (HALF_A_REPLY, {
                 "mark": str(mark)})) if k == 1 else None, 2)
         assert "could not be read" in caplog.text

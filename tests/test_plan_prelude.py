@@ -34,10 +34,10 @@ def _by_worker(caplog) -> list[str]:
 
 
 def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkeypatch, tmp_path):
+    from drakedeburr import pool as parallel
     from drakedeburr.cell.station import load_cell
     from drakedeburr.config import load_config
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan import parallel
     from drakedeburr.plan.placement import place_hub
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
 
@@ -47,7 +47,7 @@ def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkey
     wts = window_targets_for_hub(hub, params=config.process)  # this process alone
     alone = place_hub(cell, hub, wts, config, PlanOptions(workers=1))
     parallel.shutdown_pool(kill=True)
-    caplog.set_level(logging.DEBUG, logger="drakedeburr.plan.parallel")
+    caplog.set_level(logging.DEBUG, logger="drakedeburr.pool")
     try:
         # a worker running and idle (map_calls uses only those): this process's task waits
         # until the worker has done the other
@@ -63,7 +63,7 @@ def test_targets_and_placement_on_a_worker_are_the_ones_made_here(caplog, monkey
         assert _by_worker(caplog) == ["placement candidate 1: done by a worker"]
         assert _same_placement(alone, both)
         # the winner's cell is this process's, with the chosen pose
-        assert np.array_equal(both.cell._cache["load_args"]["hub_pose"], both.hub_pose)
+        assert np.array_equal(both.cell.recipe["hub_pose"], both.hub_pose)
         caplog.clear()
         monkeypatch.setenv("DRAKEDEBURR_WORKERS", "2")
         shared = window_targets_for_hub(hub, params=config.process)

@@ -278,3 +278,18 @@ def test_readers_name_what_they_refuse(tmp_path, fmt, text, match):
     path.write_text(text)
     with pytest.raises(mut.ProgramFormatError, match=match):
         mut.read_program(path)
+
+
+def test_read_types_split_and_numbers():
+    """The readers' shared parsing (drakedeburr.programs.read_types): commas inside brackets
+    and quotes do not split; a number that is not finite or not a number is refused, naming
+    the file and line."""
+    from drakedeburr.programs.common import ProgramFormatError
+    from drakedeburr.programs.read_types import parse_number, split_top_level
+
+    text = 'a, [1,2,[3,4]], "x,y", {5,6}'
+    assert split_top_level(text) == ["a", "[1,2,[3,4]]", '"x,y"', "{5,6}"]
+    assert parse_number(" -1.5e3 ", "f.mod", 3, "x") == float("-1.5e3")
+    for bad in ("1e999", "nan", "1,5", ""):
+        with pytest.raises(ProgramFormatError, match="f.mod:3"):
+            parse_number(bad, "f.mod", 3, "x")

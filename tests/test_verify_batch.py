@@ -71,7 +71,7 @@ def test_a_cluster_job_plans_and_verifies_in_its_own_process(tmp_path, monkeypat
     one pool); a job without it may use the cores."""
     import os
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     parallel.shutdown_pool(kill=True)
     monkeypatch.delenv("DRAKEDEBURR_WORKERS")

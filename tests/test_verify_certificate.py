@@ -164,7 +164,7 @@ def test_the_certificate_made_on_a_worker_is_the_one_made_here(caplog):
     import logging
     import time
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
     from drakedeburr.verify.distances import pair_scene_of
     from drakedeburr.verify.sweep import sweep
 
@@ -180,7 +180,7 @@ def test_the_certificate_made_on_a_worker_is_the_one_made_here(caplog):
     parallel.shutdown_pool(kill=True)
     try:
         parallel._pool(1)
-        with caplog.at_level(logging.DEBUG, logger="drakedeburr.plan.parallel"):
+        with caplog.at_level(logging.DEBUG, logger="drakedeburr.pool"):
             there = mut.certify_alongside(  # alongside lasts: the worker takes its task
                 scene, traj, sw, tol, lambda: (ran.append("here"), time.sleep(1.0)), workers=2)
     finally:

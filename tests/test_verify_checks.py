@@ -339,7 +339,7 @@ def test_wrist_singularity_guards_the_linear_segments():
 
     from drakedeburr.config import default_tolerances
     from drakedeburr.verify.checks_motion import wrist_singularity
-    from drakedeburr.verify.sampling import KIND_CODE
+    from drakedeburr.verify.types import KIND_CODE
 
     q = np.zeros((5, 6))
     q[:, 4] = [0.6, 0.0, 0.4, 0.5, 0.3]

@@ -77,7 +77,7 @@ def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
     sweep this process reads alone, array for array, and the same narrow-phase tally."""
     import select
 
-    import drakedeburr.plan.parallel as parallel
+    import drakedeburr.pool as parallel
     import drakedeburr.verify.sweep as sweep_mod
 
     cell, _ = vs.cell_and_hub()
@@ -88,7 +88,7 @@ def test_sweep_is_the_same_in_one_process_and_on_a_worker(monkeypatch):
     monkeypatch.setattr(sweep_mod, "_PART_SAMPLES", 600)
     one = sweep(scene, plan.trajectory, s.t, s.q, tol, workers=1)
     tally_one = dict(scene.tally.counts)
-    assert cell._cache.get("load_args") is not None  # what a worker builds its cell from
+    assert cell.recipe is not None  # what a worker builds its cell from
     from_worker = []
     real_map = parallel.map_tasks
 

@@ -166,7 +166,7 @@ def test_figures_drawn_on_a_worker_are_the_figures_drawn_here(report_file, caplo
     import logging
     import time
 
-    from drakedeburr.plan import parallel
+    from drakedeburr import pool as parallel
 
     replay_here = mut.meshcat_replay_html
 
@@ -190,7 +190,7 @@ def test_figures_drawn_on_a_worker_are_the_figures_drawn_here(report_file, caplo
     parallel.shutdown_pool(kill=True)
     try:
         parallel._pool(1)
-        with caplog.at_level(logging.DEBUG, logger="drakedeburr.plan.parallel"):
+        with caplog.at_level(logging.DEBUG, logger="drakedeburr.pool"):
             figs, replay = mut.figures_and_replay(report, plan, cell, workers=2)
     finally:
         parallel.shutdown_pool(kill=True)

@@ -144,7 +144,7 @@ def test_burr_contact_reads_the_true_surface_where_the_pieces_stand_proud(tmp_pa
 
     from drakedeburr.config import Config, ProcessParameters, Recipe, default_tolerances
     from drakedeburr.verify import checks_distance
-    from drakedeburr.verify.sampling import KIND_CODE
+    from drakedeburr.verify.types import KIND_CODE
 
     c = CONE
     V, F = _plane(np.zeros(3), [0, 0, 1], half=0.05)

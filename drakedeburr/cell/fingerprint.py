@@ -1,6 +1,8 @@
-"""A content hash of everything a cell is built from: the scenario file, the arm, tool and
-fixture models, and the hub model folder. A verification report carries it, so a report is
-accepted only for the cell it checked (``drakedeburr export`` refuses otherwise)."""
+"""Two digests of a cell. :func:`cell_fingerprint`: a content hash of everything a cell is built
+from (the scenario file, the arm, tool and fixture models, and the hub model folder); a
+verification report carries it, so a report is accepted only for the cell it checked
+(``drakedeburr export`` refuses otherwise). :func:`geometry_digest`: a hash of a loaded cell's
+geometry, by which a pool worker's cell is checked to be the caller's."""
 
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ from pathlib import Path
 from drakedeburr.cell.tools import DEFAULT_TOOL
 from drakedeburr.resources import models_dir, resolve_hub_dir, scenario_path
 
-__all__ = ["cell_fingerprint", "hub_digest"]
+__all__ = ["cell_fingerprint", "geometry_digest", "hub_digest"]
 
 #: model folders every cell draws from (each file hashed with its path inside ``models/``)
 _MODEL_FOLDERS = ("robots", "tools", "fixtures")
@@ -59,3 +61,33 @@ def hub_digest(hub: str | Path) -> str:
             h.update(f"{f.relative_to(hub_dir)}\0{len(data)}\0".encode())
             h.update(data)
     return h.hexdigest()
+
+
+def geometry_digest(cell) -> str:
+    """A digest of a cell's geometry (~30 ms, kept in ``cell.memo``): every proximity
+    geometry's name, shape kind, hull or bounding points in its frame and world pose at the
+    default configuration, and the cell's home and joint limits. Two processes that built the
+    same cell agree on it; a model rewritten at the same path (a hub regenerated) changes it,
+    so a worker's cell kept from an earlier run is never taken for the caller's."""
+    fp = cell.memo.geometry_digest
+    if fp is None:
+        import hashlib
+
+        import numpy as np
+        from pydrake.geometry import Role
+
+        from drakedeburr.cell.narrowphase import box_points
+
+        plant, inspector = cell.plant, cell.scene_graph.model_inspector()
+        pc = plant.CreateDefaultContext()
+        h = hashlib.sha256()
+        for g in sorted(inspector.GetAllGeometryIds(Role.kProximity), key=lambda g: g.get_value()):
+            shape = inspector.GetShape(g)
+            X = plant.EvalBodyPoseInWorld(pc, plant.GetBodyFromFrameId(inspector.GetFrameId(
+                g))).multiply(inspector.GetPoseInFrame(g)).GetAsMatrix4()
+            h.update(f"{inspector.GetName(g)}|{type(shape).__name__}".encode())
+            h.update(np.ascontiguousarray(box_points(shape)).tobytes() + X.tobytes())
+        for arr in (cell.q_home, cell.q_lower, cell.q_upper):
+            h.update(np.ascontiguousarray(arr, float).tobytes())
+        fp = cell.memo.geometry_digest = h.hexdigest()
+    return fp

@@ -1,15 +1,38 @@
 """How a cell is built again: the :func:`drakedeburr.cell.station.load_cell` arguments a cell
-records (``cell._cache["load_args"]``), from which a worker process builds the same cell, and
-those of the cell a saved plan was made in (so a worker can start building it before this
-process has)."""
+records (``Cell.recipe``), from which a worker process builds the same cell, and those of the
+cell a saved plan was made in (so a worker can start building it before this process has);
+and :class:`CellMemo`, what later stages derive from a cell once and keep with it."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from drakedeburr.errors import InputError
 
-__all__ = ["cell_recipe", "plan_cell_args"]
+__all__ = ["CellMemo", "cell_recipe", "plan_cell_args"]
+
+
+@dataclass(eq=False)
+class CellMemo:
+    """What is derived from a loaded cell once and kept with it (``Cell.memo``), each field
+    written by one owner only, the first time it is asked for.
+
+    Attributes:
+        context: the diagram context of the cell's pose queries (``Cell``; not thread-safe).
+        geometry_digest: digest of the cell's geometry
+            (:func:`drakedeburr.cell.fingerprint.geometry_digest`).
+        motion_bound: the planner's ``MotionBound`` (:func:`drakedeburr.plan.clearance.
+            motion_bound`).
+        pair_scene: the verifier's ``PairScene`` (:func:`drakedeburr.verify.pair_scene.
+            pair_scene_of`).
+    """
+
+    context: object = None
+    geometry_digest: str | None = None
+    motion_bound: object = None
+    pair_scene: object = None
 
 
 def cell_recipe(scenario, hub=None, *, robot=None, tool=None, time_step: float = 0.0,

@@ -35,7 +35,7 @@ from typing import Literal
 import numpy as np
 
 from drakedeburr._io import load_yaml
-from drakedeburr.cell.recipe import cell_recipe, plan_cell_args
+from drakedeburr.cell.recipe import CellMemo, cell_recipe, plan_cell_args
 from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
 from drakedeburr.resources import (
@@ -110,6 +110,8 @@ class Cell:
         scenario: the scenario file. hub_sdf: the hub model file.
         tool: the burr variant the bundled spindle carries (``drakedeburr.cell.tools``), or
             None for a scenario with its own tool model.
+        recipe: the ``load_cell`` arguments that build this cell again (:mod:`.recipe`).
+        memo: what later stages derive from the cell once (:class:`~.recipe.CellMemo`).
     """
 
     diagram: object
@@ -138,7 +140,8 @@ class Cell:
     scenario: Path
     hub_sdf: Path
     tool: str | None = None
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    recipe: dict | None = field(default=None, repr=False, compare=False)
+    memo: CellMemo = field(default_factory=CellMemo, repr=False, compare=False)
 
     @property
     def num_joints(self) -> int:
@@ -155,9 +158,9 @@ class Cell:
 
     def _plant_context(self, q: np.ndarray):
         # one cached context for pose queries (not thread-safe; use create_context for that)
-        if "context" not in self._cache:
-            self._cache["context"] = self.diagram.CreateDefaultContext()
-        plant_context = self.plant.GetMyMutableContextFromRoot(self._cache["context"])
+        if self.memo.context is None:
+            self.memo.context = self.diagram.CreateDefaultContext()
+        plant_context = self.plant.GetMyMutableContextFromRoot(self.memo.context)
         self.plant.SetPositions(plant_context, self._check_q(q))
         return plant_context
 
@@ -465,15 +468,14 @@ def load_cell(
         robot_ids=frozenset(sets["robot"]), environment_ids=frozenset(sets["env"]),
         moving_model_instances=tuple(sorted(moving, key=int)),
         scenario=scenario_file, hub_sdf=hub_sdf, tool=tool_name,
+        # how to build this cell again (a planner's worker process builds the same one)
+        recipe=cell_recipe(scenario, hub, robot=robot, tool=tool, time_step=time_step,
+                           hub_pose=hub_pose, q_home=q_home),
     )
     for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
                 cell.a_upper, cell.q_home):
         arr.setflags(write=False)
     _check_payload(cell)
-    # how to build this cell again (a planner's worker process builds the same one)
-    cell._cache["load_args"] = cell_recipe(scenario, hub, robot=robot, tool=tool,
-                                           time_step=time_step, hub_pose=hub_pose,
-                                           q_home=q_home)
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
               hub_sdf, arm.name)
     return cell

@@ -276,7 +276,7 @@ def _run_shape(args) -> int:
     if not args.max_command > args.min_command:
         raise InputError(f"--max-command {args.max_command:g} V must be above --min-command "
                          f"{args.min_command:g} V")
-    fanuc_ls._check_name(args.name or args.output.stem)
+    fanuc_ls.check_name(args.name or args.output.stem)
     shape = _make_shape(args)
     _check_point_count(shape, args)
     feed = args.feed / 60.0
@@ -414,7 +414,7 @@ def _run_job(args) -> int:
         raise InputError(f"{src}: unknown key(s) {sorted(set(job) - _JOB_KEYS)}; known: "
                          f"{sorted(_JOB_KEYS)}" if isinstance(job, dict)
                          else f"{src}: expected a mapping")
-    name = fanuc_ls._check_name(args.name or src.stem)
+    name = fanuc_ls.check_name(args.name or src.stem)
     g = geometry_from_args(args, job.get("tool"), f"{src}: tool")
     mount = pose_from_mm_deg(job.get("mount", (0, 0, 60, 0, 0, 0)), f"{src}: mount")
     cell = LaserCell(str(job.get("robot", "m10ia")),

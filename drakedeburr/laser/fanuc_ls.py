@@ -31,7 +31,7 @@ from drakedeburr.laser.robot_job import LaserJob
 from drakedeburr.programs.ls import FRAME_PR, frame_statements
 
 __all__ = ["hole_program_ls", "contour_program_ls", "job_programs_ls", "write_ls",
-           "wpr_deg_from_R"]
+           "wpr_deg_from_R", "check_name"]
 
 _TCD = """TCD:  STACK_SIZE		= 0,
       TASK_PRIORITY		= 50,
@@ -48,7 +48,7 @@ def _header(name: str, comment: str, n_lines: int, groups: str) -> list[str]:
             _TCD, f"DEFAULT_GROUP\t= {groups};", "CONTROL_CODE\t= 00000000 00000000;", "/MN"]
 
 
-def _check_name(name: str) -> str:
+def check_name(name: str) -> str:
     """The /PROG name: an LS identifier (:mod:`drakedeburr.programs.names`), upper case."""
     from drakedeburr.programs.names import check_identifier
 
@@ -76,7 +76,7 @@ def hole_program_ls(prog: HoleProgram, name: str, laser_do: int = 1, uframe: int
     from drakedeburr.errors import InputError
     from drakedeburr.laser.itp import TP_MSEC_MAX, ControllerTiming, quantise
 
-    name = _check_name(name)
+    name = check_name(name)
     seg = prog.segments
     if seg is None:
         seg = quantise(prog.timed, prog.geometry, prog.power, ControllerTiming())
@@ -143,7 +143,7 @@ def job_programs_ls(job: LaserJob, name: str, laser_do: int = 1) -> dict[str, st
     """
     from drakedeburr.laser.robot_job import X_FT_of
 
-    name = _check_name(name)
+    name = check_name(name)
     cell = job.cell
     out: dict[str, str] = {}
     mn = [f"!sets UFRAME[{cell.uframe}], UTOOL[{cell.utool}] ;",
@@ -155,7 +155,7 @@ def job_programs_ls(job: LaserJob, name: str, laser_do: int = 1) -> dict[str, st
     pos: list[str] = []
     k = 0
     for h, prog in enumerate(job.holes):
-        sub = _check_name(f"{name[:32]}_H{h + 1:02d}")
+        sub = check_name(f"{name[:32]}_H{h + 1:02d}")
         out[sub] = hole_program_ls(prog, sub)
         k += 1
         mn += [f"!hole {h + 1} {prog.contour.name} ;", f"J P[{k}] 20% FINE ;", f"CALL {sub} ;"]
@@ -186,7 +186,7 @@ def contour_program_ls(targets: LaserTargets, name: str, cell=None, geometry=Non
     motion = solve_robot(cell, X_PT, g, f"contour {targets.name}")
     job = LaserJob(cell=cell, geometry=g, holes=(), hole_centers=np.zeros((0, 2)),
                    hole_motion=None, contour=targets, contour_motion=motion)
-    return job_programs_ls(job, name, laser_do)[_check_name(name)]
+    return job_programs_ls(job, name, laser_do)[check_name(name)]
 
 
 def _assemble(name: str, comment: str, mn: list[str], pos: list[str], groups: str) -> str:

@@ -18,7 +18,12 @@ import numpy as np
 
 from drakedeburr.errors import InputError
 from drakedeburr.laser.itp import FANUC_TIMING, ControllerTiming, ItpSegments, quantise
-from drakedeburr.laser.kinematics import FiveBarGeometry, check_reach, forward_kinematics, jacobian
+from drakedeburr.laser.kinematics import (
+    FiveBarGeometry,
+    check_reach,
+    forward_kinematics,
+    tcp_speed,
+)
 from drakedeburr.laser.power import PowerMap, PowerProfile, power_profile
 from drakedeburr.laser.shapes import Contour, ShapeBase, build_contour
 from drakedeburr.laser.timing import AxisLimits, TimedPath, time_path
@@ -103,12 +108,6 @@ class HoleProgram:
         p = forward_kinematics(self.geometry, q).p_CJ5
         v = tcp_speed(self.geometry, q, qd)
         return t, q, p, power_profile(t, v, self.power)
-
-
-def tcp_speed(g: FiveBarGeometry, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """(M,) TCP speed |J(q) qd| [m/s] for servo angles q (M, 2) and rates qd (M, 2)."""
-    J = jacobian(g, q)
-    return np.linalg.norm(np.einsum("nij,nj->ni", J, qd), axis=1)
 
 
 def tool_path_points(g: FiveBarGeometry, contour: Contour) -> np.ndarray:

@@ -187,6 +187,6 @@ def quantise(timed, geometry, power, timing: ControllerTiming) -> ItpSegments:
 
 
 def _speed(g, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    from drakedeburr.laser.hole import tcp_speed
+    from drakedeburr.laser.kinematics import tcp_speed
 
     return tcp_speed(g, q, qd)

@@ -41,6 +41,7 @@ __all__ = [
     "solve_theta3",
     "inverse_kinematics",
     "jacobian",
+    "tcp_speed",
     "singularity_measures",
     "check_reach",
 ]
@@ -278,6 +279,12 @@ def jacobian(g: FiveBarGeometry, q: np.ndarray) -> np.ndarray:
     Ax, Bq = _constraint_matrices(g, st)
     with np.errstate(divide="ignore", invalid="ignore"):
         return -np.linalg.solve(Ax, Bq)
+
+
+def tcp_speed(g: FiveBarGeometry, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """(M,) TCP speed |J(q) qd| [m/s] for servo angles q (M, 2) and rates qd (M, 2)."""
+    J = jacobian(g, q)
+    return np.linalg.norm(np.einsum("nij,nj->ni", J, qd), axis=1)
 
 
 def _constraint_matrices(g: FiveBarGeometry, st: FiveBarState) -> tuple[np.ndarray, np.ndarray]:

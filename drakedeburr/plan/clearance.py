@@ -122,8 +122,8 @@ def _reach_row(P: np.ndarray, rho: float, b: int, axes: list, o: np.ndarray) -> 
 
 
 def motion_bound(cell) -> MotionBound:
-    """The :class:`MotionBound` of a loaded cell (read at ``q_home``; cached on the cell)."""
-    cached = cell._cache.get("motion_bound")
+    """The :class:`MotionBound` of a loaded cell (read at ``q_home``; kept in ``cell.memo``)."""
+    cached = cell.memo.motion_bound
     if cached is not None:
         return cached
     from pydrake.geometry import Role
@@ -170,7 +170,7 @@ def motion_bound(cell) -> MotionBound:
         c_B[i] = X_BW[:3, :3] @ c + X_BW[:3, 3]
     out = MotionBound(row={gid: i for i, gid in enumerate(gids)}, level=level, reach=reach,
                       body=body_of, c_B=c_B, radius=radius, tree=KinematicTree(plant))
-    cell._cache["motion_bound"] = out
+    cell.memo.motion_bound = out
     return out
 
 
@@ -206,8 +206,8 @@ def _counted(checker, mb: MotionBound) -> tuple:
     (bodies (B,) plant body indices, members: per body its geometry rows, solo (B,): a pair
     with a fixed geometry counts, pairs (P, 2): body pairs with a pair between them that
     counts, centre (B, 3) and radius (B,): per body a ball in its frame holding all its
-    geometries). Cached on the checker with ``mb``."""
-    cached = checker.__dict__.get("_counted")
+    geometries). Kept on the checker (``ClearanceChecker.counted``) with ``mb``."""
+    cached = checker.counted
     if cached is not None and cached[0] is mb:
         return cached[1]
     mv = np.flatnonzero(mb.level > 0)
@@ -229,7 +229,7 @@ def _counted(checker, mb: MotionBound) -> tuple:
     radius = np.array([np.max(np.linalg.norm(mb.c_B[m] - c, axis=1) + mb.radius[m])
                        for m, c in zip(members, centre, strict=True)])
     out = (bodies, members, solo, pairs, centre, radius)
-    checker.__dict__["_counted"] = (mb, out)
+    checker.counted = (mb, out)
     return out
 
 

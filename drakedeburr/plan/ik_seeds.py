@@ -200,10 +200,6 @@ def _probe_candidates(kin: CellKinematics, p_HQ: np.ndarray, axes: list, t_H: np
 #: a probe's best pose at most this short of the bound is a near miss, not unreachable [m]
 NEAR_MISS = 0.2e-3
 
-#: probe results kept per checker (:func:`cone_clearance_probe`), at most this many
-PROBE_MEMO_SIZE = 4096
-
-
 def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
                          cone_retract_H: np.ndarray, half_angle: float, pref_retract_H: np.ndarray,
                          t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
@@ -256,12 +252,7 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     args = (p_HQ, cone_retract_H, half_angle, pref_retract_H, t_H, lift, bound, min_wrist,
             rings, ring_axes, spins, per_axis)
     key = _probe_key(kin, q_ref, *args)
-    memo = checker.__dict__.setdefault("_cone_probes", {})
-    if key not in memo:
-        if len(memo) >= PROBE_MEMO_SIZE:
-            del memo[next(iter(memo))]  # the oldest
-        memo[key] = _probe(kin, checker, q_ref, *args)
-    out = dict(memo[key])
+    out = dict(checker.memo_probe(key, lambda: _probe(kin, checker, q_ref, *args)))
     out["q"] = None if out["q"] is None else out["q"].copy()
     return out
 

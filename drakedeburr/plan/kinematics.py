@@ -22,6 +22,9 @@ import numpy as np
 from drakedeburr.cell.narrowphase import ShapeSupport, certified_distance
 from drakedeburr.frames.vectors import inverse_transform
 
+#: cone probe results kept per checker (:meth:`ClearanceChecker.memo_probe`), at most this many
+PROBE_MEMO_SIZE = 4096
+
 __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_level",
            "DISTANCE_SLACK", "NARROWPHASE_SLACK"]
 
@@ -241,6 +244,12 @@ class ClearanceChecker:
     context: object = field(init=False)
     plant_context: object = field(init=False)
     _sg_context: object = field(init=False)
+    #: what the planner's modules derive from this checker once and keep with it, each
+    #: written by one owner: cone probe results (:meth:`memo_probe`, for
+    #: :func:`drakedeburr.plan.ik_seeds.cone_clearance_probe`) and the counted body pairs of a
+    #: motion bound (``clearance._counted``: ``(bound, pairs)``)
+    probes: dict = field(init=False, default_factory=dict, repr=False)
+    counted: tuple | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
@@ -318,6 +327,15 @@ class ClearanceChecker:
             self.__dict__["_spin_invariant"] = (
                 lambda a, b: (a in sym and b in rigid) or (b in sym and a in rigid))
         return self.__dict__["_spin_invariant"]
+
+    def memo_probe(self, key: bytes, compute):
+        """The cone probe result kept under ``key``, else ``compute()`` kept (the oldest of
+        :data:`PROBE_MEMO_SIZE` dropped first)."""
+        if key not in self.probes:
+            if len(self.probes) >= PROBE_MEMO_SIZE:
+                del self.probes[next(iter(self.probes))]
+            self.probes[key] = compute()
+        return self.probes[key]
 
     def reading(self, query, r) -> float:
         """Drake's signed distance ``r`` (a ``SignedDistancePair`` of ``query``) held to a

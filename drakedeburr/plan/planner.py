@@ -503,7 +503,7 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     ctx = _context(cell, config, options, q_refs)
     q_home, home_moved = clear_home(cell, ctx.free_checker)
     if home_moved is not None:  # the hub leaves the cell's home without clearance
-        cell = load_cell(**{**cell._cache["load_args"], "q_home": q_home})
+        cell = load_cell(**{**cell.recipe, "q_home": q_home})
         ctx = _context(cell, config, options, q_refs)
     # with relaxation on, a window is abandoned at its first failure (an IK target, or its cut
     # under the clearance: it fails under this recipe whatever the rest does) and relaxed;

@@ -24,7 +24,7 @@ log = logging.getLogger(__name__)
 
 
 def register(subparsers) -> None:
-    from drakedeburr.post.commands import _six
+    from drakedeburr.argcheck import six_numbers
     from drakedeburr.robots import robot_names
 
     p = subparsers.add_parser(
@@ -41,7 +41,7 @@ def register(subparsers) -> None:
                    help=f"the arm that reported the poses: a registered arm "
                         f"({', '.join(robot_names())}) or an arm file (*.yaml, "
                         "docs/robots.md); default: the touch file's, else irb1600")
-    p.add_argument("--tool", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
+    p.add_argument("--tool", type=six_numbers, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="the tool set on the controller when the poses were reported (mm, "
                         "deg; default: the file's 'tool')")
     p.add_argument("--report", default=None, help="write the fitted frames and residuals "

@@ -48,7 +48,8 @@ from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
 __all__ = ["PostResult", "PostSettings", "PostSummary", "PostIO", "program_from_cl",
-           "post_cl_file", "pose_from_mm_deg", "robot_kinematics", "io_actions", "MAX_MOVES"]
+           "post_cl_file", "pose_from_mm_deg", "robot_kinematics", "io_actions", "MAX_MOVES",
+           "program_moves", "unreachable_flag", "part_file"]
 
 log = logging.getLogger(__name__)
 
@@ -325,7 +326,7 @@ def _io_before(cl: ClProgram, s: PostSettings, keep: np.ndarray
     return before, end
 
 
-def _program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: PostSettings,
+def program_moves(cl: ClProgram, res: ToolAxisPathResult, keep: np.ndarray, s: PostSettings,
                    last_index: int, io_before: dict[int, list[IoAction]] | None = None
                    ) -> list[ProgramMove]:
     """ProgramMoves of the CL moves ``keep`` (indices, increasing); the move ``last_index``
@@ -374,7 +375,8 @@ def _names(s: PostSettings) -> dict:
     return dict(stationary_tool=True, tool_name="tSpindle", wobj_name="wobjPart")
 
 
-def _flag(bad: tuple[int, ...]) -> tuple[str, str]:
+def unreachable_flag(bad: tuple[int, ...]) -> tuple[str, str]:
+    """The program's (flag, reason) when CL points ``bad`` (line numbers) were left out."""
     if bad:
         return "FORCED", (f"{len(bad)} unreachable CL point(s) left out, lines "
                           + ", ".join(map(str, bad[:15])))
@@ -433,10 +435,10 @@ def program_from_cl(
     if keep.size == 0:
         return PostResult(None, bad, changes, res, notes)
     X_WO_, X_FT_ = s.frames()
-    flag, reason = _flag(bad)
+    flag, reason = unreachable_flag(bad)
     before, end = _io_before(cl, s, keep)
     program = zones_within_half_moves(RobotProgram(
-        name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]), before)),
+        name=name, moves=tuple(program_moves(cl, res, keep, s, int(keep[-1]), before)),
         X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
         flag_reason=reason, notes=notes, io_end=tuple(end), **_names(s)))
     return PostResult(program, bad, changes, res, notes)
@@ -463,7 +465,8 @@ class PostSummary:
     cl: ClProgram
 
 
-def _part_path(out: Path, k: int, n_parts: int) -> Path:
+def part_file(out: Path, k: int, n_parts: int) -> Path:
+    """The file of part ``k`` of ``n_parts`` (``out`` itself for one part, else ``_001`` ...)."""
     return out if n_parts == 1 else out.with_name(f"{out.stem}_{k + 1:03d}{out.suffix}")
 
 
@@ -508,12 +511,12 @@ def post_cl_file(
     if (bad and not settings.force) or keep.size == 0:
         return PostSummary((), 0, bad, changes, notes, cl)
     X_WO, X_FT = settings.frames()
-    flag, reason = _flag(bad)
+    flag, reason = unreachable_flag(bad)
     parts = [keep[a:a + max_moves] for a in range(0, keep.size, max_moves)]
     before, end = _io_before(cl, settings, keep)
     # zones within half of the adjacent moves over the whole sequence (parts run on)
     every = zones_within_half_moves(RobotProgram(
-        name="cl", moves=tuple(_program_moves(cl, res, keep, settings, int(keep[-1]), before)),
+        name="cl", moves=tuple(program_moves(cl, res, keep, settings, int(keep[-1]), before)),
         X_FT=X_FT, X_WO=X_WO, robot=settings.robot, io_end=tuple(end),
         **_names(settings))).moves
     files: list[Path] = []
@@ -526,7 +529,7 @@ def post_cl_file(
             X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
             flag=flag, flag_reason=reason, notes=notes + extra,
             io_end=tuple(end) if k == len(parts) - 1 else (), **_names(settings))
-        files += write_program(program, _part_path(Path(out), k, len(parts)), fmt)
+        files += write_program(program, part_file(Path(out), k, len(parts)), fmt)
         del program
         if progress is not None:
             progress(k + 1, len(parts), "write")

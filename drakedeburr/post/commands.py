@@ -24,14 +24,6 @@ log = logging.getLogger(__name__)
 _WORDS_SHOWN = 30  # words-not-applied lines shown on the console
 
 
-def _six(text: str) -> list[float]:
-    parts = [p for p in text.replace(";", ",").split(",") if p.strip()]
-    try:
-        return [float(p) for p in parts]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected x,y,z,rx,ry,rz numbers, got {text!r}") from None
-
-
 def add_input_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("cl_file", help="the .cl / CLSF / APT file")
     p.add_argument("--units", default="mm", choices=["mm", "inch"],
@@ -43,6 +35,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_cell_options(p: argparse.ArgumentParser) -> None:
+    from drakedeburr.argcheck import six_numbers
     from drakedeburr.robots import robot_names
 
     p.add_argument("--robot", default="irb1600", metavar="NAME|FILE",
@@ -59,14 +52,14 @@ def add_cell_options(p: argparse.ArgumentParser) -> None:
                         "(source 000; no RTCP / external-TCP option): an ordinary TCP set "
                         "at a reference pose, user frame = the spindle, targets = the CL "
                         "points mirrored; the CL tool axis must be constant")
-    p.add_argument("--reference", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
+    p.add_argument("--reference", type=six_numbers, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="with --virtual-tcp: the part's CL frame in the spindle's TCP frame at "
                         "the reference pose (mm, deg; default: on the TCP, the CL axis onto "
                         "-Z, the spin about it chosen for reach and least joint travel)")
-    p.add_argument("--wobj", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
+    p.add_argument("--wobj", type=six_numbers, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="work object (CL frame, after MSYS) in the robot base: mm, deg, "
                         "R = Rz Ry Rx (with --workpiece-in-hand: in the flange frame)")
-    p.add_argument("--tool", type=_six, default=None, metavar="X,Y,Z,RX,RY,RZ",
+    p.add_argument("--tool", type=six_numbers, default=None, metavar="X,Y,Z,RX,RY,RZ",
                    help="TCP in the flange frame: mm, deg (default 0,0,200,0,0,0); with "
                         "--workpiece-in-hand the stationary spindle's TCP in the robot base")
     p.add_argument("--spin", default="min_travel",

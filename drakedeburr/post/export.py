@@ -15,8 +15,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from drakedeburr.errors import DrakeDeburrError
+from drakedeburr.post.program_check import plan_program
 
-__all__ = ["ExportRefused", "Exported", "export_plan", "plan_program"]
+__all__ = ["ExportRefused", "Exported", "export_plan"]
 
 
 class ExportRefused(DrakeDeburrError):
@@ -30,23 +31,6 @@ class Exported:
     paths: tuple[Path, ...]
     flag: str
     reason: str
-
-
-def plan_program(plan, name: str, *, flag: str = "", flag_reason: str = "",
-                 verified: bool = False, robot: str | None = None, cell=None):
-    """The plan's program with the loads of its cell's tool (and workpiece) models (``cell``:
-    the plan's cell already loaded, else it is loaded here)."""
-    from drakedeburr.cell.station import load_plan_cell
-    from drakedeburr.errors import InputError
-    from drakedeburr.programs import program_from_plan
-
-    try:  # the plan's own cell: its arm, burr and hub pose (the workpiece's centre of mass)
-        cell = cell if cell is not None else load_plan_cell(plan)
-    except FileNotFoundError as exc:
-        raise InputError(f"the plan's cell ({plan.scenario}, hub {plan.hub}) is needed for the "
-                         f"tool's mass and centre of gravity: {exc}") from exc
-    return program_from_plan(plan, name, robot=robot, loads=cell.flange_loads(),
-                             verified=verified, flag=flag, flag_reason=flag_reason)
 
 
 def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, *,

@@ -5,7 +5,7 @@ export gate): the file read back equals the plan's program line by line
 configuration by the vendor's rule, straight lines, the vendor's corners) reaches the verified
 joints, runs within the path tolerance of the verified motion and keeps its zones; that motion
 is then sampled like a plan (:func:`controller_sampled`: the same
-:class:`~drakedeburr.verify.sampling.SampledPlan` every plan check reads) and the registry's own
+:class:`~drakedeburr.verify.types.SampledPlan` every plan check reads) and the registry's own
 checks run on it: the clearance certificate, the cone, the edge deviation, the burr's contact
 and the joint limits (:data:`CONTROLLER_CHECKS`); the values the cell must hold are named
 (:func:`controller_items`)."""
@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["program_file_item", "controller_items", "program_items", "controller_sampled",
+__all__ = ["plan_program", "program_file_item", "controller_items", "program_items",
+           "controller_sampled",
            "CONTROLLER_CHECKS"]
 
 #: the registry checks (:mod:`drakedeburr.verify.registry`) run on the controller's motion,
@@ -25,12 +26,28 @@ CONTROLLER_CHECKS = ("clearance_certificate", "cone", "edge_deviation", "burr_co
                      "joint_position")
 
 
+def plan_program(plan, name: str, *, flag: str = "", flag_reason: str = "",
+                 verified: bool = False, robot: str | None = None, cell=None):
+    """The plan's program with the loads of its cell's tool (and workpiece) models (``cell``:
+    the plan's cell already loaded, else it is loaded here)."""
+    from drakedeburr.cell.station import load_plan_cell
+    from drakedeburr.errors import InputError
+    from drakedeburr.programs import program_from_plan
+
+    try:  # the plan's own cell: its arm, burr and hub pose (the workpiece's centre of mass)
+        cell = cell if cell is not None else load_plan_cell(plan)
+    except FileNotFoundError as exc:
+        raise InputError(f"the plan's cell ({plan.scenario}, hub {plan.hub}) is needed for the "
+                         f"tool's mass and centre of gravity: {exc}") from exc
+    return program_from_plan(plan, name, robot=robot, loads=cell.flange_loads(),
+                             verified=verified, flag=flag, flag_reason=flag_reason)
+
+
 def program_file_item(plan, actual, cell=None, expected=None):
     """A required report item: the program (a file, or as read by :func:`_read_program_file`)
     compared with the plan's own program (``expected``, default
-    :func:`drakedeburr.post.export.plan_program`; :func:`drakedeburr.programs.compare_programs`),
+    :func:`plan_program`; :func:`drakedeburr.programs.compare_programs`),
     every difference named by line."""
-    from drakedeburr.post.export import plan_program
     from drakedeburr.programs import compare_programs
     from drakedeburr.verify.report import CheckItem
 
@@ -197,7 +214,7 @@ def _controller_trajectory(motion, actual, velocity: np.ndarray):
 
 
 def controller_sampled(plan, expected, actual, motion, cell, config, hub_model=None):
-    """The controller's motion as a :class:`~drakedeburr.verify.sampling.SampledPlan`: the plan
+    """The controller's motion as a :class:`~drakedeburr.verify.types.SampledPlan`: the plan
     with its trajectory replaced by the controller's joints (:func:`_controller_trajectory`)
     and its segments timed on them, sampled by
     :func:`~drakedeburr.verify.sampling.sample_plan` as a plan is -> (sampled, None), or
@@ -205,7 +222,8 @@ def controller_sampled(plan, expected, actual, motion, cell, config, hub_model=N
     from dataclasses import replace
 
     from drakedeburr.plan.types import PlanSegment
-    from drakedeburr.verify.sampling import JointLimits, sample_plan
+    from drakedeburr.verify.sampling import sample_plan
+    from drakedeburr.verify.types import JointLimits
 
     move_of = _target_moves(plan, expected)
     if len(move_of) < len(plan.targets) or not len(motion.q_path):
@@ -258,7 +276,6 @@ def controller_items(plan, actual, cell=None, tol=None, config=None, hub_model=N
     contact, joint limits), zones the controller keeps, and (information) every value the
     cell must hold. ``config``: the run's (default: the plan's recipe with ``tol``);
     ``cell``/``hub_model``/``expected`` (the plan's program): already made (default: here)."""
-    from drakedeburr.post.export import plan_program
     from drakedeburr.programs.controller import controller_motion
     from drakedeburr.verify.report import CheckItem
 
@@ -311,7 +328,6 @@ def _with_tolerances(config, tol):
 def program_items(plan, actual, cell=None, tol=None, config=None, hub_model=None) -> list:
     """Every program item: :func:`program_file_item` then :func:`controller_items` (the plan's
     program made once for both)."""
-    from drakedeburr.post.export import plan_program
 
     if isinstance(actual, (str, Path)):
         from drakedeburr.programs import read_program

@@ -39,10 +39,10 @@ from drakedeburr.post.cl_post import (
     PostResult,
     PostSettings,
     PostSummary,
-    _flag,
-    _part_path,
-    _program_moves,
     file_notes,
+    part_file,
+    program_moves,
+    unreachable_flag,
 )
 from drakedeburr.post.cl_reader import ClProgram, read_cl
 from drakedeburr.post.tool_axis import READY_POSE, ToolAxisPathResult
@@ -201,10 +201,10 @@ def virtual_tcp_program_from_cl(cl: ClProgram, name: str, s: PostSettings,
     keep = np.flatnonzero(res.reachable)
     if (bad and not s.force) or keep.size == 0:
         return PostResult(None, bad, changes, res, notes)
-    flag, reason = _flag(bad)
+    flag, reason = unreachable_flag(bad)
     # zones within half of the adjacent moves (the controller would shrink larger ones)
     program = zones_within_half_moves(RobotProgram(
-        name=name, moves=tuple(_program_moves(cl, res, keep, s, int(keep[-1]))),
+        name=name, moves=tuple(program_moves(cl, res, keep, s, int(keep[-1]))),
         X_FT=setup.X_FT, X_WO=setup.X_BO, robot=s.robot, source=Path(cl.source).name,
         flag=flag, flag_reason=reason, notes=notes, tool_name="tVirtual",
         wobj_name="wobjVirtual"))
@@ -237,7 +237,7 @@ def post_cl_file_virtual_tcp(
             X_FT=prog.X_FT, X_WO=prog.X_WO, robot=prog.robot, source=prog.source,
             flag=prog.flag, flag_reason=prog.flag_reason, notes=prog.notes + extra,
             tool_name=prog.tool_name, wobj_name=prog.wobj_name)
-        files += write_program(piece, _part_path(Path(out), k, len(parts)), fmt)
+        files += write_program(piece, part_file(Path(out), k, len(parts)), fmt)
         if progress is not None:
             progress(k + 1, len(parts), "write")
     return PostSummary(tuple(files), len(moves), result.unreachable_lines,

@@ -14,6 +14,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "program": ("DEFAULT_JOINT_SPEED_FRACTION", "JOINT", "LINEAR", "ProgramMove", "RobotProgram",
                 "zones_within_half_moves"),
     "rapid": ("format_rapid", "read_rapid"),
-    "reading": ("ReadMove", "ReadProgram", "format_of", "read_program"),
+    "read_types": ("ReadMove", "ReadProgram"),
+    "reading": ("format_of", "read_program"),
     "writers": ("check_format", "format_for_controller", "format_program", "write_program"),
 })

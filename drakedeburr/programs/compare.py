@@ -23,7 +23,7 @@ from drakedeburr.programs.common import (
     zone_written,
 )
 from drakedeburr.programs.program import JOINT, RobotProgram
-from drakedeburr.programs.reading import ReadMove, ReadProgram
+from drakedeburr.programs.read_types import ReadMove, ReadProgram
 from drakedeburr.robots import configuration_of
 from drakedeburr.units import mm_from_m
 

@@ -33,7 +33,7 @@ from drakedeburr.programs.common import (
 )
 from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
-from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number, split_top_level
+from drakedeburr.programs.read_types import ReadMove, ReadProgram, parse_number, split_top_level
 from drakedeburr.robots import joints_from_configuration, kuka_status_turn
 from drakedeburr.robots.opw_ik import arm_branches
 from drakedeburr.units import mm_from_m

@@ -43,7 +43,7 @@ from drakedeburr.programs.common import (
 )
 from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
-from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number
+from drakedeburr.programs.read_types import ReadMove, ReadProgram, parse_number
 from drakedeburr.units import mm_from_m
 
 __all__ = ["format_ls", "read_ls", "frame_statements", "FRAME_PR"]

@@ -40,7 +40,7 @@ from drakedeburr.programs.common import (
 )
 from drakedeburr.programs.names import comment_text
 from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
-from drakedeburr.programs.reading import ReadMove, ReadProgram, parse_number, split_top_level
+from drakedeburr.programs.read_types import ReadMove, ReadProgram, parse_number, split_top_level
 from drakedeburr.units import mm_from_m
 
 __all__ = ["format_rapid", "read_rapid", "speed_name", "zone_name"]
@@ -346,7 +346,7 @@ def _frames(tool, wobj, file: str):
 
 
 def read_rapid(path: str | Path) -> ReadProgram:
-    """Read a RAPID module strictly (see :mod:`drakedeburr.programs.reading`)."""
+    """Read a RAPID module strictly (see :mod:`drakedeburr.programs.read_types`)."""
     path = Path(path)
     file = str(path)
     name, stmts = _statements(path)

@@ -37,7 +37,7 @@ from drakedeburr.verify.motion_bounds import (
     rate_bounds,
     track_interval_bounds,
 )
-from drakedeburr.verify.pair_scene import CLEARANCE, SELF
+from drakedeburr.verify.pair_scene import CLEARANCE, SELF, checked_scene
 from drakedeburr.verify.sweep import class_limits, resolution_target
 
 __all__ = ["ClassCertificate", "ClearanceCertificate", "certify", "certify_alongside", "METHOD"]
@@ -308,21 +308,20 @@ def _method(scene) -> str:
 def certify_alongside(scene, traj, sweep, tol, alongside=None,
                       workers: int | None = None) -> ClearanceCertificate:
     """:func:`certify`, made on a running pool worker (the sweep's: it holds the same pair
-    scene, checked by its digest; ``workers`` as :func:`drakedeburr.plan.parallel.map_tasks`)
+    scene, checked by its digest; ``workers`` as :func:`drakedeburr.pool.map_tasks`)
     while this process runs ``alongside()``; without a worker, ``alongside()`` then
     :func:`certify` here. The same certificate either way: the worker's
     readings are added to this scene's tally before the method is written."""
     from dataclasses import replace
 
-    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks, running_workers
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.pool import map_tasks, running_workers
 
-    recipe = scene.cell._cache.get("load_args")
+    recipe = scene.cell.recipe
     if alongside is None or recipe is None or not running_workers():
         if alongside is not None:
             alongside()
         return certify(scene, traj, sweep, tol)
-    from drakedeburr.verify.sweep import certify_in_worker
-
     def here(k: int):
         return alongside() if k == 0 else certify(scene, traj, sweep, tol)
 
@@ -330,7 +329,7 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
         if k == 0:
             return None
         lean = replace(sweep, X=np.empty((0,)))  # the poses (~30 MB): certify reads none
-        return certify_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+        return certify_in_worker, (dict(recipe), geometry_digest(scene.cell), scene.digest(),
                                    traj, lean, tol)
 
     def done(k: int, value):
@@ -340,3 +339,10 @@ def certify_alongside(scene, traj, sweep, tol, alongside=None,
 
     return map_tasks(2, here, remote, workers, done,
                      name=lambda k: "the clearance certificate" if k else "alongside")[1]
+
+
+def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep, tol):
+    """A pool worker's task: the certificate of a sweep (:func:`certify`) in the same cell
+    -> (certificate, its reading tally)."""
+    scene = checked_scene(recipe, fingerprint, digest, tol)
+    return certify(scene, traj, sweep, tol), scene.tally

@@ -7,7 +7,7 @@ which must agree to ``Tolerances.fk_match``), distances come from the scene grap
 phase (:mod:`drakedeburr.verify.distances`), and the true window edges come from the hub
 model's ground truth.
 
-The plan is sampled once into a :class:`drakedeburr.verify.sampling.SampledPlan`; each check
+The plan is sampled once into a :class:`drakedeburr.verify.types.SampledPlan`; each check
 is a small function over it, listed with its purpose in :mod:`drakedeburr.verify.registry`;
 the report is rendered from their items.
 """
@@ -23,7 +23,8 @@ from drakedeburr.config import Config
 from drakedeburr.verify.gate import plan_identity
 from drakedeburr.verify.registry import CHECKS, run_checks
 from drakedeburr.verify.report import VerificationReport
-from drakedeburr.verify.sampling import KIND_CODE, SampledPlan, sample_plan
+from drakedeburr.verify.sampling import sample_plan
+from drakedeburr.verify.types import KIND_CODE, SampledPlan
 
 __all__ = ["verify_plan", "verify_sampled", "config_for_plan", "no_window_report",
            "QUICK_SAMPLING"]

@@ -7,7 +7,7 @@ import numpy as np
 
 from drakedeburr.verify.refs import LINEAR_KINDS
 from drakedeburr.verify.report import CheckItem
-from drakedeburr.verify.sampling import KIND_CODE
+from drakedeburr.verify.types import KIND_CODE
 
 __all__ = ["clearance", "clearance_certificate", "self_collision", "burr_contact"]
 

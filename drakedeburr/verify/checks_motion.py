@@ -8,7 +8,7 @@ import numpy as np
 from drakedeburr.verify.geometry import spline_extremes
 from drakedeburr.verify.refs import LINEAR_KINDS
 from drakedeburr.verify.report import CheckItem
-from drakedeburr.verify.sampling import KIND_CODE
+from drakedeburr.verify.types import KIND_CODE
 
 __all__ = ["joint_position", "joint_velocity", "joint_acceleration", "rest_at_ends",
            "start_end_home", "configuration", "wrist_singularity", "manipulability"]

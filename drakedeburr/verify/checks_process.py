@@ -12,7 +12,7 @@ import numpy as np
 
 from drakedeburr.verify.geometry import slow_stretches
 from drakedeburr.verify.report import CheckItem
-from drakedeburr.verify.sampling import KIND_CODE
+from drakedeburr.verify.types import KIND_CODE
 
 __all__ = ["tcp_speed_band", "slowdowns_justified", "tcp_speed_max", "program_speeds",
            "j4_j6_range", "cycle_time", "speed_band_per_window", "time_budget",

@@ -253,7 +253,8 @@ def _run_verify(args: argparse.Namespace) -> int:
     from drakedeburr.plan.io import save_plan
     from drakedeburr.verify.batch import make_plan
     from drakedeburr.verify.checks import config_for_plan, verify_plan
-    from drakedeburr.verify.report import write_report_files, write_report_json
+    from drakedeburr.verify.html import write_report_files
+    from drakedeburr.verify.report import write_report_json
 
     if kind == "plan":
         speed = None if args.grinding_speed is None else m_from_mm(args.grinding_speed)
@@ -315,7 +316,8 @@ def _no_window(args: argparse.Namespace, exc, scenario: str) -> int:
     from drakedeburr._io import atomic_folder
     from drakedeburr.config import default_tolerances
     from drakedeburr.verify.checks import no_window_report
-    from drakedeburr.verify.report import write_report_files, write_report_json
+    from drakedeburr.verify.html import write_report_files
+    from drakedeburr.verify.report import write_report_json
 
     report = no_window_report(exc, scenario, _tolerances(args) or default_tolerances())
     if args.out:

@@ -117,8 +117,8 @@ def _window(plan, samples, program, ref, edge: np.ndarray, idx: np.ndarray, out:
 
 
 def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows, tol):
-    """:class:`drakedeburr.verify.sampling.CutGeometry` of every cut (module docstring)."""
-    from drakedeburr.verify.sampling import KIND_CODE, CutGeometry
+    """:class:`drakedeburr.verify.types.CutGeometry` of every cut (module docstring)."""
+    from drakedeburr.verify.types import KIND_CODE, CutGeometry
 
     n = len(samples)
     out = {name: np.full(n, np.nan) for name in ("edge_dev", "engagement", "theta_A",

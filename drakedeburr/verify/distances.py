@@ -1,5 +1,5 @@
 """Signed distances at every sample, the Drake-plant FK cross-check and the manipulability ->
-:class:`drakedeburr.verify.sampling.Distances`, with the continuous clearance certificate.
+:class:`drakedeburr.verify.types.Distances`, with the continuous clearance certificate.
 
 Per sample, the smallest signed distance of each class (clearance, self, burr: see
 :mod:`drakedeburr.verify.pair_scene`) within ``Tolerances.query_distance`` (``inf`` if none)
@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drakedeburr.verify.pair_scene import BURR, CLEARANCE, SELF, PairScene
+from drakedeburr.verify.pair_scene import BURR, CLEARANCE, SELF, PairScene, pair_scene_of
 
 __all__ = ["DistanceProbe", "PairDistances", "pair_scene_of", "measure_samples"]
 
@@ -98,14 +98,6 @@ class DistanceProbe:
         return PairDistances(c, cp, sd, sp, b, bp)
 
 
-def pair_scene_of(cell) -> PairScene:
-    """The cell's :class:`PairScene`, built once per cell (kept in the cell's cache)."""
-    scene = cell._cache.get("verify.pair_scene")
-    if scene is None:
-        scene = cell._cache["verify.pair_scene"] = PairScene(cell)
-    return scene
-
-
 def _fk_difference(cell, scene: PairScene, samples, X: np.ndarray, extra: list[int],
                    every: int) -> tuple[float, int]:
     """Largest element difference of the flange pose in world and the tool pose in the hub:
@@ -137,7 +129,7 @@ def _measure_dense(cell, samples, tol, progress=None):
     sample (no certificate)."""
     from pydrake.multibody.tree import JacobianWrtVariable
 
-    from drakedeburr.verify.sampling import Distances
+    from drakedeburr.verify.types import Distances
 
     probe = DistanceProbe(cell, tol.query_distance, tol)
     plant, pc = cell.plant, probe.plant_context
@@ -172,10 +164,10 @@ def _measure_dense(cell, samples, tol, progress=None):
 def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
                     trajectory=None, method: str = "tracked", alongside=None):
     """Distances, the FK cross-check, the manipulability and the clearance certificate of the
-    samples -> :class:`drakedeburr.verify.sampling.Distances` (module docstring).
+    samples -> :class:`drakedeburr.verify.types.Distances` (module docstring).
 
     Args:
-        cell: the freshly loaded cell. samples: :class:`~drakedeburr.verify.sampling.Samples`.
+        cell: the freshly loaded cell. samples: :class:`~drakedeburr.verify.types.Samples`.
         tol: the tolerances (query distance, limits, certificate resolution).
         progress: optional callback (done, total, label), reported as the second half of
             ``2 * n_segments`` steps (the first half is the sampling).
@@ -185,7 +177,7 @@ def measure_samples(cell, samples, tol, progress=None, n_segments: int = 1, *,
             sweep, while a running pool worker makes the certificate (else before it).
     """
     from drakedeburr.verify.certificate import certify_alongside
-    from drakedeburr.verify.sampling import Distances
+    from drakedeburr.verify.types import Distances
 
     def step(done, total, label="distances"):
         if progress is not None:

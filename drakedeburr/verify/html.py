@@ -16,10 +16,10 @@ import numpy as np
 
 from drakedeburr._io import atomic_write_text
 from drakedeburr.units import deg_from_rad, mm_from_m, mm_s_from_m_s
-from drakedeburr.verify.report import VerificationReport, report_dict
+from drakedeburr.verify.report import VerificationReport, report_dict, report_json
 
 __all__ = ["report_html", "write_report_html", "report_figures", "meshcat_replay_html",
-           "figures_and_replay", "warm_plotting"]
+           "figures_and_replay", "warm_plotting", "write_report_files"]
 
 log = logging.getLogger(__name__)
 
@@ -176,11 +176,11 @@ _FIGURES = {"theta": _fig_theta, "joints": _fig_joints, "speed": _fig_speed,
 def figures_and_replay(report: VerificationReport, plan=None, cell=None,
                        workers: int | None = None) -> tuple[dict[str, str], str | None]:
     """(:func:`report_figures`, :func:`meshcat_replay_html` of ``plan`` or None without one),
-    made at once when a pool worker is running (:func:`drakedeburr.plan.parallel.map_tasks`;
+    made at once when a pool worker is running (:func:`drakedeburr.pool.map_tasks`;
     ``workers`` as there): the figures there while this process records the replay; none is
     started for them (a worker's start-up costs more than the figures). The same figures
     wherever they are drawn (deterministic SVG)."""
-    from drakedeburr.plan.parallel import map_tasks, running_workers
+    from drakedeburr.pool import map_tasks, running_workers
 
     if plan is None:
         return report_figures(report), None
@@ -195,7 +195,7 @@ def figures_and_replay(report: VerificationReport, plan=None, cell=None,
 def warm_plotting(workers: int | None = None) -> None:
     """Have the pool's idle running workers import matplotlib now (~0.3 s), so that
     :func:`figures_and_replay` finds it loaded there; starts no worker."""
-    from drakedeburr.plan.parallel import warm_pool
+    from drakedeburr.pool import warm_pool
 
     warm_pool(_import_pyplot, (), workers, start=False)
 
@@ -415,3 +415,21 @@ def write_report_html(report: VerificationReport, path: str | Path, *,
                       replay_html: str | None = None) -> Path:
     """Write ``report.html`` atomically."""
     return atomic_write_text(Path(path), report_html(report, replay_html=replay_html))
+
+
+def write_report_files(report: VerificationReport, folder: str | Path, *, plan=None,
+                       replay: bool = True, cell=None) -> tuple[Path, Path]:
+    """Write the report into its plan's folder, where the export gate reads it:
+    ``report.json`` and ``report.html`` (with a Meshcat replay of ``plan`` when given and
+    ``replay``, in ``cell`` when given, else the plan's cell built here). The two are written
+    together (:func:`drakedeburr._io.atomic_write_files`): an interruption leaves both as they
+    were. Returns their paths."""
+    from drakedeburr._io import atomic_write_files
+    from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
+
+    folder = Path(folder)
+    figures, replay_html = figures_and_replay(report, plan if replay else None, cell)
+    html = report_html(report, replay_html=replay_html, figures=figures)
+    written = atomic_write_files({folder / REPORT_HTML: html,
+                                  folder / REPORT_FILE: report_json(report)})
+    return written[1], written[0]

@@ -29,7 +29,8 @@ from drakedeburr.cell.chain import KinematicTree
 from drakedeburr.cell.narrowphase import ReadingTally, ShapeSupport, box_points, certified_distance
 from drakedeburr.verify.motion_bounds import Tracks
 
-__all__ = ["PairScene", "shape_points", "CLEARANCE", "SELF", "BURR"]
+__all__ = ["PairScene", "shape_points", "CLEARANCE", "SELF", "BURR", "pair_scene_of",
+           "worker_scene", "warm_scene", "checked_scene"]
 
 CLEARANCE, SELF, BURR = 0, 1, 2
 
@@ -279,7 +280,7 @@ class PairScene:
 
     def digest(self) -> str:
         """A digest of what the readings depend on: the cell's geometry
-        (:func:`drakedeburr.plan.parallel.cell_fingerprint`), geometry names, pairs,
+        (:func:`drakedeburr.cell.fingerprint.geometry_digest`), geometry names, pairs,
         classes, tracks, the fixed geometry's and the home configuration's poses (two
         processes that built the same cell agree on it, so one may read parts of a sweep for
         the other)."""
@@ -287,9 +288,9 @@ class PairScene:
         if d is None:
             import hashlib
 
-            from drakedeburr.plan.parallel import cell_fingerprint
+            from drakedeburr.cell.fingerprint import geometry_digest
 
-            h = hashlib.sha256((cell_fingerprint(self.cell) + "\n".join(self.names)).encode())
+            h = hashlib.sha256((geometry_digest(self.cell) + "\n".join(self.names)).encode())
             for arr in (self.a, self.b, self.cls, self.track, self.X_home, self.tracks.reach,
                         *(X for X in self._X_fixed if X is not None)):
                 h.update(np.ascontiguousarray(arr).tobytes())
@@ -298,3 +299,37 @@ class PairScene:
 
     def pair_names(self, p: int) -> tuple[str, str]:
         return self.names[self.a[p]], self.names[self.b[p]]
+
+
+def pair_scene_of(cell) -> PairScene:
+    """The cell's :class:`PairScene`, built once per cell (kept in ``cell.memo``)."""
+    scene = cell.memo.pair_scene
+    if scene is None:
+        scene = cell.memo.pair_scene = PairScene(cell)
+    return scene
+
+
+_WORKER_SCENE: dict = {}  # in a pool worker: the caller's cell and its PairScene
+
+
+def worker_scene(recipe: dict, fingerprint: str | None) -> PairScene:
+    """In a pool worker: the pair scene of the cell built from ``recipe`` (kept for the
+    worker's life, rebuilt when ``fingerprint`` differs)."""
+    from drakedeburr.plan.parallel import worker_cell
+
+    return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
+
+
+def warm_scene(recipe: dict, fingerprint: str | None) -> None:
+    """A pool task: build the worker's pair scene now (:func:`worker_scene`)."""
+    worker_scene(recipe, fingerprint)
+
+
+def checked_scene(recipe: dict, fingerprint: str, digest: str, tol) -> PairScene:
+    """In a worker: the caller's pair scene (refused when its digest differs), with the
+    tolerances set and a fresh reading tally."""
+    scene = worker_scene(recipe, fingerprint)
+    if scene.digest() != digest:
+        raise RuntimeError("the worker's pair scene differs from the caller's")
+    scene.use_tolerances(tol)
+    return scene

@@ -57,8 +57,8 @@ def _program_points(targets, ks: list[int], step: float) -> np.ndarray:
 
 
 def read_program(plan, samples, tol):
-    """:class:`drakedeburr.verify.sampling.ProgramReading` of the plan's program."""
-    from drakedeburr.verify.sampling import ProgramReading
+    """:class:`drakedeburr.verify.types.ProgramReading` of the plan's program."""
+    from drakedeburr.verify.types import ProgramReading
 
     targets = plan.targets
     n = len(samples)

@@ -31,7 +31,7 @@ import numpy as np
 from drakedeburr._io import atomic_write_text
 
 __all__ = ["SCHEMA", "CheckItem", "VerificationReport", "report_json", "write_report_json",
-           "write_report_files", "is_report_folder"]
+           "is_report_folder"]
 
 SCHEMA = "drakedeburr.verify/1"
 
@@ -169,25 +169,6 @@ def report_json(report: VerificationReport, include_run: bool = True) -> str:
 def write_report_json(report: VerificationReport, path: str | Path) -> Path:
     """Write ``report.json`` atomically."""
     return atomic_write_text(Path(path), report_json(report))
-
-
-def write_report_files(report: VerificationReport, folder: str | Path, *, plan=None,
-                       replay: bool = True, cell=None) -> tuple[Path, Path]:
-    """Write the report into its plan's folder, where the export gate reads it:
-    ``report.json`` and ``report.html`` (with a Meshcat replay of ``plan`` when given and
-    ``replay``, in ``cell`` when given, else the plan's cell built here). The two are written
-    together (:func:`drakedeburr._io.atomic_write_files`): an interruption leaves both as they
-    were. Returns their paths."""
-    from drakedeburr._io import atomic_write_files
-    from drakedeburr.verify.gate import REPORT_FILE, REPORT_HTML
-    from drakedeburr.verify.html import figures_and_replay, report_html
-
-    folder = Path(folder)
-    figures, replay_html = figures_and_replay(report, plan if replay else None, cell)
-    html = report_html(report, replay_html=replay_html, figures=figures)
-    written = atomic_write_files({folder / REPORT_HTML: html,
-                                  folder / REPORT_FILE: report_json(report)})
-    return written[1], written[0]
 
 
 def is_report_folder(folder: str | Path) -> bool:

@@ -22,7 +22,7 @@ the sample reads. At each sample, per class:
 The samples are read in *parts* of ~2000 (:func:`part_bounds`, a function of the sample count
 alone), neighbours sharing one sample; each part starts its own tracking, so the parts are
 independent tasks: this process reads them from the front while the machine's other cores
-(:func:`drakedeburr.plan.parallel.map_tasks`, workers that build the same cell) read them from
+(:func:`drakedeburr.pool.map_tasks`, workers that build the same cell) read them from
 the back, and the result is the same on one core or many. Where two parts share a sample, the
 class minimum is exact in both, and the bounds kept are the smaller of the two (each valid).
 Fresh heaps also read fewer pairs than one long run (86.7k against 102k readings on the
@@ -46,7 +46,7 @@ from drakedeburr.verify.motion_bounds import (
     rate_bounds,
     relative_pose,
 )
-from drakedeburr.verify.pair_scene import CLEARANCE, SELF, PairScene
+from drakedeburr.verify.pair_scene import CLEARANCE, SELF, PairScene, checked_scene, warm_scene
 
 __all__ = ["Sweep", "sweep", "track_motion", "class_limits", "resolution_target"]
 
@@ -349,14 +349,15 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
     Args:
         scene: the cell's pairs. traj: the joint trajectory; t (N,) [s], q (N, nq) [rad]: the
         samples on it. tol: the tolerances. progress: optional callback (done, total).
-        workers: processes (:func:`drakedeburr.plan.parallel.worker_count`; None: the cores);
+        workers: processes (:func:`drakedeburr.pool.worker_count`; None: the cores);
         the parts are the same whatever the count, and so is the result.
     """
-    from drakedeburr.plan.parallel import cell_fingerprint, map_tasks
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.pool import map_tasks
 
     scene.use_tolerances(tol)  # readings held to rigorous bounds (cell.narrowphase)
     parts, n = part_bounds(len(t)), len(t)
-    recipe = scene.cell._cache.get("load_args")
+    recipe = scene.cell.recipe
     read = [0]
 
     def finished(k: int, part: _Part) -> _Part:
@@ -371,7 +372,7 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
 
     def remote(k: int) -> tuple:
         a, b = parts[k]
-        return _part_in_worker, (dict(recipe), cell_fingerprint(scene.cell), scene.digest(),
+        return _part_in_worker, (dict(recipe), geometry_digest(scene.cell), scene.digest(),
                                  traj, t[a:b + 1], q[a:b + 1], tol)
 
     def done(k: int, value) -> _Part:
@@ -385,18 +386,16 @@ def sweep(scene: PairScene, traj, t: np.ndarray, q: np.ndarray, tol, progress=No
     return _merge(scene, t, q, parts, results)
 
 
-_WORKER_SCENE: dict = {}  # in a pool worker: the caller's cell and its PairScene
-
-
 def warm_workers(cell, n_samples: int, workers: int | None = None) -> None:
     """Have the pool's idle workers build ``cell``'s pair scene now (from its recorded
-    ``load_args``), so that they are ready when the sweep of ``n_samples`` hands them parts;
+    ``Cell.recipe``), so that they are ready when the sweep of ``n_samples`` hands them parts;
     nothing when that sweep is one part or the cell cannot be built again."""
-    recipe = cell._cache.get("load_args")
+    recipe = cell.recipe
     if recipe is not None and len(part_bounds(n_samples)) > 1:
-        from drakedeburr.plan.parallel import cell_fingerprint, warm_pool
+        from drakedeburr.cell.fingerprint import geometry_digest
+        from drakedeburr.pool import warm_pool
 
-        warm_pool(_warm_scene, (dict(recipe), cell_fingerprint(cell)), workers)
+        warm_pool(warm_scene, (dict(recipe), geometry_digest(cell)), workers)
 
 
 def warm_workers_for_plan(plan, workers: int | None = None) -> None:
@@ -406,46 +405,16 @@ def warm_workers_for_plan(plan, workers: int | None = None) -> None:
     part a worker reads later is still checked against this process's cell
     (:func:`_part_in_worker`)."""
     from drakedeburr.cell.recipe import plan_cell_args
-    from drakedeburr.plan.parallel import warm_pool
+    from drakedeburr.pool import warm_pool
 
-    warm_pool(_warm_scene, (plan_cell_args(plan), None), workers)
-
-
-def _worker_scene(recipe: dict, fingerprint: str | None) -> PairScene:
-    from drakedeburr.plan.parallel import worker_cell
-    from drakedeburr.verify.distances import pair_scene_of
-
-    return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
-
-
-def _warm_scene(recipe: dict, fingerprint: str | None) -> None:
-    _worker_scene(recipe, fingerprint)
+    warm_pool(warm_scene, (plan_cell_args(plan), None), workers)
 
 
 def _part_in_worker(recipe: dict, fingerprint: str, digest: str, traj, t: np.ndarray,
                     q: np.ndarray, tol):
     """A pool worker's task: one part read in the same cell -> (_Part, its reading tally)."""
-    scene = _checked_scene(recipe, fingerprint, digest, tol)
+    scene = checked_scene(recipe, fingerprint, digest, tol)
     return _sweep_part(scene, traj, t, q, tol), scene.tally
-
-
-def certify_in_worker(recipe: dict, fingerprint: str, digest: str, traj, sweep: Sweep, tol):
-    """A pool worker's task: the certificate of a sweep (:func:`drakedeburr.verify.certificate.
-    certify`) in the same cell -> (certificate, its reading tally)."""
-    from drakedeburr.verify.certificate import certify
-
-    scene = _checked_scene(recipe, fingerprint, digest, tol)
-    return certify(scene, traj, sweep, tol), scene.tally
-
-
-def _checked_scene(recipe: dict, fingerprint: str, digest: str, tol) -> PairScene:
-    """In a worker: the caller's pair scene (refused when its digest differs), with the
-    tolerances set and a fresh reading tally."""
-    scene = _worker_scene(recipe, fingerprint)
-    if scene.digest() != digest:
-        raise RuntimeError("the worker's pair scene differs from the caller's")
-    scene.use_tolerances(tol)
-    return scene
 
 
 def _merge(scene: PairScene, t: np.ndarray, q: np.ndarray, parts: list, res: list) -> Sweep:

@@ -1,4 +1,4 @@
-"""A worker process of :mod:`drakedeburr.plan.parallel`: ``python -m drakedeburr.plan.worker``.
+"""A worker process of :mod:`drakedeburr.pool`: ``python -m drakedeburr.pool_worker``.
 
 Reads pickled tasks ``(function, args)`` from stdin and writes pickled ``("ok", result)`` or
 ``("error", message)`` to the stdout it was started with, until stdin closes. Anything else the
