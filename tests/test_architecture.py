@@ -196,22 +196,6 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
-#: modules whose circles, private imports or long parameter lists are being rewritten by the
-#: parallel branches of issue 45 (window pipeline, hub policy) and issue 42 (hub import);
-#: pending #45 items 1-2 / #42 merge -- the lead removes these after merging
-PENDING = {
-    "hub/import_cad.py", "hub/import_mesh.py", "hub/import_output.py",
-    "plan/window.py", "plan/cut.py", "plan/planner.py", "plan/relax.py", "plan/home.py",
-    "plan/finish.py", "plan/program_fit.py",
-}
-#: private names of hub/ (its owners' branches, #42) still read across modules; pending #45
-#: items 1-2 / #42 merge
-PENDING_PRIVATE = {
-    "hub/import_collision.py drakedeburr.hub.collision._merge_pieces",
-    "hub/import_collision.py drakedeburr.hub.collision._Piece",
-    "path/commands.py drakedeburr.hub.commands._add_front_and_burr",
-    "verify/commands.py drakedeburr.hub.commands._add_front_and_burr",
-}
 #: functions over 8 parameters not yet given their records (#45 item 4), with their count: a
 #: ratchet -- none may be added, none may grow, and a fixed one must leave the list
 PENDING_PARAMETERS = {
@@ -238,33 +222,26 @@ PENDING_PARAMETERS = {
 }
 
 
-def _pending(module: str) -> bool:
-    return module.partition(".")[2].replace(".", "/") + ".py" in PENDING
-
-
 @functools.cache
 def _graph() -> _Graph:
     return _Graph()
 
 
 def test_no_import_circle_inside_a_package():
-    circles = [c for c in _graph().cycles() if not all(_pending(m) for m in c)]
+    circles = _graph().cycles()
     assert not circles, circles
 
 
 def test_no_private_name_imported_across_modules():
     graph, wrong = _graph(), []
     for name, (f, tree) in graph.trees.items():
-        if _pending(name):
-            continue
         modules = {}  # local alias -> module, for ``alias._private``
         for target, line, imported in graph.edges[name]:
             if imported is None:
                 modules[target.rsplit(".", 1)[-1]] = target
             elif imported.startswith("_") and not imported.startswith("__") and target != name:
                 found = f"{f.relative_to(ROOT)} {target}.{imported}"
-                if found not in PENDING_PRIVATE:
-                    wrong.append(f"{found} (line {line})")
+                wrong.append(f"{found} (line {line})")
         for node in ast.walk(tree):
             if isinstance(node, (ast.Import, ast.ImportFrom)):
                 for a in node.names:
@@ -288,8 +265,6 @@ def _parameter_count(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
 def test_no_function_over_8_parameters():
     found = {}
     for f, tree in _modules():
-        if str(f.relative_to(ROOT)) in PENDING:
-            continue
         for node in ast.walk(tree):
             if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
                     and _parameter_count(node) > 8):

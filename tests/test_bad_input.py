@@ -666,7 +666,7 @@ def test_the_next_run_removes_what_a_killed_run_left(ws, capsys):
 
 def test_outputs_get_the_users_umask(ws, capsys):
     from drakedeburr._io import temp_folder_beside
-    from drakedeburr.hub.import_output import write_folder
+    from drakedeburr.hub.import_output import ImportRecord, write_folder
 
     old = os.umask(0o027)
     try:
@@ -681,8 +681,9 @@ def test_outputs_get_the_users_umask(ws, capsys):
         # the imported hub folder (was 0700: made by mkdtemp)
         V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.1
         F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-        write_folder(ws / "hubs" / "h_1", ws / "hubs", "h", ws / "nan.stl", "0" * 64, V, F,
-                     [], [], 1.0, np.zeros(3), np.eye(3) * 1e-3, {"name": "h"})
+        rec = ImportRecord("h", ws / "nan.stl", "0" * 64, "k", "m", True, np.eye(4), None, {},
+                           V, F, [], 1.0, np.zeros(3), np.eye(3) * 1e-3, 1e-3, "test", 0.1, [])
+        write_folder(ws / "hubs" / "h_1", ws / "hubs", rec, {"name": "h"})
         assert (ws / "hubs" / "h_1").stat().st_mode & 0o777 == 0o750
     finally:
         os.umask(old)

@@ -146,20 +146,20 @@ def front_probes(spec: HubSpec, windows: list[Window], geom: PlateGeometry) -> n
 
 
 @dataclass
-class _Piece:
+class Piece:
     pts: np.ndarray  # hull vertices [mm]
     vol: float  # volume of the material part(s) it covers [mm^3]
     hull_vol: float
 
 
-def _piece_ok(pc: _Piece, t: float, probes: tuple[WindowProbes, ...],
+def _piece_ok(pc: Piece, t: float, probes: tuple[WindowProbes, ...],
               equations: np.ndarray | None = None) -> bool:
     excess = (pc.hull_vol - pc.vol) / max(pc.vol / t, 1.0)
     return excess <= COLL_TOL_MM and not any(p.hit(pc.pts, equations) for p in probes)
 
 
 def _quadtree_pieces(plate, t: float, probes: tuple[WindowProbes, ...],
-                     progress: Progress) -> list[_Piece]:
+                     progress: Progress) -> list[Piece]:
     """Hulls of the plate's parts in quadtree cells, split until each passes ``_piece_ok``."""
     from manifold3d import CrossSection
 
@@ -169,7 +169,7 @@ def _quadtree_pieces(plate, t: float, probes: tuple[WindowProbes, ...],
     n0 = int(math.ceil(2 * half / COLL_CELL_MM))
     edge = 2 * half / n0
     stack = [(-half + i * edge, -half + j * edge, edge) for j in range(n0) for i in range(n0)]
-    pieces: list[_Piece] = []
+    pieces: list[Piece] = []
     done, total = 0, len(stack)
     while stack:
         x0, y0, c = stack.pop()
@@ -187,7 +187,7 @@ def _quadtree_pieces(plate, t: float, probes: tuple[WindowProbes, ...],
             if vol < 1e-6:
                 continue
             hull = comp.hull()
-            pc = _Piece(mesh_arrays(hull)[0], vol, hull.volume())
+            pc = Piece(mesh_arrays(hull)[0], vol, hull.volume())
             if c > MIN_CELL_MM and not _piece_ok(pc, t, probes):
                 split = True
                 break
@@ -201,8 +201,8 @@ def _quadtree_pieces(plate, t: float, probes: tuple[WindowProbes, ...],
     return pieces
 
 
-def _merge_pieces(pieces: list[_Piece], t: float,
-                  probes: tuple[WindowProbes, ...]) -> list[_Piece]:
+def merge_pieces(pieces: list[Piece], t: float,
+                  probes: tuple[WindowProbes, ...]) -> list[Piece]:
     """Greedy merge of touching pieces while the merged hull passes ``_piece_ok``."""
     from scipy.spatial import ConvexHull
 
@@ -220,7 +220,7 @@ def _merge_pieces(pieces: list[_Piece], t: float,
                     continue
                 pts = np.concatenate([pieces[i].pts, pieces[j].pts])
                 hull = ConvexHull(pts)
-                pc = _Piece(pts[hull.vertices], pieces[i].vol + pieces[j].vol, hull.volume)
+                pc = Piece(pts[hull.vertices], pieces[i].vol + pieces[j].vol, hull.volume)
                 if _piece_ok(pc, t, probes, hull.equations):
                     score = pc.hull_vol - pc.vol
                     if best is None or score < best[0]:
@@ -247,7 +247,7 @@ def collision_pieces(spec: HubSpec, windows: list[Window], geom: PlateGeometry,
     probes = (WindowProbes.from_spec(spec, windows, geom),
               WindowProbes(front_probes(spec, windows, geom)))
     t = spec.face_thickness * 1e3
-    pieces = [p.pts for p in _merge_pieces(_quadtree_pieces(plate, t, probes, progress), t,
+    pieces = [p.pts for p in merge_pieces(_quadtree_pieces(plate, t, probes, progress), t,
                                            probes)]
     pad, rims = rings(spec)
     if pad is not None:

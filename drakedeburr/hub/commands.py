@@ -237,7 +237,7 @@ def _burr_mm() -> float:
     return round(BURR.head_diameter * 1e3, 6)
 
 
-def _add_front_and_burr(p) -> None:
+def add_front_and_burr(p) -> None:
     """--front, --burr-mm, --clearance-mm, --min-window-width-mm (every command taking a
     mesh)."""
     from drakedeburr.config import default_tolerances
@@ -289,7 +289,7 @@ def register(subparsers) -> None:
                         "estimated)")
     p.add_argument("--windows", type=number(1, integer=True),
                    help="expected number of windows, >= 1 (else any)")
-    _add_front_and_burr(p)
+    add_front_and_burr(p)
     p.add_argument("--window-reach-mm", type=_NONNEGATIVE_MM, default=1.0,
                    help="how far a collision piece may reach into a window opening [mm]")
     p.add_argument("--front-reach-mm", type=_POSITIVE_MM, default=1.0,

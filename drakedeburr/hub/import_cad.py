@@ -337,8 +337,8 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
     from manifold3d import Manifold
 
     from drakedeburr._io import check_regular_file
-    from drakedeburr.hub.import_mesh import ImportOptions
-    from drakedeburr.hub.import_output import import_summary, write_folder
+    from drakedeburr.hub.import_options import ImportOptions
+    from drakedeburr.hub.import_output import ImportRecord, import_summary, write_folder
 
     t_start = time.perf_counter()
     options = options or ImportOptions()
@@ -369,17 +369,17 @@ def import_cad(path: str | Path, out_root: str | Path, *, options=None, progress
         progress(3, steps, "write folder")
     hulls = [Manifold.hull_points(pv) for pv in pieces]
     mass, com, I_com, volume = _mass(cad, X_HM, options.density)
-    summary = import_summary(name, path, sha, key, "mm", closed, X_MH, options, notes, V_H,
-                             F, volume, "the B-rep (OpenCASCADE BRepGProp)", diameter, mass,
-                             com, windows, pieces, float(sum(h.volume() for h in hulls)), coll)
+    rec = ImportRecord(name, path, sha, key, "mm", closed, X_MH, options, notes, V_H, F,
+                       windows, mass, com, I_com, volume, "the B-rep (OpenCASCADE BRepGProp)",
+                       diameter, pieces, hulls, coll)
+    summary = import_summary(rec)
     summary["import"]["cad"] = {
         "format": "STEP" if path.suffix.lower() in (".step", ".stp") else "IGES",
         "file_unit": cad.unit, "solids": cad.solids,
         "chordal_tolerance_mm": chordal_tolerance * 1e3, "faces": notes["faces"],
         "loops": "exact B-rep edges (lines, arcs, B-splines), one NURBS per loop in edges.npz",
         "version": CAD_IMPORT_VERSION}
-    write_folder(target, out_root, name, path, sha, V_H, F, windows, hulls, mass, com, I_com,
-                 summary)
+    write_folder(target, out_root, rec, summary)
     _write_nurbs(target, kept, cad, X_HM)
     if progress is not None:
         progress(steps, steps, "done")

@@ -203,7 +203,7 @@ def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
         V: (N, 3) vertices in H [m]; F: (M, 3) triangles.
         probes: :class:`~drakedeburr.hub.collision.WindowProbes` (metres) that must stay
             outside every piece.
-        options: :class:`~drakedeburr.hub.import_mesh.ImportOptions`.
+        options: :class:`~drakedeburr.hub.import_options.ImportOptions`.
     """
     import trimesh
 
@@ -259,11 +259,11 @@ def _merge_shell(pieces: list[np.ndarray], probes, thickness: float) -> list[np.
     hull holds no probe and adds at most 1 mm of average thickness to the shell it covers."""
     from scipy.spatial import ConvexHull
 
-    from drakedeburr.hub.collision import WindowProbes, _merge_pieces, _Piece
+    from drakedeburr.hub.collision import Piece, WindowProbes, merge_pieces
 
     mm = [p * 1e3 for p in pieces]
-    parts = [_Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
-    merged = _merge_pieces(parts, thickness * 1e3, (WindowProbes(probes.pts * 1e3),))
+    parts = [Piece(p, ConvexHull(p).volume, ConvexHull(p).volume) for p in mm]
+    merged = merge_pieces(parts, thickness * 1e3, (WindowProbes(probes.pts * 1e3),))
     return [p.pts * 1e-3 for p in merged]
 
 

@@ -27,7 +27,7 @@ from drakedeburr.hub.openings import (
 )
 
 if TYPE_CHECKING:
-    from drakedeburr.hub.import_mesh import ImportOptions
+    from drakedeburr.hub.import_options import ImportOptions
 
 __all__ = ["ImportedHub", "Progress", "DIAMETER_RANGE", "file_hash", "options_json",
            "cache_key", "cache_slot", "hub_name", "from_cache", "front_origin_offset",

@@ -6,14 +6,49 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from drakedeburr._io import atomic_write_text, temp_folder_beside
 from drakedeburr.hub.types import WindowEdge
 
-__all__ = ["window_summary", "import_summary", "write_folder"]
+__all__ = ["ImportRecord", "window_summary", "import_summary", "write_folder"]
+
+
+@dataclass(frozen=True)
+class ImportRecord:
+    """What an import (mesh or CAD) made, in the hub frame H [m, kg], for the summary and the
+    folder: the source (``name``, ``path``, ``sha`` of the file, cache ``key``, file ``unit``,
+    ``closed`` solid, ``X_MH`` file -> H, ``options`` ImportOptions, ``notes`` of the window
+    search), the tessellation ``V_H`` (N, 3) / ``F`` (M, 3), the ``windows`` (WindowEdge), the
+    mass properties (``mass``, ``com`` (3,), ``I_com`` (3, 3) about the centre of mass,
+    ``volume`` [m^3] and ``how`` it was computed), ``diameter``, and the collision model
+    (``pieces`` point sets, their convex ``hulls``, ``coll`` figures)."""
+
+    name: str
+    path: Path
+    sha: str
+    key: str
+    unit: str
+    closed: bool
+    X_MH: np.ndarray
+    options: Any
+    notes: dict
+    V_H: np.ndarray
+    F: np.ndarray
+    windows: list
+    mass: float
+    com: np.ndarray
+    I_com: np.ndarray
+    volume: float
+    how: str
+    diameter: float
+    pieces: list
+    hulls: list = field(default_factory=list)
+    coll: dict = field(default_factory=dict)
 
 
 def window_summary(windows: list[WindowEdge], spacing: float) -> list[dict]:
@@ -42,14 +77,16 @@ def window_summary(windows: list[WindowEdge], spacing: float) -> list[dict]:
     return out
 
 
-def write_folder(target: Path, out_root: Path, name: str, path: Path, sha: str, V_H, F,
-                  windows, hulls, mass, com, I_com, summary: dict) -> None:
-    """Write the hub folder into a temporary folder and rename it into place."""
+def write_folder(target: Path, out_root: Path, rec: ImportRecord, summary: dict) -> None:
+    """Write the hub folder of ``rec`` (with ``summary`` as summary.json) into a temporary
+    folder and rename it into place."""
     import yaml
 
     from drakedeburr.hub.files import obj_text, sdf_text, write_npz
     from drakedeburr.hub.solid import mesh_arrays
 
+    name, path, sha, windows, hulls = rec.name, rec.path, rec.sha, rec.windows, rec.hulls
+    V_H, F, mass, com, I_com = rec.V_H, rec.F, rec.mass, rec.com, rec.I_com
     out_root.mkdir(parents=True, exist_ok=True)
     # the user's umask (mkdtemp makes 0700); a killed import's leftovers are removed
     tmp = temp_folder_beside(target)
@@ -85,13 +122,18 @@ def write_folder(target: Path, out_root: Path, name: str, path: Path, sha: str, 
         raise
 
 
-def import_summary(name, path, sha, key, unit, closed, X_MH, options, notes, V_H, F, volume, how,
-             diameter, mass, com, windows, pieces, hull_volume, coll) -> dict:
-    """The content of summary.json (the bundled hubs' keys plus ``import``)."""
+def import_summary(rec: ImportRecord) -> dict:
+    """The content of summary.json of ``rec`` (the bundled hubs' keys plus ``import``)."""
     from drakedeburr.hub.import_collision import coacd_version
     from drakedeburr.hub.import_common import options_json
-    from drakedeburr.hub.import_mesh import IMPORT_VERSION
+    from drakedeburr.hub.import_options import IMPORT_VERSION
 
+    name, path, sha, key, unit, closed = rec.name, rec.path, rec.sha, rec.key, rec.unit, rec.closed
+    X_MH, options, notes, V_H, F, windows = (rec.X_MH, rec.options, rec.notes, rec.V_H, rec.F,
+                                             rec.windows)
+    volume, how, diameter, mass, com = rec.volume, rec.how, rec.diameter, rec.mass, rec.com
+    pieces, coll = rec.pieces, rec.coll
+    hull_volume = float(sum(h.volume() for h in rec.hulls))
     return {
         "name": name,
         "import": {"source": str(path.resolve()), "sha256": sha, "cache_key": key,

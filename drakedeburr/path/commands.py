@@ -34,9 +34,9 @@ def register(subparsers) -> None:
                    help="write the table as JSON, with 'input': each window's edge loop, the "
                         "hub axis and the front side in the input mesh's coordinates and unit")
     p.add_argument("--unit", choices=("m", "mm"), help="force a mesh file's unit")
-    from drakedeburr.hub.commands import _add_front_and_burr
+    from drakedeburr.hub.commands import add_front_and_burr
 
-    _add_front_and_burr(p)
+    add_front_and_burr(p)
     p.set_defaults(_run=_run_cl)
 
 

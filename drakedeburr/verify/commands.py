@@ -400,9 +400,9 @@ def register(subparsers) -> None:
                                        "--json/--html, or ~/.cache/drakedeburr/hubs)")
     p.add_argument("--unit", choices=("m", "mm"),
                    help="unit of a mesh target (default: detected from its size)")
-    from drakedeburr.hub.commands import _add_front_and_burr
+    from drakedeburr.hub.commands import add_front_and_burr
 
-    _add_front_and_burr(p)  # mesh target: --front, --burr-mm, --clearance-mm, ...
+    add_front_and_burr(p)  # mesh target: --front, --burr-mm, --clearance-mm, ...
     p.add_argument("--robot", metavar="NAME|FILE", default=None,
                    help="hub or mesh target: the arm to plan for (drakedeburr robots, or an "
                         "arm file *.yaml; default "
