@@ -82,3 +82,31 @@ def test_a_cluster_job_plans_and_verifies_in_its_own_process(tmp_path, monkeypat
     row = mut.run_job(job)
     assert row["error"] is None and row["passed"], row
     assert os.environ["DRAKEDEBURR_WORKERS"] == "1" and parallel.running_workers() == 0
+
+
+def test_a_job_without_an_arm_uses_one_rated_for_its_load(tmp_path, monkeypatch):
+    """verify-all picks the arm as plan/verify do: the workpiece cell's IRB 1600 (10 kg) cannot
+    carry a bundled hub on its gripper, so the job runs on the first rated arm mounted there
+    (the catalogue's workpiece jobs all failed `payload` before); a named arm is kept."""
+    from drakedeburr.cell.loads import cell_load, rated_default_arm
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.robots import ROBOTS
+    from drakedeburr.robots.payload import payload_figures
+
+    seen = []
+
+    def make_plan(config, planner, windows, progress=None):
+        seen.append(config.robot)
+        raise RuntimeError("stop after the configuration")
+
+    monkeypatch.setattr(mut, "make_plan", make_plan)
+    expected = rated_default_arm("workpiece_in_hand", "h5_straight")
+    assert expected is not None  # the scenario's own arm is over its rating here
+    assert cell_load(load_cell("workpiece_in_hand", "h5_straight")).mass > \
+        ROBOTS["irb1600"].payload_kg
+    for robot, want in ((None, expected), ("irb2600", "irb2600")):
+        row = mut.run_job(mut.BatchJob("workpiece_in_hand", "h5_straight",
+                                       str(tmp_path / str(robot)), robot=robot))
+        assert row["robot"] == want and seen[-1] == want and "stop after" in row["error"]
+        cell = load_cell("workpiece_in_hand", "h5_straight", robot=want)
+        assert all(f.ok for f in payload_figures(ROBOTS[want], cell_load(cell)))

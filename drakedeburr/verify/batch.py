@@ -43,6 +43,9 @@ class BatchJob:
         one_process: plan and verify in the process running the job, no pool of worker
             processes (sets ``$DRAKEDEBURR_WORKERS`` to 1 there: a cluster's worker runs
             several jobs at once, and a pool shared by their threads would mix their tasks).
+        robot: the arm (``--robot`` NAME or file); None: the scenario's own, or the first arm
+            rated for what it carries in this cell (:func:`drakedeburr.cell.loads.
+            arm_or_rated_default`, as ``plan``/``verify`` choose); the row records it.
     """
 
     scenario: str
@@ -56,6 +59,7 @@ class BatchJob:
     extra: dict = field(default_factory=dict)
     keep_failed_plans: bool = False
     one_process: bool = False
+    robot: str | None = None
 
 
 def hub_folders(root: str | Path) -> list[Path]:
@@ -103,10 +107,14 @@ def run_job(job: BatchJob) -> dict:
             import os
 
             os.environ["DRAKEDEBURR_WORKERS"] = "1"  # for every job this process runs
+        from drakedeburr.cell.loads import arm_or_rated_default
         from drakedeburr.config import default_tolerances, load_config
 
         tol = default_tolerances(**QUICK_SAMPLING) if job.quick else None
-        config = load_config(job.scenario, job.hub, tolerances=tol,
+        # no robot named: the scenario's arm, or one rated for what it carries (as verify/plan)
+        robot = arm_or_rated_default(job.robot, job.scenario, job.hub)
+        row["robot"] = robot
+        config = load_config(job.scenario, job.hub, tolerances=tol, robot=robot,
                              grinding_speed=job.grinding_speed)
         t0 = time.perf_counter()
         plan = make_plan(config, job.planner, job.windows)
