@@ -247,7 +247,7 @@ def solve_window_ik(
             cutting circle off by ``lift * tilt``), and tilting about it swings the shank away
             from the face more per radian.
         stop_at_failure: stop at the first failed target, the later ones left unsolved
-            without records (``PlanOptions.fail_fast``).
+            without records (``RunMode.FAIL_FAST``).
 
     Returns:
         WindowIk; failures are listed per point (:class:`FailureRecord`), never raised.
