@@ -61,3 +61,34 @@ def test_wheel_size_is_checked_across_the_axis():
     scene = mut.ray_scene(np.asarray(disc.vertices), np.asarray(disc.faces))
     # the front face of the disc, now 5 mm thick and 40 mm across: z = +2.5 mm
     assert mut.front_origin_offset(scene, 0.015, 0.1) == pytest.approx(2.5e-3, abs=1e-6)
+
+
+def test_import_options_have_one_home_and_every_field_keys_the_cache():
+    """ImportOptions / IMPORT_VERSION live in hub.import_options (import_mesh re-exports the
+    same objects), and changing any one option changes the cache key (a stale hub folder is
+    never reused for other settings)."""
+    import dataclasses
+
+    import drakedeburr.hub.import_mesh as im
+    import drakedeburr.hub.import_options as io
+
+    assert im.ImportOptions is io.ImportOptions and im.IMPORT_VERSION == io.IMPORT_VERSION
+    base = io.ImportOptions()
+    key = mut.cache_key("0" * 64, base, version=io.IMPORT_VERSION)
+    assert key != mut.cache_key("0" * 64, base, version=io.IMPORT_VERSION + 1)
+    for f in dataclasses.fields(io.ImportOptions):
+        v = getattr(base, f.name)
+        if v is None:
+            other = (0.0, 0.0, 1.0) if f.name == "axis_M" else 1e-3
+        elif isinstance(v, str):
+            other = v + "x"
+        elif isinstance(v, bool):
+            other = not v
+        elif isinstance(v, int):
+            other = v + 1
+        elif isinstance(v, float):
+            other = v * 1.5 + 1e-4
+        else:
+            other = (1e-3,)
+        changed = dataclasses.replace(base, **{f.name: other})
+        assert mut.cache_key("0" * 64, changed, version=io.IMPORT_VERSION) != key, f.name
