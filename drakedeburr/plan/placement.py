@@ -227,7 +227,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
     """
     from drakedeburr.cell.recipe import cell_recipe
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.parallel import map_calls
+    from drakedeburr.pool import map_calls
 
     kin0 = cell_kinematics(cell)
     seat = seat_offset(cell, hub_model)

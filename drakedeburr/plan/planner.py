@@ -37,19 +37,14 @@ from drakedeburr.errors import InputError
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
-from drakedeburr.plan.parallel import (
-    map_calls,
-    map_windows,
-    plan_all_windows,
-    warm_pool,
-    worker_count,
-)
+from drakedeburr.plan.parallel import map_windows, plan_all_windows
 from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
 from drakedeburr.plan.tool_paths import CL_COUNT_BUDGET, CL_DELTA, tool_path
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
 from drakedeburr.plan.window_targets import WindowTargets
+from drakedeburr.pool import map_calls, warm_pool, worker_count
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub", "CL_DELTA",
            "CL_COUNT_BUDGET"]
