@@ -44,7 +44,13 @@ from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
 from drakedeburr.plan.parallel import map_windows, plan_all_windows
-from drakedeburr.plan.policy import CellPasses, cell_pass, hub_pass, relief_deviation
+from drakedeburr.plan.policy import (
+    CellPasses,
+    cell_pass,
+    hub_pass,
+    long_reach_allowed,
+    relief_deviation,
+)
 from drakedeburr.plan.results import (
     PlanDraft,
     PlanMotion,
@@ -361,7 +367,7 @@ def plan_hub(
         return plan_in_cell(cells[tool], hub_model, wts, config, options, progress, only=only)
 
     draft = hub_pass(plan_in, [wt.window_index for wt in wts], cell,
-                     long_reach=options.relax and config.tool is None, t_start=t0)
+                     long_reach=long_reach_allowed(options, config), t_start=t0)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         draft = replace(draft, failures=(*skipped, *draft.failures))
     return draft.with_timings(targets_seconds=t_targets).plan()

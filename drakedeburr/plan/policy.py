@@ -37,8 +37,8 @@ from drakedeburr.plan.results import Deviation, PlanDraft, WindowPlan, WindowSta
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["CellPasses", "first_pass", "report_only_pass", "relax_pass", "cell_pass",
-           "long_reach_pass", "hub_pass", "relief_deviation", "first_failures",
-           "in_vain_records"]
+           "long_reach_pass", "hub_pass", "long_reach_allowed", "relief_deviation",
+           "first_failures", "in_vain_records"]
 
 log = logging.getLogger(__name__)
 
@@ -208,6 +208,12 @@ def long_reach_pass(standard: PlanDraft, windows: Sequence[int],
         log.warning("the %s cuts window(s) %s: planning the hub with it",
                     relax.long_reach().title, sorted(set(failing) - set(still)))
     return relax.choose_tool(standard, plan_long_reach(None))
+
+
+def long_reach_allowed(options, config) -> bool:
+    """May :func:`hub_pass` try the long-reach burr: the recipe is relaxed where it fails
+    (``options.relax``) and the run asked for no burr (``config.tool`` None)."""
+    return bool(options.relax) and config.tool is None
 
 
 def hub_pass(plan_in: Callable[[str | None, set[int] | None], PlanDraft],
