@@ -4,6 +4,10 @@
 a window is either planned (its stretches and :class:`WindowStats` are there; failure records
 may still say where it missed a bound) or skipped with the status naming the stage that could
 not be done. Failure records are :class:`drakedeburr.plan.types.FailureRecord`.
+
+A hub's assembled plan, while the hub-level policy (:mod:`drakedeburr.plan.policy`) still
+chooses, is a :class:`PlanDraft`: its motion, failure records and :class:`PlanRecord` (what
+``Plan.meta`` and ``Plan.run`` are built from, once, by :meth:`PlanDraft.plan`).
 """
 
 from __future__ import annotations
