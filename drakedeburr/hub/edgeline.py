@@ -208,8 +208,8 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     """
     out = _outward(outline_xy)
     lag, run = max(1, int(round(lag_length / step))), max(2, int(round(run_length / step)))
-    xy, t, first = _profiles(scene, outline_xy, out, z0, step, reach, lag, run,
-                             int(round(ledge_length / step)))
+    xy, t, first = _profiles(scene, outline_xy, out, z0, step, reach,
+                             (lag, run, int(round(ledge_length / step))))
     s = 0.02e-3 + np.arange(xy.shape[1]) * step
     P = len(outline_xy)
     ok = first >= 0
@@ -243,8 +243,9 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
 
 
 def _profiles(scene, outline_xy: np.ndarray, out: np.ndarray, z0: float, step: float,
-              reach: float, lag: int, run: int, ledge: int):
-    """The profiles and their face starts (module doc), ``FAR_REACH`` times ``reach`` long:
+              reach: float, samples: tuple[int, int, int]):
+    """The profiles and their face starts (module doc), ``FAR_REACH`` times ``reach`` long
+    (``samples``: the band lag, face run and ledge of :func:`_face_start` in samples):
     a drafted flank's top (where the flank rule of :func:`_face_start` needs to see the
     gentle surface) can lie further out than ``reach`` (mkz13 rim: 39 mm tall flanks 78 deg
     off the axis reach 10.5-12 mm out).
@@ -257,7 +258,7 @@ def _profiles(scene, outline_xy: np.ndarray, out: np.ndarray, z0: float, step: f
     xy = outline_xy[:, None, :] + s[None, :, None] * out[:, None, :]
     t, n = _cast(scene, xy.reshape(-1, 2), z0)
     t, n = t.reshape(P, len(s)), n.reshape(P, len(s), 3)
-    return xy, t, _face_start(t, n, z0, step, lag, run, ledge)
+    return xy, t, _face_start(t, n, z0, step, *samples)
 
 
 def _fill_missing(scene, p: np.ndarray, band: np.ndarray, ok: np.ndarray,
