@@ -253,7 +253,7 @@ def extract_window_edges(
         source: name for messages.
         axis_M, origin_M: hub axis (+Z_H, out of the front face) and a point on it in the
             mesh frame; None estimates them. For a mesh already in H pass (0, 0, 1), (0, 0, 0).
-        front: "auto" or the file axis the front faces ("+x", "-y", ...).
+        front: "auto" or the file axis the front faces ("+z", "-y", ...).
         spacing: arc-length spacing of the returned loop points [m].
         search: how openings are found and judged
             (:class:`drakedeburr.hub.openings.OpeningSearch`: the plan-view grid step, every

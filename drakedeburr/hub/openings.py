@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -150,7 +150,6 @@ def narrow_reason(width: float, burrs: tuple[float, ...], clearance: float,
             f"{clearance * 1e3:g} mm clearance: {each}{asked}")
 
 
-
 @dataclass(frozen=True)
 class OpeningSearch:
     """How the through-openings are found and judged (module doc).
@@ -238,8 +237,7 @@ def find_openings(scene, r_max: float, z_top: float, *,
     search = OpeningSearch() if search is None else search
     burrs = tuple(sorted(float(b) for b in search.burrs)) or (DEFAULT_BURR_DIAMETER,)
     clearance, pixel = search.clearance, search.pixel
-    min_width = (min_window_width(burrs, clearance) if search.min_width is None
-                 else search.min_width)
+    min_width = replace(search, burrs=burrs).window_width
     n_px = int(np.ceil(2 * r_max / pixel)) + 3
     g = (np.arange(n_px) - (n_px - 1) / 2) * pixel
     gx, gy = np.meshgrid(g, g, indexing="ij")
