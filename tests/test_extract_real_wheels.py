@@ -266,10 +266,35 @@ def _round_face_side_ends(mesh, V_H, near, radius):
     return fe[k[end]]
 
 
+def test_the_face_side_end_of_a_tessellated_round():
+    """:func:`_round_face_side_ends` on a strip we know: a flat face (z = 0, x < 0), a 2 mm
+    round down to a vertical wall in 12 facets of 7.5 deg (no edge turns 10 deg), the wall
+    10 mm tall. The face-side tangent line is x = z = 0: those edges and no other (not the
+    round's inner edges, not its wall-side end)."""
+    import trimesh
+
+    a = np.radians(7.5) * np.arange(13)
+    xz = np.vstack([[-10e-3, 0.0], np.c_[2e-3 * np.sin(a), 2e-3 * (np.cos(a) - 1.0)],
+                    [2e-3, -12e-3]])
+    ys = np.linspace(0.0, 20e-3, 5)
+    V = np.array([[x, y, z] for y in ys for x, z in xz])
+    n = len(xz)
+    F = []
+    for j in range(len(ys) - 1):
+        for i in range(n - 1):
+            p, q, r, t = j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1
+            F += [[p, q, t], [p, t, r]]
+    mesh = trimesh.Trimesh(V, np.array(F), process=True)
+    ends = _round_face_side_ends(mesh, mesh.vertices, mesh.vertices, 1e-3)
+    assert len(ends) == len(ys) - 1
+    np.testing.assert_allclose(mesh.vertices[ends][:, :, [0, 2]], 0.0, atol=1e-12)
+
+
 def test_gentle_stretches_follow_the_mesh_creases(wheel):
     """Module doc: on gentle stretches the loop lies on the crease, open border or face-side
     end of a round (mkz13 windows 7 and 17 sit on the face-side end of a round whose facets
-    turn 27, 21, 9, 4, 3.4 and 8.5 deg: no single edge of 10 deg there)."""
+    lie 72, 45, 24, 15, 11 and 7.6 deg off the axis, the band-end edge turning 8.5 deg: no
+    single edge of 10 deg there)."""
     _, mesh, res = wheel
     X_HM = np.linalg.inv(res.X_MH)
     V_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
