@@ -173,7 +173,9 @@ def stretch_kto(cell, checker, cut: CutSamples, t: np.ndarray, a_max: np.ndarray
     kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
     kto.AddPathVelocityConstraint(dq_dr[0], dq_dr[0], 0.0)
     kto.AddPathVelocityConstraint(dq_dr[-1], dq_dr[-1], 1.0)
-    dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
+    # the clearance tolerance the checker certifies against (the run's min_clearance)
+    dist = MinimumDistanceLowerBoundConstraint(cell.plant, checker.tolerances.min_clearance, ctx,
+                                               None, 3e-3)
     keep = [dist]  # the program holds references only: keep the constraints alive
     L = float(s[-1] - s[0])
     s_c = np.linspace(s[0], s[-1], int(L / options.constraint_step) + 1)[1:-1]

@@ -88,8 +88,10 @@ class IkOptions:
     The two clearance bounds are derived from the run's ``Tolerances.min_clearance``
     (:meth:`at_clearance`, applied by :class:`drakedeburr.plan.options.PlanContext`):
     ``min_distance`` = min_clearance + :data:`CLEARANCE_MARGIN`, ``min_distance_floor`` =
-    min_clearance + :data:`FLOOR_MARGIN`; their defaults are those of the default tolerances.
-    They are fields so that the plan records the bounds its IK used.
+    min_clearance + :data:`FLOOR_MARGIN`; their defaults are those of the default tolerances,
+    and a planning context replaces whatever is given with its tolerance's (to move the IK
+    bound, change ``Tolerances.min_clearance``). They are fields so that the plan records the
+    bounds its IK used.
 
     Attributes:
         position_tolerance: half-width of the position box [m].
@@ -119,8 +121,9 @@ class IkOptions:
         spin_samples: spins tried by the seed sweep.
         min_distance_floor: the clearance bound of the last retry [m] (the acceptance bound):
             ``min_distance`` carries a small margin so that the straight moves between targets
-            keep 2 mm; where the cone leaves no room for the margin (a few fillet points) the
-            target takes the bare bound and the dense check of the executed motion decides.
+            keep the tolerance; where the cone leaves no room for the margin (a few fillet
+            points) the target takes the bare bound and the dense check of the executed motion
+            decides.
         analytic_first: accept the analytic warm start when it already meets every
             constraint of the program (see :func:`analytic_accept`) and run the Drake program
             only where it does not. The warm start puts the axis exactly on the preferred axis

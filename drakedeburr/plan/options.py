@@ -161,8 +161,10 @@ class PlanContext:
     q_refs: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.config is not None:
-            ik = self.options.ik.at_clearance(self.config.tolerances.min_clearance)
+        # a stand-in configuration without tolerances (a test's) keeps the options' own bounds
+        tol = getattr(self.config, "tolerances", None)
+        if tol is not None:
+            ik = self.options.ik.at_clearance(tol.min_clearance)
             object.__setattr__(self, "options", replace(self.options, ik=ik))
 
     @property
