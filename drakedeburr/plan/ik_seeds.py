@@ -192,6 +192,10 @@ def cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
             for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
 
 
+#: axes on the ring :func:`clearance_seed` tries around the cone axis
+SEED_RING = 12
+
+
 def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
                    target: IkTarget, half_angle: float, q_prev: np.ndarray, reach: float,
                    lift: float = 0.0) -> np.ndarray | None:
@@ -210,10 +214,6 @@ def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.nd
         if d > best_d:
             best, best_d = q, d
     return best
-
-
-#: axes on the ring :func:`clearance_seed` tries around the cone axis
-SEED_RING = 12
 
 
 def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarray,
