@@ -9,7 +9,7 @@ import numpy as np
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.results import Stretch
-from drakedeburr.plan.timing import TimedPath, rest_path, time_path
+from drakedeburr.plan.timing import TimedPath, air_limits, rest_path, time_path
 from drakedeburr.plan.transitions import joint_move
 from drakedeburr.plan.types import CartesianTarget, FailureRecord
 
@@ -44,9 +44,10 @@ def time_cartesian(ctx: PlanContext, q, s, X, v_cap, interpolate: bool = False
 
 
 def time_joint(ctx: PlanContext, q, s, v_cap) -> TimedPath:
-    """Timed joint move (``s``: joint-space arc length) under a TCP speed cap."""
+    """Timed joint move (``s``: joint-space arc length) under a TCP speed cap and the joint
+    limits (:func:`drakedeburr.plan.timing.air_limits`)."""
     p = ctx.kin.X_HT_from_q(q)[:, :3, 3]
-    return time_path(s, q, p, ctx.limits(v_cap), fk=ctx.kin.p_HT)
+    return time_path(s, q, p, air_limits(ctx.limits(v_cap)), fk=ctx.kin.p_HT)
 
 
 def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
