@@ -94,7 +94,7 @@ def test_faster_move_takes_the_tcp_line_where_clear_and_faster(kin):
     mv = _straight(kin, q0, q1)
     out = mut.faster_move(kin, _Clear(0.01), mv, _tcp_time(kin), 2e-3, 0.004)
     assert out.method == "tcp_line" and out.ok
-    assert out.info["tcp_line_seconds"] < out.info["straight_seconds"] - 1e-3
+    assert out.info["seconds"] < out.info["before_seconds"] - 1e-3
     np.testing.assert_array_equal(out.q[[0, -1]], mv.q[[0, -1]])
     np.testing.assert_allclose(out.s, mut._arc(out.q))
     # too close somewhere: the straight move stays
@@ -102,6 +102,60 @@ def test_faster_move_takes_the_tcp_line_where_clear_and_faster(kin):
     # not faster under the caller's timing (joint travel: the TCP line's is longer): stays
     joint_time = lambda q, s: float(s[-1])  # noqa: E731
     assert mut.faster_move(kin, _Clear(0.01), mv, joint_time, 2e-3, 0.004) is mv
-    # only straight moves are swapped
+    # KTO moves (and via moves without their waypoints) are kept
+    kto = mut.JointMove(q=mv.q, s=mv.s, clearance=0.01, method="kto", ok=True)
+    assert mut.faster_move(kin, _Clear(0.01), kto, _tcp_time(kin), 2e-3, 0.004) is kto
     via = mut.JointMove(q=mv.q, s=mv.s, clearance=0.01, method="via", ok=True)
     assert mut.faster_move(kin, _Clear(0.01), via, _tcp_time(kin), 2e-3, 0.004) is via
+
+
+def _via_move(way, step=0.004):
+    q = np.concatenate([a + np.linspace(0, 1, int(np.ceil(np.max(np.abs(b - a)) / step)),
+                                        endpoint=False)[:, None] * (b - a)
+                        for a, b in zip(way[:-1], way[1:], strict=True)] + [way[-1:]])
+    return mut.JointMove(q=q, s=mut._arc(q), clearance=0.01, method="via", ok=True,
+                         info=dict(via_points=len(way) - 2, waypoints=way))
+
+
+WAY = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.3, 0.5, -0.2, 1.0, 0.4, -0.6],
+                [0.35, 0.6, 0.3, 1.4, -0.2, 0.2], [0.9, 0.1, 0.2, 0.5, 0.0, 0.8]])
+
+
+@pytest.mark.parametrize("share", [1.0, 0.6, 0.3])
+def test_rounded_corners_stay_on_the_polyline_legs_and_turn_smoothly(share):
+    step = 0.004
+    q = mut.rounded_corners(WAY, share, step)
+    np.testing.assert_array_equal(q[[0, -1]], WAY[[0, -1]])
+    d = np.diff(q, axis=0)
+    assert np.max(np.abs(d)) <= step * (1 + 1e-9)
+    assert np.min(np.linalg.norm(d, axis=1)) > 1e-3 * step  # no repeated sample
+    # no reversal and no kink: successive steps turn by little (the polyline turns by
+    # 50-110 deg at its corners; a blend spreads that over its samples)
+    u = d / np.linalg.norm(d, axis=1)[:, None]
+    turn = np.degrees(np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=1), -1, 1)))
+    corner = np.diff(WAY, axis=0)
+    corner = corner / np.linalg.norm(corner, axis=1)[:, None]
+    kinks = np.degrees(np.arccos(np.sum(corner[1:] * corner[:-1], axis=1)))
+    assert kinks.min() > 30.0 and turn.max() < 0.25 * kinks.min()
+    # inside the box of the polyline's points (each blend a convex combination of three)
+    assert np.all(q >= WAY.min(axis=0) - 1e-12) and np.all(q <= WAY.max(axis=0) + 1e-12)
+    # every sample is on a leg or within its blend's triangle: off the legs only near corners
+    r_max = share * np.max(np.linalg.norm(np.diff(WAY, axis=0), axis=1))
+    near = np.min(np.linalg.norm(q[:, None] - WAY[None, 1:-1], axis=2), axis=1)
+    on_leg = np.zeros(len(q), bool)
+    for a, b in zip(WAY[:-1], WAY[1:], strict=True):
+        f = np.clip((q - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1)
+        on_leg |= np.linalg.norm(q - (a + f[:, None] * (b - a)), axis=1) < 1e-9
+    assert np.all(on_leg | (near <= r_max + 1e-9))
+    assert on_leg.sum() > 0.2 * len(q)
+
+
+def test_faster_move_rounds_a_via_move_where_clear(kin):
+    mv = _via_move(WAY)
+    # the joint-travel timing of a rounded path is shorter (a blend cuts the corner)
+    out = mut.faster_move(kin, _Clear(0.01), mv, lambda q, s: float(s[-1]), 2e-3, 0.004)
+    assert out.method == "via_rounded"
+    np.testing.assert_allclose(out.q, mut.rounded_corners(WAY, 0.9, 0.004))
+    assert out.s[-1] < mv.s[-1]
+    assert mut.faster_move(kin, _Clear(1e-3), mv, lambda q, s: float(s[-1]), 2e-3,
+                           0.004) is mv

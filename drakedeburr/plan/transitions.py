@@ -2,9 +2,10 @@
 home, each checked for collision; a joint move that collides is repaired with Drake's
 ``KinematicTrajectoryOptimization`` (minimum-distance constraints at sparse samples, joint
 velocity/acceleration bounds everywhere, warm-started from the straight joint line through a
-lifted via point). A straight move may be swapped for its TCP line (:func:`tcp_line`,
-:func:`faster_move`): the wrist on the same joint line, the arm putting the tool point on the
-straight line between the ends, where that is clear and faster under the move's timing.
+lifted via point). A straight move may be swapped for its TCP line (:func:`tcp_line`: the wrist
+on the same joint line, the arm putting the tool point on the straight line between the ends),
+a via move for the same polyline with its corners rounded (:func:`rounded_corners`), where that
+is clear and faster under the move's timing (:func:`faster_move`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 
 __all__ = ["JointMove", "approach_pose", "joint_move", "check_joint_samples", "tcp_line",
-           "faster_move"]
+           "rounded_corners", "faster_move"]
 
 log = logging.getLogger(__name__)
 
@@ -38,7 +39,7 @@ class JointMove:
         q: (N, 6) dense joint samples [rad] from start to goal.
         s: (N,) joint-space arc length [rad].
         clearance: minimum distance along it [m] (capped).
-        method: "straight", "tcp_line" (:func:`faster_move`), "via" or "kto".
+        method: "straight", "tcp_line", "via", "via_rounded" (:func:`faster_move`) or "kto".
         ok: clearance >= bound at every sample and joints in limits.
         info: solver details.
     """
@@ -128,7 +129,7 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
         d, reach = _clear_share(checker, q, min_distance)
         if d >= min_distance:
             return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
-                             info=dict(via_points=len(way) - 2))
+                             info=dict(via_points=len(way) - 2, waypoints=way))
         if reach > guess_reach:
             guess, guess_reach = way, reach  # the KTO starts from the via path clear longest
     guess = guess if guess is not None else np.stack([q0, q1])
@@ -193,26 +194,82 @@ def tcp_line(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, step: float = 
     return None
 
 
+def rounded_corners(way: np.ndarray, share: float, step: float = 0.01) -> np.ndarray:
+    """Dense joints along the joint polyline ``way`` (K, 6) with each interior corner
+    replaced by a quadratic Bezier blend that starts ``share`` (in (0, 1]) of the shorter
+    adjacent leg before the corner and ends as far after it (a leg with a corner at both ends
+    lends each at most half of itself, so blends never overlap): tangent-continuous, inside
+    the joints' box wherever the polyline is (a blend is a convex combination of its three
+    points), at most ``step`` [rad] between samples."""
+    way = np.asarray(way, float)
+    legs = np.diff(way, axis=0)
+    length = np.linalg.norm(legs, axis=1)
+    usable = length * np.where((np.arange(len(legs)) > 0)
+                               & (np.arange(len(legs)) < len(legs) - 1), 0.5, 1.0)
+    pieces, cur = [], way[0]
+    for k in range(1, len(way) - 1):
+        r = share * min(usable[k - 1], usable[k])
+        a = way[k] - r * legs[k - 1] / length[k - 1]
+        b = way[k] + r * legs[k] / length[k]
+        pieces += [(cur, a), (a, way[k], b)]
+        cur = b
+    pieces.append((cur, way[-1]))
+    out = [way[:1]]
+    for pc in pieces:
+        if len(pc) == 2:  # a straight stretch (none between two blends that meet)
+            a, b = pc
+            if np.max(np.abs(b - a)) <= 1e-9 * step:
+                continue
+            n = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
+            f = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            out.append(a + f * (b - a))
+        else:  # |dB/du| <= 2 max(|v - a|, |b - v|) per joint
+            a, v, b = pc
+            n = max(2, int(np.ceil(2 * max(np.max(np.abs(v - a)), np.max(np.abs(b - v)))
+                                   / step)))
+            f = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            out.append((1 - f) ** 2 * a + 2 * f * (1 - f) * v + f ** 2 * b)
+    q = np.concatenate(out)
+    q[-1] = way[-1]  # the move's end exactly (the next stretch starts there)
+    return q
+
+
+#: shares of the shorter adjacent leg a via path's corners are rounded by, tried in order
+_ROUNDING = (0.9, 0.6, 0.3)
+
+
 def faster_move(kin: CellKinematics, checker: ClearanceChecker, mv: JointMove,
                 duration: Callable[[np.ndarray, np.ndarray], float], min_distance: float,
                 step: float = 0.01) -> JointMove:
-    """``mv`` (a straight move) or its :func:`tcp_line`, whichever ``duration(q, s)`` [s]
-    (the caller's timing of the move) finds faster, the TCP line only where it keeps
-    ``min_distance`` at every sample (the check ``joint_move`` makes) by 1 ms or more."""
-    if mv.method != "straight" or not mv.ok or len(mv.q) < 2:
+    """``mv`` or a faster path between its ends: a straight move's :func:`tcp_line`, a via
+    move's corners rounded (:func:`rounded_corners`, the widest rounding of
+    :data:`_ROUNDING` first: a kink in a joint path is a stop). The first of them that
+    ``duration(q, s)`` [s] (the caller's timing of the move) finds faster by 1 ms or more and
+    that keeps ``min_distance`` at every sample (the check ``joint_move`` makes); else ``mv``.
+    """
+    if not mv.ok or len(mv.q) < 2:
         return mv
-    q = tcp_line(kin, mv.q[0], mv.q[-1], step)
-    if q is None:
+    if mv.method == "straight":
+        tries = [("tcp_line", lambda: tcp_line(kin, mv.q[0], mv.q[-1], step))]
+    elif mv.method == "via" and "waypoints" in mv.info:
+        way = mv.info["waypoints"]
+        tries = [("via_rounded", lambda f=f: rounded_corners(way, f, step)) for f in _ROUNDING]
+    else:
         return mv
-    s = _arc(q)
-    t_new, t_old = duration(q, s), duration(mv.q, mv.s)
-    if t_new > t_old - 1e-3:
-        return mv
-    d = check_joint_samples(checker, q, min_distance)
-    if d < min_distance:
-        return mv
-    info = dict(mv.info, straight_seconds=float(t_old), tcp_line_seconds=float(t_new))
-    return replace(mv, q=q, s=s, clearance=d, method="tcp_line", info=info)
+    t_old = duration(mv.q, mv.s)
+    for method, make in tries:
+        q = make()
+        if q is None:
+            continue
+        s = _arc(q)
+        t_new = duration(q, s)
+        if t_new > t_old - 1e-3:
+            continue
+        d = check_joint_samples(checker, q, min_distance)
+        if d >= min_distance:
+            info = dict(mv.info, before_seconds=float(t_old), seconds=float(t_new))
+            return replace(mv, q=q, s=s, clearance=d, method=method, info=info)
+    return mv
 
 
 def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
