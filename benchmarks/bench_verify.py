@@ -70,6 +70,12 @@ def _baseline_measure():
     except (subprocess.CalledProcessError, FileNotFoundError):
         return (lambda cell, s, tol, *a, **k: distances.measure_samples(
             cell, s, tol, method="dense")), "dense reference method (git unavailable)"
+    from drakedeburr.verify import types
+
+    # the baseline's measure_samples imports Distances from verify.sampling, where it lived at
+    # that commit (it moved to verify.types since); give it the same class there
+    if not hasattr(sampling, "Distances"):
+        sampling.Distances = types.Distances
     return (lambda cell, s, tol, *a, **k: mod.measure_samples(cell, s, tol)), f"git {BASELINE}"
 
 
