@@ -215,9 +215,8 @@ PENDING_PARAMETERS = {
     "plan/ik_seeds.py _probe": 15, "plan/ik_seeds.py _refine_near_miss": 15,
     "plan/placement.py place_hub": 9, "plan/spin.py optimize_spin": 11,
     "plan/stretch.py make_target": 10, "post/cl_interpreter.py arc_points": 9,
-    "post/cl_post.py program_from_cl": 15, "post/cl_post.py post_cl_file": 9,
-    "post/cl_reader.py iter_cl_moves": 10, "post/tool_axis.py solve_tool_axis_path": 10,
-    "post/virtual_tcp_post.py post_cl_file_virtual_tcp": 10, "programs/ls.py _move": 9,
+    "post/tool_axis.py solve_tool_axis_path": 10,
+    "programs/ls.py _move": 9,
     "programs/program.py from_poses": 10, "verify/batch.py verify_all": 12,
 }
 
