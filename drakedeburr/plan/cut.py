@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from drakedeburr.frames.vectors import angle_between
-from drakedeburr.plan.cut_path import cut_path
+from drakedeburr.plan.cut_path import AxisSmoothing, CutPathOptions, cut_path
 from drakedeburr.plan.interpolate import DensePath
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import (
@@ -170,8 +170,9 @@ def track_cut(ctx: PlanContext, wt, ik: IkStep, step: float) -> _Try:
     q0 = wik.q[good[0]]
     for attempt in range(6):
         dist = None
-        cp = cut_path(X_ik, wt.cone_retract_H[order], wt.cone_half_angle, step=step,
-                      spin_sigma=opt.spin_sigma, axis_margin=opt.axis_margin, pin=pin,
+        shape = CutPathOptions(step=step, spin_sigma=opt.spin_sigma,
+                               axes=AxisSmoothing(margin=opt.axis_margin))
+        cp = cut_path(X_ik, wt.cone_retract_H[order], wt.cone_half_angle, shape, pin=pin,
                       deviation=dev)
         cp, spin_mode = _spin(ctx, cp, q0, step, spin_mode, w)
         q_d, ok_d = kin.track(kin.X_WF_from_X_HT(cp.X_HT), q0)
