@@ -205,8 +205,6 @@ PENDING_PARAMETERS = {
     "hub/openings.py find_openings": 9, "hub/scan.py simulate_scan": 13,
     "laser/robot_job.py plan_job": 9, "orientation/commands.py run_orient": 9,
     "orientation/models.py make_problem": 9,
-    "plan/feed_program.py _limit_rows": 10,
-    "plan/feed_program.py _program": 10, "plan/feed_program.py hold_feed": 12,
     "plan/fillets.py stretch_kto": 11, "plan/fillets.py orientation_by_kto": 12,
     "plan/fillets.py _repair_one": 11, "plan/fillets.py _stretch_frames": 9,
     "plan/ik.py _solve_point": 12, "plan/ik.py solve_window_ik": 15,
