@@ -202,7 +202,7 @@ PENDING_PARAMETERS = {
     "cell/narrowphase.py certified_distance": 9, "cell/reach.py survey_reach": 9,
     "cell/reach.py _solve_target": 10, "frames/normals.py inner_normals_from_cloud": 9,
     "frames/normals.py _fit_point": 12, "hub/extract.py extract_window_edges": 12,
-    "hub/openings.py find_openings": 9, "hub/scan.py simulate_scan": 13,
+    "hub/openings.py find_openings": 9,
     "laser/robot_job.py plan_job": 9, "orientation/commands.py run_orient": 9,
     "orientation/models.py make_problem": 9,
     "plan/fillets.py stretch_kto": 11, "plan/fillets.py orientation_by_kto": 12,

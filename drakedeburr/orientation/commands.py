@@ -103,9 +103,9 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
 
     scan = None
     if normals == "cloud":
-        from drakedeburr.hub import simulate_scan
+        from drakedeburr.hub import ScannerModel, simulate_scan
 
-        scan = simulate_scan(hub, sigma=sigma, seed=seed, spacing=0.3e-3,
+        scan = simulate_scan(hub, ScannerModel(sigma=sigma), seed=seed, spacing=0.3e-3,
                              max_edge_distance=1.5 * 6e-3)
     rows = []
     for w, edge in enumerate(hub.windows):
