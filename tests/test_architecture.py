@@ -215,7 +215,7 @@ PENDING_PARAMETERS = {
     "plan/stretch.py make_target": 10, "post/cl_interpreter.py arc_points": 9,
     "post/tool_axis.py solve_tool_axis_path": 10,
     "programs/ls.py _move": 9,
-    "programs/program.py from_poses": 10, "verify/batch.py verify_all": 12,
+    "programs/program.py from_poses": 10,
 }
 
 
