@@ -212,9 +212,6 @@ PENDING_PARAMETERS = {
     "plan/ik_seeds.py _probe": 15, "plan/ik_seeds.py _refine_near_miss": 15,
     "plan/placement.py place_hub": 9, "plan/spin.py optimize_spin": 11,
     "plan/stretch.py make_target": 10,
-    "post/tool_axis.py solve_tool_axis_path": 10,
-    "programs/ls.py _move": 9,
-    "programs/program.py from_poses": 10,
 }
 
 

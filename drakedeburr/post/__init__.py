@@ -18,7 +18,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
         "ClWordCount",
         "iter_cl_moves", "parse_cl_text", "read_cl",
     ),
-    "tool_axis": ("ToolAxisPathResult", "path_travel", "solve_tool_axis_path", "tool_frames"),
+    "tool_axis": ("ToolAxisOptions", "ToolAxisPathResult", "path_travel", "solve_tool_axis_path",
+                  "tool_frames"),
     "virtual_tcp": (
         "contour_frames", "offset_contour", "part_contour_at_virtual", "virtual_tcp_poses",
     ),

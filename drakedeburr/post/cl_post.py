@@ -35,7 +35,11 @@ import numpy as np
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_reader import ClProgram, ClReadOptions, read_cl
-from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
+from drakedeburr.post.tool_axis import (
+    ToolAxisOptions,
+    ToolAxisPathResult,
+    solve_tool_axis_path,
+)
 from drakedeburr.programs.program import (
     JOINT,
     LINEAR,
@@ -276,12 +280,12 @@ def _solve(cl: ClProgram, s: PostSettings,
         raise InputError(f"{cl.source}: no moves in the CL file")
     X_WO, X_FT = s.frames()
     if s.stationary_tool:  # CL data stay in the held part's frame; the spindle is X_WO
-        return solve_tool_axis_path(s.robot, cl.p_C, cl.axis_C, X_FT, mode=s.spin_mode,
-                                    q_start=s.q_start, progress=progress, X_WS=X_WO)
+        return solve_tool_axis_path(s.robot, cl.p_C, cl.axis_C, X_FT, s.spin_mode,
+                                    ToolAxisOptions(q_start=s.q_start), progress, X_WS=X_WO)
     p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
     axis_W = cl.axis_C @ X_WO[:3, :3].T
-    return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, mode=s.spin_mode,
-                                q_start=s.q_start, progress=progress)
+    return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, s.spin_mode,
+                                ToolAxisOptions(q_start=s.q_start), progress)
 
 
 def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...],
