@@ -210,8 +210,7 @@ PENDING_PARAMETERS = {
     "plan/ik_seeds.py clearance_seed": 11, "plan/ik_seeds.py analytic_accept": 10,
     "plan/ik_seeds.py _probe_candidates": 9, "plan/ik_seeds.py cone_clearance_probe": 15,
     "plan/ik_seeds.py _probe": 15, "plan/ik_seeds.py _refine_near_miss": 15,
-    "plan/placement.py place_hub": 9, "plan/spin.py optimize_spin": 11,
-    "plan/stretch.py make_target": 10,
+    "plan/placement.py place_hub": 9,
 }
 
 

@@ -27,7 +27,7 @@ from drakedeburr.plan.program_reading import (
     program_orientation_error,
 )
 from drakedeburr.plan.results import IkStep
-from drakedeburr.plan.spin import optimize_spin, spin_frames
+from drakedeburr.plan.spin import SpinSearch, optimize_spin, spin_frames
 from drakedeburr.plan.timing import joint_spline
 from drakedeburr.plan.types import FailureRecord
 
@@ -139,9 +139,9 @@ def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: 
     if spin_mode == "search" and opt.spin_search:
         # the spin program keeps its travel resolution (every 2nd sample at the base step)
         # when the cut is sampled more finely
-        X_spin, stats = optimize_spin(ctx.kin, cp.X_HT, cp.s, q0, wrist_margin=opt.ik.min_wrist,
-                                      psi_ref=cp.psi_ik, band=opt.spin_band,
-                                      stride=max(1, round(2 * opt.dense_step / step)))
+        search = SpinSearch(wrist_margin=opt.ik.min_wrist, band=opt.spin_band,
+                            stride=max(1, round(2 * opt.dense_step / step)))
+        X_spin, stats = optimize_spin(ctx.kin, cp.X_HT, cp.s, q0, search, psi_ref=cp.psi_ik)
         if stats["ok"]:
             X_tg = cp.X_target.copy()
             X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
