@@ -33,6 +33,7 @@ import time
 import numpy as np
 
 import drakedeburr.orientation.exact as exact_module
+from drakedeburr.config import OrientationBounds
 from drakedeburr.frames.local_frames import R_HL_from_normals
 from drakedeburr.frames.normals import inner_normals_from_cloud
 from drakedeburr.hub import ScannerModel, load_hub, simulate_scan
@@ -61,7 +62,8 @@ def _fresh(prob):
     """The same problem, rebuilt (no cached coupling matrix), the solver's caches emptied."""
     for f in _solver_caches():
         f.cache_clear()
-    return make_problem(prob.model, prob.p_HC, prob.R_HL, prob.theta_min, prob.theta_max,
+    return make_problem(prob.model, prob.p_HC, prob.R_HL,
+                        OrientationBounds(prob.theta_min, prob.theta_max),
                         w1=prob.w1, w2=prob.w2,
                         second_difference_weight=prob.second_difference_weight, name=prob.name)
 

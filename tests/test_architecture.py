@@ -201,8 +201,6 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 PENDING_PARAMETERS = {
     "hub/extract.py extract_window_edges": 12,
     "hub/openings.py find_openings": 9,
-    "orientation/commands.py run_orient": 9,
-    "orientation/models.py make_problem": 9,
     "plan/fillets.py stretch_kto": 11, "plan/fillets.py orientation_by_kto": 12,
     "plan/fillets.py _repair_one": 11, "plan/fillets.py _stretch_frames": 9,
     "plan/ik.py _solve_point": 12, "plan/ik.py solve_window_ik": 15,
