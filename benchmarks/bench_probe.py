@@ -33,7 +33,7 @@ def main() -> None:
     from drakedeburr.config import ProcessParameters
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.ik import IkOptions
-    from drakedeburr.plan.ik_seeds import _probe, unreachable
+    from drakedeburr.plan.ik_seeds import IkTarget, _probe, unreachable
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
     from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -51,13 +51,13 @@ def main() -> None:
 
     def probe(ch, i):
         t = time.perf_counter()
-        r = _probe(kin, ch, cell.q_home, p_HQ[i], wt.cone_retract_H[i], wt.cone_half_angle,
-                   wt.retract_H[i], wt.t_H[i], lift, opt.min_distance_floor, opt.min_wrist,
-                   (0.0, 0.33, 0.66, 0.98), 16, 24, 24)
+        r = _probe(kin, ch, cell.q_home, IkTarget(p_HQ[i], wt.cone_retract_H[i], wt.retract_H[i],
+                                                  wt.t_H[i]), wt.cone_half_angle,
+                   opt.probe_settings(lift))
         return r, time.perf_counter() - t
 
     def verdict(r):
-        return "clear" if r["feasible"] else ("unreachable" if unreachable(r, opt) else "near")
+        return "clear" if r.feasible else ("unreachable" if unreachable(r, opt) else "near")
 
     print(f"## cone probe: hub {args.hub}, window {args.window}, source box, "
           f"targets {len(wt) // 2}..{len(wt) // 2 + args.targets - 1}\n")
@@ -67,11 +67,11 @@ def main() -> None:
     for i in range(len(wt) // 2, min(len(wt), len(wt) // 2 + args.targets)):
         (r, t), (b, tb) = probe(checker, i), probe(full, i)
         same &= verdict(r) == verdict(b)
-        if not r["feasible"]:
+        if not r.feasible:
             times["now"].append(t)
             times["full"].append(tb)
-        print(f"{i:4d}  {verdict(r):11}  {1e3 * r['best_clearance']:8.3f}  "
-              f"{1e3 * b['best_clearance']:8.3f}  {r['queries']:7d}  {b['queries']:6d}  "
+        print(f"{i:4d}  {verdict(r):11}  {1e3 * r.best_clearance:8.3f}  "
+              f"{1e3 * b.best_clearance:8.3f}  {r.queries:7d}  {b.queries:6d}  "
               f"{t:6.3f}  {tb:6.3f}")
     if times["now"]:
         now, base = np.median(times["now"]), np.median(times["full"])

@@ -64,16 +64,18 @@ def hold(cell, kin, checker, tol, s, q, p, cone_s, cones, half_angle, dip, targe
     clearance, largest acceleration ratio, seconds). ``targets``: the window's CL points in
     program order and their cone axes, (K, 3) each."""
     from drakedeburr.plan.cut_path import axes_interp
-    from drakedeburr.plan.fillets import FilletOptions, stretch_kto
+    from drakedeburr.plan.fillets import CutSamples, FilletOptions, stretch_kto
     from drakedeburr.plan.program_reading import cone_axes_on_moves
     from drakedeburr.verify.geometry import point_segment
 
     sg, tg = _profile(s, V_BAND, dip)
     amax = np.asarray(kin.a_max)
     t0 = time.perf_counter()
+    X = kin.X_HT_from_q(q)
+    X[:, :3, 3] = p  # the plan's tool points (the KTO reads only these of the poses)
     res, traj = stretch_kto(
-        cell, checker, s, q, p, axes_interp(cone_s, cones, s), half_angle, np.interp(s, sg, tg),
-        amax, np.asarray(kin.v_max),
+        cell, checker, CutSamples(s, q, X, axes_interp(cone_s, cones, s), half_angle),
+        np.interp(s, sg, tg), amax, np.asarray(kin.v_max),
         FilletOptions(control_points=control_points, acceleration_share=0.9,
                       cone_margin=cone_margin, constraint_step=constraint_step, iterations=500,
                       position_tolerance=position_tolerance))

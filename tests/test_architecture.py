@@ -198,17 +198,7 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 
 #: functions over 8 parameters not yet given their records (#45 item 4), with their count: a
 #: ratchet -- none may be added, none may grow, and a fixed one must leave the list
-PENDING_PARAMETERS = {
-    "hub/extract.py extract_window_edges": 12,
-    "hub/openings.py find_openings": 9,
-    "plan/fillets.py stretch_kto": 11, "plan/fillets.py orientation_by_kto": 12,
-    "plan/fillets.py _repair_one": 11, "plan/fillets.py _stretch_frames": 9,
-    "plan/ik.py _solve_point": 12, "plan/ik.py solve_window_ik": 15,
-    "plan/ik_seeds.py clearance_seed": 11, "plan/ik_seeds.py analytic_accept": 10,
-    "plan/ik_seeds.py _probe_candidates": 9, "plan/ik_seeds.py cone_clearance_probe": 15,
-    "plan/ik_seeds.py _probe": 15, "plan/ik_seeds.py _refine_near_miss": 15,
-    "plan/placement.py place_hub": 9,
-}
+PENDING_PARAMETERS: dict[str, int] = {}
 
 
 @functools.cache

@@ -5,6 +5,7 @@ from scipy.spatial import cKDTree
 import drakedeburr.hub.extract as mut
 from drakedeburr.errors import InputError
 from drakedeburr.hub.mesh_io import load_hub_mesh
+from drakedeburr.hub.openings import OpeningSearch
 from drakedeburr.path.synthetic import rounded_polygon
 
 AUDIBOT = "wheel_models/audibot__wheel_rim_only_DERIVED_m.stl"
@@ -114,7 +115,7 @@ def test_openings_no_burr_fits_are_refused_with_width_and_each_burrs_need(tmp_pa
     assert len(res.windows) == 6 and all(11.5 < e["width_mm"] < 12.5 for e in res.notes["loops"])
     with pytest.raises(InputError, match="the 12 mm burr needs 16.0 mm"):
         mut.extract_window_edges(lm.mesh, source="s12", front="+z",
-                                 burr_diameters=(12e-3,))
+                                 search=OpeningSearch.of(burr_diameters=(12e-3,)))
 
 
 def test_no_opening_and_bad_files(tmp_path):

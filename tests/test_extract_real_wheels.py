@@ -11,11 +11,21 @@ What is checked here is measured on the mesh itself, not by the extractor's own 
   extractor casts into);
 * every loop point outside the through-opening in plan view (a ray along -Z_H through it hits
   the mesh: trimesh's ray caster) and the opening's outline inside the loop;
+* the loop is this opening's front boundary and no other's: on its gently sloped stretches no
+  surface seen from the front stands above the loop between it and the opening's outline (what
+  lies there is the edge band and the wall, falling away from the loop), the loop encloses no
+  other opening and no other window's loop in plan view. How far out the loop lies from the
+  outline is not bounded by a constant: the top of a drafted flank lies 11-23 mm out;
 * on the loop's gently sloped stretches (within 45 deg of the face plane), the points lie on
-  the mesh's creases or open borders: the median distance to a mesh edge whose dihedral angle
-  is >= 10 deg, or that bounds only one face, is <= 0.5 mm. (On a low-poly mesh the front
-  boundary is such an edge; the steep stretches where the loop runs down a flank may follow a
-  smoothly tessellated corner instead.)
+  the line docs/hub.md defines: on a sharp edge the crease, on a rounded or chamfered edge its
+  face-side tangent line. The median distance to such a line is <= 0.5 mm, where the lines
+  of the mesh are its edges whose dihedral angle is >= 10 deg, its open borders, and the
+  face-side ends of tessellated rounds (an edge turning by >= 2 deg with the face flat beyond
+  it and the surface turning by >= 10 deg within 3 mm across it: a 10 deg crease spread over
+  facets; see :func:`_round_face_side_ends`). (The steep stretches where the loop runs down a
+  flank may follow a smoothly tessellated corner instead.)
+* no stretch at the foot of a drafted flank (the surface just outside the loop stands far
+  above it).
 """
 
 from __future__ import annotations
@@ -88,7 +98,6 @@ def test_loops_run_around_the_opening_outside_it(wheel):
 
         tree = cKDTree(outline)
         d, k = tree.query(w.p_HE[:, :2])
-        assert d.max() < 12e-3
         step_out = w.p_HE[:, :2] - outline[k]
         nrm = np.linalg.norm(step_out, axis=1, keepdims=True)
         inside = MplPath(outline).contains_points(w.p_HE[:, :2])
@@ -100,6 +109,39 @@ def test_loops_run_around_the_opening_outside_it(wheel):
         c = outline.mean(axis=0)
         shrunk = c + 0.9 * (outline - c)
         assert MplPath(w.p_HE[:, :2]).contains_points(shrunk).mean() > 0.98
+
+
+def test_loops_are_their_openings_front_boundary(wheel):
+    """The loop belongs to its opening and lies on the front boundary, however far out from the
+    opening's narrowest section (its outline) that is (a drafted flank's top: 11-23 mm on
+    these rims): on its gently sloped stretches the surface seen from the front between each
+    loop point and the nearest outline point (10 plan-view samples) lies below the loop, up to
+    0.2 mm (loop points are on the surface to 0.1 mm, see above, and a facet of the band may
+    tilt up by as much) on 98 % of them; the loop's plan view encloses no other opening (the
+    centres of the other windows' outlines, of the bore, lug holes and refused openings) and
+    no point of another window's loop."""
+    from matplotlib.path import Path as MplPath
+    from scipy.spatial import cKDTree
+
+    _, mesh, res = wheel
+    X_HM = np.linalg.inv(res.X_MH)
+    tri = (mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3])[mesh.faces]
+    others = [np.array(o["center_xy_mm"]) * 1e-3 for o in res.notes["not_windows"]]
+    frac = np.linspace(0.05, 0.95, 10)
+    for w, outline in zip(res.windows, res.outlines_xy, strict=True):
+        gentle = np.abs(w.t_H[:, 2]) < np.sin(np.radians(45.0))
+        p = w.p_HE[gentle]
+        k = cKDTree(outline).query(p[:, :2])[1]
+        q = p[:, None, :2] + frac[None, :, None] * (outline[k] - p[:, :2])[:, None, :]
+        top = _top_height(tri, q.reshape(-1, 2)).reshape(len(p), len(frac))
+        above = np.nanmax(np.vstack([top.T - p[:, 2], np.full(len(p), -np.inf)]), axis=0)
+        assert np.quantile(above, 0.98) <= 0.2e-3, (w.index, np.quantile(above, [0.5, 0.98]))
+        plan = MplPath(w.p_HE[:, :2])
+        centres = [o.mean(axis=0) for j, o in enumerate(res.outlines_xy) if j != w.index]
+        assert not plan.contains_points(np.array(centres + others)).any(), w.index
+        for v in res.windows:
+            if v.index != w.index:
+                assert not plan.contains_points(v.p_HE[:, :2]).any(), (w.index, v.index)
 
 
 def _covered(tri_xy, q):
@@ -123,6 +165,52 @@ def _covered(tri_xy, q):
     return out
 
 
+def _top_height(tri, q):
+    """(K,) height of the mesh seen from the front over each plan-view point q (K, 2): the
+    highest z over q of the triangles (T, 3, 3) in H (barycentric interpolation), nan where
+    none lies over it."""
+    xy = tri[:, :, :2]
+    lo, hi = xy.min(axis=1), xy.max(axis=1)
+    out = np.full(len(q), np.nan)
+    for k, p in enumerate(q):
+        near = np.flatnonzero(np.all((lo <= p + 1e-9) & (hi >= p - 1e-9), axis=1))
+        if not len(near):
+            continue
+        a, b, c = tri[near, 0], tri[near, 1], tri[near, 2]
+        v0, v1, v2 = (b - a)[:, :2], (c - a)[:, :2], p - a[:, :2]
+        den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+        ok = np.abs(den) > 1e-24
+        den = np.where(ok, den, 1.0)
+        u = (v2[:, 0] * v1[:, 1] - v2[:, 1] * v1[:, 0]) / den
+        v = (v0[:, 0] * v2[:, 1] - v0[:, 1] * v2[:, 0]) / den
+        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        if inside.any():
+            z = a[:, 2] + u * (b - a)[:, 2] + v * (c - a)[:, 2]
+            out[k] = z[inside].max()
+    return out
+
+
+def test_no_loop_at_the_foot_of_a_flank(wheel):
+    """Where a drafted spoke flank climbs to the spoke face, the front boundary is the crease
+    at its top, not the flank's foot (issue 42: on the audibot rim 36-52 % of each loop's
+    gently sloped length lay at the foot of its 76 deg flanks, 25-47 mm below the face, and
+    the collet met the spokes). Measured on the mesh: 1 mm outside the loop (away from the
+    opening, across its plan-view tangent) the surface seen from the front stands at most
+    3 mm above the loop point, on all but 2 % of the gently sloped loop length."""
+    _, mesh, res = wheel
+    X_HM = np.linalg.inv(res.X_MH)
+    tri = (mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3])[mesh.faces]
+    for w in res.windows:
+        p = w.p_HE
+        left = np.cross([0.0, 0.0, 1.0], w.t_H)[:, :2]  # into the opening (CCW loop)
+        left /= np.maximum(np.linalg.norm(left, axis=1, keepdims=True), 1e-12)
+        gentle = np.abs(w.t_H[:, 2]) < np.sin(np.radians(45.0))
+        above = _top_height(tri, p[:, :2] - 1e-3 * left) - p[:, 2]
+        seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) * gentle
+        foot = gentle & (np.nan_to_num(above, nan=0.0) > 3e-3)
+        assert seg[foot].sum() <= 0.02 * seg.sum(), (w.index, seg[foot].sum() / seg.sum())
+
+
 def _segment_distance(q, a, b):
     ab = b - a
     L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-30)
@@ -134,11 +222,86 @@ def _segment_distance(q, a, b):
     return out
 
 
+def _round_face_side_ends(mesh, V_H, near, radius):
+    """Edges (E, 2) of the mesh (vertices V_H in H) within ``radius`` of the points ``near``
+    (K, 3) [m, H] that are the face-side end of a tessellated round or chamfer, the line
+    docs/hub.md defines there ("the line where the face surface meets the round or chamfer,
+    its face-side tangent line"): the edge turns by >= 2 deg (less is the tessellation of a
+    smooth face), the surface beyond it on its face side (the side whose normal is nearer the
+    axis) turns by < 2 deg within 1 mm (the face: the band has ended), and across it toward the
+    other side the surface turns by >= 10 deg from the face within 3 mm (the crease a single
+    edge of >= 10 deg makes, spread over the facets of a round: 10 deg over 3 mm is a round of
+    radius <= 17 mm). The surface beside the edge is read at 0.2 mm steps in the face-side
+    facet's plane, perpendicular to the edge, by the closest mesh point (libigl)."""
+    import igl
+    from scipy.spatial import cKDTree
+
+    fe, adj = mesh.face_adjacency_edges, mesh.face_adjacency
+    N = np.cross(V_H[mesh.faces[:, 1]] - V_H[mesh.faces[:, 0]],
+                 V_H[mesh.faces[:, 2]] - V_H[mesh.faces[:, 0]])
+    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-30)
+    mid = V_H[fe].mean(axis=1)
+    half = 0.5 * np.linalg.norm(V_H[fe[:, 1]] - V_H[fe[:, 0]], axis=1)
+    close = cKDTree(near).query(mid)[0] <= radius + half
+    k = np.flatnonzero(close & (mesh.face_adjacency_angles >= np.radians(2.0))
+                       & (mesh.face_adjacency_angles < np.radians(10.0)))
+    if not len(k):
+        return np.zeros((0, 2), np.int64)
+    fa, fb = adj[k, 0], adj[k, 1]
+    swap = np.abs(N[fa, 2]) < np.abs(N[fb, 2])
+    fa, fb = np.where(swap, fb, fa), np.where(swap, fa, fb)  # fa: the face side
+    n0 = N[fa]
+    d = V_H[fe[k, 1]] - V_H[fe[k, 0]]
+    u = np.cross(n0, d / np.linalg.norm(d, axis=1, keepdims=True))
+    centre_b = V_H[mesh.faces[fb]].mean(axis=1)
+    u *= np.sign(np.einsum("ij,ij->i", centre_b - mid[k], u))[:, None]  # toward the round
+    s = np.r_[np.arange(1, 16) * 0.2e-3, -np.arange(1, 6) * 0.2e-3]
+    q = mid[k][:, None, :] + s[None, :, None] * u[:, None, :]
+    tri = igl.point_mesh_squared_distance(q.reshape(-1, 3), np.ascontiguousarray(V_H, float),
+                                          np.asarray(mesh.faces, np.int64))[1]
+    turn = np.arccos(np.clip(np.abs(np.einsum(
+        "kij,kj->ki", N[tri].reshape(len(k), len(s), 3), n0)), 0.0, 1.0))
+    end = (turn[:, s > 0].max(axis=1) >= np.radians(10.0)) & (
+        turn[:, s < 0].max(axis=1) < np.radians(2.0))
+    return fe[k[end]]
+
+
+def test_the_face_side_end_of_a_tessellated_round():
+    """:func:`_round_face_side_ends` on a strip we know: a flat face (z = 0, x < 0), a 2 mm
+    round down to a vertical wall in 12 facets of 7.5 deg (no edge turns 10 deg), the wall
+    10 mm tall. The face-side tangent line is x = z = 0: those edges and no other (not the
+    round's inner edges, not its wall-side end)."""
+    import trimesh
+
+    a = np.radians(7.5) * np.arange(13)
+    xz = np.vstack([[-10e-3, 0.0], np.c_[2e-3 * np.sin(a), 2e-3 * (np.cos(a) - 1.0)],
+                    [2e-3, -12e-3]])
+    ys = np.linspace(0.0, 20e-3, 5)
+    V = np.array([[x, y, z] for y in ys for x, z in xz])
+    n = len(xz)
+    F = []
+    for j in range(len(ys) - 1):
+        for i in range(n - 1):
+            p, q, r, t = j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1
+            F += [[p, q, t], [p, t, r]]
+    mesh = trimesh.Trimesh(V, np.array(F), process=True)
+    ends = _round_face_side_ends(mesh, mesh.vertices, mesh.vertices, 1e-3)
+    assert len(ends) == len(ys) - 1
+    np.testing.assert_allclose(mesh.vertices[ends][:, :, [0, 2]], 0.0, atol=1e-12)
+
+
 def test_gentle_stretches_follow_the_mesh_creases(wheel):
+    """Module doc: on gentle stretches the loop lies on the crease, open border or face-side
+    end of a round (mkz13 windows 7 and 17 sit on the face-side end of a round whose facets
+    lie 72, 45, 24, 15, 11 and 7.6 deg off the axis, the band-end edge turning 8.5 deg: no
+    single edge of 10 deg there)."""
     _, mesh, res = wheel
+    X_HM = np.linalg.inv(res.X_MH)
+    V_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
     sharp = mesh.face_adjacency_edges[mesh.face_adjacency_angles >= np.radians(10.0)]
     e, count = np.unique(np.sort(mesh.edges, axis=1), axis=0, return_counts=True)
-    edges = np.vstack([sharp, e[count == 1]])
+    ends = _round_face_side_ends(mesh, V_H, np.vstack([w.p_HE for w in res.windows]), 1e-3)
+    edges = np.vstack([sharp, e[count == 1], ends])
     a, b = mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]]
     for w, p in zip(res.windows, _loops_M(res), strict=True):
         gentle = np.abs(w.t_H[:, 2]) < np.sin(np.radians(45.0))

@@ -456,7 +456,7 @@ def test_front_openings_and_input_view(imported, capsys):
     kinds = sorted(o["kind"] for o in imp["not_windows"])
     assert kinds == ["centre bore"] + ["lug hole"] * 5
     assert imp["min_window_width_mm"] == pytest.approx(10.0)  # the 6 mm burr's need
-    assert imp["burrs_mm"] == [12.0, 6.0]
+    assert imp["burrs_mm"] == [6.0, 12.0]  # smallest first (openings.judged_burrs), as CAD
     assert main(["-q", "hub", "info", str(res.dir), "--json"]) == 0
     view = json.loads(capsys.readouterr().out)["input"]
     assert view["unit"] == "mm" and len(view["edges"]) == 5

@@ -1,6 +1,8 @@
 """Per-target IK of the real chain around a window fillet, re-checked with Drake's FK and the
 cell's signed distances; the analytic-first shortcut against the Drake program at every target."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -29,13 +31,28 @@ def fillet():
     return cell, cell_kinematics(cell), ClearanceChecker(cell), wt, p_HQ, lift
 
 
+def _context(fillet, ik):
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.plan.options import PlanContext, PlanOptions
+
+    cell, kin, checker = fillet[:3]
+    return PlanContext(cell=cell, kin=kin, checker=checker, free_checker=None,
+                       config=SimpleNamespace(tolerances=default_tolerances()),
+                       options=PlanOptions(ik=ik))
+
+
+def _targets(fillet):
+    from drakedeburr.plan.ik import IkTargets
+
+    wt, p_HQ, lift = fillet[3:]
+    return IkTargets(p_HQ, wt.retract_H, wt.cone_retract_H, wt.t_H, wt.cone_half_angle, lift)
+
+
 def _solve(fillet, analytic_first):
     from drakedeburr.plan.ik import IkOptions, solve_window_ik
 
-    cell, kin, checker, wt, p_HQ, lift = fillet
-    opts = IkOptions(analytic_first=analytic_first)
-    return opts, solve_window_ik(cell, kin, checker, p_HQ, wt.retract_H, wt.cone_retract_H,
-                                 wt.cone_half_angle, wt.t_H, cell.q_home, options=opts, lift=lift)
+    ctx = _context(fillet, IkOptions(analytic_first=analytic_first))
+    return ctx.options.ik, solve_window_ik(ctx, _targets(fillet), fillet[0].q_home)
 
 
 def _drake_recheck(fillet, q, opts):
@@ -99,7 +116,7 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     from drakedeburr.config import ProcessParameters
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.ik import IkOptions, cone_clearance_probe
-    from drakedeburr.plan.ik_seeds import unreachable
+    from drakedeburr.plan.ik_seeds import IkTarget, ProbeSettings, unreachable
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
     from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -111,24 +128,25 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     hub = load_hub("h5_deepdish")
     r_c, lift = contact_geometry(PlanOptions().contact_radius)
     bound = IkOptions().min_distance_floor
+    settings = ProbeSettings(bound=bound, lift=lift)
 
     def probe(wt, i, ch=checker):
         p_HQ = tool_point_H(wt.p_HC, wt.n_H, wt.retract_H, wt.depth_of_cut, r_c, 0.0)
         return p_HQ[i], cone_clearance_probe(
-            kin, ch, p_HQ[i], wt.cone_retract_H[i], wt.cone_half_angle, wt.retract_H[i],
-            wt.t_H[i], cell.q_home, lift=lift, bound=bound)
+            kin, ch, IkTarget(p_HQ[i], wt.cone_retract_H[i], wt.retract_H[i], wt.t_H[i]),
+            wt.cone_half_angle, cell.q_home, settings)
 
     def assert_admissible(wt, i, p_HQ, res):
-        assert res["feasible"]
+        assert res.feasible
         ctx = cell.plant.CreateDefaultContext()
-        cell.plant.SetPositions(ctx, res["q"])
+        cell.plant.SetPositions(ctx, res.q)
         X = cell.plant.CalcRelativeTransform(ctx, cell.hub_frame, cell.tool_frame)
         R = X.rotation().matrix()
         assert np.linalg.norm(X.translation() + lift * R[:, 2] - p_HQ) < 1e-6
         assert (np.arccos(np.clip(-R[:, 2] @ wt.cone_retract_H[i], -1, 1))
                 <= wt.cone_half_angle + 1e-9)
-        assert checker.min_distance(res["q"], 0.01)[0] >= bound
-        assert kin.within_limits(res["q"])
+        assert checker.min_distance(res.q, 0.01)[0] >= bound
+        assert kin.within_limits(res.q)
 
     source_box = window_targets_for_hub(hub, source="toolpath", windows=[4],
                                         params=ProcessParameters())[0]
@@ -137,13 +155,13 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     r, i_blocked = None, -1
     for i in range(len(source_box) // 2, len(source_box) // 2 + 16):
         _, r = probe(source_box, i)
-        if not r["feasible"]:
+        if not r.feasible:
             i_blocked = i
             break
-    assert not r["feasible"], "expected targets no axis in the cone can reach"
+    assert not r.feasible, "expected targets no axis in the cone can reach"
     # every axis of the cone read (2 + 3 rings x 16), the blocked ones no further
-    assert r["best_clearance"] < bound and r["queries"] >= 50
-    assert any("spindle" in name for name in r["pair"]) and any("hub" in n for n in r["pair"])
+    assert r.best_clearance < bound and r.queries >= 50
+    assert any("spindle" in name for name in r.pair) and any("hub" in n for n in r.pair)
     assert_admissible(source_box, 0, *probe(source_box, 0))
     # the hub's recipe: same CL points (the path stage does not depend on the box), other cone
     assert hub.process.bounds_large.theta_max <= ProcessParameters().bounds_large.theta_min
@@ -160,10 +178,10 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     for wt, i in ((source_box, i_blocked), (source_box, 0), (recipe, i_blocked)):
         p_HQ, fast = probe(wt, i)
         full = probe(wt, i, slow)[1]
-        assert fast["feasible"] == full["feasible"]
+        assert fast.feasible == full.feasible
         assert unreachable(fast, IkOptions()) == unreachable(full, IkOptions())
-        assert fast["queries"] <= full["queries"]
-        if fast["feasible"]:
+        assert fast.queries <= full.queries
+        if fast.feasible:
             assert_admissible(wt, i, p_HQ, fast)
     # the memo: the same target probed again (another start on the same branch) is answered
     # without a query, with what a fresh checker's search returns; another branch is searched
@@ -177,15 +195,15 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
     assert n_first > 0 and len(calls) == n_first
     fresh = probe(source_box, i_blocked, ClearanceChecker(cell))[1]
     for res in (again, fresh):
-        assert res["feasible"] == first["feasible"] and res["pair"] == first["pair"]
-        assert res["best_clearance"] == first["best_clearance"]
-        assert np.array_equal(res["q"], first["q"]) and res["q"] is not first["q"]
+        assert res.feasible == first.feasible and res.pair == first.pair
+        assert res.best_clearance == first.best_clearance
+        assert np.array_equal(res.q, first.q) and res.q is not first.q
     q_other = cell.q_home.copy()
     q_other[4] = -q_other[4]  # the other wrist branch
     assert not np.array_equal(kin.branch_of(q_other), kin.branch_of(cell.q_home))
-    cone_clearance_probe(kin, counted, p_HQ, source_box.cone_retract_H[i_blocked],
-                         source_box.cone_half_angle, source_box.retract_H[i_blocked],
-                         source_box.t_H[i_blocked], q_other, lift=lift, bound=bound)
+    cone_clearance_probe(kin, counted, IkTarget(
+        p_HQ, source_box.cone_retract_H[i_blocked], source_box.retract_H[i_blocked],
+        source_box.t_H[i_blocked]), source_box.cone_half_angle, q_other, settings)
     assert len(calls) > n_first
     # the ranking value: the certified distance of a clear pose, minus the depth in contact
     assert checker.ranked_distance(cell.q_home, 0.01) == checker.distance(cell.q_home, 0.01) > 0
@@ -195,7 +213,7 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
                         source_box.depth_of_cut, r_c, 0.0)[i_blocked]
     poses = np.concatenate(_probe_candidates(
         kin, p_HQ, [source_box.cone_retract_H[i_blocked]], source_box.t_H[i_blocked],
-        cell.q_home, lift, 24, 0.25, 24))
+        cell.q_home, settings))
     hits = [q for q in poses if checker.collides(q)]
     assert hits, "expected poses of the blocked target in contact"
     for q in hits[:5]:
@@ -239,7 +257,7 @@ def test_cone_probe_tells_unreachable_targets_from_solver_failures():
                          0.0)[i_blocked]
     clear = np.concatenate(_probe_candidates(
         kin, p_HQ2, [recipe.cone_retract_H[i_blocked]], recipe.t_H[i_blocked], cell.q_home,
-        lift, 24, 0.25, 24))
+        settings))
     upper = checker.axis_reading(clear[0], 0.01)[1]
     assert 0 < upper < 0.01
     for q in clear[:: max(1, len(clear) // 6)]:
@@ -283,7 +301,7 @@ def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
     although the sampled best alone is a near miss."""
     from drakedeburr.frames.vectors import perpendicular_basis
     from drakedeburr.plan.ik import IkOptions, cone_clearance_probe
-    from drakedeburr.plan.ik_seeds import NEAR_MISS, unreachable
+    from drakedeburr.plan.ik_seeds import NEAR_MISS, IkTarget, ProbeSettings, unreachable
 
     cell, kin, _, wt, p_HQ, lift = fillet
     bound = IkOptions().min_distance_floor
@@ -297,24 +315,24 @@ def test_a_near_miss_is_searched_between_the_sampled_axes(fillet):
     best_in_cone = slope * 0.3 * half  # below the peak, on the rim toward it
     for margin in (0.02e-3, -0.03e-3):
         field = _AxisField(kin, peak, bound + margin + best_in_cone, slope)
-        res = cone_clearance_probe(kin, field, p_HQ[0], c, half, wt.retract_H[0], wt.t_H[0],
-                                   cell.q_home, lift=lift, bound=bound)
+        res = cone_clearance_probe(kin, field, IkTarget(p_HQ[0], c, wt.retract_H[0], wt.t_H[0]),
+                                   half, cell.q_home, ProbeSettings(bound=bound, lift=lift))
         sampled = max(field.value(np.cos(r * half) * c + np.sin(r * half) * (
             np.cos(f) * e1 + np.sin(f) * e2)) for r in (0.0, 0.33, 0.66, 0.98)
             for f in np.linspace(0, 2 * np.pi, 16, endpoint=False))
         assert bound - NEAR_MISS <= sampled < bound  # the case: a near miss when sampled
         if margin > 0:
-            assert res["feasible"] and not unreachable(res, IkOptions())
-            axis = field.axis_of(res["q"])
+            assert res.feasible and not unreachable(res, IkOptions())
+            axis = field.axis_of(res.q)
             assert np.arccos(np.clip(axis @ c, -1, 1)) <= half + 1e-9
             assert field.value(axis) >= bound
-            X = kin.X_HT_from_q(res["q"])
+            X = kin.X_HT_from_q(res.q)
             assert np.linalg.norm(X[:3, 3] + lift * X[:3, 2] - p_HQ[0]) < 1e-6
         else:
-            assert not res["feasible"] and unreachable(res, IkOptions())
-            assert res["best_clearance"] >= bound - NEAR_MISS  # the sampled verdict alone
-            assert abs(res["axis_bound"] - (bound + margin)) < 1e-6
-            assert res["axis_bound"] <= bound + margin + 1e-12
+            assert not res.feasible and unreachable(res, IkOptions())
+            assert res.best_clearance >= bound - NEAR_MISS  # the sampled verdict alone
+            assert abs(res.axis_bound - (bound + margin)) < 1e-6
+            assert res.axis_bound <= bound + margin + 1e-12
 
 
 #: how close the forward IK from the tracked-back start arrives at the probe's pose [rad], per
@@ -346,18 +364,16 @@ def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet, rule
                       options=options)
 
     def forward(q_first):
-        return solve_window_ik(cell, kin, checker, p_HQ, wt.retract_H, wt.cone_retract_H,
-                               wt.cone_half_angle, wt.t_H, cell.q_home, options=opts, lift=lift,
-                               q_first=q_first, stop_at_failure=True)
+        return solve_window_ik(ctx, _targets(fillet), cell.q_home, q_first=q_first,
+                               stop_at_failure=True)
 
     trial = forward(None)
     i = 20
     assert trial.ok[:i + 1].all()
-    probe = cone_clearance_probe(kin, checker, p_HQ[i], wt.cone_retract_H[i],
-                                 max(float(wt.cone_half_angle), 1e-3), wt.retract_H[i], wt.t_H[i],
-                                 trial.q[i - 1], lift=lift, bound=opts.min_distance_floor,
-                                 min_wrist=opts.min_wrist)
-    assert probe["feasible"]
+    probe = cone_clearance_probe(kin, checker, _targets(fillet).at(i),
+                                 max(float(wt.cone_half_angle), 1e-3), trial.q[i - 1],
+                                 opts.probe_settings(lift))
+    assert probe.feasible
     failed = replace(trial, ok=np.arange(len(trial.ok)) < i, failures=(FailureRecord(
         window=wt.window_index, kind="ik", point=i, reason="stand-in failure"),),
         probes={i: probe})
@@ -375,5 +391,38 @@ def test_a_start_tracked_back_from_an_admissible_pose_arrives_there(fillet, rule
     assert clear.min() >= opts.min_distance_floor - 1e-9
     # the probe's pose is of another family than the one the first track arrived in (5e-5
     # rad from it when written, the first track 1.8 rad off)
-    assert np.abs(trial.q[i] - probe["q"]).max() > opts.trust_region
-    assert np.abs(again.q[i] - probe["q"]).max() <= ARRIVAL[rule]
+    assert np.abs(trial.q[i] - probe.q).max() > opts.trust_region
+    assert np.abs(again.q[i] - probe.q).max() <= ARRIVAL[rule]
+
+
+def test_the_ik_clearance_bounds_follow_the_tolerance(fillet):
+    """The IK's bounds are Tolerances.min_clearance plus their margins, as the planning
+    context holds them: a pose whose clearance d is read by the cell is accepted as a target's
+    solution with the tolerance 10 um below d - CLEARANCE_MARGIN and refused 10 um above it."""
+    from dataclasses import replace
+
+    from drakedeburr.config import default_tolerances
+    from drakedeburr.plan.ik import CLEARANCE_MARGIN, FLOOR_MARGIN, IkOptions, seed_by_spin
+    from drakedeburr.plan.ik_seeds import analytic_accept
+
+    cell, kin, checker, wt, p_HQ, lift = fillet
+    for c in (2e-3, 3e-3):
+        ik = _context(fillet, IkOptions()).options.ik if c == 2e-3 else replace(
+            _context(fillet, IkOptions()), config=SimpleNamespace(
+                tolerances=default_tolerances(min_clearance=c))).options.ik
+        assert ik.min_distance == pytest.approx(c + CLEARANCE_MARGIN, abs=1e-15)
+        assert ik.min_distance_floor == pytest.approx(c + FLOOR_MARGIN, abs=1e-15)
+        assert ik.probe_settings(lift).bound == ik.min_distance_floor
+    opts = IkOptions()
+    q = seed_by_spin(kin, None, p_HQ[0] + lift * wt.retract_H[0], wt.retract_H[0], wt.t_H[0],
+                     cell.q_home, opts)
+    d = checker.distance(q, 0.05)
+    assert 0 < d < 0.05
+    anchor = q + np.array([1e-3, 0, 0, 0, 0, 0])
+    target = _targets(fillet).at(0)
+    for shift, accepted in ((-1e-5, True), (1e-5, False)):
+        ik = opts.at_clearance(d - CLEARANCE_MARGIN + shift)
+        got = analytic_accept(kin, checker, q, anchor, target, wt.cone_half_angle, ik, lift)
+        assert (got is not None) == accepted, (shift, d)
+        if accepted:
+            assert got[1] == pytest.approx(d, abs=1e-9)

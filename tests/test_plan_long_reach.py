@@ -1,25 +1,28 @@
-"""The long-reach retry of plan_hub (planner._long_reach): the windows the standard burr left
-failing are planned first with the long-reach burr (placed for the whole hub); the whole hub
-is planned again only when that cuts one of them, or when a move between windows failed.
-Control flow with stand-in plans; that a window's plan does not depend on the others is
-tests/test_plan_parallel.py's."""
+"""The long-reach retry of the hub-level policy (policy.long_reach_pass): the windows the
+standard burr left failing are planned first with the long-reach burr (placed for the whole
+hub); the whole hub is planned again only when that cuts one of them, or when a move between
+windows failed. Control flow with typed stand-in plans (PlanDraft); that a window's plan does
+not depend on the others is tests/test_plan_parallel.py's."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import pytest
 
-from drakedeburr.plan import planner
+from drakedeburr.plan.policy import long_reach_pass
+from drakedeburr.plan.relax import LONG_REACH
+from drakedeburr.plan.results import PlanDraft, PlanRecord
 from drakedeburr.plan.types import FailureRecord
 
 
-@dataclass(frozen=True)
-class _Plan:
-    failures: tuple
-    meta: dict = field(default_factory=dict)
-    run: dict = field(default_factory=lambda: {"timings": {}})
-    label: str = ""
+def _plan(failures: tuple, label: str = "") -> PlanDraft:
+    """A plan with these failure records; ``label`` "long reach" is one made in the
+    long-reach cell (its record names the burr), else the standard burr's."""
+    return PlanDraft(failures=failures,
+                     record=PlanRecord(tool=LONG_REACH if label == "long reach" else None))
+
+
+def _label(plan: PlanDraft) -> str:
+    return "long reach" if plan.record.tool == LONG_REACH else "standard"
 
 
 def _fail(w: int, reason: str = "blocked") -> FailureRecord:
@@ -28,41 +31,28 @@ def _fail(w: int, reason: str = "blocked") -> FailureRecord:
 
 
 @pytest.fixture
-def calls(monkeypatch):
-    """Replace the cell build and the per-cell planning; record each call's ``only``."""
-    from drakedeburr.cell import station
+def calls():
+    """The long-reach cell's plans: each call's ``only`` recorded, its outcome from the table."""
+    return [], {}
 
-    made: list = []
-    outcomes: dict = {}
 
-    def plan_in_cell(cell, hub_model, wts, config, options, progress, only=None):
+def _run(calls, standard, wts=(0, 1, 2, 3)):
+    made, outcomes = calls
+
+    def plan_long_reach(only):
         made.append(None if only is None else sorted(only))
         return outcomes["first" if only is not None else "full"]
 
-    monkeypatch.setattr(station, "load_cell", lambda *a, **k: "long-reach cell")
-    monkeypatch.setattr(planner, "_plan_in_cell", plan_in_cell)
-    return made, outcomes
-
-
-class _Config:
-    scenario, hub, robot = "tool_in_hand", "hub", None
-
-
-def _run(standard, wts=(0, 1, 2, 3)):
-    class _Wt:
-        def __init__(self, w):
-            self.window_index = w
-
-    return planner._long_reach(standard, None, [_Wt(w) for w in wts], _Config(), None, None)
+    return long_reach_pass(standard, list(wts), plan_long_reach)
 
 
 def test_failing_windows_first_and_no_full_pass_when_they_still_fail(calls):
     made, outcomes = calls
-    standard = _Plan(failures=(_fail(2),), label="standard")
-    outcomes["first"] = _Plan(failures=(_fail(2, "position/cone not met"),))
-    kept = _run(standard)
+    standard = _plan(failures=(_fail(2),), label="standard")
+    outcomes["first"] = _plan(failures=(_fail(2, "position/cone not met"),))
+    kept = _run(calls, standard)
     assert made == [[2]]  # the other windows not planned again
-    assert kept.label == "standard"
+    assert _label(kept) == "standard"
     note = kept.failures[-1]
     assert note.window == 2 and note.kind == "relaxation"
     assert "tried on window(s) [2] first" in note.reason
@@ -71,32 +61,32 @@ def test_failing_windows_first_and_no_full_pass_when_they_still_fail(calls):
 
 def test_the_hub_planned_again_when_the_long_reach_burr_cuts_a_failing_window(calls):
     made, outcomes = calls
-    standard = _Plan(failures=(_fail(1), _fail(2)), label="standard")
-    outcomes["first"] = _Plan(failures=(_fail(2),))  # window 1 cut
-    outcomes["full"] = _Plan(failures=(_fail(2),), label="long reach")
-    chosen = _run(standard)
+    standard = _plan(failures=(_fail(1), _fail(2)), label="standard")
+    outcomes["first"] = _plan(failures=(_fail(2),))  # window 1 cut
+    outcomes["full"] = _plan(failures=(_fail(2),), label="long reach")
+    chosen = _run(calls, standard)
     assert made == [[1, 2], None]
-    assert chosen.label == "long reach"  # fewer windows failing
-    assert chosen.meta["recipe_deviations"][-1]["item"] == "burr"
+    assert _label(chosen) == "long reach"  # fewer windows failing
+    assert chosen.record.deviations[-1].item == "burr"
 
 
 def test_a_failed_move_between_windows_plans_the_hub_again(calls):
     made, outcomes = calls
-    standard = _Plan(failures=(_fail(2),), label="standard")
-    outcomes["first"] = _Plan(failures=(
+    standard = _plan(failures=(_fail(2),), label="standard")
+    outcomes["first"] = _plan(failures=(
         _fail(2), FailureRecord(window=-1, kind="transition", reason="no clear move")))
-    outcomes["full"] = _Plan(failures=(_fail(2),), label="long reach")
-    kept = _run(standard)
+    outcomes["full"] = _plan(failures=(_fail(2),), label="long reach")
+    kept = _run(calls, standard)
     assert made == [[2], None]
-    assert kept.label == "standard"  # a tie keeps the standard burr
+    assert _label(kept) == "standard"  # a tie keeps the standard burr
     assert "was tried for the hub" in kept.failures[-1].reason
 
 
 def test_a_standard_plan_failing_between_windows_or_everywhere_goes_straight_to_the_hub(calls):
     made, outcomes = calls
-    outcomes["full"] = _Plan(failures=(), label="long reach")
-    between = _Plan(failures=(_fail(-1), _fail(2)), label="standard")
-    assert _run(between).label == "long reach" and made == [None]
+    outcomes["full"] = _plan(failures=(), label="long reach")
+    between = _plan(failures=(_fail(-1), _fail(2)), label="standard")
+    assert _label(_run(calls, between)) == "long reach" and made == [None]
     made.clear()
-    everywhere = _Plan(failures=tuple(_fail(w) for w in range(4)), label="standard")
-    assert _run(everywhere).label == "long reach" and made == [None]
+    everywhere = _plan(failures=tuple(_fail(w) for w in range(4)), label="standard")
+    assert _label(_run(calls, everywhere)) == "long reach" and made == [None]

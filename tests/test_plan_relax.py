@@ -1,22 +1,28 @@
-"""Recipe relaxation (plan.relax, planner._relax): milder tilt boxes in order, the first that
-plans clean kept with its deviation recorded; what was tried recorded where none does; the
-hub re-planned with the relaxed window kept only when it leaves fewer failure records, and
-the records of windows relaxed in vain said with whichever plan is kept."""
+"""Recipe relaxation (plan.relax): milder tilt boxes in order, the first that plans clean kept
+with its deviation recorded; what was tried recorded where none does; the window's run modes;
+the burr for the whole hub. When the relaxed plan is kept, and the records of windows relaxed
+in vain, are the policy's: tests/test_plan_policy.py."""
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
-from drakedeburr.plan import planner
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
 from drakedeburr.plan.relax import TILT_STEPS, relax_windows, window_ladder
-from drakedeburr.plan.results import CutTargets, WindowStatus
+from drakedeburr.plan.results import (
+    CutTargets,
+    Deviation,
+    PlanDraft,
+    PlanRecord,
+    WindowPlan,
+    WindowStatus,
+)
 from drakedeburr.plan.types import FailureRecord
 
 
@@ -36,16 +42,15 @@ def relaxed_targets(edge, params, reason, plan_one):
     return wt, dev, tried[edge.index]
 
 
-@dataclass
-class _Plan:
-    """What _relax reads of a plan."""
-
-    failures: tuple
-    meta: dict = field(default_factory=dict)
+def _plan(failures=()) -> WindowPlan:
+    """A window's plan with these failure records (what a ladder step reads of it)."""
+    return WindowPlan(0, WindowStatus.DEGRADED if failures else WindowStatus.OK,
+                      failures=list(failures))
 
 
-def _plan(failures=()):
-    return _Plan(tuple(failures))
+def _draft(failures=(), deviations=()) -> PlanDraft:
+    """A hub's plan with these failure records and deviations (what choose_tool reads)."""
+    return PlanDraft(failures=tuple(failures), record=PlanRecord(deviations=tuple(deviations)))
 
 
 def test_the_first_milder_box_that_plans_clean_is_kept_and_recorded():
@@ -120,57 +125,6 @@ def test_a_box_whose_tool_path_gives_no_targets_is_said_and_the_next_is_tried(mo
     assert dev.used == f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"
 
 
-@pytest.mark.parametrize("relaxed_failures, kept", [(1, "relaxed"), (2, "default"), (3, "default")])
-def test_the_hub_is_assembled_again_and_kept_only_with_fewer_failures(monkeypatch,
-                                                                      relaxed_failures, kept):
-    """Window 0 relaxes, window 1 does not: the hub is assembled again from window 0's relaxed
-    plan and window 1's first-pass plan (not planned again), kept with fewer records than
-    the default plan (2), and window 1's relaxation record is added to whichever plan is
-    kept."""
-    wts = [SimpleNamespace(window_index=0), SimpleNamespace(window_index=1)]
-    default = _plan([FailureRecord(0, "ik", "a"), FailureRecord(1, "ik", "b")])
-    relaxed = _plan([FailureRecord(1, "ik", "b")] * max(relaxed_failures, 1))
-    from drakedeburr.plan import relax
-
-    dev = relax.Deviation(0, "tool tilt", "theta box 0.26-0.44 rad", "theta box 0.09-0.26 rad",
-                          "r")
-    wt0 = SimpleNamespace(window_index=0, relaxed=True)
-    seen = {}
-
-    def fake_relax_windows(edges, params, reasons, ladders):
-        seen["edges"], seen["reasons"] = [e.index for e in edges], reasons
-        return {0: (wt0, "window 0 relaxed", dev)}, {0: [], 1: [("theta box 0.09-0.26 rad",
-                                                                 "ik: b")]}
-
-    def fake_assemble(ctx, windows, results, progress, t_start):
-        if windows[0] is wt0:
-            seen["windows"], seen["results"] = list(windows), list(results)
-            return relaxed
-        return default
-
-    monkeypatch.setattr(relax, "relax_windows", fake_relax_windows)
-    monkeypatch.setattr(planner, "_assemble_windows", fake_assemble)
-    hub = SimpleNamespace(windows=[SimpleNamespace(index=0), SimpleNamespace(index=1)])
-    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
-                      config=SimpleNamespace(process=ProcessParameters()),
-                      options=PlanOptions(workers=1))
-    first = [SimpleNamespace(status=WindowStatus.DEGRADED, failures=[f])
-             for f in default.failures]
-    out = planner._relax(ctx, hub, wts, first, None, 0.0)
-    assert seen["edges"] == [0, 1] and seen["reasons"][1].startswith("window 1")
-    assert seen["windows"] == [wt0, wts[1]]
-    assert seen["results"] == ["window 0 relaxed", first[1]]
-    base = relaxed if kept == "relaxed" else default
-    assert out.failures[:len(base.failures)] == base.failures
-    extra = out.failures[len(base.failures):]
-    assert len(extra) == 1 and extra[0].kind == "relaxation" and extra[0].window == 1
-    assert extra[0].tried == ("theta box 0.09-0.26 rad",)
-    if kept == "relaxed":
-        assert out.meta["recipe_deviations"] == [dev.record()]
-    else:
-        assert "recipe_deviations" not in out.meta
-
-
 def test_every_failing_window_climbs_its_own_ladder_and_all_at_once():
     """The failing windows' ladders go to the planner together, one task each (no window waits
     for another's variant of a step): each window's variants in turn, milder each step, up to
@@ -194,44 +148,10 @@ def test_every_failing_window_climbs_its_own_ladder_and_all_at_once():
     accepted, tried = relax_windows(large, ProcessParameters(), {}, ladders)
     assert calls == [[large[0].index, large[1].index]]
     assert planned == [large[0].index] + [large[1].index] * len(TILT_STEPS)
-    assert list(accepted) == [large[0].index] and accepted[large[0].index][1].failures == ()
+    assert list(accepted) == [large[0].index] and accepted[large[0].index][1].failures == []
     assert accepted[large[0].index][2].used == "theta box 0.09-0.26 rad"
     assert [t for t, _ in tried[large[1].index]] == [
         f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad" for b in TILT_STEPS]
-
-
-def test_an_abandoned_window_no_relaxation_helps_is_planned_in_full(monkeypatch):
-    """The first pass abandons window 0 at an unreachable target (with relaxation on): every
-    start and both spin rules failed there. No milder box helps: it is planned in full once,
-    for its report (RunMode.REPORT_ONLY: the first start, every target), before the
-    plan is assembled; the relaxation record says what was tried."""
-    from drakedeburr.plan import relax
-
-    wts = [SimpleNamespace(window_index=0)]
-    abandoned = SimpleNamespace(status=WindowStatus.ABANDONED,
-                                failures=[FailureRecord(0, "ik", "unreachable")])
-    in_full = SimpleNamespace(status=WindowStatus.DEGRADED, failures=abandoned.failures * 3)
-    calls = []
-
-    def fake_plan_pass(ctx, windows, mode, progress):
-        calls.append((mode, [w.window_index for w in windows]))
-        return [in_full for _ in windows]
-
-    assembled = []
-    monkeypatch.setattr(relax, "relax_windows", lambda *a: ({}, {0: [("box", "ik: x")]}))
-    monkeypatch.setattr(planner, "_plan_pass", fake_plan_pass)
-    monkeypatch.setattr(planner, "_assemble_windows",
-                        lambda ctx, w, results, p, t: assembled.append(list(results))
-                        or _plan(f for r in results for f in r.failures))
-    ctx = PlanContext(cell=None, kin=None, checker=None, free_checker=None,
-                      config=SimpleNamespace(process=ProcessParameters()),
-                      options=PlanOptions(workers=1))
-    hub = SimpleNamespace(windows=[SimpleNamespace(index=0)])
-    out = planner._relax(ctx, hub, wts, [abandoned], None, 0.0)
-    assert calls == [(RunMode.REPORT_ONLY, [0])]
-    assert assembled == [[in_full]]
-    assert len(out.failures) == 4 and out.failures[-1].kind == "relaxation"
-    assert "both spin rules stopped at a first failure" in out.failures[-1].reason
 
 
 def test_a_report_only_window_is_planned_once(monkeypatch):
@@ -416,7 +336,7 @@ _STAND = FailureRecord(3, "ik", "unreachable", where={
 def test_the_long_reach_is_tried_where_the_tool_body_blocked(failures, tool, helps):
     from drakedeburr.plan.relax import reach_may_help
 
-    assert reach_may_help(_plan(failures), SimpleNamespace(tool=tool)) is helps
+    assert reach_may_help(_draft(failures), SimpleNamespace(tool=tool)) is helps
 
 
 @pytest.mark.parametrize("alt_failures, kept", [
@@ -429,17 +349,21 @@ def test_the_burr_leaving_fewer_windows_failing_is_kept_and_said(alt_failures, k
     windows; either way the kept plan says what the other burr did."""
     from drakedeburr.plan.relax import choose_tool
 
-    std = _Plan((_BODY, _HEAD, FailureRecord(1, "ik", "more")))
-    alt = _Plan(tuple(alt_failures), {"recipe_deviations": [{"window": 3}]})
+    std = _draft((_BODY, _HEAD, FailureRecord(1, "ik", "more")))
+    home = Deviation(-1, "home", "the cell's", "moved", "r")
+    alt = _draft(alt_failures, [home])
     out = choose_tool(std, alt)
     if kept == "long_reach":
-        assert out is alt and out.failures == tuple(alt_failures)
-        dev = out.meta["recipe_deviations"][-1]
-        assert out.meta["recipe_deviations"][0] == {"window": 3}
+        assert out.failures == tuple(alt_failures) and out.record is not alt.record
+        assert alt.record.deviations == (home,)  # a new draft: the long-reach one not edited
+        devs = out.record.meta()["recipe_deviations"]
+        dev = devs[-1]
+        assert devs[0] == home.record() and len(devs) == 2
         assert (dev["window"], dev["item"]) == (-1, "burr")
         assert "75 mm" in dev["used"] and "25 mm" in dev["default"]
         assert "[0, 1]" in dev["reason"] and "spindle" not in dev["used"]
     else:
+        assert out.record is std.record and out.record.deviations == ()
         assert out.failures[:3] == std.failures
         notes = out.failures[3:]
         assert [n.window for n in notes] == [0, 1]
@@ -449,62 +373,16 @@ def test_the_burr_leaving_fewer_windows_failing_is_kept_and_said(alt_failures, k
                    for n in notes)
 
 
-@pytest.mark.parametrize("tool, failing, planned", [
-    (None, [_BODY], ["standard", "long_reach"]), (None, [_HEAD], ["standard"]),
-    ("standard", [_BODY], ["standard"]), (None, [], ["standard"])])
-def test_plan_hub_plans_again_with_the_long_reach_only_when_it_may_help(monkeypatch, tool,
-                                                                       failing, planned):
-    """The orchestration: the hub is planned in the standard cell; again in the long-reach
-    cell only when no burr was asked for and the standard's failures name the tool body."""
-    from drakedeburr.config import load_config
-
-    cells = []
-
-    def fake_plan_in_cell(cell, hub_model, wts, config, options, progress):
-        cells.append(cell.tool)
-        return _RunPlan(tuple(failing) if cell.tool == "standard" else ())
-
-    monkeypatch.setattr(planner, "_plan_in_cell", fake_plan_in_cell)
-    monkeypatch.setattr(planner, "window_targets_for_hub", lambda *a, **k: [])
-    out = planner.plan_hub(load_config("tool_in_hand", "h5_straight", tool=tool),
-                           options=PlanOptions(workers=1))
-    assert cells == planned
-    if len(planned) == 2:
-        assert out.meta["recipe_deviations"][-1]["item"] == "burr" and not out.failures
-
-
-@dataclass
-class _RunPlan:
-    failures: tuple
-    meta: dict = field(default_factory=dict)
-    run: dict = field(default_factory=lambda: {"timings": {}})
-
-
-def test_moved_tool_points_are_a_recipe_deviation():
-    """A window whose tool points the burr-depth reading moved out (plan.burr_depth) is
-    recorded as a deviation from the recipe, with what is left if the move fell short."""
-    relief = {"max_mm": 0.15, "cl_points": 25, "depth_read_mm": 1.45, "bound_mm": 1.37,
-              "excess_left_mm": 0.0}
-    rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
-    assert rec["window"] == 2 and rec["item"] == "tool point"
-    assert "0.150 mm at 25 CL points" in rec["used"]
-    assert "1.450 mm" in rec["reason"] and "1.370 mm" in rec["reason"]
-    assert "still" not in rec["reason"]
-    relief["excess_left_mm"] = 0.02
-    rec = planner._relief_record({"window": 2, "chamfer_relief": relief})
-    assert "still 0.020 mm too deep" in rec["reason"]
-
-
 def test_the_relaxation_and_home_import_no_planner_module():
     """relax makes its variants' tool paths by drakedeburr.plan.tool_paths.tool_path, the
     function the planner's own targets use, not by a planner private: no import circle
-    planner -> relax/home -> planner (an import inside a function counts)."""
+    planner -> relax/home/policy -> planner (an import inside a function counts)."""
     import ast
     import inspect
 
-    from drakedeburr.plan import home, relax, tool_paths
+    from drakedeburr.plan import home, planner, policy, relax, tool_paths
 
-    for mod in (relax, home, tool_paths):
+    for mod in (relax, home, tool_paths, policy):
         tree = ast.parse(inspect.getsource(mod))
         mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
         assert "drakedeburr.plan.planner" not in mods, mod.__name__

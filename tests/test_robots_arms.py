@@ -20,6 +20,9 @@ NAMES = ("irb1600", "kr6_r700", "lrmate200ic", "m10ia", "irb2600", "kr20_r1810",
          "m710ic50")
 NEW = ("irb2600", "kr20_r1810", "m20ia", "m710ic50")
 CHAINS = json.loads((Path(__file__).parent / "data" / "arm_urdf_chains.json").read_text())
+_RANGES = Path(__file__).parent / "data" / "vendor_working_ranges.json"
+VENDOR = {k: v for k, v in json.loads(_RANGES.read_text()).items() if not k.startswith("_")}
+MIRRORED_IN_URDF = {"irb2600": (1,)}  # axis index: see models/robots/irb2600.yaml sources
 
 
 def _plant(spec):
@@ -298,10 +301,33 @@ def test_new_arms_limits_equal_the_urdf(name):
     lower = np.deg2rad(lim["lower_deg"]) if "lower_deg" in lim else lim["lower"]
     upper = np.deg2rad(lim["upper_deg"]) if "upper_deg" in lim else lim["upper"]
     vel = np.deg2rad(lim["velocity_deg"]) if "velocity_deg" in lim else lim["velocity"]
+    lower, upper = np.array(lower, float), np.array(upper, float)
+    for j in MIRRORED_IN_URDF.get(name, ()):
+        # the URDF writes this axis's range mirrored against the vendor's (same axis
+        # direction): the arm file takes the vendor's, which is the URDF's negated
+        lower[j], upper[j] = -upper[j], -lower[j]
     np.testing.assert_allclose(spec.q_lower, lower, atol=1e-12)
     np.testing.assert_allclose(spec.q_upper, upper, atol=1e-12)
     np.testing.assert_allclose(spec.v_max, vel, atol=1e-12)
     assert np.all(spec.a_max > 0) and "ASSUMED" in spec.a_max_note
+
+
+@pytest.mark.parametrize("name", sorted(VENDOR))
+def test_limits_lie_inside_the_controllers_working_range(name):
+    """A plan inside our limits is one the controller runs: every axis's range lies inside the
+    vendor's working range (tests/data/vendor_working_ranges.json, not from our files). The
+    IRB 2600's axis 2 was once copied mirrored (-155..+95 deg against ABB's -95..+155 deg):
+    plans leaning the arm back past -95 deg would have passed here and stopped on the robot."""
+    ref, spec = VENDOR[name], mut.get_robot(name)
+    lo, hi = np.deg2rad(ref["lower_deg"]), np.deg2rad(ref["upper_deg"])
+    tol = 1e-5  # [rad] the URDFs' 3-4 decimals (1.309 = 75.0002 deg), below a joint's resolution
+    assert np.all(spec.q_lower >= lo - tol), (name, np.rad2deg(spec.q_lower), ref["lower_deg"])
+    assert np.all(spec.q_upper <= hi + tol), (name, np.rad2deg(spec.q_upper), ref["upper_deg"])
+    # and our ranges are not needlessly narrow where the source gives the full range: the
+    # IRB 2600's axis 2 forward range is ABB's +155 deg
+    if name == "irb2600":
+        assert np.rad2deg(spec.q_upper[1]) == pytest.approx(155.0, abs=0.02)  # 2.705 rad
+        assert np.rad2deg(spec.q_lower[1]) == pytest.approx(-95.0, abs=0.02)
 
 
 @pytest.mark.parametrize("name", ["kr20_r1810", "m20ia"])

@@ -97,7 +97,7 @@ def test_on_a_deep_dish_the_long_reach_clears_what_the_spindle_body_blocks():
     from drakedeburr.config import ProcessParameters
     from drakedeburr.hub import load_hub
     from drakedeburr.plan.ik import IkOptions
-    from drakedeburr.plan.ik_seeds import _probe
+    from drakedeburr.plan.ik_seeds import IkTarget, _probe
     from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
     from drakedeburr.plan.planner import PlanOptions, window_targets_for_hub
     from drakedeburr.plan.targets import contact_geometry, tool_point_H
@@ -112,22 +112,22 @@ def test_on_a_deep_dish_the_long_reach_clears_what_the_spindle_body_blocks():
         cell = _cell("tool_in_hand", tool)
         kin, checker = cell_kinematics(cell), ClearanceChecker(cell)
         for i in range(0, len(wt), 2):
-            r = _probe(kin, checker, cell.q_home, p_HQ[i], wt.cone_retract_H[i],
-                       wt.cone_half_angle, wt.retract_H[i], wt.t_H[i], lift,
-                       opt.min_distance_floor, opt.min_wrist, (0.0, 0.33, 0.66, 0.98), 16, 24, 24)
-            if not r["feasible"]:
-                blocked.setdefault(tool, []).append((i, r["pair"]))
+            r = _probe(kin, checker, cell.q_home, IkTarget(
+                p_HQ[i], wt.cone_retract_H[i], wt.retract_H[i], wt.t_H[i]), wt.cone_half_angle,
+                opt.probe_settings(lift))
+            if not r.feasible:
+                blocked.setdefault(tool, []).append((i, r.pair))
                 continue
             if tool == "standard":
                 continue
             # independent re-check of the long-reach pose: the tool point on its target, the
             # axis in the cone, Drake's signed distance above the limit
-            X_HT = np.linalg.inv(_pose(cell, "hub", r["q"])) @ _pose(cell, "tool_tip", r["q"])
+            X_HT = np.linalg.inv(_pose(cell, "hub", r.q)) @ _pose(cell, "tool_tip", r.q)
             p_HT = X_HT[:3, 3] + lift * X_HT[:3, 2]
             assert np.linalg.norm(p_HT - p_HQ[i]) < 1e-6
             cos = float(-X_HT[:3, 2] @ wt.cone_retract_H[i])
             assert cos >= np.cos(wt.cone_half_angle) - 1e-6
-            assert cell.min_distance(r["q"])[0] >= opt.min_distance_floor - 1e-6
+            assert cell.min_distance(r.q)[0] >= opt.min_distance_floor - 1e-6
     std_blocked = blocked.get("standard", [])
     assert len(std_blocked) >= 3, std_blocked
     assert all("spindle_body" in " ".join(pair) for _, pair in std_blocked)

@@ -12,12 +12,18 @@ along -Z_H at ``step`` spacing sample the surface seen from the front: height z(
 normal n(s). From the outline outward a profile crosses, in this order: what is seen through
 the opening's wider front part (a drafted wall, anything below), the edge band (round,
 chamfer), then the face. A sample belongs to the face when its normal is less than
-``WALL_ANGLE`` off the axis (walls are steeper), does not differ by more than
+``WALL_ANGLE`` off the axis (walls are steeper) and it is not on a drafted flank (more than
+``FLANK_ANGLE`` off the axis with the surface climbing by more than ``FLANK_RISE`` before it
+turns gentler than that: a wall of the opening seen from the front, whose top is the front
+boundary; a real rim's spoke flanks are drafted 12-14 deg, 76-78 deg off the axis), does not
+differ by more than
 ``BAND_ANGLE`` from the normal ``lag`` further out (the band turns faster), and the profile
 does not jump there (a step of more than ``JUMP`` between samples is a wall hidden from the
 front). The edge point is the first sample of the first run of ``run`` face samples, unless
 the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
-wider front part): then the first run after that step.
+wider front part): then the first run after that step. A profile goes ``FAR_REACH`` times
+``reach`` out (a 40 mm tall drafted flank's top lies 10-12 mm out); nearly every profile finds
+its face within the first millimetres.
 
 **Noise.** A profile reads the face start on its own 0.1 mm grid from the facets of a
 tessellated round, so neighbouring profiles can disagree by a facet. The band width (outline to
@@ -29,7 +35,7 @@ chamfer changes over millimetres, not between profiles 0.5 mm apart.
 turns down a spoke flank, along the rim's lip): neighbouring edge points then differ in height
 by more than their plan-view distance. Such a stretch is not an error: the points between them
 are filled in along the straight segment and moved onto the nearest mesh surface
-(:func:`_bridge`), so the loop follows the flank. A profile that finds no face within ``reach``
+(:func:`_bridge`), so the loop follows the flank. A profile that finds no face within its length
 takes the band of its neighbours (periodic interpolation along the loop) and reads the surface
 there, or the outline point itself (where the surface seen from the front ends).
 
@@ -51,6 +57,9 @@ __all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANG
 
 BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
 WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
+FLANK_ANGLE = math.radians(60.0)  # steeper (off the axis) and climbing FLANK_RISE: a flank
+FLANK_RISE = 3e-3  # [m] a flank's climb to the next gentle sample that makes it a wall
+FAR_REACH = 3.0  # a profile walks this many times its `reach` out (module doc)
 JUMP = 0.8e-3  # [m] height step between two samples (0.1 mm apart) that is a hidden wall
 MAX_BRIDGE_GAP = 10e-3  # [m] a gap this wide left in a filled stretch: the loop is not closed
 CROSS_DZ = 1e-3  # [m] plan-view crossings closer than this in height are self-intersections
@@ -145,11 +154,23 @@ def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
     z = z0 - t
     hit = np.isfinite(t)
     steep = np.abs(n[..., 2]) < math.cos(WALL_ANGLE)
+    # a drafted flank (FLANK_ANGLE..WALL_ANGLE off the axis) that the surface climbs by more
+    # than FLANK_RISE before it turns gentle is a wall seen from the front, not the face: the
+    # front boundary is the crease at its top (on the audibot rim the 14 deg draft of the
+    # spoke flanks put 36-52 % of each loop at their foot, 25-47 mm below the spoke face). The
+    # steep part of an edge round rises by far less than that to the face.
+    gentle = hit & (np.abs(n[..., 2]) >= math.cos(FLANK_ANGLE))
+    K = t.shape[1]
+    nxt = np.minimum.accumulate(np.where(gentle, np.arange(K), K)[:, ::-1], axis=1)[:, ::-1]
+    z_next = np.take_along_axis(np.where(hit, z, -np.inf), np.minimum(nxt, K - 1), axis=1)
+    with np.errstate(invalid="ignore"):  # misses: -inf - -inf, masked by `hit`
+        steep |= hit & ~gentle & (nxt < K) & (z_next - z > FLANK_RISE)
     # the band: the normal turns by more than BAND_ANGLE over `lag` samples (facets of a
     # non-watertight mesh may face either way: compare |n . n'|)
     nxt = np.concatenate([n[:, lag:], np.repeat(n[:, -1:], lag, axis=1)], axis=1)
     turning = np.abs(np.einsum("pkd,pkd->pk", n, nxt)) < math.cos(BAND_ANGLE)
-    dz = np.diff(z, axis=1, prepend=z[:, :1])
+    with np.errstate(invalid="ignore"):  # between two misses: nan, never a jump
+        dz = np.diff(z, axis=1, prepend=z[:, :1])
     jump_tol = JUMP * step / 1e-4
     up = hit & (dz > jump_tol)
     face = hit & ~steep & ~turning & ~(np.abs(dz) > jump_tol)
@@ -179,19 +200,18 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
         scene: open3d RaycastingScene of the mesh in H [m].
         outline_xy: (M, 2) refined CCW outline of the opening [m].
         z0: ray origin height above the mesh [m].
-        step: profile sample spacing [m]; reach: how far out the profile goes [m].
+        step: profile sample spacing [m]; reach: how far out the profile goes, times
+            ``FAR_REACH`` [m].
         lag_length: the band test compares normals this far apart [m].
         run_length: the face must continue this far past the edge point [m].
         ledge_length: a face stretch this close before a step up is a ledge [m].
     """
     out = _outward(outline_xy)
-    s = 0.02e-3 + np.arange(int(round(reach / step)) + 1) * step
-    P, K = len(outline_xy), len(s)
-    xy = outline_xy[:, None, :] + s[None, :, None] * out[:, None, :]
-    t, n = _cast(scene, xy.reshape(-1, 2), z0)
-    t, n = t.reshape(P, K), n.reshape(P, K, 3)
     lag, run = max(1, int(round(lag_length / step))), max(2, int(round(run_length / step)))
-    first = _face_start(t, n, z0, step, lag, run, int(round(ledge_length / step)))
+    xy, t, first = _profiles(scene, outline_xy, out, z0, step, reach,
+                             (lag, run, int(round(ledge_length / step))))
+    s = 0.02e-3 + np.arange(xy.shape[1]) * step
+    P = len(outline_xy)
     ok = first >= 0
     figures = {"outline_length": float(np.linalg.norm(
         np.roll(outline_xy, -1, axis=0) - outline_xy, axis=1).sum()),
@@ -201,7 +221,7 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
         c = outline_xy.mean(axis=0)
         return EdgeLine(None, band, outline_xy,
                         f"no front boundary: no surface seen from the front within "
-                        f"{reach * 1e3:.0f} mm of the opening's outline (around "
+                        f"{FAR_REACH * reach * 1e3:.0f} mm of the opening's outline (around "
                         f"({c[0] * 1e3:.0f}, {c[1] * 1e3:.0f}) mm)", figures)
     rows = np.flatnonzero(ok)
     band[rows] = s[first[ok]]
@@ -220,6 +240,25 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     p, crossings = _untangle(p)
     reason = _implausible(p, figures, gap, crossings)
     return EdgeLine(None if reason else p, band, outline_xy, reason, figures)
+
+
+def _profiles(scene, outline_xy: np.ndarray, out: np.ndarray, z0: float, step: float,
+              reach: float, samples: tuple[int, int, int]):
+    """The profiles and their face starts (module doc), ``FAR_REACH`` times ``reach`` long
+    (``samples``: the band lag, face run and ledge of :func:`_face_start` in samples):
+    a drafted flank's top (where the flank rule of :func:`_face_start` needs to see the
+    gentle surface) can lie further out than ``reach`` (mkz13 rim: 39 mm tall flanks 78 deg
+    off the axis reach 10.5-12 mm out).
+
+    Returns:
+        xy (P, K, 2) sample points, t (P, K) hit distances, first (P,) face-start index or -1.
+    """
+    P = len(outline_xy)
+    s = 0.02e-3 + np.arange(int(round(FAR_REACH * reach / step)) + 1) * step
+    xy = outline_xy[:, None, :] + s[None, :, None] * out[:, None, :]
+    t, n = _cast(scene, xy.reshape(-1, 2), z0)
+    t, n = t.reshape(P, len(s)), n.reshape(P, len(s), 3)
+    return xy, t, _face_start(t, n, z0, step, *samples)
 
 
 def _fill_missing(scene, p: np.ndarray, band: np.ndarray, ok: np.ndarray,

@@ -39,17 +39,11 @@ from drakedeburr.errors import (
     numerical_errors,
 )
 from drakedeburr.hub.front import FrontDecision, decide_front, front_from_user
-from drakedeburr.hub.openings import (
-    DEFAULT_BURR_DIAMETER,
-    DEFAULT_BURR_DIAMETERS,
-    DEFAULT_CLEARANCE,
-    find_openings,
-)
-from drakedeburr.hub.openings import min_window_width as _min_window_width
+from drakedeburr.hub.openings import OpeningSearch, find_openings
 from drakedeburr.hub.types import WindowEdge
 
 __all__ = ["HubFrameEstimate", "ExtractionResult", "extract_window_edges", "resample_loop",
-           "hub_frame_from_mesh", "principal_axis", "frame_from_axis"]
+           "hub_frame_from_mesh", "principal_axis", "frame_from_axis", "ray_scene"]
 
 log = logging.getLogger(__name__)
 
@@ -121,7 +115,8 @@ def _to_frame(mesh, X_MH: np.ndarray) -> np.ndarray:
     return mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]
 
 
-def _scene(V: np.ndarray, F: np.ndarray):
+def ray_scene(V: np.ndarray, F: np.ndarray):
+    """open3d RaycastingScene of the triangles F (T, 3) over the vertices V (N, 3) [m]."""
     import open3d as o3d
 
     scene = o3d.t.geometry.RaycastingScene()
@@ -157,11 +152,11 @@ def hub_frame_from_mesh(mesh, axis_M: np.ndarray | None = None,
         if decision is None:
             X0 = frame_from_axis(z, centroid)
             V0 = _to_frame(mesh, X0)
-            scene = _scene(V0, mesh.faces)
+            scene = ray_scene(V0, mesh.faces)
             r_max = float(np.hypot(V0[:, 0], V0[:, 1]).max())
-            scan = find_openings(scene, r_max, float(V0[:, 2].max()) + 0.01, pixel=pixel,
-                                 min_width=min_width, source=f"{source} (front cues)",
-                                 quiet=True)
+            scan = find_openings(scene, r_max, float(V0[:, 2].max()) + 0.01,
+                                 search=OpeningSearch(min_width=min_width, pixel=pixel),
+                                 source=f"{source} (front cues)", quiet=True)
             decision = decide_front(scene, V0, scan, source=source)
         z = z * decision.sign
     o = centroid if origin_M is None else np.asarray(origin_M, float)
@@ -240,15 +235,6 @@ def _window_edges(scene, scan, spacing: float, source: str):
     return kept, rejected, [f for _, f in sorted(figures, key=lambda t: t[0])]
 
 
-def _burrs(burr_diameter: float, burr_diameters) -> tuple[float, ...]:
-    """The burrs an opening is judged by (see :func:`extract_window_edges`)."""
-    if burr_diameters:
-        return tuple(float(b) for b in burr_diameters)
-    if abs(burr_diameter - DEFAULT_BURR_DIAMETER) < 1e-12:
-        return DEFAULT_BURR_DIAMETERS
-    return (float(burr_diameter),)
-
-
 def extract_window_edges(
     mesh,
     *,
@@ -257,12 +243,8 @@ def extract_window_edges(
     origin_M: np.ndarray | None = None,
     front: str = "auto",
     spacing: float = 2.0e-3,
-    pixel: float = 0.5e-3,
-    burr_diameter: float = DEFAULT_BURR_DIAMETER,
-    clearance: float = DEFAULT_CLEARANCE,
-    min_window_width: float | None = None,
+    search: OpeningSearch | None = None,
     expected_windows: int | None = None,
-    burr_diameters: tuple[float, ...] | None = None,
 ) -> ExtractionResult:
     """Find the window edge loops of a hub mesh (see module doc).
 
@@ -273,13 +255,11 @@ def extract_window_edges(
             mesh frame; None estimates them. For a mesh already in H pass (0, 0, 1), (0, 0, 0).
         front: "auto" or the file axis the front faces ("+z", "-y", ...).
         spacing: arc-length spacing of the returned loop points [m].
-        pixel: plan-view grid step for finding openings [m].
-        burr_diameter, clearance: the burr and the clearance it needs [m].
-        burr_diameters: every burr that may cut [m]; None: the tool library's
-            (``DEFAULT_BURR_DIAMETERS``) when ``burr_diameter`` is the standard one, else
-            ``burr_diameter`` alone. An opening is a window candidate when one of them fits
-            (:func:`drakedeburr.hub.openings.min_window_width`) unless ``min_window_width``
-            [m] is given.
+        search: how openings are found and judged
+            (:class:`drakedeburr.hub.openings.OpeningSearch`: the plan-view grid step, every
+            burr that may cut, the clearance each needs, the narrowest window). Default: the
+            tool library's burrs (``OpeningSearch.of()``): an opening is a window candidate
+            when one of them fits (:func:`drakedeburr.hub.openings.min_window_width`).
         expected_windows: if given, a different count is an error.
 
     Returns:
@@ -289,17 +269,16 @@ def extract_window_edges(
         InputError: no opening, no plausible window edge, or the wrong number of windows;
             the message names the openings and why each was not used.
     """
-    burrs = _burrs(burr_diameter, burr_diameters)
-    min_w = (min_window_width if min_window_width is not None
-             else _min_window_width(burrs, clearance))
+    search = OpeningSearch.of() if search is None else search
+    min_w = search.window_width
     try:
         frame = hub_frame_from_mesh(mesh, axis_M, origin_M, front=front, min_width=min_w,
                                     source=source)
         v_H = _to_frame(mesh, frame.X_MH)
-        scene = _scene(v_H, mesh.faces)
+        scene = ray_scene(v_H, mesh.faces)
         r_max = float(np.linalg.norm(v_H[:, :2], axis=1).max())
-        scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, pixel=pixel,
-                             min_width=min_w, source=source, burrs=burrs, clearance=clearance)
+        scan = find_openings(scene, r_max, float(v_H[:, 2].max()) + 0.01, search=search,
+                             source=source)
     except InputError:
         raise
     except numerical_errors() as exc:  # degenerate geometry: a named result, not a crash
@@ -311,7 +290,7 @@ def extract_window_edges(
     notes = {"axis_estimated": frame.estimated,
              "front": None if frame.front is None else frame.front.as_dict(frame.X_MH[:3, 2]),
              "min_window_width_mm": round(min_w * 1e3, 3),
-             "burrs_mm": [round(b * 1e3, 3) for b in burrs],
+             "burrs_mm": [round(b * 1e3, 3) for b in search.burrs],
              "not_windows": [o.as_dict() for o in scan.not_windows],
              "watertight": bool(mesh.is_watertight)}
     kept, rejected, figures = _window_edges(scene, scan, spacing, source)

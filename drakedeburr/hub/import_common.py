@@ -20,11 +20,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from drakedeburr.errors import InputError
-from drakedeburr.hub.openings import (
-    DEFAULT_BURR_DIAMETER,
-    DEFAULT_BURR_DIAMETERS,
-    burr_need,
-)
+from drakedeburr.hub.extract import principal_axis, ray_scene
+from drakedeburr.hub.openings import judged_burrs, narrow_reason
 
 if TYPE_CHECKING:
     from drakedeburr.hub.import_options import ImportOptions
@@ -39,34 +36,6 @@ log = logging.getLogger(__name__)
 DIAMETER_RANGE = (0.150, 0.700)  # [m] plausible wheel diameter across the hub axis
 
 Progress = Callable[[int, int, str], None] | None
-
-
-def judged_burrs(burr_diameter: float = DEFAULT_BURR_DIAMETER,
-                 burr_diameters: tuple[float, ...] | None = None) -> tuple[float, ...]:
-    """The burrs [m] an opening is judged by, smallest first: ``burr_diameters`` when given;
-    else the tool library's (``DEFAULT_BURR_DIAMETERS``: the small burr is tried before an
-    opening is refused) when ``burr_diameter`` is the standard one, else that burr alone."""
-    if burr_diameters:
-        burrs = burr_diameters
-    elif abs(burr_diameter - DEFAULT_BURR_DIAMETER) < 1e-12:
-        burrs = DEFAULT_BURR_DIAMETERS
-    else:
-        burrs = (burr_diameter,)
-    return tuple(sorted(float(b) for b in burrs))
-
-
-def narrow_reason(width: float, burrs: tuple[float, ...], clearance: float,
-                  min_width: float, what: str = "opening") -> str:
-    """Why an opening ``width`` [m] wide (inscribed circle) is no window: the measured width,
-    each burr's need (:func:`drakedeburr.hub.openings.burr_need`) and, when the caller asked
-    for a wider bound than the smallest need, that bound [m]."""
-    needs = [(b, burr_need(b, clearance)) for b in burrs]
-    each = ", ".join(f"the {b * 1e3:g} mm burr needs {n * 1e3:.1f} mm" for b, n in needs)
-    own = min((n for _, n in needs), default=min_width)
-    asked = ("" if abs(own - min_width) < 1e-9
-             else f"; the narrowest window asked for is {min_width * 1e3:.1f} mm")
-    return (f"{what} {width * 1e3:.1f} mm wide (inscribed circle): no burr fits with the "
-            f"{clearance * 1e3:g} mm clearance: {each}{asked}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,20 +136,9 @@ def front_origin_offset(scene, r_inner: float, z_top: float) -> float:
     return float(np.median(z_top - t)) if len(t) else 0.0
 
 
-def ray_scene(V: np.ndarray, F: np.ndarray):
-    import open3d as o3d
-
-    scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(V.astype(np.float32)),
-                        o3d.core.Tensor(F.astype(np.uint32)))
-    return scene
-
-
 def across_axis(mesh, axis_M) -> tuple[float, np.ndarray, np.ndarray]:
     """(extent [m] across the hub axis, the axis z_M, the centre of that extent) - the axis
     is the principal axis unless given."""
-    from drakedeburr.hub.extract import principal_axis
-
     z_M = principal_axis(mesh)[0] if axis_M is None else np.asarray(axis_M, float)
     z_M = z_M / np.linalg.norm(z_M)
     v = mesh.vertices - mesh.vertices.mean(axis=0)

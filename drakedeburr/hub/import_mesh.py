@@ -102,14 +102,13 @@ def _frame_and_windows(path: Path, mesh, options: ImportOptions):
     import trimesh
 
     from drakedeburr.hub.extract import extract_window_edges
+    from drakedeburr.hub.openings import OpeningSearch
 
+    search = OpeningSearch.of(options.burr_diameter, options.burr_diameters,
+                              options.clearance, options.min_window_width)
     ext = extract_window_edges(mesh, source=str(path), axis_M=options.axis_M,
                                front=options.front, spacing=options.edge_spacing,
-                               burr_diameter=options.burr_diameter,
-                               burr_diameters=options.burr_diameters,
-                               clearance=options.clearance,
-                               min_window_width=options.min_window_width,
-                               expected_windows=options.expected_windows)
+                               search=search, expected_windows=options.expected_windows)
     X_MH = np.array(ext.X_MH, float)
     X_HM = np.linalg.inv(X_MH)
     V_H = mesh.vertices @ X_HM[:3, :3].T + X_HM[:3, 3]

@@ -11,9 +11,9 @@ from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 
 __all__ = ["ImportOptions", "IMPORT_VERSION"]
 
-# 11: into-the-opening from the outline on steep stretches; 5-10: 3-D loops, burrs (issue 42);
-# 4: front_band; 3: band filter
-IMPORT_VERSION = 11
+# 12: drafted flanks are walls, 30 mm profiles; 11: into-the-opening from the outline on steep
+# stretches; 5-10: 3-D loops, burrs (issue 42); 4: front_band; 3: band filter
+IMPORT_VERSION = 12
 
 
 @dataclass(frozen=True)

@@ -29,12 +29,13 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-__all__ = ["Opening", "OpeningScan", "find_openings", "min_window_width", "burr_need",
-           "DEFAULT_BURR_DIAMETER", "DEFAULT_BURR_DIAMETERS", "DEFAULT_CLEARANCE"]
+__all__ = ["Opening", "OpeningScan", "OpeningSearch", "find_openings", "min_window_width",
+           "burr_need", "judged_burrs", "narrow_reason", "DEFAULT_BURR_DIAMETER",
+           "DEFAULT_BURR_DIAMETERS", "DEFAULT_CLEARANCE"]
 
 log = logging.getLogger(__name__)
 
@@ -121,6 +122,69 @@ class OpeningScan:
         return [o for o in self.openings if o.kind != "window"]
 
 
+def judged_burrs(burr_diameter: float = DEFAULT_BURR_DIAMETER,
+                 burr_diameters: tuple[float, ...] | None = None) -> tuple[float, ...]:
+    """The burrs [m] an opening is judged by, smallest first: ``burr_diameters`` when given;
+    else the tool library's (``DEFAULT_BURR_DIAMETERS``: the small burr is tried before an
+    opening is refused) when ``burr_diameter`` is the standard one, else that burr alone."""
+    if burr_diameters:
+        burrs = burr_diameters
+    elif abs(burr_diameter - DEFAULT_BURR_DIAMETER) < 1e-12:
+        burrs = DEFAULT_BURR_DIAMETERS
+    else:
+        burrs = (burr_diameter,)
+    return tuple(sorted(float(b) for b in burrs))
+
+
+def narrow_reason(width: float, burrs: tuple[float, ...], clearance: float,
+                  min_width: float, what: str = "opening") -> str:
+    """Why an opening ``width`` [m] wide (inscribed circle) is no window: the measured width,
+    each burr's need (:func:`burr_need`) and, when the caller asked for a wider bound than
+    the smallest need, that bound [m]."""
+    needs = [(b, burr_need(b, clearance)) for b in burrs]
+    each = ", ".join(f"the {b * 1e3:g} mm burr needs {n * 1e3:.1f} mm" for b, n in needs)
+    own = min((n for _, n in needs), default=min_width)
+    asked = ("" if abs(own - min_width) < 1e-9
+             else f"; the narrowest window asked for is {min_width * 1e3:.1f} mm")
+    return (f"{what} {width * 1e3:.1f} mm wide (inscribed circle): no burr fits with the "
+            f"{clearance * 1e3:g} mm clearance: {each}{asked}")
+
+
+@dataclass(frozen=True)
+class OpeningSearch:
+    """How the through-openings are found and judged (module doc).
+
+    Attributes:
+        burrs: the burr head diameters an opening is judged by [m], smallest first
+            (:func:`judged_burrs`; the CLI passes the tool library's heads).
+        clearance: what each burr needs to both walls [m].
+        min_width: narrowest window asked for [m]; None: :func:`min_window_width` of
+            ``burrs`` (the smallest burr's need).
+        pixel: step of the plan-view ray grid [m].
+    """
+
+    burrs: tuple[float, ...] = tuple(sorted(DEFAULT_BURR_DIAMETERS))
+    clearance: float = DEFAULT_CLEARANCE
+    min_width: float | None = None
+    pixel: float = 0.5e-3
+
+    @classmethod
+    def of(cls, burr_diameter: float = DEFAULT_BURR_DIAMETER,
+           burr_diameters: tuple[float, ...] | None = None,
+           clearance: float = DEFAULT_CLEARANCE, min_window_width: float | None = None,
+           pixel: float = 0.5e-3) -> OpeningSearch:
+        """From the importer's options (:class:`drakedeburr.hub.import_options.ImportOptions`
+        fields of the same names): the burrs by :func:`judged_burrs`."""
+        return cls(judged_burrs(burr_diameter, burr_diameters), float(clearance),
+                   min_window_width, float(pixel))
+
+    @property
+    def window_width(self) -> float:
+        """Narrowest opening [m] that is a window candidate."""
+        return (min_window_width(self.burrs, self.clearance) if self.min_width is None
+                else float(self.min_width))
+
+
 def _measure(mask: np.ndarray, g: np.ndarray, pixel: float) -> dict:
     from scipy import ndimage
 
@@ -153,29 +217,27 @@ def _lug_pattern(cands: list[dict], r_max: float) -> set[int]:
     return found
 
 
-def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
-                  min_width: float | None = None, source: str = "mesh",
-                  quiet: bool = False,
-                  burrs: tuple[float, ...] = DEFAULT_BURR_DIAMETERS,
-                  clearance: float = DEFAULT_CLEARANCE) -> OpeningScan:
+def find_openings(scene, r_max: float, z_top: float, *,
+                  search: OpeningSearch | None = None, source: str = "mesh",
+                  quiet: bool = False) -> OpeningScan:
     """Cast the plan-view grid along -Z_H and classify the openings (module doc).
 
     Args:
         scene: open3d RaycastingScene of the mesh in H [m].
         r_max: largest distance of the mesh from the axis [m].
         z_top: height above the mesh for the ray origins [m].
-        pixel: grid step [m].
-        min_width: narrowest window [m]; default :func:`min_window_width` of ``burrs``.
+        search: the grid step, the burrs (the refusal names each one's need), the clearance
+            and the narrowest window; default :class:`OpeningSearch` (the tool library's).
         source: name for messages.
-        burrs: the burr head diameters of the tool library [m] (the refusal names each one's
-            need); clearance: what each needs to both walls [m].
         quiet: log the openings that are not windows at DEBUG instead of WARNING.
     """
     import open3d as o3d
     from scipy import ndimage
 
-    burrs = tuple(sorted(float(b) for b in burrs)) or (DEFAULT_BURR_DIAMETER,)
-    min_width = min_window_width(burrs, clearance) if min_width is None else min_width
+    search = OpeningSearch() if search is None else search
+    burrs = tuple(sorted(float(b) for b in search.burrs)) or (DEFAULT_BURR_DIAMETER,)
+    clearance, pixel = search.clearance, search.pixel
+    min_width = replace(search, burrs=burrs).window_width
     n_px = int(np.ceil(2 * r_max / pixel)) + 3
     g = (np.arange(n_px) - (n_px - 1) / 2) * pixel
     gx, gy = np.meshgrid(g, g, indexing="ij")
@@ -194,8 +256,7 @@ def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
             continue  # noise of the grid
         cands.append({"label": lab, "mask": mask, **_measure(mask, g, pixel)})
     lugs = _lug_pattern(cands, r_max)
-    needs = [(b, burr_need(b, clearance)) for b in burrs]
-    openings = [_classify(c, centre, lugs, min_width, needs) for c in cands]
+    openings = [_classify(c, centre, lugs, min_width, burrs, clearance) for c in cands]
     for o in openings:
         if o.kind != "window":
             level = logging.DEBUG if quiet else (
@@ -208,7 +269,7 @@ def find_openings(scene, r_max: float, z_top: float, *, pixel: float = 0.5e-3,
 
 
 def _classify(c: dict, centre: int, lugs: set[int], min_width: float,
-              needs: list[tuple[float, float]]) -> Opening:
+              burrs: tuple[float, ...], clearance: float) -> Opening:
     if c["label"] == centre or c["radius"] < 0.25 * c["width"]:
         kind, reason = "centre bore", "it contains the hub axis (centre bore)"
     elif c["label"] in lugs:
@@ -216,13 +277,7 @@ def _classify(c: dict, centre: int, lugs: set[int], min_width: float,
                                     f"pattern on a {2 * c['radius'] * 1e3:.1f} mm circle")
     elif c["width"] < min_width:
         what = "vent slot" if c["length"] > 3.0 * c["width"] else "opening"
-        each = ", ".join(f"the {b * 1e3:g} mm burr needs {n * 1e3:.1f} mm" for b, n in needs)
-        own = min(n for _, n in needs) if needs else 0.0
-        extra = ("" if abs(own - min_width) < 1e-9
-                 else f"; the narrowest window asked for is {min_width * 1e3:.1f} mm")
-        kind, reason = "too narrow", (f"{what} {c['width'] * 1e3:.1f} mm wide (inscribed "
-                                      f"circle): no burr fits with the clearance: {each}"
-                                      f"{extra}")
+        kind, reason = "too narrow", narrow_reason(c["width"], burrs, clearance, min_width, what)
     else:
         kind, reason = "window", ""
     return Opening(c["label"], kind, reason, c["area"], c["width"], c["length"],

@@ -48,6 +48,7 @@ def _windows_and_view(args: argparse.Namespace):
     from drakedeburr.hub.inputview import input_view, input_view_of_hub
     from drakedeburr.hub.mesh_io import CAD_SUFFIXES, MESH_TARGET_SUFFIXES, load_hub_mesh
     from drakedeburr.hub.model import load_hub
+    from drakedeburr.hub.openings import OpeningSearch
     from drakedeburr.hub.types import WindowEdge
     from drakedeburr.units import m_from_mm
 
@@ -56,11 +57,12 @@ def _windows_and_view(args: argparse.Namespace):
         return _cad_windows_and_view(path, args)
     if path.suffix.lower() in MESH_TARGET_SUFFIXES:  # read, or refused by name
         lm = load_hub_mesh(path, unit=args.unit)
-        res = extract_window_edges(
-            lm.mesh, source=str(path), spacing=2.0e-3, front=args.front,
-            burr_diameter=m_from_mm(args.burr_mm), clearance=m_from_mm(args.clearance_mm),
+        search = OpeningSearch.of(
+            m_from_mm(args.burr_mm), clearance=m_from_mm(args.clearance_mm),
             min_window_width=None if args.min_window_width_mm is None
             else m_from_mm(args.min_window_width_mm))
+        res = extract_window_edges(lm.mesh, source=str(path), spacing=2.0e-3,
+                                   front=args.front, search=search)
         view = input_view(res.windows, res.X_MH, lm.unit, front=res.notes["front"],
                           not_windows=res.notes["not_windows"] + res.notes["rejected"],
                           source=str(path))

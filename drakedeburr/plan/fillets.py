@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -30,7 +30,8 @@ from drakedeburr.plan.feed_program import FeedProgramOptions, FeedStretch, hold_
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FilletOptions", "slow_stretches", "stretch_kto", "orientation_by_kto", "repair_fillets"]
+__all__ = ["FilletOptions", "FilletStretch", "CutSamples", "slow_stretches", "stretch_kto",
+           "orientation_by_kto", "repair_fillets"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,53 @@ class FilletOptions:
                              f"{self.method!r}")
 
 
+@dataclass(frozen=True)
+class FilletStretch:
+    """The fillet repair's report of one slow stretch of a timed cut.
+
+    Attributes:
+        from_m, to_m: where the stretch runs, as travel along the cut [m].
+        slowest_mps: the timed cut's slowest TCP speed on it [m/s].
+        held: the feed can be held there, by the repair method's own reading.
+        kept: the new orientation was kept (the whole cut more in the band, no slower).
+    """
+
+    from_m: float
+    to_m: float
+    slowest_mps: float
+    held: bool
+    kept: bool = False
+
+    def as_dict(self) -> dict:
+        """JSON-ready record (the plan's ``meta["windows"][i]["fillets"]`` entries)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True, eq=False)
+class CutSamples:
+    """Dense samples of a cut (or a stretch of it) with their cones.
+
+    Attributes:
+        s: (N,) tool travel [m]; q: (N, 6) joints [rad]; X_HT: (N, 4, 4) tool poses in H [m].
+        cone: (N, 3) cone axes (tip -> spindle) in H; half_angle: the cones' half-angle [rad].
+    """
+
+    s: np.ndarray
+    q: np.ndarray
+    X_HT: np.ndarray
+    cone: np.ndarray
+    half_angle: float
+
+    @property
+    def p(self) -> np.ndarray:
+        """(N, 3) tool points in H [m]."""
+        return self.X_HT[:, :3, 3]
+
+    def part(self, st: slice) -> CutSamples:
+        """The samples ``st``."""
+        return replace(self, s=self.s[st], q=self.q[st], X_HT=self.X_HT[st], cone=self.cone[st])
+
+
 def slow_stretches(s: np.ndarray, v: np.ndarray, v_band: float, keep_off: float = 0.02,
                    merge: float = 0.02) -> list[tuple[int, int, int]]:
     """Stretches of a timed cut below ``v_band`` away from its rest-to-rest ends (``keep_off``
@@ -90,15 +138,14 @@ def slow_stretches(s: np.ndarray, v: np.ndarray, v_band: float, keep_off: float 
     return [(a, b, a + int(np.argmin(v[a:b + 1]))) for a, b in runs]
 
 
-def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone: np.ndarray,
-                half_angle: float, t: np.ndarray, a_max: np.ndarray, v_max: np.ndarray,
-                options: FilletOptions):
-    """One KTO over a stretch of the executed cut (s, q, p: travel, joints, tool points at its
-    samples; ``cone``: (N, 3) cone axes tip -> spindle) with a prescribed timing ``t`` (N,)
-    (times at the samples from 0; a constant speed v: (s - s[0]) / v). Returns (SNOPT result,
-    its trajectory). Not a library's because Drake's KTO is the library: this states the
-    stretch's problem (path constraints at ``options.constraint_step``, bounds, the cut's joints
-    and path velocity at both ends) and warm-starts it from the cut."""
+def stretch_kto(cell, checker, cut: CutSamples, t: np.ndarray, a_max: np.ndarray,
+                v_max: np.ndarray, options: FilletOptions):
+    """One KTO over a stretch ``cut`` of the executed cut (its travel, joints, tool points and
+    cones at the samples) with a prescribed timing ``t`` (N,) (times at the samples from 0; a
+    constant speed v: (s - s[0]) / v) and joint limits ``a_max``, ``v_max`` (6,). Returns
+    (SNOPT result, its trajectory). Not a library's because Drake's KTO is the library: this
+    states the stretch's problem (path constraints at ``options.constraint_step``, bounds, the
+    cut's joints and path velocity at both ends) and warm-starts it from the cut."""
     from pydrake.multibody.inverse_kinematics import (
         AngleBetweenVectorsConstraint,
         MinimumDistanceLowerBoundConstraint,
@@ -109,6 +156,7 @@ def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone
 
     from drakedeburr.plan.cut_path import axes_interp
 
+    s, q, p, cone, half_angle = cut.s, cut.q, cut.p, cut.cone, cut.half_angle
     T = float(t[-1])
     r = np.asarray(t, float) / T
     dq_dr = np.gradient(q, r, axis=0)  # path velocity in the KTO's normalised time
@@ -125,7 +173,9 @@ def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone
     kto.AddPathPositionConstraint(q[-1], q[-1], 1.0)
     kto.AddPathVelocityConstraint(dq_dr[0], dq_dr[0], 0.0)
     kto.AddPathVelocityConstraint(dq_dr[-1], dq_dr[-1], 1.0)
-    dist = MinimumDistanceLowerBoundConstraint(cell.plant, 2e-3, ctx, None, 3e-3)
+    # the clearance tolerance the checker certifies against (the run's min_clearance)
+    dist = MinimumDistanceLowerBoundConstraint(cell.plant, checker.tolerances.min_clearance, ctx,
+                                               None, 3e-3)
     keep = [dist]  # the program holds references only: keep the constraints alive
     L = float(s[-1] - s[0])
     s_c = np.linspace(s[0], s[-1], int(L / options.constraint_step) + 1)[1:-1]
@@ -158,13 +208,12 @@ def stretch_kto(cell, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray, cone
     return res, kto.ReconstructTrajectory(res)
 
 
-def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.ndarray,
-                       cone: np.ndarray, half_angle: float, speed: float, a_max: np.ndarray,
+def orientation_by_kto(cell, kin, checker, cut: CutSamples, speed: float, a_max: np.ndarray,
                        v_max: np.ndarray, options: FilletOptions) -> np.ndarray | None:
     """Tool orientations (N, 3, 3) at the samples of a stretch (see :func:`stretch_kto`) from
     its KTO at the constant ``speed``, or None if SNOPT found no solution."""
-    res, traj = stretch_kto(cell, checker, s, q, p, cone, half_angle, (s - s[0]) / speed, a_max,
-                            v_max, options)
+    s, p = cut.s, cut.p
+    res, traj = stretch_kto(cell, checker, cut, (s - s[0]) / speed, a_max, v_max, options)
     if not res.is_success():
         return None
     rs = (s - s[0]) / (s[-1] - s[0])
@@ -187,13 +236,15 @@ def orientation_by_kto(cell, kin, checker, s: np.ndarray, q: np.ndarray, p: np.n
     return kin.X_HT_from_q(traj.vector_values(t_at).T)[:, :3, :3]
 
 
-def _repair_one(ctx, cp, X, q, d, cone, half_angle, st: slice, R, window: int, s_c: float):
-    """The cut with the KTO's orientation ``R`` on the samples ``st``, or None when it leaves
-    the cone, the joints' reach or loses clearance: (poses, joints, distances)."""
+def _repair_one(ctx, cur: CutSamples, d, st: slice, R, window: int, s_c: float):
+    """The cut ``cur`` (distances ``d``) with the new orientation ``R`` on the samples ``st``,
+    or None when it leaves the cone, the joints' reach or loses clearance: (poses, joints,
+    distances)."""
     from drakedeburr.plan.kinematics import DISTANCE_SLACK
 
-    ang = angle_between(cone[st], -R[:, :, 2])
-    if np.any(ang > half_angle - 1e-3):
+    X, q = cur.X_HT, cur.q
+    ang = angle_between(cur.cone[st], -R[:, :, 2])
+    if np.any(ang > cur.half_angle - 1e-3):
         log.debug("window %d: fillet at %.0f mm: the KTO's axis leaves its cone; kept as it "
                  "was", window, 1e3 * s_c)
         return None
@@ -218,9 +269,10 @@ def _in_band(v: np.ndarray, v_g: float, band: float) -> float:
     return float(np.mean(np.abs(v_cut - v_g) <= band * v_g)) if len(v_cut) else 0.0
 
 
-def _stretch_frames(ctx, s, X, q, cone, half_angle, run, lim, fo):
-    """New frames for one slow run ``(a, b, slowest)`` of the timed cut: (R (n, 3, 3) over the
-    samples ``lo..hi`` or None, lo, hi, held)."""
+def _stretch_frames(ctx, cur: CutSamples, run, lim, fo):
+    """New frames for one slow run ``(a, b, slowest)`` of the timed cut ``cur``: (R (n, 3, 3)
+    over the samples ``lo..hi`` or None, lo, hi, held)."""
+    s = cur.s
     a, b, c = run
     v_g = ctx.process.grinding_speed
     if fo.method == "program":
@@ -230,17 +282,16 @@ def _stretch_frames(ctx, s, X, q, cone, half_angle, run, lim, fo):
             return None, lo, hi, False
         fr = np.asarray(lim.acceleration_fraction) * np.asarray(lim.a_max)
         vr = np.asarray(lim.velocity_fraction) * np.asarray(lim.v_max)
-        res = hold_feed(ctx.kin, FeedStretch(s, X, q, cone, half_angle, lo, hi),
+        res = hold_feed(ctx.kin, FeedStretch(s, cur.X_HT, cur.q, cur.cone, cur.half_angle, lo, hi),
                         fo.speed_share * v_g, fr, vr, fo.program)
         return (res.R if res.held else None), lo, hi, res.held
     lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
     hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
     if hi - lo < 20:
         return None, lo, hi, False
-    st = slice(lo, hi + 1)
-    R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, s[st], q[st], X[st, :3, 3],
-                           cone[st], half_angle, fo.speed_share * v_g,
-                           np.asarray(lim.a_max), np.asarray(lim.v_max), fo)
+    R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, cur.part(slice(lo, hi + 1)),
+                           fo.speed_share * v_g, np.asarray(lim.a_max), np.asarray(lim.v_max),
+                           fo)
     return R, lo, hi, R is not None
 
 
@@ -250,11 +301,8 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
     more travel in the band and is no slower, the axis stays 1 mrad inside its cone, the joints
     track on the same configuration without jumps and no sample loses clearance (below the
     bound). ``ctx`` is the planner's :class:`drakedeburr.plan.options.PlanContext`. Returns
-    (CutPath, DensePath, distances, report): the report lists each slow stretch
-    ``{"from_m", "to_m", "slowest_mps", "held", "kept"}`` (travel along the cut; ``held``: the
-    feed can be held there, by the method's own reading)."""
-    from dataclasses import replace
-
+    (CutPath, DensePath, distances, report): the report is a :class:`FilletStretch` for each
+    slow stretch."""
     from drakedeburr.plan.timing import time_path
 
     fo = ctx.options.fillets
@@ -265,16 +313,15 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
     base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim, fk=ctx.kin.p_HT)
     X, q, d = cut.X_HT, cut.q, dist
     best_t, best_share = float(base.t[-1]), _in_band(base.v_tcp, v_g, tol_band)
-    report = []
+    report: list[FilletStretch] = []
     for run in slow_stretches(s, base.v_tcp, (1 - tol_band) * v_g):
-        R, lo, hi, held = _stretch_frames(ctx, s, X, q, cone, half_angle, run, lim, fo)
-        entry = dict(from_m=float(s[run[0]]), to_m=float(s[run[1]]),
-                     slowest_mps=float(base.v_tcp[run[2]]), held=bool(held), kept=False)
-        report.append(entry)
+        cur = CutSamples(s, q, X, cone, half_angle)
+        R, lo, hi, held = _stretch_frames(ctx, cur, run, lim, fo)
+        report.append(FilletStretch(from_m=float(s[run[0]]), to_m=float(s[run[1]]),
+                                    slowest_mps=float(base.v_tcp[run[2]]), held=bool(held)))
         if R is None:
             continue
-        new = _repair_one(ctx, cp, X, q, d, cone, half_angle, slice(lo, hi + 1), R, window,
-                          s[run[2]])
+        new = _repair_one(ctx, cur, d, slice(lo, hi + 1), R, window, s[run[2]])
         if new is None:
             continue
         timed = time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT)
@@ -284,7 +331,7 @@ def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
                   t_new, best_share, share)
         if share > best_share + 1e-9 and t_new <= best_t + 1e-3:
             (X, q, d), best_t, best_share = new, t_new, share
-            entry["kept"] = True
+            report[-1] = replace(report[-1], kept=True)
     if X is cut.X_HT:
         return cp, cut, dist, report
     X_tg = cp.X_target.copy()

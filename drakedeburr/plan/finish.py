@@ -145,7 +145,7 @@ def _stats(ctx: PlanContext, wt, ik: IkStep, ex: ExecutedCut, timed_cut,
         q_ik_rad=wik.q[good].tolist(), q_smoothed_rad=ex.q_targets[cl_rows].tolist(),
         cl_order=[int(i) for i in order], spin_rule=ctx.options.ik.seed_spin,
         speed_in_band_bound=_band_bound(ctx, ex, timed_cut),
-        fillets=[dict(f) for f in ex.fillets])
+        fillets=[f.as_dict() for f in ex.fillets])
 
 
 def _band_bound(ctx: PlanContext, ex: ExecutedCut, timed_cut) -> float | None:
@@ -159,8 +159,8 @@ def _band_bound(ctx: PlanContext, ex: ExecutedCut, timed_cut) -> float | None:
     s = ex.cut.s[1:-1]
     ok = np.abs(v - v_g) <= ctx.config.tolerances.speed_band * v_g
     for f in ex.fillets:
-        if f["held"]:
-            ok |= (s >= f["from_m"]) & (s <= f["to_m"])
+        if f.held:
+            ok |= (s >= f.from_m) & (s <= f.to_m)
     return float(np.mean(ok)) if len(v) else 0.0
 
 

@@ -8,14 +8,14 @@ reaches into the robot's own forearm (-0.88 mm), so no move out of home can be c
 
 Where the home's clearance (every pair, the burr head included: nothing cuts at home) is below
 :data:`HOME_CLEARANCE` (the mount study's home margin), the home is moved to the configuration
-nearest to it (joint travel weighted as the placement search weighs it) that keeps that
-clearance, the joints :data:`JOINT_MARGIN` inside their limits and the wrist
-:data:`WRIST_MARGIN` off its singularity on the home's own side. Drake's
-``InverseKinematics``-style program (SNOPT, a ``MinimumDistanceLowerBoundConstraint``) from a
-fixed list of starts, every answer re-read by the clearance checker; deterministic.
-The plan records the home it used (``plan.meta["q_home"]``) and the deviation; the program
-starts and ends there and the verifier builds the cell with it
-(:func:`drakedeburr.cell.station.load_plan_cell`).
+nearest to it (joint travel weighted by :data:`drakedeburr.plan.kinematics.JOINT_WEIGHTS`, as
+the placement search weighs it) that keeps that clearance, the joints :data:`JOINT_MARGIN`
+inside their limits and the wrist :data:`drakedeburr.plan.kinematics.WRIST_MARGIN` off its
+singularity on the home's own side. Drake's ``InverseKinematics``-style program (SNOPT, a
+``MinimumDistanceLowerBoundConstraint``) from a fixed list of starts, every answer re-read by
+the clearance checker; deterministic. The plan records the home it used
+(``plan.meta["q_home"]``) and the deviation; the program starts and ends there and the verifier
+builds the cell with it (:func:`drakedeburr.cell.station.load_plan_cell`).
 """
 
 from __future__ import annotations
@@ -24,16 +24,16 @@ import logging
 
 import numpy as np
 
+from drakedeburr.plan.kinematics import JOINT_WEIGHTS, WRIST_MARGIN
 from drakedeburr.plan.relax import Deviation
 
-__all__ = ["HOME_CLEARANCE", "JOINT_MARGIN", "WRIST_MARGIN", "clear_home"]
+__all__ = ["HOME_CLEARANCE", "JOINT_MARGIN", "clear_home"]
 
 log = logging.getLogger(__name__)
 
 HOME_CLEARANCE = 5e-3  # [m] as the mount study's home (cell.mounts)
 JOINT_MARGIN = np.radians(10.0)  # [rad] inside each joint limit, as the mount study
-WRIST_MARGIN = 0.25  # [rad] smallest |J5| of a home, as the mount study
-_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.3, 0.3, 0.3])  # joint travel weights (placement search)
+_WEIGHTS = np.asarray(JOINT_WEIGHTS)  # joint travel weighed as the placement search does
 # starts: the home, the wrist unbent by steps (a held hub swings off the forearm), the upper
 # arm raised / lowered; fixed, so the answer is the same on any machine
 _STARTS = ((0.0, 0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, -0.3, 0.0),

@@ -38,11 +38,15 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from drakedeburr.config import Tolerances
 from drakedeburr.plan.ik_seeds import (
-    JOINT_WEIGHTS,
+    ConeProbe,
+    IkTarget,
+    ProbeSettings,
     analytic_accept,
     analytic_seed,
     clearance_seed,
@@ -52,17 +56,42 @@ from drakedeburr.plan.ik_seeds import (
     seed_by_spin,
     unreachable,
 )
-from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
+from drakedeburr.plan.kinematics import (
+    JOINT_WEIGHTS,
+    WRIST_MARGIN,
+    CellKinematics,
+    ClearanceChecker,
+)
 from drakedeburr.plan.types import FailureRecord
 
-__all__ = ["IkOptions", "WindowIk", "solve_window_ik", "seed_by_spin", "cone_clearance_probe"]
+if TYPE_CHECKING:
+    from drakedeburr.cell.station import Cell
+    from drakedeburr.plan.options import PlanContext
+
+__all__ = ["IkOptions", "IkTargets", "IkAttempt", "WindowIk", "solve_window_ik", "seed_by_spin",
+           "cone_clearance_probe", "CLEARANCE_MARGIN", "FLOOR_MARGIN"]
 
 log = logging.getLogger(__name__)
+
+#: [m] the IK's clearance bound (``IkOptions.min_distance``) above ``Tolerances.min_clearance``:
+#: the straight moves between targets keep the tolerance
+CLEARANCE_MARGIN = 0.1e-3
+#: [m] the bound of the IK's last retry and of the cone probe (``IkOptions.min_distance_floor``)
+#: above ``Tolerances.min_clearance``
+FLOOR_MARGIN = 0.05e-3
 
 
 @dataclass(frozen=True)
 class IkOptions:
     """Settings of the per-target IK.
+
+    The two clearance bounds are derived from the run's ``Tolerances.min_clearance``
+    (:meth:`at_clearance`, applied by :class:`drakedeburr.plan.options.PlanContext`):
+    ``min_distance`` = min_clearance + :data:`CLEARANCE_MARGIN`, ``min_distance_floor`` =
+    min_clearance + :data:`FLOOR_MARGIN`; their defaults are those of the default tolerances,
+    and a planning context replaces whatever is given with its tolerance's (to move the IK
+    bound, change ``Tolerances.min_clearance``). They are fields so that the plan records the
+    bounds its IK used.
 
     Attributes:
         position_tolerance: half-width of the position box [m].
@@ -92,8 +121,9 @@ class IkOptions:
         spin_samples: spins tried by the seed sweep.
         min_distance_floor: the clearance bound of the last retry [m] (the acceptance bound):
             ``min_distance`` carries a small margin so that the straight moves between targets
-            keep 2 mm; where the cone leaves no room for the margin (a few fillet points) the
-            target takes the bare bound and the dense check of the executed motion decides.
+            keep the tolerance; where the cone leaves no room for the margin (a few fillet
+            points) the target takes the bare bound and the dense check of the executed motion
+            decides.
         analytic_first: accept the analytic warm start when it already meets every
             constraint of the program (see :func:`analytic_accept`) and run the Drake program
             only where it does not. The warm start puts the axis exactly on the preferred axis
@@ -110,7 +140,7 @@ class IkOptions:
     """
 
     position_tolerance: float = 1e-6
-    min_distance: float = 2.1e-3
+    min_distance: float = Tolerances.min_clearance + CLEARANCE_MARGIN
     influence_distance: float = 2e-3
     axis_weight: float = 10.0
     joint_weights: tuple[float, ...] = JOINT_WEIGHTS
@@ -119,9 +149,9 @@ class IkOptions:
     snopt_distance_iterations: int = 15
     ipopt_max_iterations: int = 50
     retries: int = 3
-    min_wrist: float = 0.25
+    min_wrist: float = WRIST_MARGIN
     spin_samples: int = 36
-    min_distance_floor: float = 2.05e-3
+    min_distance_floor: float = Tolerances.min_clearance + FLOOR_MARGIN
     analytic_first: bool = True
     seed_spin: str = "frame"
 
@@ -131,6 +161,65 @@ class IkOptions:
 
             raise InputError(f"IkOptions.seed_spin must be 'joint_cost' or 'frame', "
                              f"got {self.seed_spin!r}")
+
+    def at_clearance(self, min_clearance: float) -> IkOptions:
+        """These options with both clearance bounds derived from ``min_clearance`` [m] (the
+        run's ``Tolerances.min_clearance``)."""
+        return replace(self, min_distance=min_clearance + CLEARANCE_MARGIN,
+                       min_distance_floor=min_clearance + FLOOR_MARGIN)
+
+    def probe_settings(self, lift: float) -> ProbeSettings:
+        """The cone probe's settings at this IK's bound (``min_distance_floor``) and wrist
+        margin, the constrained point ``lift`` [m] from T toward the tip."""
+        return ProbeSettings(bound=self.min_distance_floor, lift=lift, min_wrist=self.min_wrist)
+
+
+@dataclass(frozen=True, eq=False)
+class IkTargets:
+    """The CL targets of one window's IK, in H and in solving order.
+
+    Attributes:
+        p_HT: (M, 3) targets of the constrained point [m]: on the burr axis, ``lift`` from T
+            toward the tip (see :func:`solve_window_ik`).
+        pref_retract_H: (M, 3) preferred tool axes (tip -> spindle).
+        cone_retract_H: (M, 3) admissible cone axes; cone_half_angle: [rad] (> 0).
+        t_H: (M, 3) feed tangents (spin reference of the seeds).
+        lift: [m].
+    """
+
+    p_HT: np.ndarray
+    pref_retract_H: np.ndarray
+    cone_retract_H: np.ndarray
+    t_H: np.ndarray
+    cone_half_angle: float
+    lift: float = 0.0
+
+    def __len__(self) -> int:
+        return len(self.p_HT)
+
+    def at(self, i: int) -> IkTarget:
+        """Target ``i``."""
+        return IkTarget(self.p_HT[i], self.cone_retract_H[i], self.pref_retract_H[i],
+                        self.t_H[i])
+
+    def back_from(self, i: int) -> IkTargets:
+        """Targets ``i, i-1, ..., 0``, their tangents reversed (the path walked backwards)."""
+        rev = np.arange(i, -1, -1)
+        return replace(self, p_HT=self.p_HT[rev], pref_retract_H=self.pref_retract_H[rev],
+                       cone_retract_H=self.cone_retract_H[rev], t_H=-self.t_H[rev])
+
+
+@dataclass(frozen=True, eq=False)
+class IkAttempt:
+    """One solve of a target, re-checked by the analytic FK: joints (6,) [rad], tool pose
+    X_HT (4, 4) [m], clearance [m], position error of the constrained point [m] and angle of
+    the tool axis to the cone axis [rad]."""
+
+    q: np.ndarray
+    X_HT: np.ndarray
+    clearance: float
+    position_error: float
+    cone_angle: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,8 +233,8 @@ class WindowIk:
         clearance: (M,) minimum distance [m] (capped at ``influence + bound``).
         failures: per-point failure records.
         stats: timings and solver counts.
-        probes: point -> the cone probe of each failed point (:func:`cone_clearance_probe`;
-            None where it did not run).
+        probes: point -> the :class:`ConeProbe` of each failed point
+            (:func:`cone_clearance_probe`; None where it did not run).
     """
 
     q: np.ndarray
@@ -173,27 +262,26 @@ def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     return so
 
 
-def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_retract_H: np.ndarray,
-                 half_angle: float, pref_retract_H: np.ndarray, q_prev: np.ndarray,
-                 q_seed: np.ndarray, with_distance: bool, solver, options: IkOptions,
-                 lift: float = 0.0) -> tuple[bool, np.ndarray]:
+def _solve_point(run: _WindowRun, tg: IkTarget, q_prev: np.ndarray, q_seed: np.ndarray,
+                 with_distance: bool, solver, options: IkOptions) -> tuple[bool, np.ndarray]:
     from pydrake.multibody.inverse_kinematics import InverseKinematics
 
-    ik = InverseKinematics(cell.plant, checker.plant_context, with_joint_limits=True)
+    cell = run.cell
+    ik = InverseKinematics(cell.plant, run.checker.plant_context, with_joint_limits=True)
     tol = options.position_tolerance
     # the constrained point: on the burr axis, ``lift`` from T toward the tip (+Z_T)
-    ik.AddPositionConstraint(cell.tool_frame, np.array([0.0, 0.0, lift]), cell.hub_frame,
-                             p_HT - tol, p_HT + tol)
+    ik.AddPositionConstraint(cell.tool_frame, np.array([0.0, 0.0, run.lift]), cell.hub_frame,
+                             tg.p_HT - tol, tg.p_HT + tol)
     down_T = np.array([0.0, 0.0, -1.0])  # the tool axis (tip -> spindle) is -Z_T
-    ik.AddAngleBetweenVectorsConstraint(cell.hub_frame, cone_retract_H, cell.tool_frame, down_T,
-                                        0.0, half_angle)
-    ik.AddAngleBetweenVectorsCost(cell.hub_frame, pref_retract_H, cell.tool_frame, down_T,
+    ik.AddAngleBetweenVectorsConstraint(cell.hub_frame, tg.cone_retract_H, cell.tool_frame,
+                                        down_T, 0.0, run.half)
+    ik.AddAngleBetweenVectorsCost(cell.hub_frame, tg.pref_retract_H, cell.tool_frame, down_T,
                                   options.axis_weight)
     prog = ik.get_mutable_prog()
     q = ik.q()
     if with_distance:
-        prog.AddConstraint(checker.distance_constraint(options.min_distance,
-                                                       options.influence_distance), q)
+        prog.AddConstraint(run.checker.distance_constraint(options.min_distance,
+                                                           options.influence_distance), q)
     prog.AddQuadraticErrorCost(np.diag(options.joint_weights), q_prev, q)
     lo = np.maximum(cell.q_lower, q_prev - options.trust_region)
     hi = np.minimum(cell.q_upper, q_prev + options.trust_region)
@@ -211,41 +299,30 @@ def _solve_point(cell, checker: ClearanceChecker, p_HT: np.ndarray, cone_retract
 
 
 def solve_window_ik(
-    cell,
-    kin: CellKinematics,
-    checker: ClearanceChecker,
-    p_HT: np.ndarray,
-    pref_retract_H: np.ndarray,
-    cone_retract_H: np.ndarray,
-    cone_half_angle: float,
-    t_H: np.ndarray,
+    ctx: PlanContext,
+    targets: IkTargets,
     q_ref: np.ndarray,
     *,
     window_index: int = 0,
-    options: IkOptions = IkOptions(),
     progress: Callable[[int, int, str], None] | None = None,
     q_first: np.ndarray | None = None,
-    lift: float = 0.0,
     stop_at_failure: bool = False,
 ) -> WindowIk:
     """IK at every CL target of one window, warm-started along the path.
 
     Args:
-        cell: the loaded :class:`drakedeburr.cell.Cell`.
-        kin: its :class:`CellKinematics`; checker: its :class:`ClearanceChecker`.
-        p_HT: (M, 3) tool-point targets in H [m] (see :mod:`drakedeburr.plan.targets`).
-        pref_retract_H: (M, 3) preferred tool axes (tip -> spindle) in H.
-        cone_retract_H: (M, 3) admissible cone axes in H; cone_half_angle: [rad] (> 0).
-        t_H: (M, 3) feed tangents (spin reference of the seeds).
+        ctx: the planning context: its cell (:class:`drakedeburr.cell.Cell`), kinematics,
+            clearance checker (``ctx.checker``) and IK options (``ctx.options.ik``).
+        targets: the window's targets in solving order. Their constrained point is on the
+            burr axis ``targets.lift`` [m] from T toward the tip (the centre of the cutting
+            circle, :func:`targets.contact_geometry`), and ``targets.p_HT`` are its targets.
+            Constraining that point rather than T keeps the implied edge point where it
+            belongs when the IK tilts the axis inside the cone (T would carry the cutting
+            circle off by ``lift * tilt``), and tilting about it swings the shank away from the
+            face more per radian.
         q_ref: (6,) joints the robot comes from (configuration preference) [rad].
         window_index: for failure records.
         q_first: seed of the first target (default: the spin sweep's best).
-        lift: the constrained point is on the burr axis ``lift`` [m] from T toward the tip
-            (the centre of the cutting circle, :func:`targets.contact_geometry`), and ``p_HT``
-            are its targets. Constraining that point rather than T keeps the implied edge point
-            where it belongs when the IK tilts the axis inside the cone (T would carry the
-            cutting circle off by ``lift * tilt``), and tilting about it swings the shank away
-            from the face more per radian.
         stop_at_failure: stop at the first failed target, the later ones left unsolved
             without records (``RunMode.FAIL_FAST``).
 
@@ -254,41 +331,40 @@ def solve_window_ik(
     """
     from pydrake.solvers import IpoptSolver, SnoptSolver
 
+    options, kin, checker, lift = ctx.options.ik, ctx.kin, ctx.checker, targets.lift
     solvers = [s for s in (SnoptSolver(), IpoptSolver()) if s.available() and s.enabled()]
-    half = max(float(cone_half_angle), 1e-3)
-    m = len(p_HT)
+    m = len(targets)
     counts = dict.fromkeys(("distance", "fallback", "retry", "analytic", "probe"), 0)
-    run = _WindowRun(cell=cell, kin=kin, checker=checker, solvers=solvers, options=options,
-                     lift=lift, half=half,
+    run = _WindowRun(cell=ctx.cell, kin=kin, checker=checker, solvers=solvers, options=options,
+                     lift=lift, half=max(float(targets.cone_half_angle), 1e-3),
                      reach=options.min_distance + options.influence_distance, counts=counts)
     q_out, X_out = np.full((m, 6), np.nan), np.full((m, 4, 4), np.nan)
     ok, clearance = np.zeros(m, bool), np.zeros(m)
     failures: list[FailureRecord] = []
-    probes: dict[int, dict | None] = {}  # per failed point: its cone probe (None: not run)
+    probes: dict[int, ConeProbe | None] = {}  # per failed point: its cone probe (None: not run)
     t0 = time.perf_counter()
-    p_T_pref = p_HT + lift * pref_retract_H  # T itself at the preferred axis (seeds)
+    pref = targets.pref_retract_H
+    p_T_pref = targets.p_HT + lift * pref  # T itself at the preferred axis (seeds)
     q_prev, i_prev = None, -1
     for i in range(m):
+        tg = targets.at(i)
         if q_prev is None:
             q_seed = (q_first if q_first is not None and i == 0 else
-                      seed_by_spin(kin, checker, p_T_pref[i], pref_retract_H[i], t_H[i], q_ref,
-                                   options))
+                      seed_by_spin(kin, checker, p_T_pref[i], pref[i], tg.t_H, q_ref, options))
             if q_seed is None:
-                failures.append(_unreached(kin, window_index, i, p_T_pref[i], pref_retract_H[i],
-                                           t_H[i]))
+                failures.append(_unreached(kin, window_index, i, p_T_pref[i], pref[i], tg.t_H))
                 continue
             anchor = q_seed
         else:
             anchor = q_prev
-            q_seed = analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref_retract_H[i], q_prev,
+            q_seed = analytic_seed(kin, X_out[i_prev], p_T_pref[i], pref[i], q_prev,
                                     options.joint_weights,
                                     spin_span=0.5 if options.seed_spin == "joint_cost" else 0.0,
                                     spin_samples=21 if options.seed_spin == "joint_cost" else 1)
-        target = _Target(p_HT[i], cone_retract_H[i], pref_retract_H[i], t_H[i])
         prev = None if q_prev is None else (q_prev, X_out[i_prev])
-        done, best, probe = _solve_target(run, target, q_seed, anchor, prev)
+        done, best, probe = _solve_target(run, tg, q_seed, anchor, prev)
         if best is not None:
-            q_out[i], X_out[i], clearance[i] = best[0], best[1], best[2]
+            q_out[i], X_out[i], clearance[i] = best.q, best.X_HT, best.clearance
         if done:
             ok[i] = True
             q_prev, i_prev = q_out[i], i
@@ -329,7 +405,7 @@ def _unreached(kin, window: int, i: int, p_HT, retract_H, t_H) -> FailureRecord:
 class _WindowRun:
     """What every target of one window's IK is solved with (``counts``: solver counters)."""
 
-    cell: object
+    cell: Cell
     kin: CellKinematics
     checker: ClearanceChecker
     solvers: list
@@ -340,65 +416,55 @@ class _WindowRun:
     counts: dict
 
 
-@dataclass(frozen=True, eq=False)
-class _Target:
-    """One CL target: the constrained point, cone axis, preferred axis and tangent (in H)."""
-
-    p_HT: np.ndarray
-    cone_retract_H: np.ndarray
-    pref_retract_H: np.ndarray
-    t_H: np.ndarray
-
-
-def _reseed(run: _WindowRun, tg: _Target, attempt: int, probe, anchor, prev):
+def _reseed(run: _WindowRun, tg: IkTarget, attempt: int, probe: ConeProbe | None, anchor, prev):
     """The seed of a retry: the cone probe's pose (attempt 1, when within the trust region),
     else the axis in the cone with the most clearance (attempts 1-2, distance-active at once),
     else the spin sweep. Returns (seed or None, start with the distance constraint)."""
     opt = run.options
-    if attempt == 1 and probe["q"] is not None and np.max(
-            np.abs(probe["q"] - anchor)) <= opt.trust_region:
-        return probe["q"], True  # the probe's pose: admissible and clear
+    if attempt == 1 and probe.q is not None and np.max(
+            np.abs(probe.q - anchor)) <= opt.trust_region:
+        return probe.q, True  # the probe's pose: admissible and clear
     if attempt in (1, 2) and prev is not None:
         # where the preferred axis is too close to the hub (concave fillets), seed from the
         # axis in the cone with the most clearance, distance-active at once
-        seed = clearance_seed(run.kin, run.checker, prev[1], tg.p_HT, tg.cone_retract_H, run.half,
-                               tg.pref_retract_H, prev[0], run.reach, lift=run.lift)
+        seed = clearance_seed(run.kin, run.checker, prev[1], tg, run.half, prev[0], run.reach,
+                              lift=run.lift)
         if seed is not None:
             return seed, True
     p_T = tg.p_HT + run.lift * tg.pref_retract_H
     return seed_by_spin(run.kin, run.checker, p_T, tg.pref_retract_H, tg.t_H, anchor, opt), False
 
 
-def _solve_with(run: _WindowRun, tg: _Target, solver, anchor, q_seed, with_distance, opts):
+def _solve_with(run: _WindowRun, tg: IkTarget, solver, anchor, q_seed, with_distance, opts):
     """One solve (and a lazy re-solve with the distance constraint when the solution comes
-    too close), re-checked by the analytic FK: ((q, X, clearance, position error, cone angle),
-    accepted, whether the distance constraint is now on - it stays on for the next solver)."""
-    args = (run.cell, run.checker, tg.p_HT, tg.cone_retract_H, run.half, tg.pref_retract_H, anchor)
-    _, q = _solve_point(*args, q_seed, with_distance, solver, opts, run.lift)
+    too close), re-checked by the analytic FK: (the :class:`IkAttempt`, accepted, whether the
+    distance constraint is now on - it stays on for the next solver)."""
+    _, q = _solve_point(run, tg, anchor, q_seed, with_distance, solver, opts)
     good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts, run.lift)
     dist = run.checker.distance(q, run.reach)
     if good and dist < opts.min_distance - 1e-5 and not with_distance:
         # lazy collision constraint: re-solve with it from this solution
         with_distance = True
         run.counts["distance"] += 1
-        _, q = _solve_point(*args, q, True, solver, opts, run.lift)
+        _, q = _solve_point(run, tg, anchor, q, True, solver, opts)
         good, err, ang, X = recheck(run.kin, q, tg.p_HT, tg.cone_retract_H, run.half, opts,
                                      run.lift)
         dist = run.checker.distance(q, run.reach)
-    return (q, X, dist, err, ang), good and dist >= opts.min_distance - 1e-5, with_distance
+    attempt = IkAttempt(q=q, X_HT=X, clearance=dist, position_error=err, cone_angle=ang)
+    return attempt, good and dist >= opts.min_distance - 1e-5, with_distance
 
 
-def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
+def _solve_target(run: _WindowRun, tg: IkTarget, q_seed, anchor, prev):
     """One target: the analytic warm start if it is admissible, else the NLP from the seed,
     with retries from other seeds (after a cone probe tells an unreachable target). Returns
-    (done, best (q, X, clearance, position error, cone angle) or None, probe or None)."""
+    (done, the best :class:`IkAttempt` or None, the :class:`ConeProbe` or None)."""
     opt = run.options
     if opt.analytic_first and prev is not None:
-        acc = analytic_accept(run.kin, run.checker, q_seed, anchor, tg.p_HT, tg.cone_retract_H,
-                               run.half, opt, run.lift, run.reach)
+        acc = analytic_accept(run.kin, run.checker, q_seed, anchor, tg, run.half, opt, run.lift)
         if acc is not None:
             run.counts["analytic"] += 1
-            return True, (q_seed, acc[0], acc[1], 0.0, 0.0), None
+            return True, IkAttempt(q=q_seed, X_HT=acc[0], clearance=acc[1], position_error=0.0,
+                                   cone_angle=0.0), None
     best, probe = None, None
     for attempt in range(opt.retries + 1):
         with_distance = False
@@ -407,9 +473,8 @@ def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
             opt, min_distance=min(opt.min_distance, opt.min_distance_floor))
         if attempt == 1 and probe is None:
             # the program failed from the warm start: is there any admissible pose at all?
-            probe = cone_clearance_probe(run.kin, run.checker, tg.p_HT, tg.cone_retract_H, run.half,
-                                         tg.pref_retract_H, tg.t_H, anchor, lift=run.lift,
-                                         bound=opt.min_distance_floor, min_wrist=opt.min_wrist)
+            probe = cone_clearance_probe(run.kin, run.checker, tg, run.half, anchor,
+                                         opt.probe_settings(run.lift))
             run.counts["probe"] += 1
             if unreachable(probe, opt):
                 break  # far from any admissible pose: no seed can help (reported)
@@ -428,25 +493,27 @@ def _solve_target(run: _WindowRun, tg: _Target, q_seed, anchor, prev):
     return False, best, probe
 
 
-def _failure(run: _WindowRun, window: int, i: int, best, probe) -> FailureRecord:
+def _failure(run: _WindowRun, window: int, i: int, best: IkAttempt | None,
+             probe: ConeProbe | None) -> FailureRecord:
     """The failure record of a target the IK could not meet."""
     reason, where, value, limit, unit = "IK failed", {}, None, None, ""
+    floor = run.options.min_distance_floor
     if best is not None:
-        where = dict(position_error=best[3], cone_angle=best[4], clearance=best[2])
-        met = best[3] <= 1e-5 and best[4] <= run.half + 1e-6
+        where = dict(position_error=best.position_error, cone_angle=best.cone_angle,
+                     clearance=best.clearance)
+        met = best.position_error <= 1e-5 and best.cone_angle <= run.half + 1e-6
         reason = "clearance below bound" if met else "position/cone not met"
         if met:
-            value, limit, unit = float(best[2]), run.options.min_distance_floor, "m"
+            value, limit, unit = float(best.clearance), floor, "m"
     if probe is not None and unreachable(probe, run.options):
-        where.update(cone_best_clearance=probe["best_clearance"],
-                     blocking_pair=list(probe["pair"]))
-        value, limit, unit = (float(probe["best_clearance"]), run.options.min_distance_floor,
-                              "m")
+        where.update(cone_best_clearance=probe.best_clearance,
+                     blocking_pair=list(probe.pair))
+        value, limit, unit = float(probe.best_clearance), floor, "m"
         reason = (f"unreachable: no tool axis in the cone ({np.degrees(run.half):.1f} deg) and "
-                  f"spin clears the cell; best {probe['best_clearance'] * 1e3:.2f} mm "
-                  f"({probe['pair'][0]} vs {probe['pair'][1]})")
-        bound = float(probe.get("axis_bound", np.inf))
-        if bound < run.options.min_distance_floor:  # a near miss searched between the axes
+                  f"spin clears the cell; best {probe.best_clearance * 1e3:.2f} mm "
+                  f"({probe.pair[0]} vs {probe.pair[1]})")
+        bound = float(probe.axis_bound)
+        if bound < floor:  # a near miss searched between the axes
             where.update(cone_axis_bound=bound)
             reason += (f"; on every axis in the cone the tool's round parts (shank, collet, "
                        f"spindle body) come within {bound * 1e3:.3f} mm of the hub side")

@@ -5,23 +5,83 @@ can reach from one the solver missed."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from drakedeburr.cell.narrowphase import READING_GAP
 from drakedeburr.frames.vectors import angle_between, perpendicular_basis
-from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
+from drakedeburr.plan.kinematics import (
+    JOINT_WEIGHTS,
+    WRIST_MARGIN,
+    CellKinematics,
+    ClearanceChecker,
+)
 from drakedeburr.plan.targets import X_HT_from_axis
 
 if TYPE_CHECKING:
     from drakedeburr.plan.ik import IkOptions
 
-#: (6,) default weights of the IK's ``q - q_prev`` cost (wrist joints cheaper)
-JOINT_WEIGHTS = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
+__all__ = ["IkTarget", "ProbeSettings", "ConeProbe", "seed_by_spin", "cone_clearance_probe",
+           "analytic_seed", "analytic_accept", "clearance_seed", "unreachable", "recheck",
+           "reach_shortfall"]
 
-__all__ = ["JOINT_WEIGHTS", "seed_by_spin", "cone_clearance_probe", "analytic_seed",
-           "analytic_accept", "clearance_seed", "unreachable", "recheck", "reach_shortfall"]
+
+@dataclass(frozen=True, eq=False)
+class IkTarget:
+    """One CL target of the window IK, in H: the constrained point ``p_HT`` (on the burr axis,
+    ``lift`` from T toward the tip, see :func:`drakedeburr.plan.ik.solve_window_ik`) [m], the
+    cone axis, the preferred axis (both (3,) tip -> spindle) and the feed tangent (3,)."""
+
+    p_HT: np.ndarray
+    cone_retract_H: np.ndarray
+    pref_retract_H: np.ndarray
+    t_H: np.ndarray
+
+
+@dataclass(frozen=True)
+class ProbeSettings:
+    """How :func:`cone_clearance_probe` searches a cone.
+
+    Attributes:
+        bound: the clearance a pose must have [m] (the IK's ``min_distance_floor``).
+        lift: the constrained point's distance from T toward the tip [m].
+        min_wrist: smallest |J5| of a pose [rad].
+        rings: rings of axes, as shares of the cone's half-angle (0: the cone axis alone).
+        ring_axes: axes on each ring; spins: spins about each axis.
+        per_axis: poses of an axis queried at most.
+    """
+
+    bound: float
+    lift: float = 0.0
+    min_wrist: float = WRIST_MARGIN
+    rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98)
+    ring_axes: int = 16
+    spins: int = 24
+    per_axis: int = 24
+
+
+@dataclass(frozen=True, eq=False)
+class ConeProbe:
+    """What :func:`cone_clearance_probe` found at a target.
+
+    Attributes:
+        feasible: a pose with the bound's clearance was found.
+        best_clearance: the largest clearance read [m] (-inf: no pose read).
+        pair: the closest pair (geometry names) at the best pose (``("", "")``: none).
+        q: (6,) the best pose found [rad], or None.
+        queries: distance queries and contact tests made.
+        axis_bound: the largest reading of the spin-invariant pairs over the axes, an upper
+            bound on every pose of its axis [m] (-inf where no axis had a pose).
+    """
+
+    feasible: bool
+    best_clearance: float
+    pair: tuple[str, str]
+    q: np.ndarray | None
+    queries: int
+    axis_bound: float
 
 
 def seed_by_spin(kin: CellKinematics, checker: ClearanceChecker | None, p_HT: np.ndarray,
@@ -132,18 +192,22 @@ def cone_ring(c: np.ndarray, angle: float, count: int) -> list[np.ndarray]:
             for f in np.linspace(0.0, 2 * np.pi, count, endpoint=False)]
 
 
+#: axes on the ring :func:`clearance_seed` tries around the cone axis
+SEED_RING = 12
+
+
 def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.ndarray,
-                    p_HT: np.ndarray, cone_retract_H: np.ndarray, half_angle: float,
-                    pref_retract_H: np.ndarray, q_prev: np.ndarray, reach: float,
-                    samples: int = 12, lift: float = 0.0) -> np.ndarray | None:
+                   target: IkTarget, half_angle: float, q_prev: np.ndarray, reach: float,
+                   lift: float = 0.0) -> np.ndarray | None:
     """Analytic seed at the axis of most clearance among the preferred axis, the cone axis and
-    ``samples`` axes at 0.8 of the cone half-angle around it (None if none is reachable).
-    ``p_HT`` is the constrained point (``lift`` below T on the axis, see solve_window_ik)."""
-    c = cone_retract_H / np.linalg.norm(cone_retract_H)
-    axes = [pref_retract_H, c] + cone_ring(c, 0.8 * half_angle, samples)
+    :data:`SEED_RING` axes at 0.8 of the cone half-angle around it (None if none is
+    reachable). ``target.p_HT`` is the constrained point (``lift`` below T on the axis, see
+    solve_window_ik); ``reach``: how far the distance query looks [m]."""
+    c = target.cone_retract_H / np.linalg.norm(target.cone_retract_H)
+    axes = [target.pref_retract_H, c] + cone_ring(c, 0.8 * half_angle, SEED_RING)
     best, best_d = None, -np.inf
     for a in axes:
-        q = analytic_seed(kin, X_prev, p_HT + lift * a, a, q_prev)
+        q = analytic_seed(kin, X_prev, target.p_HT + lift * a, a, q_prev)
         if q is q_prev:
             continue
         d = checker.distance(q, reach)
@@ -153,31 +217,33 @@ def clearance_seed(kin: CellKinematics, checker: ClearanceChecker, X_prev: np.nd
 
 
 def analytic_accept(kin: CellKinematics, checker: ClearanceChecker, q: np.ndarray,
-                     anchor: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray, half: float,
-                     options: IkOptions, lift: float, reach: float):
+                    anchor: np.ndarray, target: IkTarget, half: float, options: IkOptions,
+                    lift: float):
     """The analytic warm start as the target's solution when it meets every constraint of the
     Drake program: position and cone (re-checked by FK), joint limits, the trust region about
-    the previous target, the wrist branch and margin, and the clearance bound. Returns
-    ``(X_HT, clearance)`` or None (then the Drake program runs)."""
+    the previous target, the wrist branch and margin, and the clearance bound (the distance
+    read as far as the program's constraint looks: ``min_distance + influence_distance``).
+    Returns ``(X_HT, clearance)`` or None (then the Drake program runs)."""
     if q is anchor or np.max(np.abs(q - anchor)) > options.trust_region:
         return None
     if abs(q[4]) < options.min_wrist or np.sign(q[4]) != np.sign(anchor[4]):
         return None
-    good, _, _, X = recheck(kin, q, p_HT, cone_retract_H, half, options, lift)
+    good, _, _, X = recheck(kin, q, target.p_HT, target.cone_retract_H, half, options, lift)
     if not good:
         return None
-    dist = checker.distance(q, reach)
+    dist = checker.distance(q, options.min_distance + options.influence_distance)
     if dist < options.min_distance:
         return None
     return X, dist
 
 
 def _probe_candidates(kin: CellKinematics, p_HQ: np.ndarray, axes: list, t_H: np.ndarray,
-                      q_ref: np.ndarray, lift: float, spins: int, min_wrist: float,
-                      per_axis: int) -> list[np.ndarray]:
-    """Per axis: the analytic IK's admissible joints over ``spins`` spins and every branch (the
-    reference configuration's branch first; J4/J6 turned into the limits where a turn fits,
-    |J5| >= ``min_wrist``), thinned to about ``per_axis`` (one batched IK for all axes)."""
+                      q_ref: np.ndarray, settings: ProbeSettings) -> list[np.ndarray]:
+    """Per axis: the analytic IK's admissible joints over ``settings.spins`` spins and every
+    branch (the reference configuration's branch first; J4/J6 turned into the limits where a
+    turn fits, |J5| >= ``min_wrist``), thinned to about ``per_axis`` (one batched IK for all
+    axes). ``p_HQ``: the constrained point (``settings.lift`` below T on the axis)."""
+    spins, lift = settings.spins, settings.lift
     psi = np.linspace(-np.pi, np.pi, spins, endpoint=False)
     A = np.repeat(np.asarray(axes, float), spins, axis=0)
     X = X_HT_from_axis(p_HQ[None] + lift * A, A, np.repeat(t_H[None], len(A), 0),
@@ -192,39 +258,37 @@ def _probe_candidates(kin: CellKinematics, p_HQ: np.ndarray, axes: list, t_H: np
         for j in (3, 5):
             q[q[:, j] < kin.q_lower[j], j] += 2 * np.pi
             q[q[:, j] > kin.q_upper[j], j] -= 2 * np.pi
-        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= min_wrist)]
-        out.append(q[:: max(1, len(q) // per_axis)])
+        q = q[kin.within_limits(q) & (np.abs(q[:, 4]) >= settings.min_wrist)]
+        out.append(q[:: max(1, len(q) // settings.per_axis)])
     return out
 
 
 #: a probe's best pose at most this short of the bound is a near miss, not unreachable [m]
 NEAR_MISS = 0.2e-3
 
-def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: np.ndarray,
-                         cone_retract_H: np.ndarray, half_angle: float, pref_retract_H: np.ndarray,
-                         t_H: np.ndarray, q_ref: np.ndarray, *, lift: float = 0.0,
-                         bound: float = 2.05e-3, min_wrist: float = 0.25,
-                         rings: tuple[float, ...] = (0.0, 0.33, 0.66, 0.98), ring_axes: int = 16,
-                         spins: int = 24, per_axis: int = 24) -> dict:
+
+def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, target: IkTarget,
+                         half_angle: float, q_ref: np.ndarray,
+                         settings: ProbeSettings) -> ConeProbe:
     """Is there any admissible pose at a target? A sampled search of the whole cone.
 
-    Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings``
-    x half-angle; for each, ``spins`` spins about it and every analytic IK branch (J4/J6 turned
-    into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis`` of them
-    queried for signed distance. Stops at the first pose with ``bound`` clearance. The axes are
-    searched best first: one pose of each is queried (in the order above), then the remaining
-    poses axis by axis in the order of that first clearance (the burr shank's clearance, which
-    the spin does not change, mostly decides: a clear pose is usually found on the first axes
-    searched, where the axes in their listed order found it only near the rim). A pose in
-    contact (85 % of the poses of a blocked target on a deep-dish hub) is not read by the
-    signed distances (2-3 ms): the first pose of each axis is ranked by its deepest
-    penetration (:meth:`ClearanceChecker.ranked_distance`), later poses are rejected by the
-    contact test alone (0.2 ms). Every pose with positive clearance is read in full, so the
-    verdict and, where a clear pose exists, the best pose are the same. An axis whose first
-    pose puts a spin-invariant pair (the spindle body, collet or shank against the hub:
-    :meth:`ClearanceChecker.spin_invariant`) more than ``NEAR_MISS`` short of the bound is not
-    searched further: that pair is as short at each of its poses (the tool and hub keep their
-    relative pose up to a turn about the burr axis), so no pose of it meets the bound or
+    Axes: the preferred and the cone axis, then ``ring_axes`` axes on each ring of ``rings`` x
+    half-angle (``settings``); for each, ``spins`` spins about it and every analytic IK branch
+    (J4/J6 turned into the limits where a turn fits, |J5| >= ``min_wrist``), up to ``per_axis``
+    of them queried for signed distance. Stops at the first pose with the ``bound``'s
+    clearance. The axes are searched best first: one pose of each is queried (in the order
+    above), then the remaining poses axis by axis in the order of that first clearance (the
+    burr shank's clearance, which the spin does not change, mostly decides: a clear pose is
+    usually found on the first axes searched, where the axes in their listed order found it
+    only near the rim). A pose in contact (85 % of the poses of a blocked target on a deep-dish
+    hub) is not read by the signed distances (2-3 ms): the first pose of each axis is ranked by
+    its deepest penetration (:meth:`ClearanceChecker.ranked_distance`), later poses are
+    rejected by the contact test alone (0.2 ms). Every pose with positive clearance is read in
+    full, so the verdict and, where a clear pose exists, the best pose are the same. An axis
+    whose first pose puts a spin-invariant pair (the spindle body, collet or shank against the
+    hub: :meth:`ClearanceChecker.spin_invariant`) more than ``NEAR_MISS`` short of the bound is
+    not searched further: that pair is as short at each of its poses (the tool and hub keep
+    their relative pose up to a turn about the burr axis), so no pose of it meets the bound or
     decides between a near miss and an unreachable target. The verdict, and the best pose
     whenever it is a near miss or clear, are those of the full search; an unreachable target's
     best clearance is the best of the axes searched (on a blocked deep-dish target, ~95 % of
@@ -244,78 +308,102 @@ def cone_clearance_probe(kin: CellKinematics, checker: ClearanceChecker, p_HQ: n
     A near miss (the best within ``NEAR_MISS`` of the bound) is searched on between the
     sampled axes (:func:`_refine_near_miss`).
 
+    Args:
+        target: the target (``target.p_HT`` the constrained point, ``settings.lift`` below T).
+        half_angle: the cone's half-angle [rad]; q_ref: (6,) the configuration whose branch is
+            searched first [rad].
+        settings: the bound, lift, wrist margin and how finely the cone is sampled.
+
     Returns:
-        ``{"feasible", "best_clearance", "pair", "q", "queries", "axis_bound"}`` (q: the best
-        pose found; axis_bound: the largest reading of the spin-invariant pairs found over the
-        axes, an upper bound on every pose of its axis [m], inf where none is near).
+        :class:`ConeProbe` (a fresh copy of its ``q``).
     """
-    args = (p_HQ, cone_retract_H, half_angle, pref_retract_H, t_H, lift, bound, min_wrist,
-            rings, ring_axes, spins, per_axis)
-    key = _probe_key(kin, q_ref, *args)
-    out = dict(checker.memo_probe(key, lambda: _probe(kin, checker, q_ref, *args)))
-    out["q"] = None if out["q"] is None else out["q"].copy()
-    return out
+    out = checker.memo_probe(_probe_key(kin, q_ref, target, half_angle, settings),
+                             lambda: _probe(kin, checker, q_ref, target, half_angle, settings))
+    return replace(out, q=None if out.q is None else out.q.copy())
 
 
-def _probe_key(kin: CellKinematics, q_ref: np.ndarray, *args) -> bytes:
+def _probe_key(kin: CellKinematics, q_ref: np.ndarray, target: IkTarget, half_angle: float,
+               settings: ProbeSettings) -> bytes:
     """What :func:`cone_clearance_probe`'s result depends on, as bytes."""
     arrays = (kin.branch_of(q_ref), kin.X_FT, kin.X_WH, kin.X_FH, kin.X_WT, kin.X_WB,
-              kin.q_lower, kin.q_upper, *args[:5])
-    return b"".join(np.asarray(a, float).tobytes() for a in arrays) + repr(args[5:]).encode()
+              kin.q_lower, kin.q_upper, target.p_HT, target.cone_retract_H, half_angle,
+              target.pref_retract_H, target.t_H)
+    return b"".join(np.asarray(a, float).tobytes() for a in arrays) + repr(settings).encode()
 
 
-def _probe(kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray, p_HQ, cone_retract_H,
-           half_angle, pref_retract_H, t_H, lift, bound, min_wrist, rings, ring_axes, spins,
-           per_axis) -> dict:
-    """:func:`cone_clearance_probe`, searched."""
-    c = cone_retract_H / np.linalg.norm(cone_retract_H)
-    axes = [pref_retract_H / np.linalg.norm(pref_retract_H), c]
-    for ring in rings:
-        if ring > 0:
-            axes += cone_ring(c, ring * half_angle, ring_axes)
-    cands = _probe_candidates(kin, p_HQ, axes, t_H, q_ref, lift, spins, min_wrist, per_axis)
-    best = dict(feasible=False, best_clearance=-np.inf, pair=("", ""), q=None, queries=0)
+class _Search:
+    """One cone probe's search: what it reads with, the best pose read so far and the count of
+    queries (the state :func:`_probe` and :func:`_refine_near_miss` share)."""
 
-    def query(qq: np.ndarray) -> tuple[float, float]:
-        d, upper = checker.axis_reading(qq, bound + 1e-3)
-        best["queries"] += 1
-        if d > best["best_clearance"]:
-            best.update(best_clearance=float(d), q=qq.copy())
-        best["feasible"] = best["feasible"] or d >= bound
+    def __init__(self, kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray,
+                 target: IkTarget, settings: ProbeSettings) -> None:
+        self.kin, self.checker, self.q_ref = kin, checker, q_ref
+        self.target, self.settings = target, settings
+        self.feasible, self.best_clearance, self.q = False, -np.inf, None
+        self.queries, self.axis_bound = 0, -np.inf
+
+    def candidates(self, axes: list) -> list[np.ndarray]:
+        return _probe_candidates(self.kin, self.target.p_HT, axes, self.target.t_H, self.q_ref,
+                                 self.settings)
+
+    def query(self, qq: np.ndarray) -> tuple[float, float]:
+        """One pose read in full: (its clearance, the bound of its axis's spin-invariant
+        pairs), the best kept."""
+        bound = self.settings.bound
+        d, upper = self.checker.axis_reading(qq, bound + 1e-3)
+        self.queries += 1
+        if d > self.best_clearance:
+            self.best_clearance, self.q = float(d), qq.copy()
+        self.feasible = self.feasible or d >= bound
         return d, upper
 
+    def result(self) -> ConeProbe:
+        pair = ("", "")
+        if self.q is not None:
+            pair = self.checker.min_distance(self.q, self.settings.bound + 1e-3)[1]
+        return ConeProbe(feasible=bool(self.feasible), best_clearance=self.best_clearance,
+                         pair=pair, q=self.q, queries=self.queries, axis_bound=self.axis_bound)
+
+
+def _probe(kin: CellKinematics, checker: ClearanceChecker, q_ref: np.ndarray, target: IkTarget,
+           half_angle: float, settings: ProbeSettings) -> ConeProbe:
+    """:func:`cone_clearance_probe`, searched."""
+    bound = settings.bound
+    c = target.cone_retract_H / np.linalg.norm(target.cone_retract_H)
+    axes = [target.pref_retract_H / np.linalg.norm(target.pref_retract_H), c]
+    for ring in settings.rings:
+        if ring > 0:
+            axes += cone_ring(c, ring * half_angle, settings.ring_axes)
+    search = _Search(kin, checker, q_ref, target, settings)
+    cands = search.candidates(axes)
     first, dead = np.full(len(axes), -np.inf), np.zeros(len(axes), bool)
     uppers = np.full(len(axes), -np.inf)
     for k, q in enumerate(cands):
         if len(q):
-            first[k], uppers[k] = query(q[0])
+            first[k], uppers[k] = search.query(q[0])
             # a spin-invariant pair (ClearanceChecker.spin_invariant) short of the near-miss
             # line at the first pose is as short at every pose of the axis: none can meet the
             # bound nor make the best a near miss, so the axis is not searched further
             dead[k] = uppers[k] < bound - NEAR_MISS - READING_GAP
-            if best["feasible"]:
+            if search.feasible:
                 break
-    if not best["feasible"]:
+    if not search.feasible:
         for k in np.argsort(-first, kind="stable"):
             if dead[k]:
                 continue
             for qq in cands[k][1:]:
                 if checker.collides(qq):  # fails the bound; most poses of a blocked target
-                    best["queries"] += 1
+                    search.queries += 1
                     continue
-                if query(qq)[0] >= bound:
+                if search.query(qq)[0] >= bound:
                     break
-            if best["feasible"]:
+            if search.feasible:
                 break
-    best["axis_bound"] = float(uppers.max())
-    if not best["feasible"] and best["best_clearance"] >= bound - NEAR_MISS:
-        _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound,
-                          min_wrist, spins, per_axis, [axes[k] for k in np.argsort(
-                              -uppers, kind="stable")[:3] if np.isfinite(uppers[k])],
-                          best, query)
-    if best["q"] is not None:
-        best["pair"] = checker.min_distance(best["q"], bound + 1e-3)[1]
-    return best
+    search.axis_bound = float(uppers.max())
+    if not search.feasible and search.best_clearance >= bound - NEAR_MISS:
+        _refine_near_miss(search, c, half_angle, [axes[k] for k in np.argsort(
+            -uppers, kind="stable")[:3] if np.isfinite(uppers[k])])
+    return search.result()
 
 
 #: a near miss's compass search over the axes: first step and the step it stops below, as
@@ -324,17 +412,17 @@ _REFINE_STEPS = (0.25, 0.01)
 _REFINE_EVALS = 48
 
 
-def _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound, min_wrist,
-                      spins, per_axis, starts, best, query) -> None:
+def _refine_near_miss(search: _Search, c: np.ndarray, half_angle: float, starts: list) -> None:
     """A near miss searched on between the sampled axes: from each of ``starts`` (the sampled
-    axes whose spin-invariant pairs stand farthest off), a compass search in the cone's
-    tangent plane, kept inside the cone, for the axis whose spin-invariant pairs stand
-    farthest off. Those pairs' distance depends on the axis alone (every spin, every branch),
-    so it bounds every pose of the axis: ``best["axis_bound"]`` becomes the largest found.
-    Where it reaches the bound, that axis's poses are read in full (``query``: a clear one
-    makes the probe feasible). Hand-written: a two-parameter search whose every step is one
-    analytic IK and one distance query of the cell; scipy's optimisers would need a smooth
-    objective, which a distance over convex pieces is not."""
+    axes whose spin-invariant pairs stand farthest off), a compass search in the tangent plane
+    of the cone (unit axis ``c``), kept inside the cone, for the axis whose spin-invariant
+    pairs stand farthest off. Those pairs' distance depends on the axis alone (every spin,
+    every branch), so it bounds every pose of the axis: ``search.axis_bound`` becomes the
+    largest found. Where it reaches the bound, that axis's poses are read in full
+    (``search.query``: a clear one makes the probe feasible). Hand-written: a two-parameter
+    search whose every step is one analytic IK and one distance query of the cell; scipy's
+    optimisers would need a smooth objective, which a distance over convex pieces is not."""
+    checker, bound = search.checker, search.settings.bound
     e1, e2, _ = perpendicular_basis(c).T
     radius = np.tan(half_angle)
 
@@ -343,14 +431,13 @@ def _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound
         return a / np.linalg.norm(a)
 
     def poses(xy):
-        return _probe_candidates(kin, p_HQ, [axis(xy)], t_H, q_ref, lift, spins, min_wrist,
-                                 per_axis)[0]
+        return search.candidates([axis(xy)])[0]
 
     def upper(xy) -> float:
         q = poses(xy)
         if not len(q):
             return -np.inf
-        best["queries"] += 1
+        search.queries += 1
         return checker.axis_reading(q[0], bound + 1e-3)[1]
 
     for a in starts:
@@ -368,20 +455,20 @@ def _refine_near_miss(kin, checker, q_ref, p_HQ, c, half_angle, t_H, lift, bound
                     break
             else:
                 step *= 0.5
-        best["axis_bound"] = max(best["axis_bound"], float(value))
+        search.axis_bound = max(search.axis_bound, float(value))
         if value >= bound:
             for qq in poses(xy):
-                if not checker.collides(qq) and query(qq)[0] >= bound:
+                if not checker.collides(qq) and search.query(qq)[0] >= bound:
                     return
 
 
-def unreachable(probe: dict, options: IkOptions) -> bool:
+def unreachable(probe: ConeProbe, options: IkOptions) -> bool:
     """The probe's best pose is more than ``NEAR_MISS`` short of the bound (the sampled search
     may miss a pose within that; the retries may still find it), or a near miss whose search
     between the axes kept the spin-invariant pairs under the bound on every axis it read."""
-    return not probe["feasible"] and (
-        probe["best_clearance"] < options.min_distance_floor - NEAR_MISS
-        or probe.get("axis_bound", np.inf) < options.min_distance_floor)
+    return not probe.feasible and (
+        probe.best_clearance < options.min_distance_floor - NEAR_MISS
+        or probe.axis_bound < options.min_distance_floor)
 
 
 def recheck(kin: CellKinematics, q: np.ndarray, p_HT: np.ndarray, cone_retract_H: np.ndarray,

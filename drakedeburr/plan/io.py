@@ -42,7 +42,8 @@ from drakedeburr.plan.types import (
 from drakedeburr.units import deg_from_rad
 
 __all__ = ["PLAN_FORMAT", "PLAN_VERSION", "save_plan", "load_plan", "write_joint_csv", "jsonable",
-           "plan_digest", "is_plan_folder", "hub_reference", "check_hub_reference"]
+           "plan_digest", "plan_content", "is_plan_folder", "hub_reference",
+           "check_hub_reference"]
 
 PLAN_FORMAT = "drakedeburr-plan"
 PLAN_VERSION = 2
@@ -63,7 +64,7 @@ def jsonable(obj):
     return obj
 
 
-def _content(plan: Plan) -> tuple[dict, dict]:
+def plan_content(plan: Plan) -> tuple[dict, dict]:
     """What a plan folder holds of the plan: (plan.json document, arrays.npz arrays)."""
     n = len(plan.targets)
     nan3 = np.full(3, np.nan)
@@ -155,7 +156,7 @@ def _doc_text(doc: dict) -> str:
 def plan_digest(plan: Plan) -> str:
     """SHA-256 (hex) of the plan's content: its ``plan.json`` text and every array (name,
     dtype, shape, bytes), not the run's timings. Identical for a plan and its saved copy."""
-    doc, arrays = _content(plan)
+    doc, arrays = plan_content(plan)
     h = hashlib.sha256(_doc_text(doc).encode())
     for name in sorted(arrays):
         a = np.ascontiguousarray(arrays[name])
@@ -179,7 +180,7 @@ def save_plan(plan: Plan, path: str | Path, *, is_ours=is_plan_folder) -> Path:
     of the plan's content). An existing plan folder there (or any folder ``is_ours`` accepts)
     is replaced whole (with its old report); any other existing folder is refused. Returns the
     folder."""
-    doc, arrays = _content(plan)
+    doc, arrays = plan_content(plan)
     ref = hub_reference(plan.hub)
     if ref is not None:  # not part of the plan's digest: where its hub is and what it holds
         doc = {**doc, "hub_ref": ref}

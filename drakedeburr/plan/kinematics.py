@@ -26,7 +26,16 @@ from drakedeburr.frames.vectors import inverse_transform
 PROBE_MEMO_SIZE = 4096
 
 __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_level",
-           "DISTANCE_SLACK", "NARROWPHASE_SLACK"]
+           "DISTANCE_SLACK", "NARROWPHASE_SLACK", "JOINT_WEIGHTS", "WRIST_MARGIN"]
+
+#: (6,) weights of joint travel wherever the planner weighs it (the IK's ``q - q_prev`` cost,
+#: the home search, the placement's branch sequence): the wrist joints cheaper
+JOINT_WEIGHTS = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
+
+#: [rad] smallest |J5| the planner's IK, seeds, cone probe and home keep (J5 = 0 is the wrist
+#: singularity), as the mount study (:mod:`drakedeburr.cell.mounts`); above the verifier's
+#: ``Tolerances.wrist_margin``
+WRIST_MARGIN = 0.25
 
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
 # few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m

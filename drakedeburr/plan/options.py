@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,10 @@ from drakedeburr.config import Config
 from drakedeburr.plan.fillets import FilletOptions
 from drakedeburr.plan.ik import IkOptions
 from drakedeburr.plan.timing import TimingLimits
+
+if TYPE_CHECKING:
+    from drakedeburr.cell.station import Cell
+    from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 
 __all__ = ["PlanOptions", "PlanContext", "RunMode"]
 
@@ -140,16 +145,27 @@ class PlanContext:
     """What a planning run works with: the loaded cell, its kinematics, clearance checkers
     (``checker``: the burr head/hub contact filtered, for cutting moves; ``free_checker``: not
     filtered, for moves that do not cut), the run's configuration, the options and the
-    per-window branch references."""
+    per-window branch references.
 
-    cell: object
-    kin: object
-    checker: object
-    free_checker: object
+    The IK's clearance bounds follow the configuration: ``options.ik`` is held at
+    ``config.tolerances.min_clearance`` (:meth:`drakedeburr.plan.ik.IkOptions.at_clearance`),
+    so the plan records the bounds its IK used."""
+
+    cell: Cell
+    kin: CellKinematics
+    checker: ClearanceChecker
+    free_checker: ClearanceChecker | None
     config: Config
     options: PlanOptions
     #: window -> (6,) a configuration on the branch chosen to cut it (placement search)
     q_refs: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        # a stand-in configuration without tolerances (a test's) keeps the options' own bounds
+        tol = getattr(self.config, "tolerances", None)
+        if tol is not None:
+            ik = self.options.ik.at_clearance(tol.min_clearance)
+            object.__setattr__(self, "options", replace(self.options, ik=ik))
 
     @property
     def process(self):

@@ -26,10 +26,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker, cell_kinematics
+from drakedeburr.plan.kinematics import (
+    JOINT_WEIGHTS,
+    CellKinematics,
+    ClearanceChecker,
+    cell_kinematics,
+)
 from drakedeburr.plan.targets import X_HT_from_axis, contact_geometry, tool_point_H
 
-__all__ = ["Placement", "place_hub", "seat_offset"]
+__all__ = ["Placement", "PlacementSearch", "place_hub", "seat_offset"]
 
 log = logging.getLogger(__name__)
 
@@ -67,6 +72,23 @@ class Placement:
         return {"turn_rad": self.turn, "offset_m": self.offset, "seat_m": self.seat,
                 "windows_reached": self.windows_reached, "joint_margin_rad": self.margin,
                 "clearance_m": self.clearance, "candidates": [list(c) for c in self.candidates]}
+
+
+@dataclass(frozen=True)
+class PlacementSearch:
+    """How widely :func:`place_hub` searches.
+
+    Attributes:
+        per_window: CL targets sampled per window.
+        turns: turns tried per window period.
+        offsets: offsets tried on a chuck [m] (the nominal first: it wins ties).
+        checked: best candidates whose clearance is checked in a built cell.
+    """
+
+    per_window: int = 16
+    turns: int = 6
+    offsets: tuple[float, ...] = (0.0, -0.05, 0.05)
+    checked: int = 2
 
 
 def seat_offset(cell, hub_model) -> float:
@@ -211,9 +233,8 @@ def _candidate_clearance(recipe: dict, kin: CellKinematics, samples, per, tol):
     return _clear_share(planning_cell(recipe)[0], kin, samples, per, tol)
 
 
-def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
-              turns: int = 6, offsets: tuple[float, ...] = (0.0, -0.05, 0.05),
-              checked: int = 2) -> Placement:
+def place_hub(cell, hub_model, wts, config, options, *,
+              search: PlacementSearch = PlacementSearch()) -> Placement:
     """Search the hub's pose on its mount and the windows' branches (module docstring).
 
     Args:
@@ -221,9 +242,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
         hub_model: the hub; wts: its windows' targets, in cutting order.
         config: the run's configuration (tolerances: wrist margin, clearance).
         options: the planner's options (contact radius, IK wrist margin).
-        per_window: CL targets sampled per window; turns: turns tried per window period;
-        offsets: offsets tried on a chuck [m] (the nominal first: it wins ties).
-        checked: best candidates whose clearance is checked in a built cell.
+        search: how widely to search (targets per window, turns, offsets, cells built).
     """
     from drakedeburr.cell.recipe import cell_recipe
     from drakedeburr.cell.station import load_cell
@@ -233,8 +252,9 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
     seat = seat_offset(cell, hub_model)
     spec = hub_model.spec
     period = 2 * np.pi / (spec.spoke_count if spec is not None else max(len(wts), 1))
-    offs = offsets if cell.mode == "tool" else (0.0,)
-    samples = _sample_targets(wts, per_window, options)
+    turns = search.turns
+    offs = search.offsets if cell.mode == "tool" else (0.0,)
+    samples = _sample_targets(wts, search.per_window, options)
     wrist = max(options.ik.min_wrist, config.tolerances.wrist_margin)
     cands = []
     for k in range(turns):
@@ -243,7 +263,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
             n, margin, per = _score(_moved(kin0, X), samples, wrist)
             cands.append((n, margin, -k, -abs(off), X, per, period * k / turns, off))
     cands.sort(key=lambda c: c[:4], reverse=True)
-    top = cands[:checked]
+    top = cands[:search.checked]
     recipes = [cell_recipe(cell.scenario, cell.hub_sdf.parent, robot=cell.arm.ref,
                            tool=cell.tool, hub_pose=c[4]) for c in top]
     tol = config.tolerances
@@ -276,7 +296,7 @@ def place_hub(cell, hub_model, wts, config, options, *, per_window: int = 16,
             best, best_key = (X, per, turn, off, n, margin, least, k), key
     X, per, turn, off, n, margin, least, k = best
     placed = built.get(k) or load_cell(**recipes[k])
-    refs = branch_sequence(per, kin0.q_home, np.array([1.0, 1.0, 1.0, 0.3, 0.3, 0.3]))
+    refs = branch_sequence(per, kin0.q_home, np.asarray(JOINT_WEIGHTS))
     log.info("hub placement: turn %.1f deg, offset %.0f mm, seat %.1f mm: %d of %d windows "
              "reachable on one branch (joint margin %.2f rad)", np.degrees(turn), 1e3 * off,
              1e3 * seat, n, len(wts), margin)

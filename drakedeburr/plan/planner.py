@@ -19,6 +19,11 @@ home).
 
 Both cells are the same code: only :class:`CellKinematics` knows which of T and H rides on
 the flange. Failures are :class:`drakedeburr.plan.types.FailureRecord` in ``Plan.failures``.
+
+Which passes plan the hub (first pass, recipe relaxation, the long-reach burr, report-only
+re-runs) is :mod:`drakedeburr.plan.policy`'s; this module gives it the cell's passes
+(:func:`cell_passes`) and makes the Plan once from the kept
+:class:`~drakedeburr.plan.results.PlanDraft`.
 """
 
 from __future__ import annotations
@@ -34,11 +39,26 @@ import numpy as np
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import Config, ProcessParameters
 from drakedeburr.errors import InputError
+from drakedeburr.plan import relax
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
 from drakedeburr.plan.parallel import map_windows, plan_all_windows
-from drakedeburr.plan.results import PlanStats, Stretch, WindowStatus
+from drakedeburr.plan.policy import (
+    CellPasses,
+    cell_pass,
+    hub_pass,
+    long_reach_allowed,
+    relief_deviation,
+)
+from drakedeburr.plan.results import (
+    PlanDraft,
+    PlanMotion,
+    PlanRecord,
+    PlanStats,
+    Stretch,
+    WindowStatus,
+)
 from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
 from drakedeburr.plan.tool_paths import CL_COUNT_BUDGET, CL_DELTA, tool_path
@@ -47,7 +67,7 @@ from drakedeburr.plan.window_targets import WindowTargets
 from drakedeburr.pool import map_calls, warm_pool, worker_count
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub", "CL_DELTA",
-           "CL_COUNT_BUDGET"]
+           "CL_COUNT_BUDGET", "plan_in_cell", "assemble_windows", "cell_passes"]
 
 log = logging.getLogger(__name__)
 
@@ -83,7 +103,7 @@ def plan_windows(
     t_start = time.perf_counter()
     ctx = _context(cell, config, options or PlanOptions(), q_refs)
     results = plan_all_windows(ctx, windows, ctx.options.workers, progress)
-    return _assemble_windows(ctx, windows, results, progress, t_start)
+    return assemble_windows(ctx, windows, results, progress, t_start).plan()
 
 
 def _context(cell, config: Config, options: PlanOptions, q_refs: dict | None) -> PlanContext:
@@ -96,10 +116,12 @@ def _context(cell, config: Config, options: PlanOptions, q_refs: dict | None) ->
                        config=config, options=options, q_refs=dict(q_refs or {}))
 
 
-def _assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], results: list,
-                      progress: Progress, t_start: float) -> Plan:
+def assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], results: Sequence,
+                     progress: Progress, t_start: float) -> PlanDraft:
     """The plan of independently planned windows (one result per window, in execution
-    order): from home through every planned window and back, with its transitions."""
+    order): from home through every planned window and back, with its transitions; its
+    record holds the cell's frames, the figures, the tool points moved out of the material
+    (deviations) and the timings since ``t_start`` (``time.perf_counter()``)."""
     kin, process = ctx.kin, ctx.config.process
     failures, stretches, window_stats, window_seconds = [], [], [], []
     q_cur = kin.q_home.copy()
@@ -108,7 +130,7 @@ def _assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], result
     t_transitions = 0.0
     for wt, res in zip(windows, results, strict=True):
         failures += res.failures
-        if res.status is WindowStatus.ABANDONED:  # abandoned for relaxation (_relax)
+        if res.status is WindowStatus.ABANDONED:  # abandoned for relaxation (policy)
             log.debug("window %d: an IK target failed under the recipe", wt.window_index)
             continue
         if not res.status.planned:
@@ -141,9 +163,8 @@ def _assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], result
         progress(n, n, "done")
     stats = PlanStats(total_seconds=time.perf_counter() - t_start,
                       transition_seconds=t_transitions)
-    plan = _assemble(ctx, stretches, home, window_stats, failures, windows)
-    plan.run.update(timings=asdict(stats), windows=window_seconds)
-    return plan
+    draft = _assemble(ctx, stretches, home, window_stats, failures, windows)
+    return draft.with_record(timings=stats, window_seconds=tuple(window_seconds))
 
 
 _REST_SECONDS = 0.1  # [s] a plan that moves nowhere holds home this long (a trajectory has pieces)
@@ -177,7 +198,7 @@ def _concatenate(kin, stretches: list[Stretch], home):
                                               c=np.concatenate(c_all, axis=1))
 
 
-def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows) -> Plan:
+def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows) -> PlanDraft:
     kin, cell, config = ctx.kin, ctx.cell, ctx.config
     targets, segments, traj = _concatenate(kin, stretches, home)
     v_g = config.process.grinding_speed
@@ -187,14 +208,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
     for sgm in segments:
         seg_time[sgm.kind] = seg_time.get(sgm.kind, 0.0) + sgm.t_range[1] - sgm.t_range[0]
     r_c, lift = contact_geometry(ctx.options.contact_radius)
-    meta = dict(
-        version=1,
-        planner="drakedeburr.plan",
-        config=config.to_record(),
-        contact_radius_m=r_c,
-        contact_lift_m=lift,
-        X_FT=kin.X_FT.tolist(), X_FH=kin.X_FH.tolist(), X_WT=kin.X_WT.tolist(),
-        robot=cell.arm.ref, X_WB=kin.X_WB.tolist(),
+    figures = dict(
         windows=window_stats,
         window_sources=[w.source for w in windows],
         depth_of_cut={str(w.window_index): w.depth_of_cut for w in windows},
@@ -203,124 +217,47 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         cutting_seconds=cut_time,
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
-        options=jsonable({k: v for k, v in asdict(ctx.options).items()
-                          if k != "workers"}),
-        **({"tool": ctx.cell.tool, "tool_title": tool_variant(ctx.cell.tool).title}
-           if ctx.cell.tool not in (None, DEFAULT_TOOL) else {}),
     )
-    reliefs = [_relief_record(s) for s in window_stats if s.get("chamfer_relief")]
-    if reliefs:
-        meta["recipe_deviations"] = reliefs
+    other_tool = cell.tool not in (None, DEFAULT_TOOL)
+    record = PlanRecord(
+        config=config.to_record(),
+        options=jsonable({k: v for k, v in asdict(ctx.options).items() if k != "workers"}),
+        robot=cell.arm.ref, tool=cell.tool if other_tool else None,
+        tool_title=tool_variant(cell.tool).title if other_tool else None,
+        X_FT=kin.X_FT.copy(), X_FH=kin.X_FH.copy(), X_WT=kin.X_WT.copy(), X_WB=kin.X_WB.copy(),
+        contact_radius_m=r_c, contact_lift_m=lift, figures=figures,
+        deviations=tuple(relief_deviation(s) for s in window_stats if s.get("chamfer_relief")))
     tool_paths = tuple(w.tool_path for w in windows) if any(w.tool_path is not None
                                                            for w in windows) else None
-    return Plan(scenario=str(config.scenario), hub=str(config.hub), mode=cell.mode,
-                X_WH=kin.X_WH.copy(), targets=tuple(targets), segments=tuple(segments),
-                trajectory=traj, tool_path=tool_paths, failures=tuple(failures), meta=meta)
+    motion = PlanMotion(scenario=str(config.scenario), hub=str(config.hub), mode=cell.mode,
+                        X_WH=kin.X_WH.copy(), targets=tuple(targets), segments=tuple(segments),
+                        trajectory=traj, tool_path=tool_paths)
+    return PlanDraft(failures=tuple(failures), record=record, motion=motion)
 
 
-def _relax(ctx: PlanContext, hub_model, wts, results: list, progress, t_start: float) -> Plan:
-    """The hub with a milder recipe for each window the default could not cut
-    (:func:`drakedeburr.plan.relax.relax_windows`: each window's variants in turn, the windows
-    at once), kept when it leaves fewer failure records than the default; every deviation
-    recorded in ``plan.meta["recipe_deviations"]``. The other windows keep their first-pass
-    plans (windows are planned independently); the hub's plan is assembled from them.
-
-    ``results`` (the first pass, one per window) may hold windows abandoned at their first
-    failure (``WindowStatus.ABANDONED``, ``RunMode.FAIL_FAST``): an IK target every start
-    configuration failed, or an executed cut under the clearance, with both spin rules. Those
-    not replaced by a kept relaxation are planned in full here, once, for the report
-    (``RunMode.REPORT_ONLY``: the first start, the IK's own rule; its failure records say
-    where the window fails and by how much)."""
-    from drakedeburr.plan import relax
-
-    edges = {e.index: e for e in hub_model.windows}
-    first = {}
-    for r in results:
-        for f in r.failures:
-            first.setdefault(f.window, str(f))
-    failing = [wt.window_index for wt in wts if wt.window_index in first
-               and wt.window_index in edges]
-    results = list(results)
-
-    def complete(ks) -> None:  # abandoned windows planned in full, once, for their report
-        ks = [k for k in ks if results[k].status is WindowStatus.ABANDONED]
-        if ks:
-            done = _plan_pass(ctx, [wts[k] for k in ks], RunMode.REPORT_ONLY, None)
-            for k, r in zip(ks, done, strict=True):
-                results[k] = r
-
-    params = ctx.config.process
-    accepted, tried = ({}, {}) if not failing else relax.relax_windows(
-        [edges[w] for w in failing], params, first,
-        lambda es: map_windows(ctx, functools.partial(relax.plan_ladder, mode=RunMode.FAIL_FAST),
-                               [(e, params) for e in es], ctx.options.workers,
-                               name=lambda item: f"window {item[0].index}'s milder recipes"))
-    abandoned = {wt.window_index for wt, r in zip(wts, results, strict=True)
-                 if r.status is WindowStatus.ABANDONED}
-    in_vain = [FailureRecord(window=w, kind="relaxation", tried=tuple(t for t, _ in tried[w]),
-                             reason="milder recipes failed too: " + "; ".join(
-                                 f"{t}: {r}" for t, r in tried[w]) + (
-                                 "; with the recipe both spin rules stopped at a first failure"
-                                 " (an IK target no start configuration reached, or the executed"
-                                 " cut under the clearance), the records are the first start's"
-                                 if w in abandoned else ""))
-               for w in failing if w not in accepted and tried[w]]
-    complete([k for k, wt in enumerate(wts) if wt.window_index not in accepted])
-    plan = None
-    if accepted:
-        wts2 = [accepted[wt.window_index][0] if wt.window_index in accepted else wt
-                for wt in wts]
-        res2 = [accepted[wt.window_index][1] if wt.window_index in accepted else r
-                for wt, r in zip(wts, results, strict=True)]
-        relaxed = _assemble_windows(ctx, wts2, res2, progress, t_start)
-        # the default's windows' records (an abandoned window's: its first ones) bound its
-        # count from below: fewer than that is fewer than the default; else assemble it
-        kept = len(relaxed.failures) < sum(len(r.failures) for r in results)
-        if not kept:
-            complete(range(len(wts)))
-            plan = _assemble_windows(ctx, wts, results, progress, t_start)
-            kept = len(relaxed.failures) < len(plan.failures)  # both without in-vain records
-        if kept:
-            deviations = [accepted[w][2] for w in failing if w in accepted]
-            relaxed.meta["recipe_deviations"] = [
-                *relaxed.meta.get("recipe_deviations", []), *(d.record() for d in deviations)]
-            log.warning("recipe relaxed for window(s) %s: %s", [d.window for d in deviations],
-                        "; ".join(f"{d.item} {d.default} -> {d.used}" for d in deviations))
-            plan = relaxed
-    if plan is None:
-        plan = _assemble_windows(ctx, wts, results, progress, t_start)
-    if in_vain:  # said with the failures of whichever plan is kept
-        plan = replace(plan, failures=(*plan.failures, *in_vain))
-    return plan
-
-
-def _relief_record(stats: dict) -> dict:
-    """The recipe deviation of a window whose tool points were moved out of the material
-    (:mod:`drakedeburr.plan.burr_depth`)."""
-    from drakedeburr.plan.burr_depth import MARGIN
-    from drakedeburr.plan.relax import Deviation
-
-    r = stats["chamfer_relief"]
-    left = (f"; still {r['excess_left_mm']:.3f} mm too deep" if r["excess_left_mm"] > 0
-            else "")
-    return Deviation(
-        window=int(stats["window"]), item="tool point", default="the depth of cut's",
-        used=f"moved out of the material by up to {r['max_mm']:.3f} mm at {r['cl_points']} "
-             f"CL points",
-        reason=f"the burr reached {r['depth_read_mm']:.3f} mm into the hub where "
-               f"{r['bound_mm']:.3f} mm is allowed (depth of cut + the edge tolerance; the "
-               f"planner keeps {1e3 * MARGIN:.2f} mm inside it): a rounded or acute edge{left}"
-    ).record()
-
-
-def _plan_pass(ctx: PlanContext, wts: Sequence[WindowTargets], mode: RunMode,
-               progress: Progress) -> list:
-    """Every window of ``wts`` planned in run mode ``mode`` (in their order, on the pool's
-    workers: :func:`drakedeburr.plan.parallel.map_windows`)."""
+def cell_passes(ctx: PlanContext, progress: Progress, t_start: float) -> CellPasses:
+    """How the hub-level policy (:mod:`drakedeburr.plan.policy`) plans and assembles windows
+    in ``ctx``'s cell: each window by :func:`drakedeburr.plan.window.plan_window` in the
+    policy's run mode, on the pool's workers (:func:`drakedeburr.plan.parallel.map_windows`),
+    the milder recipes' ladders by :func:`drakedeburr.plan.relax.plan_ladder`, the plans by
+    :func:`assemble_windows` (timed from ``t_start``)."""
     from drakedeburr.plan.window import plan_window
 
-    return map_windows(ctx, functools.partial(plan_window, mode=mode), wts, ctx.options.workers,
-                       progress, name=lambda wt: f"window {wt.window_index}")
+    params, workers = ctx.config.process, ctx.options.workers
+
+    def plan(wts, mode: RunMode, shown: Progress) -> list:
+        return map_windows(ctx, functools.partial(plan_window, mode=mode), wts, workers,
+                           shown, name=lambda wt: f"window {wt.window_index}")
+
+    def ladders(edges, mode: RunMode) -> list:
+        return map_windows(ctx, functools.partial(relax.plan_ladder, mode=mode),
+                           [(e, params) for e in edges], workers,
+                           name=lambda item: f"window {item[0].index}'s milder recipes")
+
+    return CellPasses(plan=plan, ladders=ladders,
+                      assemble=lambda wts, results: assemble_windows(ctx, wts, results,
+                                                                     progress, t_start),
+                      params=params, progress=progress)
 
 
 def window_targets_for_hub(hub_model, *, source: str = "auto",
@@ -396,7 +333,8 @@ def plan_hub(
     something (a deep dish), the hub is planned again with the long-reach burr and that
     plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
     one burr for the whole hub, no tool change within a program); the failing windows are
-    planned with it first, and the rest only when it cuts one of them (:func:`_long_reach`).
+    planned with it first, and the rest only when it cuts one of them
+    (:func:`drakedeburr.plan.policy.hub_pass`, :func:`~drakedeburr.plan.policy.long_reach_pass`).
 
     Args:
         config: the run's configuration (:func:`drakedeburr.config.load_config`): scenario,
@@ -410,7 +348,6 @@ def plan_hub(
     """
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import load_hub
-    from drakedeburr.plan import relax
 
     options = options or PlanOptions()
     if worker_count(options.workers, 2) > 1:  # the pool imports while this process loads
@@ -422,49 +359,18 @@ def plan_hub(
     wts = window_targets_for_hub(hub_model, source=source, params=config.process,
                                  windows=options.windows, skipped=skipped)
     t_targets = time.perf_counter() - t0
-    plan = _plan_in_cell(cell, hub_model, wts, config, options, progress)
-    if options.relax and config.tool is None and relax.reach_may_help(plan, cell):
-        t1 = time.perf_counter()
-        t_standard = t1 - t0
-        plan = _long_reach(plan, hub_model, wts, config, options, progress)
-        plan.run["timings"].update(standard_burr_seconds=t_standard,
-                                   long_reach_seconds=time.perf_counter() - t1)
+    cells = {None: cell}
+
+    def plan_in(tool: str | None, only: set[int] | None) -> PlanDraft:
+        if tool not in cells:
+            cells[tool] = load_cell(config.scenario, config.hub, robot=config.robot, tool=tool)
+        return plan_in_cell(cells[tool], hub_model, wts, config, options, progress, only=only)
+
+    draft = hub_pass(plan_in, [wt.window_index for wt in wts], cell,
+                     long_reach=long_reach_allowed(options, config), t_start=t0)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
-        plan = replace(plan, failures=(*skipped, *plan.failures))
-    plan.run["timings"]["targets_seconds"] = t_targets
-    return plan
-
-
-def _long_reach(plan: Plan, hub_model, wts, config: Config, options: PlanOptions,
-                progress: Progress) -> Plan:
-    """The hub planned again with the long-reach burr, the standard burr's ``plan`` or that
-    one kept (:func:`drakedeburr.plan.relax.choose_tool`).
-
-    The windows the standard burr left failing are planned first, in the long-reach cell
-    placed for the whole hub (as the full pass places it). A window's plan depends only on
-    the cell, the placement and its own targets, so one that fails there (its milder recipes
-    included, and no move between windows failing) fails in the full pass too; when every
-    such window does, the long-reach plan cannot leave fewer windows failing, and the other
-    windows are not planned again (on an unseen 10-window hub, one window failing with
-    either burr, that was most of the planning time)."""
-    from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan import relax
-
-    failing = relax.failing_windows(plan)
-    log.warning("the standard burr leaves window(s) %s failing where the spindle meets the "
-                "cell: planning %s again with the %s", failing,
-                "them" if -1 not in failing else "the hub", relax.long_reach().title)
-    cell = load_cell(config.scenario, config.hub, robot=config.robot, tool=relax.LONG_REACH)
-    if -1 not in failing and len(failing) < len(wts):
-        first = _plan_in_cell(cell, hub_model, wts, config, options, progress,
-                              only=set(failing))
-        still = relax.failing_windows(first)
-        if -1 not in still and set(failing) <= set(still):
-            return relax.keep_standard(plan, first)
-        log.warning("the %s cuts window(s) %s: planning the hub with it",
-                    relax.long_reach().title, sorted(set(failing) - set(still)))
-    return relax.choose_tool(plan, _plan_in_cell(cell, hub_model, wts, config, options,
-                                                 progress))
+        draft = replace(draft, failures=(*skipped, *draft.failures))
+    return draft.with_timings(targets_seconds=t_targets).plan()
 
 
 def _import_planning() -> None:
@@ -476,11 +382,13 @@ def _import_planning() -> None:
     import drakedeburr.plan.window  # noqa: F401
 
 
-def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
-                  progress: Progress, only: set[int] | None = None) -> Plan:
+def plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
+                 progress: Progress, only: set[int] | None = None) -> PlanDraft:
     """The hub's plan in one cell: where the hub sits (placement search), the home it is
-    planned from (:mod:`drakedeburr.plan.home`), the windows, the recipe's relaxation where
-    it fails. ``only``: the windows planned (the placement is still the whole hub's)."""
+    planned from (:mod:`drakedeburr.plan.home`), the windows and the recipe's relaxation where
+    it fails (:func:`drakedeburr.plan.policy.cell_pass`). ``only``: the windows planned (the
+    placement is still the whole hub's). Returns the PlanDraft (``.plan()`` makes the Plan)
+    with the home, hub pose and placement recorded."""
     from drakedeburr.cell.station import load_cell
     from drakedeburr.plan.home import clear_home
     from drakedeburr.plan.placement import place_hub
@@ -500,23 +408,14 @@ def _plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
     if home_moved is not None:  # the hub leaves the cell's home without clearance
         cell = load_cell(**{**cell.recipe, "q_home": q_home})
         ctx = _context(cell, config, options, q_refs)
-    # with relaxation on, a window is abandoned at its first failure (an IK target, or its cut
-    # under the clearance: it fails under this recipe whatever the rest does) and relaxed;
-    # _relax plans it in full if no relaxation is kept
     if only is not None:
         wts = [wt for wt in wts if wt.window_index in only]
-    results = _plan_pass(ctx, wts, RunMode.FAIL_FAST if options.relax else RunMode.FULL,
-                         progress)
-    if options.relax and any(r.failures for r in results):
-        plan = _relax(ctx, hub_model, wts, results, progress, t_windows)
-    else:
-        plan = _assemble_windows(ctx, wts, results, progress, t_windows)
+    draft = cell_pass(cell_passes(ctx, progress, t_windows),
+                      {e.index: e for e in hub_model.windows}, wts, options.relax)
     if home_moved is not None:
-        plan.meta["q_home"] = q_home.tolist()
-        plan.meta["recipe_deviations"] = [home_moved.record(),
-                                          *plan.meta.get("recipe_deviations", [])]
+        draft = draft.with_deviations(front=(home_moved,)).with_record(q_home=q_home.copy())
     if placement is not None:
-        plan.meta["hub_pose"] = placement.hub_pose.tolist()
-        plan.meta["placement"] = placement.record()
-        plan.run["timings"]["placement_seconds"] = t_place
-    return plan
+        draft = draft.with_record(hub_pose=placement.hub_pose.copy(),
+                                  placement=placement.record()).with_timings(
+            placement_seconds=t_place)
+    return draft

@@ -1,5 +1,7 @@
 """Recipe relaxation: a window the default recipe cannot cut is planned again with a milder
-one, and the deviation is recorded (``plan.meta["recipe_deviations"]``) and shown in the report.
+one, and the deviation is recorded (:class:`~drakedeburr.plan.results.Deviation` in the plan's
+record, ``plan.meta["recipe_deviations"]``) and shown in the report. When each is tried is the
+hub-level policy's (:mod:`drakedeburr.plan.policy`).
 
 What is relaxed, in order, for a window whose plan leaves failure records:
 
@@ -13,7 +15,7 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    the 80 mm spindle body 2 mm off the dish wall at some targets of every window; the whole
    range cut window 0 without a failure record);
 2. the burr, for the whole hub (:func:`choose_tool`, called by
-   :func:`drakedeburr.plan.planner.plan_hub`): where windows still fail with the spindle body,
+   :func:`drakedeburr.plan.policy.hub_pass`): where windows still fail with the spindle body,
    its clamp or the collet against something (a deep dish: the spindle body meets
    the dish wall whatever the tilt), the hub is planned again with the long-reach burr (the
    same head, 50 mm further out: ``drakedeburr.cell.tools.TOOL_VARIANTS``) and that plan kept
@@ -35,11 +37,12 @@ from __future__ import annotations
 
 import functools
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
 from drakedeburr.plan.options import RunMode
+from drakedeburr.plan.results import Deviation
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
@@ -57,21 +60,6 @@ LONG_REACH = "long_reach"
 #: tool geometries a longer stick-out moves back from the cut (the generated tool models')
 #: (not the shank: a longer one reaches further down, where it met the hub)
 _TOOL_BODY = frozenset({"spindle_body", "clamp", "collet", "bracket", "adapter_plate"})
-
-
-@dataclass(frozen=True)
-class Deviation:
-    """One departure from the recipe for one window: what, from what to what, and why."""
-
-    window: int  # -1: the whole hub
-    item: str
-    default: str
-    used: str
-    reason: str
-
-    def record(self) -> dict:
-        return {"window": self.window, "item": self.item, "default": self.default,
-                "used": self.used, "reason": self.reason}
 
 
 def _box(b: OrientationBounds) -> str:
@@ -199,7 +187,8 @@ def _standard_kept(plan, tried, how: str):
 
 
 def choose_tool(plan, alt):
-    """The standard burr's plan or the long-reach one's (``alt``): the long-reach plan only
+    """The standard burr's plan or the long-reach one's (``alt``), both
+    :class:`~drakedeburr.plan.results.PlanDraft`: the long-reach plan only
     when it leaves fewer windows failing (a tie keeps the standard burr, the stiffer). The
     kept plan records the choice: a recipe deviation when it is the long-reach burr, else a
     failure record per failing window saying what the long-reach burr left failing."""
@@ -210,9 +199,8 @@ def choose_tool(plan, alt):
         dev = Deviation(-1, "burr", std.title, lr.title,
                         f"the standard burr left window(s) {a} failing ({len(plan.failures)} "
                         f"records; first: window {first.window}, {first.reason})")
-        alt.meta["recipe_deviations"] = [*alt.meta.get("recipe_deviations", []), dev.record()]
         log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing",
                     std.title, lr.title, len(a), len(b))
-        return alt
+        return alt.with_deviations(back=(dev,))
     return _standard_kept(plan, alt, f"was tried for the hub and left {len(b)} window(s) "
                                      f"failing {b}")

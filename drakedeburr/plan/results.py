@@ -4,6 +4,10 @@
 a window is either planned (its stretches and :class:`WindowStats` are there; failure records
 may still say where it missed a bound) or skipped with the status naming the stage that could
 not be done. Failure records are :class:`drakedeburr.plan.types.FailureRecord`.
+
+A hub's assembled plan, while the hub-level policy (:mod:`drakedeburr.plan.policy`) still
+chooses, is a :class:`PlanDraft`: its motion, failure records and :class:`PlanRecord` (what
+``Plan.meta`` and ``Plan.run`` are built from, once, by :meth:`PlanDraft.plan`).
 """
 
 from __future__ import annotations
@@ -15,10 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drakedeburr.plan.timing import TimedPath
-from drakedeburr.plan.types import FailureRecord
+from drakedeburr.plan.types import FailureRecord, Plan
 
 __all__ = ["WindowStatus", "Stretch", "ExecutedCut", "WindowStats", "WindowPlan", "PlanStats",
-           "CutTargets", "IkStep", "ProgramFit", "CutStep"]
+           "CutTargets", "IkStep", "ProgramFit", "CutStep", "Deviation", "PlanRecord",
+           "PlanMotion", "PlanDraft"]
 
 
 class WindowStatus(enum.Enum):
@@ -216,8 +221,141 @@ class WindowPlan:
 
 @dataclass(frozen=True)
 class PlanStats:
-    """Timings of a planning run [s] (``plan.run["timings"]``; not part of the plan's content)."""
+    """Timings of a planning run [s] (``plan.run["timings"]``; not part of the plan's content).
+    A stage the run did not go through (no placement search, no long-reach retry) is None and
+    left out of the record."""
 
     total_seconds: float
     transition_seconds: float
     targets_seconds: float = 0.0
+    placement_seconds: float | None = None
+    standard_burr_seconds: float | None = None
+    long_reach_seconds: float | None = None
+
+    def to_dict(self) -> dict:
+        return {k: v for k, v in dataclasses.asdict(self).items() if v is not None}
+
+
+@dataclass(frozen=True)
+class Deviation:
+    """One departure from the recipe for one window: what, from what to what, and why
+    (``plan.meta["recipe_deviations"]`` holds :meth:`record` of each)."""
+
+    window: int  # -1: the whole hub
+    item: str
+    default: str
+    used: str
+    reason: str
+
+    def record(self) -> dict:
+        return {"window": self.window, "item": self.item, "default": self.default,
+                "used": self.used, "reason": self.reason}
+
+
+@dataclass(frozen=True, eq=False)
+class PlanRecord:
+    """Everything a plan records beside its motion, collected while it is planned and turned
+    into ``Plan.meta`` (:meth:`meta`) and ``Plan.run`` (:meth:`run`) once, when the Plan is
+    made (:meth:`PlanDraft.plan`).
+
+    Attributes:
+        config, options: the run's configuration and planner options (JSON-ready records).
+        robot: the arm's reference; tool, tool_title: the burr when not the standard one.
+        X_FT, X_FH, X_WT, X_WB: (4, 4) the cell's frames (tool on flange, hub on flange, tool
+            in world, robot base in world) [m].
+        contact_radius_m, contact_lift_m: the burr contact geometry [m].
+        figures: the assembled plan's figures (per-window statistics, cycle and cut times).
+        deviations: departures from the recipe, in the order they are recorded: the home, the
+            tool points moved out of the material, the milder tilts, the burr.
+        q_home: (6,) the home planned from when it is not the cell's [rad].
+        hub_pose, placement: (4, 4) the hub pose the placement search chose and its record.
+        timings: the run's timings; window_seconds: per planned window its stage timings.
+    """
+
+    config: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
+    robot: str | None = None
+    tool: str | None = None
+    tool_title: str | None = None
+    X_FT: np.ndarray | None = None
+    X_FH: np.ndarray | None = None
+    X_WT: np.ndarray | None = None
+    X_WB: np.ndarray | None = None
+    contact_radius_m: float | None = None
+    contact_lift_m: float | None = None
+    figures: dict = field(default_factory=dict)
+    deviations: tuple[Deviation, ...] = ()
+    q_home: np.ndarray | None = None
+    hub_pose: np.ndarray | None = None
+    placement: dict | None = None
+    timings: PlanStats = PlanStats(0.0, 0.0)
+    window_seconds: tuple[dict, ...] = ()
+
+    def meta(self) -> dict:
+        """``Plan.meta``: what the plan was made with and its figures (part of its content)."""
+        return dict(
+            version=1, planner="drakedeburr.plan", config=self.config,
+            contact_radius_m=self.contact_radius_m, contact_lift_m=self.contact_lift_m,
+            X_FT=_listed(self.X_FT), X_FH=_listed(self.X_FH), X_WT=_listed(self.X_WT),
+            robot=self.robot, X_WB=_listed(self.X_WB), **self.figures, options=self.options,
+            **({"tool": self.tool, "tool_title": self.tool_title} if self.tool else {}),
+            **({"recipe_deviations": [d.record() for d in self.deviations]}
+               if self.deviations else {}),
+            **({"q_home": self.q_home.tolist()} if self.q_home is not None else {}),
+            **({"hub_pose": self.hub_pose.tolist(), "placement": self.placement}
+               if self.hub_pose is not None else {}))
+
+    def run(self) -> dict:
+        """``Plan.run``: how the run went (timings [s]; not part of the plan's content)."""
+        return {"timings": self.timings.to_dict(), "windows": list(self.window_seconds)}
+
+
+def _listed(X: np.ndarray | None) -> list | None:
+    return None if X is None else np.asarray(X).tolist()
+
+
+@dataclass(frozen=True, eq=False)
+class PlanMotion:
+    """The motion of an assembled plan: the :class:`drakedeburr.plan.types.Plan` fields other
+    than its failures and records."""
+
+    scenario: str
+    hub: str
+    mode: str
+    X_WH: np.ndarray
+    targets: tuple
+    segments: tuple
+    trajectory: object
+    tool_path: object = None
+
+
+@dataclass(frozen=True, eq=False)
+class PlanDraft:
+    """A hub's plan while the hub-level policy (:mod:`drakedeburr.plan.policy`) still works on
+    it: its motion, its failure records and its :class:`PlanRecord`. The policy makes new
+    drafts (never edits one); :meth:`plan` makes the Plan, once, at the end."""
+
+    failures: tuple[FailureRecord, ...] = ()
+    record: PlanRecord = PlanRecord()
+    motion: PlanMotion | None = None
+
+    def with_deviations(self, front: tuple = (), back: tuple = ()) -> PlanDraft:
+        """The draft with ``front`` recorded before its deviations and ``back`` after."""
+        devs = (*front, *self.record.deviations, *back)
+        return dataclasses.replace(self, record=dataclasses.replace(self.record,
+                                                                    deviations=devs))
+
+    def with_record(self, **changes) -> PlanDraft:
+        """The draft with those :class:`PlanRecord` fields replaced."""
+        return dataclasses.replace(self, record=dataclasses.replace(self.record, **changes))
+
+    def with_timings(self, **seconds: float) -> PlanDraft:
+        """The draft with those :class:`PlanStats` timings set [s]."""
+        return self.with_record(timings=dataclasses.replace(self.record.timings, **seconds))
+
+    def plan(self) -> Plan:
+        """The Plan: its motion, failures, and ``meta`` / ``run`` built from the record."""
+        m = self.motion
+        return Plan(scenario=m.scenario, hub=m.hub, mode=m.mode, X_WH=m.X_WH, targets=m.targets,
+                    segments=m.segments, trajectory=m.trajectory, tool_path=m.tool_path,
+                    failures=tuple(self.failures), meta=self.record.meta(), run=self.record.run())

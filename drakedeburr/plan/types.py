@@ -194,7 +194,9 @@ class Plan:
         tool_path: the orientation stage's ToolPath per window this plan came from.
         failures: what could not be planned (empty when every point planned).
         meta: what the plan was made with and its figures (configuration, options, per-window
-            statistics): a pure function of the inputs, part of the plan's content.
+            statistics): a pure function of the inputs, part of the plan's content. The
+            planner builds it once, with ``run``, from a
+            :class:`drakedeburr.plan.results.PlanRecord`; nothing edits it afterwards.
         run: how this run went (timings [s]); not part of the plan's content (``run.json``).
     """
 

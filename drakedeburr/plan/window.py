@@ -19,7 +19,7 @@ import numpy as np
 
 from drakedeburr.plan.cut import track_cut
 from drakedeburr.plan.finish import finish_window
-from drakedeburr.plan.ik import seed_by_spin, solve_window_ik
+from drakedeburr.plan.ik import IkTargets, seed_by_spin, solve_window_ik
 from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.options import PlanContext, RunMode
 from drakedeburr.plan.program_fit import fit_program
@@ -152,11 +152,11 @@ def _solve_ik(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray, targets: 
         seeds = seeds[:1]
     wik, best_score = None, 0
     tracked_back: set[int] = set()
+    ik_targets = IkTargets(p_HQ, wt.retract_H[loop], wt.cone_retract_H[loop], wt.t_H[loop],
+                           wt.cone_half_angle, lift)
     for attempt, q_first in enumerate(seeds):
-        trial = solve_window_ik(ctx.cell, kin, ctx.checker, p_HQ, wt.retract_H[loop],
-                                wt.cone_retract_H[loop], wt.cone_half_angle, wt.t_H[loop], q_from,
-                                window_index=wt.window_index, options=opt.ik,
-                                q_first=q_first, lift=lift, stop_at_failure=fail_fast)
+        trial = solve_window_ik(ctx, ik_targets, q_from, window_index=wt.window_index,
+                                q_first=q_first, stop_at_failure=fail_fast)
         reached = np.flatnonzero(trial.ok)
         dense_ok = bool(len(reached) > 1 and np.all(track_poses(
             kin, trial.X_HT[reached], trial.q[reached[0]], opt.dense_step).ok))
@@ -204,16 +204,15 @@ def _backward_seed(ctx: PlanContext, wt: WindowTargets, loop: np.ndarray, p_HQ: 
     from drakedeburr.plan.ik_seeds import NEAR_MISS
 
     probe, opt = trial.probes.get(i), ctx.options.ik
-    if (i == 0 or probe is None or not probe["feasible"]
-            or probe["best_clearance"] < opt.min_distance_floor + NEAR_MISS):
+    if (i == 0 or probe is None or not probe.feasible
+            or probe.best_clearance < opt.min_distance_floor + NEAR_MISS):
         return None
-    rev = np.arange(i, -1, -1)
-    back = solve_window_ik(ctx.cell, ctx.kin, ctx.checker, p_HQ[rev], wt.retract_H[loop][rev],
-                           wt.cone_retract_H[loop][rev], wt.cone_half_angle, -wt.t_H[loop][rev],
-                           probe["q"], window_index=wt.window_index, options=opt,
-                           q_first=probe["q"], lift=lift, stop_at_failure=True)
+    ik_targets = IkTargets(p_HQ, wt.retract_H[loop], wt.cone_retract_H[loop], wt.t_H[loop],
+                           wt.cone_half_angle, lift).back_from(i)
+    back = solve_window_ik(ctx, ik_targets, probe.q, window_index=wt.window_index,
+                           q_first=probe.q, stop_at_failure=True)
     log.debug("window %d: tracked back from an admissible pose at CL %d: %d of %d targets",
-              wt.window_index, int(loop[i]), int(back.ok.sum()), len(rev))
+              wt.window_index, int(loop[i]), int(back.ok.sum()), len(ik_targets))
     return back.q[-1].copy() if back.ok.all() else None
 
 
