@@ -11,8 +11,8 @@ import numpy as np
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.results import Stretch
-from drakedeburr.plan.timing import TimedPath, rest_path, time_path
-from drakedeburr.plan.transitions import joint_move
+from drakedeburr.plan.timing import TimedPath, air_limits, rest_path, time_path
+from drakedeburr.plan.transitions import faster_move, joint_move
 from drakedeburr.plan.types import CartesianTarget, FailureRecord
 
 __all__ = ["TargetPoint", "make_target", "time_cartesian", "time_joint", "joint_stretch"]
@@ -57,9 +57,10 @@ def time_cartesian(ctx: PlanContext, q, s, X, v_cap, interpolate: bool = False
 
 
 def time_joint(ctx: PlanContext, q, s, v_cap) -> TimedPath:
-    """Timed joint move (``s``: joint-space arc length) under a TCP speed cap."""
+    """Timed joint move (``s``: joint-space arc length) under a TCP speed cap and the joint
+    limits (:func:`drakedeburr.plan.timing.air_limits`)."""
     p = ctx.kin.X_HT_from_q(q)[:, :3, 3]
-    return time_path(s, q, p, ctx.limits(v_cap), fk=ctx.kin.p_HT)
+    return time_path(s, q, p, air_limits(ctx.limits(v_cap)), fk=ctx.kin.p_HT)
 
 
 def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
@@ -68,8 +69,11 @@ def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
     rad) against the acceptance bound with the burr head not filtered; returns the stretch,
     the move and its failure records."""
     kin = ctx.kin
-    mv = joint_move(ctx.cell, kin, ctx.free_checker, q0, q1,
-                    min_distance=ctx.min_clearance + DISTANCE_SLACK, step=ctx.options.joint_step)
+    bound = ctx.min_clearance + DISTANCE_SLACK
+    mv = joint_move(ctx.cell, kin, ctx.free_checker, q0, q1, min_distance=bound,
+                    step=ctx.options.joint_step)
+    mv = faster_move(kin, ctx.free_checker, mv, lambda q, s: time_joint(ctx, q, s, v_cap).t[-1],
+                     bound, ctx.options.joint_step)
     failures = []
     if not mv.ok:
         failures.append(FailureRecord(

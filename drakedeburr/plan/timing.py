@@ -29,12 +29,13 @@ the passes are exact at every sample and need no LP per grid point. TOPP-RA
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-__all__ = ["TimingLimits", "TimedPath", "time_path", "joint_spline", "compose", "rest_path"]
+__all__ = ["TimingLimits", "TimedPath", "time_path", "joint_spline", "compose", "rest_path",
+           "air_limits"]
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,7 @@ class TimingLimits:
 
     Attributes:
         v_cap: TCP speed cap [m/s] (relative speed of tool and hub).
-        a_cap: TCP path acceleration cap [m/s^2].
+        a_cap: TCP path acceleration cap [m/s^2]; ``inf``: none (:func:`air_limits`).
         v_max: (6,) joint speed limits [rad/s]; a_max: (6,) joint acceleration limits.
         velocity_fraction / acceleration_fraction: share of the joint limits used (margin).
     """
@@ -54,6 +55,18 @@ class TimingLimits:
     a_max: tuple[float, ...]
     velocity_fraction: float = 0.95
     acceleration_fraction: float = 0.9
+
+
+def air_limits(limits: TimingLimits) -> TimingLimits:
+    """The limits of a move off the cut (home, transition): the joint limits (at the same
+    margins) and the move's programmed TCP speed, no TCP path acceleration cap.
+
+    The recipe's TCP path acceleration (``ProcessParameters.tcp_acceleration``) shapes the
+    cut's ramps, where the burr is in contact; off the cut the arm's joint limits are the
+    limits (issue 46: air moves at the arm's limits). The programmed speed stays: it is what
+    the program commands and ``tcp_speed_max`` checks (the default hub's moves off the cut
+    are bound by it, docs/plan.md "Air moves")."""
+    return replace(limits, a_cap=np.inf)
 
 
 @dataclass(frozen=True, eq=False)
@@ -286,9 +299,11 @@ def time_path(s: np.ndarray, q: np.ndarray, p_HT: np.ndarray, limits: TimingLimi
     dp_norm = np.linalg.norm(dp, axis=1)
     vmax = np.asarray(limits.v_max) * limits.velocity_fraction
     amax = np.asarray(limits.a_max) * limits.acceleration_fraction
-    x = np.vstack([dq.T, dp_norm[None]])            # (7, N): joints and the TCP path speed
-    xx = np.vstack([ddq.T, np.zeros((1, n))])      # their second derivatives
-    lim_a = np.concatenate([amax, [limits.a_cap]])  # (7,) acceleration limits
+    # (7, N): joints and the TCP path speed (6: joints alone without a TCP acceleration cap)
+    tcp = [dp_norm[None]] if np.isfinite(limits.a_cap) else []
+    x = np.vstack([dq.T, *tcp])
+    xx = np.vstack([ddq.T, *[np.zeros((1, n))] * len(tcp)])  # their second derivatives
+    lim_a = np.concatenate([amax, [limits.a_cap] * len(tcp)])  # acceleration limits
     with np.errstate(divide="ignore", invalid="ignore"):
         v_lim = np.minimum(
             limits.v_cap / np.maximum(dp_norm, 1e-12),

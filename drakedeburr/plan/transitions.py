@@ -2,19 +2,24 @@
 home, each checked for collision; a joint move that collides is repaired with Drake's
 ``KinematicTrajectoryOptimization`` (minimum-distance constraints at sparse samples, joint
 velocity/acceleration bounds everywhere, warm-started from the straight joint line through a
-lifted via point).
+lifted via point). A straight move may be swapped for its TCP line (:func:`tcp_line`: the wrist
+on the same joint line, the arm putting the tool point on the straight line between the ends),
+a via move for the same polyline with its corners rounded (:func:`rounded_corners`), where that
+is clear and faster under the move's timing (:func:`faster_move`).
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 
-__all__ = ["JointMove", "approach_pose", "joint_move", "check_joint_samples"]
+__all__ = ["JointMove", "approach_pose", "joint_move", "check_joint_samples", "tcp_line",
+           "rounded_corners", "faster_move"]
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +39,7 @@ class JointMove:
         q: (N, 6) dense joint samples [rad] from start to goal.
         s: (N,) joint-space arc length [rad].
         clearance: minimum distance along it [m] (capped).
-        method: "straight", "via" or "kto".
+        method: "straight", "tcp_line", "via", "via_rounded" (:func:`faster_move`) or "kto".
         ok: clearance >= bound at every sample and joints in limits.
         info: solver details.
     """
@@ -124,7 +129,7 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
         d, reach = _clear_share(checker, q, min_distance)
         if d >= min_distance:
             return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=True,
-                             info=dict(via_points=len(way) - 2))
+                             info=dict(via_points=len(way) - 2, waypoints=way))
         if reach > guess_reach:
             guess, guess_reach = way, reach  # the KTO starts from the via path clear longest
     guess = guess if guess is not None else np.stack([q0, q1])
@@ -147,6 +152,124 @@ def joint_move(cell, kin: CellKinematics, checker: ClearanceChecker, q0: np.ndar
         return JointMove(q=q, s=_arc(q), clearance=d, method="kto", ok=d >= min_distance,
                          info=info)
     return JointMove(q=q, s=_arc(q), clearance=d, method="via", ok=False, info=info)
+
+
+def tcp_line(kin: CellKinematics, q0: np.ndarray, q1: np.ndarray, step: float = 0.01,
+             tol: float = 1e-9) -> np.ndarray | None:
+    """Dense joints from ``q0`` to ``q1`` whose wrist (J4-J6) runs the straight joint line and
+    whose arm (J1-J3) puts the tool point on the straight line between the ends' tool points
+    (relative to the hub, at the same share of the way): Newton steps on the arm's 3x3
+    position Jacobian (central differences of ``kin.p_HT``) from the straight joint line.
+
+    Where a wrist unwinds (J4/J6 turning by up to a half turn between windows) the straight
+    joint line swings the tool point about the flange, up to 1.8x the straight distance on the
+    default hub; under the programmed TCP speed that travel is the move's time. Returns None
+    where Newton does not settle to ``tol`` [m], a joint leaves its limits or steps more than
+    ``step`` [rad] between samples (even after doubling the samples once)."""
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    p0, p1 = kin.p_HT(np.stack([q0, q1]))
+    n = max(1, int(np.ceil(np.max(np.abs(q1 - q0)) / step)))
+    for m in (n, 2 * n):
+        u = np.linspace(0.0, 1.0, m + 1)[:, None]
+        q = q0 + u * (q1 - q0)
+        goal = (1.0 - u) * p0 + u * p1
+        for _ in range(20):
+            r = goal - kin.p_HT(q)
+            if np.max(np.abs(r)) <= tol:
+                break
+            h = 1e-6
+            J = np.stack([(kin.p_HT(q + h * e) - kin.p_HT(q - h * e)) / (2 * h)
+                          for e in np.eye(6)[:3]], axis=-1)  # (m + 1, 3, 3)
+            with np.errstate(all="ignore"):
+                q[:, :3] += np.linalg.solve(J, r[..., None])[..., 0]
+            if not np.all(np.isfinite(q)):
+                return None
+        else:
+            return None
+        q[[0, -1]] = q0, q1
+        if not np.all((q >= kin.q_lower) & (q <= kin.q_upper)):
+            return None
+        if np.max(np.abs(np.diff(q, axis=0))) <= step * (1 + 1e-9):
+            return q
+    return None
+
+
+def rounded_corners(way: np.ndarray, share: float, step: float = 0.01) -> np.ndarray:
+    """Dense joints along the joint polyline ``way`` (K, 6) with each interior corner
+    replaced by a quadratic Bezier blend that starts ``share`` (in (0, 1]) of the shorter
+    adjacent leg before the corner and ends as far after it (a leg with a corner at both ends
+    lends each at most half of itself, so blends never overlap): tangent-continuous, inside
+    the joints' box wherever the polyline is (a blend is a convex combination of its three
+    points), at most ``step`` [rad] between samples."""
+    way = np.asarray(way, float)
+    legs = np.diff(way, axis=0)
+    length = np.linalg.norm(legs, axis=1)
+    usable = length * np.where((np.arange(len(legs)) > 0)
+                               & (np.arange(len(legs)) < len(legs) - 1), 0.5, 1.0)
+    pieces, cur = [], way[0]
+    for k in range(1, len(way) - 1):
+        r = share * min(usable[k - 1], usable[k])
+        a = way[k] - r * legs[k - 1] / length[k - 1]
+        b = way[k] + r * legs[k] / length[k]
+        pieces += [(cur, a), (a, way[k], b)]
+        cur = b
+    pieces.append((cur, way[-1]))
+    out = [way[:1]]
+    for pc in pieces:
+        if len(pc) == 2:  # a straight stretch (none between two blends that meet)
+            a, b = pc
+            if np.max(np.abs(b - a)) <= 1e-9 * step:
+                continue
+            n = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
+            f = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            out.append(a + f * (b - a))
+        else:  # |dB/du| <= 2 max(|v - a|, |b - v|) per joint
+            a, v, b = pc
+            n = max(2, int(np.ceil(2 * max(np.max(np.abs(v - a)), np.max(np.abs(b - v)))
+                                   / step)))
+            f = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            out.append((1 - f) ** 2 * a + 2 * f * (1 - f) * v + f ** 2 * b)
+    q = np.concatenate(out)
+    q[-1] = way[-1]  # the move's end exactly (the next stretch starts there)
+    return q
+
+
+#: shares of the shorter adjacent leg a via path's corners are rounded by, tried in order
+_ROUNDING = (0.9, 0.6, 0.3)
+
+
+def faster_move(kin: CellKinematics, checker: ClearanceChecker, mv: JointMove,
+                duration: Callable[[np.ndarray, np.ndarray], float], min_distance: float,
+                step: float = 0.01) -> JointMove:
+    """``mv`` or a faster path between its ends: a straight move's :func:`tcp_line`, a via
+    move's corners rounded (:func:`rounded_corners`, the widest rounding of
+    :data:`_ROUNDING` first: a kink in a joint path is a stop). The first of them that
+    ``duration(q, s)`` [s] (the caller's timing of the move) finds faster by 1 ms or more and
+    that keeps ``min_distance`` at every sample (the check ``joint_move`` makes); else ``mv``.
+    """
+    if not mv.ok or len(mv.q) < 2:
+        return mv
+    if mv.method == "straight":
+        tries = [("tcp_line", lambda: tcp_line(kin, mv.q[0], mv.q[-1], step))]
+    elif mv.method == "via" and "waypoints" in mv.info:
+        way = mv.info["waypoints"]
+        tries = [("via_rounded", lambda f=f: rounded_corners(way, f, step)) for f in _ROUNDING]
+    else:
+        return mv
+    t_old = duration(mv.q, mv.s)
+    for method, make in tries:
+        q = make()
+        if q is None:
+            continue
+        s = _arc(q)
+        t_new = duration(q, s)
+        if t_new > t_old - 1e-3:
+            continue
+        d = check_joint_samples(checker, q, min_distance)
+        if d >= min_distance:
+            info = dict(mv.info, before_seconds=float(t_old), seconds=float(t_new))
+            return replace(mv, q=q, s=s, clearance=d, method=method, info=info)
+    return mv
 
 
 def _lifted(kin: CellKinematics, q: np.ndarray, lift: float) -> np.ndarray | None:
