@@ -78,14 +78,14 @@ def main() -> None:
     t0 = time.perf_counter()
     hubs = generate(args.seed, args.count, out / "hubs", args.workers)[args.start:]
     t_gen = time.perf_counter() - t0
-    from drakedeburr.verify.batch import verify_all
+    from drakedeburr.verify.batch import JobSettings, verify_all
 
     def progress(done: int, total: int, label: str) -> None:  # a long run shows each job
         print(f"[{done}/{total}] {label} done at {time.perf_counter() - t0:.0f} s", flush=True)
 
     summary = verify_all([str(h) for h in hubs], out / "verify",
                          scenarios=args.cells.split(","), workers=args.workers,
-                         progress=progress, keep_failed_plans=True)
+                         progress=progress, settings=JobSettings(keep_failed_plans=True))
     print(f"catalogue seed {args.seed}: {len(hubs)} hubs (generated/reused in {t_gen:.0f} s), "
           f"{summary['jobs']} jobs in {summary['elapsed_s']:.0f} s on {summary['executor']}")
     for cell in args.cells.split(","):

@@ -33,9 +33,10 @@ import time
 import numpy as np
 
 import drakedeburr.orientation.exact as exact_module
+from drakedeburr.config import OrientationBounds
 from drakedeburr.frames.local_frames import R_HL_from_normals
 from drakedeburr.frames.normals import inner_normals_from_cloud
-from drakedeburr.hub import load_hub, simulate_scan
+from drakedeburr.hub import ScannerModel, load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, problem_for, solve_problem
 from drakedeburr.orientation.commands import cl_points_from_edge
 from drakedeburr.orientation.models import make_problem
@@ -61,7 +62,8 @@ def _fresh(prob):
     """The same problem, rebuilt (no cached coupling matrix), the solver's caches emptied."""
     for f in _solver_caches():
         f.cache_clear()
-    return make_problem(prob.model, prob.p_HC, prob.R_HL, prob.theta_min, prob.theta_max,
+    return make_problem(prob.model, prob.p_HC, prob.R_HL,
+                        OrientationBounds(prob.theta_min, prob.theta_max),
                         w1=prob.w1, w2=prob.w2,
                         second_difference_weight=prob.second_difference_weight, name=prob.name)
 
@@ -145,7 +147,8 @@ def main() -> None:
 
     # normal estimation
     t0 = time.perf_counter()
-    scan = simulate_scan(hub, sigma=0.05e-3, seed=0, spacing=0.3e-3, max_edge_distance=9e-3)
+    scan = simulate_scan(hub, ScannerModel(sigma=0.05e-3), seed=0, spacing=0.3e-3,
+                         max_edge_distance=9e-3)
     t_scan = time.perf_counter() - t0
     print(f"\nnormals from a scan (sigma 0.05 mm, {len(scan.p_S)} points near the edges; "
           f"simulating it took {t_scan:.1f} s)")
@@ -171,7 +174,8 @@ def main() -> None:
     rng = np.random.default_rng(0)
     X_true = RigidTransform(RotationMatrix.MakeZRotation(rng.uniform(-np.pi / n, np.pi / n)),
                             rng.uniform(-5e-3, 5e-3, 3))
-    raw = simulate_scan(hub, sigma=0.05e-3, seed=3, spacing=1.5e-3, partial=(-2.0, 2.0))
+    raw = simulate_scan(hub, ScannerModel(sigma=0.05e-3), seed=3, spacing=1.5e-3,
+                        partial=(-2.0, 2.0))
     scan_W = ScanCloud(points_in_world(X_true, raw.p_S), source="scan")
     ropts = RegistrationOptions(symmetry_order=n, roi_radii=(0.07, 0.2))
     res = register_hub(scan_W, hub.trimesh, options=ropts)

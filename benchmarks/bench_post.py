@@ -32,6 +32,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from drakedeburr.post.cl_post import (  # noqa: E402
+    PostOutput,
     PostSettings,
     pose_from_mm_deg,
     post_cl_file,
@@ -131,8 +132,8 @@ def child(mode: str, cl_file: str, out: str) -> None:
             phases[label] = time.perf_counter() - t
 
     if mode == "new-post":
-        post_cl_file(cl_file, out, "rapid", "big", PostSettings(X_WO=pose_from_mm_deg(WOBJ)),
-                     progress=progress)
+        post_cl_file(cl_file, PostOutput(out, "rapid", "big"),
+                     PostSettings(X_WO=pose_from_mm_deg(WOBJ)), progress=progress)
     elif mode == "new-read":
         read_cl(cl_file)
     elif mode == "old-read":
@@ -153,7 +154,9 @@ def cam_rows(tmp: Path, quick: bool, base) -> list[tuple[str, str, str, str]]:
     rows = []
     n = 1000 if quick else 7500
     path = make_cam_file(tmp / f"cam_{n}.ncl", n)
-    new = types.SimpleNamespace(read_cl=read_cl, program_from_cl=program_from_cl)
+    new = types.SimpleNamespace(
+        read_cl=read_cl, program_from_cl=lambda cl, name, X_WO, X_FT: program_from_cl(
+            cl, name, PostSettings(X_WO=X_WO, X_FT=X_FT)))
     cases = [(f"{n}-target CAM file, tool on the flange axis", tool(0.0), True),
              (f"{n}-target CAM file, tool tilted 30 deg", tool(30.0), False)]
     if not quick:

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from drakedeburr.programs import JOINT, LINEAR, RobotProgram
+from drakedeburr.programs import JOINT, LINEAR, MoveDetails, RobotProgram
 from drakedeburr.robots import fk_opw, get_robot
 
 SUFFIX = {"rapid": ".mod", "krl": ".src", "ls": ".ls"}
@@ -51,5 +51,5 @@ def random_program(robot: str, stationary: bool = False, seed: int = 0, n: int =
         name, fk_opw(spec.opw, q) @ X_FT, q, speed=[SPEEDS[i % 10] for i in range(n)],
         zone=[ZONES[i % 10] for i in range(n)], move_type=types, X_FT=X_FT, X_WO=X_WO,
         robot=spec, stationary_tool=stationary,
-        comments=["approach window 1"] + [""] * (n - 2) + ["home"],
-        joint_fractions=[0.33] + [None] * (n - 2) + [0.125], **kw)
+        details=MoveDetails(comments=["approach window 1"] + [""] * (n - 2) + ["home"],
+                            joint_fractions=[0.33] + [None] * (n - 2) + [0.125]), **kw)

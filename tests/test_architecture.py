@@ -198,21 +198,7 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 
 #: functions over 8 parameters not yet given their records (#45 item 4), with their count: a
 #: ratchet -- none may be added, none may grow, and a fixed one must leave the list
-PENDING_PARAMETERS = {
-    "cell/narrowphase.py certified_distance": 9, "cell/reach.py survey_reach": 9,
-    "cell/reach.py _solve_target": 10, "frames/normals.py inner_normals_from_cloud": 9,
-    "frames/normals.py _fit_point": 12, "hub/scan.py simulate_scan": 13,
-    "laser/robot_job.py plan_job": 9, "orientation/commands.py run_orient": 9,
-    "orientation/models.py make_problem": 9, "plan/cut_path.py smooth_axes": 11,
-    "plan/cut_path.py cut_path": 12, "plan/feed_program.py _limit_rows": 10,
-    "plan/feed_program.py _program": 10, "plan/feed_program.py hold_feed": 12,
-    "plan/spin.py optimize_spin": 11,
-    "plan/stretch.py make_target": 10, "post/cl_interpreter.py arc_points": 9,
-    "post/cl_post.py program_from_cl": 15, "post/cl_post.py post_cl_file": 9,
-    "post/cl_reader.py iter_cl_moves": 10, "post/tool_axis.py solve_tool_axis_path": 10,
-    "post/virtual_tcp_post.py post_cl_file_virtual_tcp": 10, "programs/ls.py _move": 9,
-    "programs/program.py from_poses": 10, "verify/batch.py verify_all": 12,
-}
+PENDING_PARAMETERS: dict[str, int] = {}
 
 
 @functools.cache

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from drakedeburr.post.cl_interpreter import arc_points
+from drakedeburr.post.cl_interpreter import ClCircle, arc_points
 from drakedeburr.post.cl_types import ClParseError, Notes, number, unit_vector
 
 
@@ -34,7 +34,7 @@ def test_unit_vector_normalises_with_a_warning_and_refuses_zero():
 def test_arc_points_lie_on_the_circle_within_the_chord_tolerance(tol):
     r, c, n = 0.04, np.array([0.1, 0.2, 0.0]), np.array([0.0, 0.0, 1.0])
     p0, p1 = c + [r, 0, 0], c + [0, r, 0]  # a quarter, counter-clockwise about +z
-    pts = arc_points("part.cl", 9, p0, p1, c, n, r, "40", tol)
+    pts = arc_points("part.cl", ClCircle(9, c, n, r, "40"), p0, p1, tol)
     assert np.allclose(np.linalg.norm(pts - c, axis=1), r, atol=1e-12)
     ang = np.unwrap(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
     assert np.all(np.diff(ang) > 0) and 0 < ang[0] and ang[-1] < math.pi / 2

@@ -28,7 +28,7 @@ def test_pose_from_mm_deg():
 def test_creo_program_in_work_object(extdata):
     cl = read_cl(extdata / "cl_files" / CREO)
     X_WO = mut.pose_from_mm_deg(WOBJ)
-    res = mut.program_from_cl(cl, "creo", X_WO=X_WO)
+    res = mut.program_from_cl(cl, "creo", mut.PostSettings(X_WO=X_WO))
     assert res.ok and res.program is not None
     prog = res.program
     assert len(prog.moves) == len(cl.moves) and prog.flag == "UNVERIFIED"
@@ -49,9 +49,9 @@ def test_unreachable_reported_with_lines_and_forced():
                       "FINI"])
     cl = parse_cl_text(text)
     X_WO = mut.pose_from_mm_deg(WOBJ)
-    res = mut.program_from_cl(cl, "p", X_WO=X_WO)
+    res = mut.program_from_cl(cl, "p", mut.PostSettings(X_WO=X_WO))
     assert res.program is None and res.unreachable_lines == (4,)
-    forced = mut.program_from_cl(cl, "p", X_WO=X_WO, force=True)
+    forced = mut.program_from_cl(cl, "p", mut.PostSettings(X_WO=X_WO, force=True))
     assert forced.program is not None and len(forced.program.moves) == 3
     assert forced.program.flag == "FORCED" and "lines 4" in forced.program.flag_reason
 
@@ -117,7 +117,7 @@ def test_fifteen_paths_every_goto_in_the_program(fifteen):
     scan = scan_nx_paths(fifteen)
     cl = read_cl(fifteen, units="inch")
     X_WO = mut.pose_from_mm_deg(NX_WOBJ)
-    res = mut.program_from_cl(cl, "fifteen", X_WO=X_WO)
+    res = mut.program_from_cl(cl, "fifteen", mut.PostSettings(X_WO=X_WO))
     assert res.ok, res.unreachable_lines[:5]
     prog = res.program
     lines = [m.source_line for m in prog.moves]
@@ -198,7 +198,7 @@ def test_creo_drilling_program(extdata):
     feed moves at the cycle feed down to the depth written in the file."""
     cl = read_cl(extdata / "cl_files" / "CreoPost__bohren_1.ncl.8")
     X_WO = mut.pose_from_mm_deg(WOBJ)
-    res = mut.program_from_cl(cl, "bohren", X_WO=X_WO)
+    res = mut.program_from_cl(cl, "bohren", mut.PostSettings(X_WO=X_WO))
     prog = res.program
     assert res.ok and len(prog.moves) == len(cl) == 26
     for i, m in enumerate(prog.moves):
@@ -301,9 +301,8 @@ def test_cli_interrupt_exit_130(extdata, tmp_path, monkeypatch):
 def test_post_cl_file_reports_progress_and_never_prints(extdata, tmp_path, capsys):
     calls = []
     summary = mut.post_cl_file(
-        extdata / "cl_files" / CREO, tmp_path / "p.ls", "ls", "p",
+        extdata / "cl_files" / CREO, mut.PostOutput(tmp_path / "p.ls", "ls", "p", max_moves=60),
         mut.PostSettings(robot=mut.robot_kinematics("m10ia"), X_WO=mut.pose_from_mm_deg(WOBJ)),
-        max_moves=60,
         progress=lambda done, total, label: calls.append((label, done, total)))
     assert [f.name for f in summary.files] == ["p_001.ls", "p_002.ls", "p_003.ls"]
     assert summary.n_moves == len(summary.cl) == 172

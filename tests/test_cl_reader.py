@@ -326,7 +326,7 @@ def test_reader_streams():
             yield text
         raise AssertionError("the consumer stopped early: never reached")
 
-    it = mut.iter_cl_moves(lines(), units="mm")
+    it = mut.iter_cl_moves(lines(), options=mut.ClReadOptions(units="mm"))
     first = next(it)
     assert first.p_C == pytest.approx((1e-3, 2e-3, 3e-3)) and len(read) <= 2
 

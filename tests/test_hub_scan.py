@@ -30,7 +30,7 @@ def _dist(scene, p):
 
 
 def test_noise_sigma_is_measured_back(hub, scene):
-    cloud = mut.simulate_scan(hub, sigma=5e-5, spacing=3e-3, seed=1)
+    cloud = mut.simulate_scan(hub, mut.ScannerModel(sigma=5e-5), spacing=3e-3, seed=1)
     assert 10_000 < len(cloud.p_S) < 100_000
     d = _dist(scene, cloud.p_S)
     # points near edges can be nearer another face; the bulk follows the sigma
@@ -41,7 +41,8 @@ def test_noise_sigma_is_measured_back(hub, scene):
 
 
 def test_noise_free_scan_lies_on_the_visible_surface(hub, scene):
-    cloud = mut.simulate_scan(hub, sigma=0.0, spacing=4e-3, seed=0, with_normals=True)
+    cloud = mut.simulate_scan(hub, mut.ScannerModel(sigma=0.0), spacing=4e-3, seed=0,
+                              with_normals=True)
     # exact float64 check: each point lies inside some mesh triangle (open3d's distances are
     # float32, trimesh's closest_point errs by ~5e-5 m on some triangles)
     sub = cloud.p_S[np.random.default_rng(0).choice(len(cloud.p_S), 150, replace=False)]
@@ -71,8 +72,8 @@ def test_noise_free_scan_lies_on_the_visible_surface(hub, scene):
     win_walls = walls & (r > hub.spec.window_inner_radius - 1e-3) & (
         r < hub.spec.window_outer_radius + 1e-3)
     assert win_walls.sum() > 200
-    face_on = mut.simulate_scan(hub, sigma=0.0, spacing=4e-3, seed=0, n_tilted=0,
-                                with_normals=True)
+    face_on = mut.simulate_scan(hub, mut.ScannerModel(sigma=0.0, n_tilted=0), spacing=4e-3,
+                                seed=0, with_normals=True)
     r0 = np.hypot(face_on.p_S[:, 0], face_on.p_S[:, 1])
     walls0 = (np.abs(face_on.n_S[:, 2]) < 1e-6) & (r0 < hub.spec.window_outer_radius + 1e-3)
     assert walls0.sum() < 0.5 * win_walls.sum()  # face-on: only walls facing the axis
@@ -88,21 +89,22 @@ def test_deterministic_for_a_seed(hub):
 
 def test_partial_sector_and_edge_band(hub):
     sector = (math.radians(-20.0), math.radians(80.0))
-    cloud = mut.simulate_scan(hub, sigma=0.0, spacing=3e-3, partial=sector)
+    cloud = mut.simulate_scan(hub, mut.ScannerModel(sigma=0.0), spacing=3e-3, partial=sector)
     th = np.arctan2(cloud.p_S[:, 1], cloud.p_S[:, 0])
     assert th.min() >= sector[0] - 1e-9 and th.max() <= sector[1] + 1e-9
     assert th.max() - th.min() > math.radians(95.0)
     from scipy.spatial import cKDTree
 
-    band = mut.simulate_scan(hub, sigma=0.0, spacing=1e-3, max_edge_distance=4e-3)
+    band = mut.simulate_scan(hub, mut.ScannerModel(sigma=0.0), spacing=1e-3,
+                             max_edge_distance=4e-3)
     edge = np.concatenate([w.p_HE for w in hub.windows])
     d, _ = cKDTree(edge).query(band.p_S)
     assert d.max() <= 4e-3 + 1e-9 and len(band.p_S) > 5000
 
 
 def test_view_direction_is_respected(hub):
-    back = mut.simulate_scan(hub, sigma=0.0, spacing=5e-3, view_dir=(0, 0, -1), n_tilted=0,
-                             with_normals=True)
+    back = mut.simulate_scan(hub, mut.ScannerModel(sigma=0.0, view_dir=(0, 0, -1), n_tilted=0),
+                             spacing=5e-3, with_normals=True)
     assert back.n_S[:, 2].max() < 0.2  # nothing facing +Z_H
     assert back.n_S[:, 2].mean() < -0.3
 
@@ -122,9 +124,9 @@ def test_scan_in_a_moved_frame(hub):
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"X_SH": np.diag([1.0, 1.0, -1.0, 1.0])}, "X_SH"),
-    ({"sigma": -1.0}, "sigma"),
+    ({"scanner": mut.ScannerModel(sigma=-1.0)}, "sigma"),
     ({"spacing": 0.0}, "spacing"),
-    ({"view_dir": (0, 0, 0)}, "view_dir"),
+    ({"scanner": mut.ScannerModel(view_dir=(0, 0, 0))}, "view_dir"),
     ({"partial": (1.0, 0.5)}, "partial"),
 ])
 def test_bad_arguments(hub, kwargs, match):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import drakedeburr.cell.mounts as mut
-from drakedeburr.cell.reach import ReachTarget, survey_reach
+from drakedeburr.cell.reach import ReachOptions, ReachTarget, survey_reach
 from drakedeburr.cell.station import load_cell
 from drakedeburr.errors import InputError
 from drakedeburr.robots import ROBOTS, fk_opw, get_robot
@@ -70,7 +70,7 @@ def test_rim_and_centre_are_reached_with_margins(name, scenario):
         for tilt in (0.0, 0.5):
             a = np.array([np.sin(tilt) * np.cos(phi), np.sin(tilt) * np.sin(phi), -np.cos(tilt)])
             targets.append(ReachTarget(p, a))
-    survey = survey_reach(cell, targets, seeds=4)
+    survey = survey_reach(cell, targets, ReachOptions(seeds=4))
     reached = [r for r in survey.results if r.success]
     assert len(reached) >= len(targets) - 1, [r.target for r in survey.results if not r.success]
     X_WB = cell.X_WB().GetAsMatrix4()

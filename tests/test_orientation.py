@@ -38,7 +38,7 @@ WINDOWS = [_window("large", 3.0, 90, (0.03, 0.02, 0.006), 0),
 
 def _problem(cl, n, model="axis", w2nd=0.0):
     b = ProcessParameters().bounds_large if cl.kind == "large" else ProcessParameters().bounds_small
-    return make_problem(model, cl.p_HC, R_HL_from_normals(cl.t_H, n), b.theta_min, b.theta_max,
+    return make_problem(model, cl.p_HC, R_HL_from_normals(cl.t_H, n), b,
                         second_difference_weight=w2nd, name=f"window {cl.window_index}")
 
 

@@ -41,7 +41,7 @@ def _angles_deg(a, b):
 @pytest.mark.parametrize("name, windows", [("h5_split", (0, 1)), ("h5_deepdish", (0,))])
 def test_cloud_normals_on_bundled_hubs(name, windows):
     hub = hub_mod.load_hub(name)
-    scan = hub_mod.simulate_scan(hub, sigma=0.05e-3, seed=0, spacing=0.3e-3,
+    scan = hub_mod.simulate_scan(hub, hub_mod.ScannerModel(sigma=0.05e-3), seed=0, spacing=0.3e-3,
                                  max_edge_distance=9e-3,
                                  partial=_sector([hub.windows[i] for i in windows]))
     for i in windows:
@@ -81,7 +81,8 @@ def test_registration_on_a_bundled_hub_recovers_pose_and_refuses_another_hub():
     rng = np.random.default_rng(1)
     X_true = RigidTransform(RotationMatrix.MakeZRotation(rng.uniform(-np.pi / n, np.pi / n)),
                             rng.uniform(-5e-3, 5e-3, 3))
-    raw = hub_mod.simulate_scan(hub, sigma=0.05e-3, seed=3, spacing=1.5e-3, partial=(-2.0, 2.0))
+    raw = hub_mod.simulate_scan(hub, hub_mod.ScannerModel(sigma=0.05e-3), seed=3,
+                                spacing=1.5e-3, partial=(-2.0, 2.0))
     scan = ScanCloud(points_in_world(X_true, raw.p_S), source="scan")
     opts = RegistrationOptions(symmetry_order=n, roi_radii=(0.07, 0.2))
     res = register_hub(scan, hub.trimesh, options=opts)

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drakedeburr.config import OrientationBounds
 from drakedeburr.orientation.exact import projected_gradient_norm, solve_exact
 from drakedeburr.orientation.models import make_problem
 
@@ -44,7 +45,7 @@ CASES = _cases_from_file() if DATA.is_file() else []
 
 def _problem(case):
     lo, hi = case["box"]
-    return make_problem("axis", case["p_HC"], case["R_HL"], float(lo), float(hi),
+    return make_problem("axis", case["p_HC"], case["R_HL"], OrientationBounds(float(lo), float(hi)),
                         second_difference_weight=float(case["w2nd"]), name=case["name"])
 
 

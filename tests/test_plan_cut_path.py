@@ -57,7 +57,7 @@ def test_smooth_axes_stay_in_their_cones_and_are_smoother_than_the_preference():
     # a noisy preferred axis inside the cones
     a_pref = c + rng.normal(scale=0.03, size=(n, 3))
     a_pref /= np.linalg.norm(a_pref, axis=1, keepdims=True)
-    a = mut.smooth_axes(s, a_pref, c, half, margin=2e-3, w_pref=1e-2)
+    a = mut.smooth_axes(s, a_pref, c, half, mut.AxisSmoothing(margin=2e-3, w_pref=1e-2))
     assert np.allclose(np.linalg.norm(a, axis=1), 1.0)
     ang = np.arccos(np.clip(np.sum(a * c, 1), -1, 1))
     assert ang.max() <= half - 2e-3 + 1e-6
@@ -73,7 +73,8 @@ def test_pinned_axes_stay_near_the_given_axes():
     c = np.tile([0.0, 0.0, 1.0], (n, 1))
     a_pin = np.tile([np.sin(0.1), 0.0, np.cos(0.1)], (n, 1))
     pin = (s > 0.04) & (s < 0.06)
-    a = mut.smooth_axes(s, c, c, 0.2, pin=pin, pin_axes=a_pin, pin_angle=0.004)
+    a = mut.smooth_axes(s, c, c, 0.2, mut.AxisSmoothing(pin_angle=0.004), pin=pin,
+                        pin_axes=a_pin)
     ang_pin = np.arccos(np.clip(np.sum(a[pin] * a_pin[pin], 1), -1, 1))
     assert ang_pin.max() <= 0.004 + 1e-5  # interior-point solver tolerance
     assert np.arccos(np.clip(a[0] @ c[0], -1, 1)) < 0.05  # free elsewhere, pulled to pref
@@ -91,7 +92,7 @@ def test_cut_path_keeps_targets_and_orthonormal_frames():
     x = np.cross([0, 1.0, 0], z)
     x /= np.linalg.norm(x)
     X[:, :3, :3] = np.stack([x, np.cross(z, x), z], 1)
-    cp = mut.cut_path(X, c, 0.1, deviation=0.02e-3, step=0.2e-3)
+    cp = mut.cut_path(X, c, 0.1, mut.CutPathOptions(step=0.2e-3), deviation=0.02e-3)
     R = cp.X_HT[:, :3, :3]
     assert np.allclose(np.einsum("nji,njk->nik", R, R), np.eye(3), atol=1e-9)
     assert np.allclose(np.linalg.det(R), 1.0)
@@ -162,15 +163,16 @@ def test_the_cut_keeps_its_axis_in_the_cones_as_the_verifier_reads_them(monkeypa
         c = program_reading.cone_axes_on_moves(cp.X_HT[:, :3, 3], P, C)
         return float(np.max(np.arccos(np.clip(np.sum(a * c, 1), -1, 1))) - half)
 
-    kw = dict(deviation=dev, step=step, pin=np.array([[0.0, 1.0]]))
-    assert worst(mut.cut_path(X, C, half, **kw)) <= -mut.PIN_MARGIN + 1e-6  # pinned: the margin
+    kw = dict(deviation=dev, pin=np.array([[0.0, 1.0]]))
+    shape = mut.CutPathOptions(step=step)
+    assert worst(mut.cut_path(X, C, half, shape, **kw)) <= -mut.PIN_MARGIN + 1e-6  # pinned
 
     def travel(p, P_, C_):  # the reading the planner used before
         bp = mut.blend_corners(P_, dev, step)
         return mut.axes_interp(bp.target_s, C_, bp.s)
 
     monkeypatch.setattr(mut, "cone_axes_on_moves", travel)
-    assert worst(mut.cut_path(X, C, half, **kw)) > 1e-4
+    assert worst(mut.cut_path(X, C, half, shape, **kw)) > 1e-4
 
 
 def test_smooth_axes_says_when_no_axis_fits():

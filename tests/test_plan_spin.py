@@ -39,7 +39,7 @@ def test_spin_search_keeps_axes_and_points_and_removes_a_wobble():
     X_wob[:, :3, :3] = mut.spin_frames(X[:, :3, :3], 1.0 * np.sin(2 * np.pi * s / 0.02))
     q_wob, ok = kin.track(kin.X_WF_from_X_HT(X_wob), q0)
     assert np.all(ok)
-    out, stats = mut.optimize_spin(kin, X_wob, s, q0, wrist_margin=0.15)
+    out, stats = mut.optimize_spin(kin, X_wob, s, q0, mut.SpinSearch(wrist_margin=0.15))
     assert stats["ok"]
     assert np.allclose(out[:, :3, 3], X_wob[:, :3, 3], atol=1e-12)
     assert np.allclose(out[:, :3, 2], X_wob[:, :3, 2], atol=1e-12)
@@ -66,7 +66,8 @@ def test_spin_search_result_stays_inside_the_limits_near_a_j4_limit():
     X = kin.X_HT_from_q(q)
     X[:, :3, :3] = mut.spin_frames(X[:, :3, :3], 0.6 * np.sin(2 * np.pi * s / 0.03))
     for sigma in (4e-3, 12e-3, 30e-3):
-        out, stats = mut.optimize_spin(kin, X, s, q0, wrist_margin=0.15, sigma=sigma)
+        search = mut.SpinSearch(wrist_margin=0.15, sigma=sigma)
+        out, stats = mut.optimize_spin(kin, X, s, q0, search)
         if not stats["ok"]:
             continue
         q_out, ok = kin.track(kin.X_WF_from_X_HT(out), q0)

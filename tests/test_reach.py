@@ -26,8 +26,8 @@ def test_whole_face_is_reachable_with_margins(scenario):
     cell = load_cell(scenario, hub=STAND_IN_HUB)
     # rim (0.23 m) and centre, vertical and 0.5 rad tilts: the hardest targets of the study
     targets = [t for t in mut.face_targets(0.23, rings=1, per_ring=6, tilt=0.5, tilts=4)]
-    survey = mut.survey_reach(cell, targets, joint_margin=np.radians(10), wrist_margin=0.25,
-                              min_distance=0.005)
+    survey = mut.survey_reach(cell, targets, mut.ReachOptions(
+        joint_margin=np.radians(10), wrist_margin=0.25, min_distance=0.005))
     assert survey.all_reached, [targets[i] for i in survey.failed]
     assert survey.min_wrist >= 0.25 - 1e-9
     X_FT = cell.X_WF(cell.q_home).inverse().multiply(cell.X_WT(cell.q_home))
@@ -57,6 +57,6 @@ def test_whole_face_is_reachable_with_margins(scenario):
 def test_unreachable_target_is_reported_not_raised():
     cell = load_cell("tool_in_hand", hub=STAND_IN_HUB)
     far = mut.ReachTarget(np.array([3.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]))
-    survey = mut.survey_reach(cell, [far], seeds=2, min_distance=None)
+    survey = mut.survey_reach(cell, [far], mut.ReachOptions(seeds=2, min_distance=None))
     assert survey.failed == [0] and not survey.all_reached
     assert np.all(np.isnan(survey.results[0].q))

@@ -9,13 +9,14 @@ import pytest
 import drakedeburr.verify.batch as mut
 
 HUBS = ["h5_straight", "h5_split"]
-OPTIONS = {"scenarios": ["tool_in_hand"], "planner": "reference", "windows": [0],
-           "quick": True, "grinding_speed": 0.075}
+SETTINGS = mut.JobSettings(planner="reference", windows=(0,), quick=True, grinding_speed=0.075)
 
 
 def test_process_pool_then_dask_cluster(tmp_path):
-    pool = mut.verify_all(HUBS, tmp_path / "pool", workers=2, keep_failed_plans=True,
-                          **OPTIONS)
+    from dataclasses import replace
+
+    pool = mut.verify_all(HUBS, tmp_path / "pool", scenarios=["tool_in_hand"], workers=2,
+                          settings=replace(SETTINGS, keep_failed_plans=True))
     assert pool["executor"] == "processes(2)"
     assert [r["hub"] for r in pool["rows"]] == sorted(HUBS)
     for r in pool["rows"]:
@@ -39,7 +40,8 @@ def test_process_pool_then_dask_cluster(tmp_path):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        dask = mut.verify_all(HUBS[:1], tmp_path / "dask", scheduler=client, **OPTIONS)
+        dask = mut.verify_all(HUBS[:1], tmp_path / "dask", scenarios=["tool_in_hand"],
+                              scheduler=client, settings=SETTINGS)
     assert dask["executor"] == "dask"
     a = next(r for r in pool["rows"] if r["hub"] == HUBS[0])
     b = dask["rows"][0]
@@ -61,7 +63,7 @@ def test_hub_folders_and_errors(tmp_path):
     with pytest.raises(InputError, match="no hub model folders"):
         mut.hub_folders(tmp_path)
     row = mut.run_job(mut.BatchJob("tool_in_hand", "no_such_hub", str(tmp_path / "x"),
-                                   planner="reference"))
+                                   mut.JobSettings(planner="reference")))
     assert row["error"] and not row["passed"]
 
 
@@ -77,7 +79,8 @@ def test_a_cluster_job_plans_and_verifies_in_its_own_process(tmp_path, monkeypat
     monkeypatch.delenv("DRAKEDEBURR_WORKERS")
     assert parallel.worker_count(None, 5) == min(5, len(os.sched_getaffinity(0)))
     job = mut.BatchJob(scenario="tool_in_hand", hub=HUBS[0], out_dir=str(tmp_path / "j"),
-                       planner="reference", windows=(0,), quick=True, grinding_speed=0.075,
+                       settings=mut.JobSettings(planner="reference", windows=(0,), quick=True,
+                                                grinding_speed=0.075),
                        one_process=True)
     row = mut.run_job(job)
     assert row["error"] is None and row["passed"], row

@@ -8,7 +8,8 @@ are the same code with different frames. Tool geometry (the burr) is defined onc
 from drakedeburr._lazy import lazy_exports
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
-    "reach": ("ReachResult", "ReachSurvey", "ReachTarget", "face_targets", "survey_reach"),
+    "reach": ("ReachOptions", "ReachResult", "ReachSurvey", "ReachTarget", "face_targets",
+              "survey_reach"),
     "station": ("Cell", "load_cell", "resolve_hub_sdf"),
     "tools": ("BURR", "FLOATING_SPINDLE", "SPINDLE_STAND", "BurrGeometry"),
 })

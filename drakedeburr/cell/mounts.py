@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell.reach import ReachTarget, face_targets, survey_reach
+from drakedeburr.cell.reach import ReachOptions, ReachTarget, face_targets, survey_reach
 from drakedeburr.robots import CellMount, RobotSpec, get_robot
 
 __all__ = ["FLOOR_Z", "PEDESTAL_CLEARANCE", "PEDESTALS", "Pedestal", "MountStudy",
@@ -202,7 +202,7 @@ def _home(cell, scenario: str, seeds: int):
     d0 = _HOME_DISTANCE[scenario]
     for d in (d0, d0 + 0.05, d0 - 0.05, d0 + 0.10):
         r = survey_reach(cell, [ReachTarget(np.array([0.0, 0.0, d]), np.array([0.0, 0.0, -1.0]))],
-                         min_distance=0.005, seeds=seeds).results[0]
+                         ReachOptions(min_distance=0.005, seeds=seeds)).results[0]
         if r.success:
             return r
     return r
@@ -234,7 +234,7 @@ def study_mount(spec: RobotSpec | str, scenario: str, X_WB: np.ndarray, *,
         mount = CellMount(X_WB=X_WB, q_home=_ready_pose(spec), pedestal_url=path.as_uri())
         cell = load_cell(scenario, hub, robot=replace(spec, mounts=((scenario, mount),)))
         gap = pedestal_gap(cell)
-        survey = survey_reach(cell, targets, seeds=seeds)
+        survey = survey_reach(cell, targets, ReachOptions(seeds=seeds))
         ok = [r for r in survey.results if r.success]
         home = _home(cell, scenario, seeds)
     return MountStudy(

@@ -9,8 +9,8 @@ positive reading is checked against a bound that holds whatever the narrow phase
 * for any unit vector ``n`` (from B toward A), ``min_{a in A} n.a - max_{b in B} n.b`` is at
   most the distance of A and B (the separating-plane bound: support functions of the shapes,
   exact for boxes, cylinders, capsules, spheres, ellipsoids and convex hulls);
-* along Drake's own normal the bound meets the reading to within ``gap`` in almost every
-  case: the reading is then kept as it is (it lies within ``gap`` above the true distance);
+* along Drake's own normal the bound meets the reading to within ``READING_GAP`` in almost
+  every case: the reading is then kept as it is (it lies within that above the true distance);
 * otherwise the distance is solved again as a small second-order-cone program (Drake's
   ``MathematicalProgram`` with Clarabel: the closest points of the two convex sets), and the
   reading becomes the separating-plane bound along the solved direction: a rigorous lower bound
@@ -227,14 +227,14 @@ def exact_distance(A: ShapeSupport, X_WA: np.ndarray, B: ShapeSupport,
 
 def certified_distance(d: float, n_BA: np.ndarray, A: ShapeSupport, X_WA: np.ndarray,
                        B: ShapeSupport, X_WB: np.ndarray, *, solve_below: float = np.inf,
-                       solve_from: float = -np.inf,
-                       gap: float = READING_GAP) -> tuple[float, str]:
+                       solve_from: float = -np.inf) -> tuple[float, str]:
     """Drake's reading ``d`` [m] with its normal ``n_BA`` (from B toward A), held to the
     separating-plane bound (module docstring).
 
-    Returns (the certified reading [m], how): ``"kept"`` Drake's reading, within ``gap`` above
-    the distance; ``"bound"`` the bound along Drake's normal, which is at least
-    ``solve_below`` (rigorous; it may understate a distance that is far from mattering);
+    Returns (the certified reading [m], how): ``"kept"`` Drake's reading, within ``gap`` =
+    :data:`READING_GAP` above the distance; ``"bound"`` the bound along Drake's normal, which
+    is at least ``solve_below`` (rigorous; it may understate a distance that is far from
+    mattering);
     ``"solved"`` the bound along the exactly solved direction (or Drake's reading when that
     bound confirms it within ``gap``). Readings at or below zero (contact) are kept. A reading
     below ``solve_from`` (a limit it already fails, whatever the error) is not solved: its
@@ -242,6 +242,7 @@ def certified_distance(d: float, n_BA: np.ndarray, A: ShapeSupport, X_WA: np.nda
     """
     if not d > 0.0:
         return d, "kept"
+    gap = READING_GAP
     sep = separation(A, X_WA, B, X_WB, np.asarray(n_BA, float))
     if sep >= d - gap:
         return d, "kept"

@@ -25,7 +25,8 @@ import numpy as np
 from drakedeburr.cell.station import Cell
 from drakedeburr.frames.vectors import angle_between
 
-__all__ = ["ReachTarget", "ReachResult", "ReachSurvey", "face_targets", "survey_reach"]
+__all__ = ["ReachTarget", "ReachOptions", "ReachResult", "ReachSurvey", "face_targets",
+           "survey_reach"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,28 @@ class ReachTarget:
 
     p_HQ: np.ndarray
     a_H: np.ndarray
+
+
+@dataclass(frozen=True)
+class ReachOptions:
+    """The survey's constraints and effort.
+
+    Attributes:
+        joint_margin: distance kept from every position limit [rad].
+        wrist_margin: minimum |q_5| (J5 = 0 is the wrist singularity) [rad].
+        min_distance: minimum clearance [m] between unfiltered geometry pairs, the burr
+            head/hub pair excepted; None skips collision constraints.
+        axis_tolerance: cone half-angle around a_H [rad] (small, non-zero: see DESIGN.md).
+        position_tolerance: box half-width on p_TQ [m].
+        seeds: number of initial guesses tried per target (home, wrist flips, random).
+    """
+
+    joint_margin: float = float(np.radians(10.0))
+    wrist_margin: float = 0.25
+    min_distance: float | None = 0.005
+    axis_tolerance: float = 0.01
+    position_tolerance: float = 1e-6
+    seeds: int = 6
 
 
 @dataclass(frozen=True)
@@ -104,13 +127,7 @@ def face_targets(
 def survey_reach(
     cell: Cell,
     targets: list[ReachTarget],
-    *,
-    joint_margin: float = np.radians(10.0),
-    wrist_margin: float = 0.25,
-    min_distance: float | None = 0.005,
-    axis_tolerance: float = 0.01,
-    position_tolerance: float = 1e-6,
-    seeds: int = 6,
+    options: ReachOptions = ReachOptions(),
     progress: Callable[[int, int, str], None] | None = None,
 ) -> ReachSurvey:
     """Solve IK for every target (see module docstring). Failing targets are reported, not raised.
@@ -118,13 +135,7 @@ def survey_reach(
     Args:
         cell: the cell.
         targets: from :func:`face_targets` or your own.
-        joint_margin: distance kept from every position limit [rad].
-        wrist_margin: minimum |q_5| (J5 = 0 is the wrist singularity) [rad].
-        min_distance: minimum clearance [m] between unfiltered geometry pairs, the burr head/hub
-            pair excepted; None skips collision constraints.
-        axis_tolerance: cone half-angle around a_H [rad] (small, non-zero: see DESIGN.md).
-        position_tolerance: box half-width on p_TQ [m].
-        seeds: number of initial guesses tried per target (home, wrist flips, random).
+        options: margins, clearance, tolerances and seeds (:class:`ReachOptions`).
         progress: optional callback (done, total, label).
     """
     from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
@@ -140,9 +151,12 @@ def survey_reach(
         CollisionFilterDeclaration().ExcludeBetween(
             GeometrySet(burr_body_ids), GeometrySet(list(cell.hub_ids))))
     plant_context = plant.GetMyMutableContextFromRoot(context)
+    wrist_margin, min_distance = options.wrist_margin, options.min_distance
+    axis_tolerance, position_tolerance = options.axis_tolerance, options.position_tolerance
+    seeds = options.seeds
 
-    lo = np.asarray(cell.q_lower) + joint_margin
-    hi = np.asarray(cell.q_upper) - joint_margin
+    lo = np.asarray(cell.q_lower) + options.joint_margin
+    hi = np.asarray(cell.q_upper) - options.joint_margin
     rng = np.random.default_rng(0)
     seed_list = [np.asarray(cell.q_home, float)]
     flips = ((0, 0, 0, np.pi, 0, np.pi), (0, 0, 0, np.pi / 2, 0, 0), (0, 0, 0, -np.pi / 2, 0, 0))
@@ -156,8 +170,7 @@ def survey_reach(
     for i, target in enumerate(targets):
         prev = results[-1].q if results and results[-1].success else None
         found = _solve_target(cell, plant_context, target, ([prev] if prev is not None else [])
-                              + seed_list, lo, hi, wrist_margin, min_distance, axis_tolerance,
-                              position_tolerance)
+                              + seed_list, (lo, hi), options)
         if found is None:
             results.append(ReachResult(target, False, np.full(6, np.nan), np.nan, np.nan, np.nan))
         else:
@@ -177,14 +190,18 @@ def survey_reach(
     return ReachSurvey(tuple(results))
 
 
-def _solve_target(cell: Cell, plant_context, target: ReachTarget, seeds: list, lo: np.ndarray,
-                  hi: np.ndarray, wrist_margin: float, min_distance: float | None,
-                  axis_tolerance: float, position_tolerance: float) -> np.ndarray | None:
-    """Joints reaching one target from the first seed (and J5 sign) that solves, or None."""
+def _solve_target(cell: Cell, plant_context, target: ReachTarget, seeds: list,
+                  bounds: tuple[np.ndarray, np.ndarray], options: ReachOptions
+                  ) -> np.ndarray | None:
+    """Joints reaching one target within the joint ``bounds`` (lo, hi) from the first seed (and
+    J5 sign) that solves, or None."""
     from pydrake.multibody.inverse_kinematics import InverseKinematics
     from pydrake.solvers import SnoptSolver, Solve
 
     plant = cell.plant
+    lo, hi = bounds
+    wrist_margin, min_distance = options.wrist_margin, options.min_distance
+    axis_tolerance, position_tolerance = options.axis_tolerance, options.position_tolerance
     a_H = np.asarray(target.a_H, float) / np.linalg.norm(target.a_H)
     for seed in seeds:
         for sign in (1.0, -1.0):

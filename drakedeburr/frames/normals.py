@@ -44,7 +44,8 @@ from drakedeburr.frames.vectors import perpendicular_basis
 from drakedeburr.hub.types import ScanCloud
 from drakedeburr.path.types import ClPath
 
-__all__ = ["NormalEstimate", "inner_normals_from_cloud", "inner_normals_from_mesh", "loop_axis"]
+__all__ = ["NormalEstimate", "CloudNormalOptions", "inner_normals_from_cloud",
+           "inner_normals_from_mesh", "loop_axis"]
 
 log = logging.getLogger(__name__)
 
@@ -191,16 +192,33 @@ def _kmeans_split(n: np.ndarray, seed: int) -> np.ndarray:
     return km.labels_
 
 
+@dataclass(frozen=True)
+class CloudNormalOptions:
+    """Settings of :func:`inner_normals_from_cloud` beyond the process parameters.
+
+    Attributes:
+        voxel_size: voxel filter size [m].
+        knn: neighbours of the per-point normal estimate.
+        min_neighbours: fewer points than this within the search radius is an InputError.
+        quadric_sigma: Gaussian weight radius of the key-point quadric fit along the edge [m]
+            (across the edge it is half the search radius): short, so that a fit across a
+            plane/fillet junction stays local.
+        seed: k-means / RANSAC seed.
+    """
+
+    voxel_size: float = 0.3e-3
+    knn: int = 20
+    min_neighbours: int = 40
+    quadric_sigma: float = 1.0e-3
+    seed: int = 0
+
+
 def inner_normals_from_cloud(
     cloud: ScanCloud,
     cl: ClPath,
     *,
     params: ProcessParameters | None = None,
-    voxel_size: float = 0.3e-3,
-    knn: int = 20,
-    min_neighbours: int = 40,
-    quadric_sigma: float = 1.0e-3,
-    seed: int = 0,
+    options: CloudNormalOptions = CloudNormalOptions(),
     progress: Progress | None = None,
 ) -> NormalEstimate:
     """Inner-side normals at the CL points from a point cloud given in H.
@@ -210,26 +228,22 @@ def inner_normals_from_cloud(
             :func:`drakedeburr.hub.registration.register_hub`).
         cl: the window's CL points (H).
         params: search radius, key-point curvature, RANSAC threshold.
-        voxel_size: voxel filter size [m].
-        knn: neighbours of the per-point normal estimate.
-        min_neighbours: fewer points than this within the search radius is an InputError.
-        quadric_sigma: Gaussian weight radius of the key-point quadric fit along the edge [m]
-            (across the edge it is half the search radius): short, so that a fit across a
-            plane/fillet junction stays local.
-        seed: k-means / RANSAC seed.
+        options: voxel filter, neighbours, quadric weight radius, seed
+            (:class:`CloudNormalOptions`).
         progress: optional callback (done, total, label).
 
     Raises:
         InputError: a CL point has too few neighbours (names the window and the point).
     """
     params = params or ProcessParameters()
+    min_neighbours = options.min_neighbours
     p = np.asarray(cloud.p_S, float)
     if p.ndim != 2 or p.shape[1] != 3 or len(p) < min_neighbours:
         raise InputError(f"{cloud.source or 'scan'}: need an (N, 3) cloud, got {p.shape}")
     from threadpoolctl import threadpool_limits
 
     r = params.normal_search_radius
-    pts, nrm, tree = _window_cloud(p, cl, r, voxel_size, knn)
+    pts, nrm, tree = _window_cloud(p, cl, r, options.voxel_size, options.knn)
     m = len(cl.p_HC)
     w = cl.window_index
     z_loop = loop_axis(cl.p_HC)
@@ -252,8 +266,8 @@ def inner_normals_from_cloud(
                     f"{r * 1e3:.1f} mm (need {min_neighbours}); is the scan registered to H and "
                     "does it cover this edge?")
             key = cl.kappa[i] > params.key_point_curvature
-            label = _fit_point(pts, nrm, np.asarray(idx), p_C, cl.t_H[i], key, params, seed,
-                               quadric_sigma, z_loop, fitted[i], side_pts[i])
+            label, fitted[i], side_pts[i] = _fit_point(
+                (pts, nrm), np.asarray(idx), p_C, cl.t_H[i], key, params, options, z_loop)
             method.append(label)
             if progress is not None:
                 progress(i + 1, m, f"window {w}")
@@ -282,12 +296,15 @@ def _window_cloud(p: np.ndarray, cl: ClPath, r: float, voxel_size: float, knn: i
     return np.asarray(pcd.points), np.asarray(pcd.normals), o3d.geometry.KDTreeFlann(pcd)
 
 
-def _fit_point(pts, nrm, idx, p_C, t_C, key: bool, params, seed: int, quadric_sigma: float,
-               z_loop, fitted_out: np.ndarray, side_out: np.ndarray) -> str:
-    """The two faces meeting at one CL point: k-means splits its neighbourhood ``idx`` into
-    two clusters, each fitted by a RANSAC plane (or, at a key point or where the plane is
-    rejected, a local quadric). Writes the normals (2, 3) and cluster centroids (2, 3) into
-    ``fitted_out``/``side_out``; returns the fit's label."""
+def _fit_point(cloud: tuple[np.ndarray, np.ndarray], idx, p_C, t_C, key: bool, params,
+               options: CloudNormalOptions, z_loop) -> tuple[str, np.ndarray, np.ndarray]:
+    """The two faces meeting at one CL point: k-means splits its neighbourhood ``idx`` of the
+    window cloud ``(points, normals)`` into two clusters, each fitted by a RANSAC plane (or,
+    at a key point or where the plane is rejected, a local quadric). Returns the fit's label,
+    the normals (2, 3) and the cluster centroids (2, 3)."""
+    pts, nrm = cloud
+    seed, quadric_sigma = options.seed, options.quadric_sigma
+    fitted_out, side_out = np.zeros((2, 3)), np.zeros((2, 3))
     labels = _kmeans_split(nrm[idx], seed)
     label = "quadric" if key else "plane"
     r = params.normal_search_radius
@@ -306,7 +323,7 @@ def _fit_point(pts, nrm, idx, p_C, t_C, key: bool, params, seed: int, quadric_si
             n0 = _principal(nrm[idx[labels == c]])
             n_fit = _quadric_normal(q, p_C, n0, t_C, quadric_sigma, 0.5 * r)
         fitted_out[c] = n_fit
-    return label
+    return label, fitted_out, side_out
 
 
 def _group_and_sign(fitted: np.ndarray, side_pts: np.ndarray, cl: ClPath, z_loop: np.ndarray):

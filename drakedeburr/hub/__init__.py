@@ -6,7 +6,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "catalogue": ("BUNDLED", "DEFAULT_HUB", "bundled_spec"),
     "generate": ("GeneratedHub", "generate_hub"),
     "model": ("HubModel", "load_hub"),
-    "scan": ("simulate_scan",),
+    "scan": ("ScannerModel", "simulate_scan"),
     "spec": ("HubSpec", "load_spec", "spec_to_yaml"),
     "types": ("ScanCloud", "WindowEdge", "WindowKind"),
 })

@@ -154,13 +154,13 @@ def _run_scan(args: argparse.Namespace) -> int:
 
     from drakedeburr.argcheck import output_file
     from drakedeburr.hub.model import load_hub
-    from drakedeburr.hub.scan import simulate_scan
+    from drakedeburr.hub.scan import ScannerModel, simulate_scan
     from drakedeburr.units import m_from_mm
 
     output_file(args.output, "output point-cloud file")
     hub = load_hub(args.hub)
-    cloud = simulate_scan(hub, sigma=m_from_mm(args.sigma_mm), spacing=m_from_mm(args.spacing_mm),
-                          seed=args.seed)
+    cloud = simulate_scan(hub, ScannerModel(sigma=m_from_mm(args.sigma_mm)),
+                          spacing=m_from_mm(args.spacing_mm), seed=args.seed)
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(cloud.p_S))
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     if not o3d.io.write_point_cloud(str(args.output), pcd):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from drakedeburr.errors import InputError
 from drakedeburr.hub.model import HubModel
 from drakedeburr.hub.types import ScanCloud
 
-__all__ = ["simulate_scan", "scanner_origins_H"]
+__all__ = ["ScannerModel", "simulate_scan", "scanner_origins_H"]
 
 log = logging.getLogger(__name__)
 
@@ -49,30 +50,45 @@ def scanner_origins_H(view_dir: Sequence[float] = (0.0, 0.0, 1.0), *, distance: 
     return np.asarray(target_H, float) + distance * np.array(dirs)
 
 
-def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, seed: int = 0,
-                  view_dir: Sequence[float] = (0.0, 0.0, 1.0),
-                  partial: tuple[float, float] | None = None,
-                  max_edge_distance: float | None = None, distance: float = 0.8,
-                  tilt: float = math.radians(25.0), n_tilted: int = 4,
-                  max_incidence: float = math.radians(80.0),
-                  with_normals: bool = False, X_SH: np.ndarray | None = None) -> ScanCloud:
-    """Simulate a merged multi-view structured-light scan of ``hub`` in its frame H.
+@dataclass(frozen=True)
+class ScannerModel:
+    """The simulated sensor (module docstring).
 
-    Args:
-        hub: the hub model (see :func:`drakedeburr.hub.load_hub`).
+    Attributes:
         sigma: noise standard deviation per axis [m] (0.05 mm default).
-        spacing: mean point spacing on the surface [m]; the count is area / spacing^2.
-        seed: random seed (sampling and noise); same seed, same cloud.
         view_dir: unit direction in H from the hub towards the scanner (+Z_H: face-on).
-        partial: optional sector ``(theta_min, theta_max)`` [rad] about +Z_H (measured from
-            +X_H, CCW); only points whose polar angle lies in it are kept.
-        max_edge_distance: optional [m]: keep only points within this distance of a window edge
-            (cheap dense clouds for normal estimation).
         distance: scanner distance from the hub origin [m].
         tilt: tilt of the extra views about ``view_dir`` [rad].
         n_tilted: number of tilted views (0: a single face-on view, window walls unseen).
         max_incidence: a view sees a point only if the angle between the surface normal and the
             direction to the scanner is below this [rad].
+    """
+
+    sigma: float = 5e-5
+    view_dir: Sequence[float] = (0.0, 0.0, 1.0)
+    distance: float = 0.8
+    tilt: float = math.radians(25.0)
+    n_tilted: int = 4
+    max_incidence: float = math.radians(80.0)
+
+
+def simulate_scan(hub: HubModel, scanner: ScannerModel = ScannerModel(), *,
+                  spacing: float = 1e-3, seed: int = 0,
+                  partial: tuple[float, float] | None = None,
+                  max_edge_distance: float | None = None,
+                  with_normals: bool = False, X_SH: np.ndarray | None = None) -> ScanCloud:
+    """Simulate a merged multi-view structured-light scan of ``hub`` in its frame H.
+
+    Args:
+        hub: the hub model (see :func:`drakedeburr.hub.load_hub`).
+        scanner: noise, view direction, distance, tilted views and incidence limit
+            (:class:`ScannerModel`).
+        spacing: mean point spacing on the surface [m]; the count is area / spacing^2.
+        seed: random seed (sampling and noise); same seed, same cloud.
+        partial: optional sector ``(theta_min, theta_max)`` [rad] about +Z_H (measured from
+            +X_H, CCW); only points whose polar angle lies in it are kept.
+        max_edge_distance: optional [m]: keep only points within this distance of a window edge
+            (cheap dense clouds for normal estimation).
         with_normals: put the true (noise-free) surface normals in ``n_S``; otherwise ``n_S`` is
             None like a real scanner's output.
         X_SH: optional (4, 4) homogeneous pose of H in the scan frame S (e.g. the hub turned
@@ -86,6 +102,7 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
     Raises:
         InputError: invalid arguments.
     """
+    sigma, view_dir = scanner.sigma, scanner.view_dir
     if not (sigma >= 0 and math.isfinite(sigma)):
         raise InputError(f"simulate_scan: sigma must be >= 0, got {sigma}")
     if not (spacing > 0 and math.isfinite(spacing)) or spacing < 5e-5:
@@ -95,8 +112,9 @@ def simulate_scan(hub: HubModel, *, sigma: float = 5e-5, spacing: float = 1e-3, 
         if not th1 > th0:
             raise InputError(f"simulate_scan: partial sector needs theta_max > theta_min, "
                              f"got {partial}")
-    views = scanner_origins_H(view_dir, distance=distance, tilt=tilt, n_tilted=n_tilted)
-    cos_max = math.cos(max_incidence)
+    views = scanner_origins_H(view_dir, distance=scanner.distance, tilt=scanner.tilt,
+                              n_tilted=scanner.n_tilted)
+    cos_max = math.cos(scanner.max_incidence)
     T, N = _facing_triangles(hub.vertices_H, hub.faces, views, cos_max)
     etree = None
     if max_edge_distance is not None:

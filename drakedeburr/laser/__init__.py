@@ -20,7 +20,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "feature": ("FeatureSettings", "LaserTargets", "plan_contour"),
     "hole": ("HoleProgram", "ServoLimits", "plan_hole"),
     "itp": ("ControllerTiming", "ItpSegments"),
-    "robot_job": ("LaserCell", "LaserJob", "plan_job"),
+    "robot_job": ("LaserCell", "LaserJob", "LaserProcess", "plan_job"),
     "kinematics": (
         "FiveBarGeometry", "check_reach", "forward_kinematics", "inverse_kinematics", "jacobian",
         "singularity_measures",

@@ -400,7 +400,7 @@ def _run_job(args) -> int:
     from drakedeburr.laser.hole import ServoLimits
     from drakedeburr.laser.itp import ControllerTiming
     from drakedeburr.laser.power import PowerMap
-    from drakedeburr.laser.robot_job import LaserCell, plan_job
+    from drakedeburr.laser.robot_job import LaserCell, LaserProcess, plan_job
     from drakedeburr.post.cl_post import pose_from_mm_deg
     from drakedeburr.units import m_from_mm, rad_from_deg
 
@@ -432,8 +432,7 @@ def _run_job(args) -> int:
         holes.append(((m_from_mm(float(at[0])), m_from_mm(float(at[1]))),
                       _shape_from(h, f"{src}: holes[{k}]")))
     contour = job.get("contour")
-    plan = plan_job(
-        cell, None if contour is None else _shape_from(contour, f"{src}: contour"), holes, g,
+    process = LaserProcess(
         settings=FeatureSettings(travel_angle=rad_from_deg(float(job.get("travel_angle", 0))),
                                  work_angle=rad_from_deg(float(job.get("work_angle", 0))),
                                  speed=feed,
@@ -445,6 +444,9 @@ def _run_job(args) -> int:
         timing=ControllerTiming(period=float(job.get("itp_ms", 8)) * 1e-3,
                                 chord_tolerance=m_from_mm(float(job.get("chord_tolerance_mm",
                                                                         0.01)))))
+    plan = plan_job(
+        cell, None if contour is None else _shape_from(contour, f"{src}: contour"), holes, g,
+        process)
     texts = fanuc_ls.job_programs_ls(plan, name)
     args.output.mkdir(parents=True, exist_ok=True)
     files = [str(fanuc_ls.write_ls(args.output / f"{n.lower()}.ls", t)) for n, t in texts.items()]

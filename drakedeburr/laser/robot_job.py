@@ -23,14 +23,21 @@ is an InputError naming it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from drakedeburr.errors import InputError
 from drakedeburr.laser.kinematics import FiveBarGeometry
 
-__all__ = ["LaserCell", "LaserJob", "RobotMotion", "plan_job", "solve_robot", "hole_pose",
-           "X_FT_of", "HOLE_R"]
+if TYPE_CHECKING:
+    from drakedeburr.laser.feature import FeatureSettings
+    from drakedeburr.laser.hole import ServoLimits
+    from drakedeburr.laser.itp import ControllerTiming
+    from drakedeburr.laser.power import PowerMap
+
+__all__ = ["LaserCell", "LaserJob", "LaserProcess", "RobotMotion", "plan_job", "solve_robot",
+           "hole_pose", "X_FT_of", "HOLE_R"]
 
 #: largest joint step between two points of one cut [rad] (beyond: the short way round is
 #: outside the joint range, the wrist would unwind)
@@ -191,11 +198,31 @@ class LaserJob:
     contour_motion: RobotMotion | None
 
 
+@dataclass(frozen=True)
+class LaserProcess:
+    """How a job's features are cut (each None: the module's default).
+
+    Attributes:
+        settings: the robot contour's feed, angles and acceleration
+            (:class:`~drakedeburr.laser.feature.FeatureSettings`).
+        power: the laser command for a speed (:class:`~drakedeburr.laser.power.PowerMap`).
+        limits: the Cutting Tool's servo limits (:class:`~drakedeburr.laser.hole.ServoLimits`).
+        timing: the controller's interpolation (:class:`~drakedeburr.laser.itp.
+            ControllerTiming`; None: the default one).
+        hole_spacing: the holes' point spacing [m].
+    """
+
+    settings: FeatureSettings | None = None
+    power: PowerMap | None = None
+    limits: ServoLimits | None = None
+    timing: ControllerTiming | None = None
+    hole_spacing: float = 0.2e-3
+
+
 def plan_job(cell: LaserCell, contour_shape=None, holes=(), geometry: FiveBarGeometry | None = None,
-             settings=None, power=None, limits=None, timing=None,
-             hole_spacing: float = 0.2e-3) -> LaserJob:
+             process: LaserProcess = LaserProcess()) -> LaserJob:
     """Plan a part: ``holes`` = [((x, y) centre in P [m], shape), ...] cut by the tool,
-    ``contour_shape`` (in P) cut by the robot.
+    ``contour_shape`` (in P) cut by the robot, as ``process`` says (:class:`LaserProcess`).
 
     Raises:
         InputError: a hole the tool cannot cut, or a pose the arm cannot reach (named).
@@ -207,11 +234,12 @@ def plan_job(cell: LaserCell, contour_shape=None, holes=(), geometry: FiveBarGeo
     if contour_shape is None and not holes:
         raise InputError("laser job: nothing to cut (no contour and no holes)")
     g = geometry or FiveBarGeometry()
-    timing = timing if timing is not None else ControllerTiming()
+    settings, power, limits = process.settings, process.power, process.limits
+    timing = process.timing if process.timing is not None else ControllerTiming()
     progs, centers = [], []
     for k, (center, shape) in enumerate(holes):
         try:
-            progs.append(plan_hole(shape, hole_spacing, g, limits, power, timing,
+            progs.append(plan_hole(shape, process.hole_spacing, g, limits, power, timing,
                                    mirror_y=True))
         except InputError as exc:
             raise InputError(f"hole {k + 1}: {exc}") from exc

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 import logging
+from dataclasses import dataclass
 
 from drakedeburr.argcheck import number
 
-__all__ = ["register", "run_orient", "cl_points_from_edge", "cl_points_planned"]
+__all__ = ["register", "OrientRun", "run_orient", "cl_points_from_edge", "cl_points_planned"]
 
 log = logging.getLogger(__name__)
 
@@ -88,9 +89,30 @@ def cl_points_planned(edge, method: str):
     return cl, idx
 
 
-def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05e-3, seed=0,
-               spacing=2e-3, cl_method="proposed", progress=None) -> list[dict]:
-    """Orient every window of ``hub`` (a drakedeburr.hub HubModel); JSON-ready rows.
+@dataclass(frozen=True)
+class OrientRun:
+    """What ``orient`` runs on each window.
+
+    Attributes:
+        solver: the orientation solver ("exact", ...); model: the orientation model.
+        normals: "cloud" (estimated from a simulated scan), "mesh" or "truth".
+        sigma: the simulated scan's noise [m]; seed: its seed.
+        spacing: CL point spacing of the "loop" CL method [m]; cl_method: "proposed", "loop"
+            or another CL planner's method.
+    """
+
+    solver: str = "exact"
+    model: str = "axis"
+    normals: str = "cloud"
+    sigma: float = 0.05e-3
+    seed: int = 0
+    spacing: float = 2e-3
+    cl_method: str = "proposed"
+
+
+def run_orient(hub, run: OrientRun = OrientRun(), progress=None) -> list[dict]:
+    """Orient every window of ``hub`` (a drakedeburr.hub HubModel) as ``run`` says; JSON-ready
+    rows.
 
     Returns:
         One dict per window: tool_path_summary(...) plus normal-error figures when the model
@@ -101,11 +123,13 @@ def run_orient(hub, *, solver="exact", model="axis", normals="cloud", sigma=0.05
     from drakedeburr.frames.normals import inner_normals_from_cloud, inner_normals_from_mesh
     from drakedeburr.orientation.orient import orient_window, tool_path_summary
 
+    solver, model, normals, sigma, seed, spacing, cl_method = (
+        run.solver, run.model, run.normals, run.sigma, run.seed, run.spacing, run.cl_method)
     scan = None
     if normals == "cloud":
-        from drakedeburr.hub import simulate_scan
+        from drakedeburr.hub import ScannerModel, simulate_scan
 
-        scan = simulate_scan(hub, sigma=sigma, seed=seed, spacing=0.3e-3,
+        scan = simulate_scan(hub, ScannerModel(sigma=sigma), seed=seed, spacing=0.3e-3,
                              max_edge_distance=1.5 * 6e-3)
     rows = []
     for w, edge in enumerate(hub.windows):
@@ -152,9 +176,10 @@ def _run(args: argparse.Namespace) -> int:
 
     output_file(args.json, "--json")
     hub = load_hub(args.hub)
-    rows = run_orient(hub, solver=args.solver, model=args.model, normals=args.normals,
-                      sigma=args.sigma_mm * 1e-3, seed=args.seed, spacing=args.spacing_mm * 1e-3,
-                      cl_method=args.cl, progress=tqdm_progress("orient"))
+    rows = run_orient(hub, OrientRun(solver=args.solver, model=args.model, normals=args.normals,
+                                     sigma=args.sigma_mm * 1e-3, seed=args.seed,
+                                     spacing=args.spacing_mm * 1e-3, cl_method=args.cl),
+                      progress=tqdm_progress("orient"))
     print(f"{'window':>6} {'kind':>5} {'pts':>4} {'objective':>12} {'ms':>8} "
           f"{'thA min..max':>14} {'thB min..max':>14} {'turn deg/mm max':>16} ok")
     for r in rows:

@@ -38,6 +38,7 @@ from typing import Literal
 
 import numpy as np
 
+from drakedeburr.config import OrientationBounds
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import axis_from_angles, axis_jacobian
 
@@ -285,15 +286,16 @@ def make_problem(
     model: ModelName,
     p_HC: np.ndarray,
     R_HL: np.ndarray,
-    theta_min: float,
-    theta_max: float,
+    bounds: OrientationBounds,
     *,
     w1: float = 0.6,
     w2: float = 0.4,
     second_difference_weight: float = 0.0,
     name: str = "",
 ) -> OrientationProblem:
-    """Validate and build an :class:`OrientationProblem` (closed for axis, open for paper)."""
+    """Validate and build an :class:`OrientationProblem` (closed for axis, open for paper) with
+    the box ``bounds`` (theta_min, theta_max) on both angles [rad]."""
+    theta_min, theta_max = bounds.theta_min, bounds.theta_max
     if model not in ("axis", "paper"):
         raise InputError(f"{name}: unknown orientation model {model!r}; use 'axis' or 'paper'")
     p = np.asarray(p_HC, float)

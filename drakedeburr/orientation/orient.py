@@ -90,8 +90,8 @@ def problem_for(cl: ClPath, R_HL: np.ndarray, model: ModelName = "axis",
     """The orientation problem of one window (bounds from its kind)."""
     params = params or ProcessParameters()
     b = _bounds_for(cl.kind, params)
-    return make_problem(model, cl.p_HC, R_HL, b.theta_min, b.theta_max, w1=params.w1,
-                        w2=params.w2, second_difference_weight=options.second_difference_weight,
+    return make_problem(model, cl.p_HC, R_HL, b, w1=params.w1, w2=params.w2,
+                        second_difference_weight=options.second_difference_weight,
                         name=f"window {cl.window_index}")
 
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from drakedeburr.frames.vectors import angle_between
-from drakedeburr.plan.cut_path import cut_path
+from drakedeburr.plan.cut_path import AxisSmoothing, CutPathOptions, cut_path
 from drakedeburr.plan.interpolate import DensePath
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import (
@@ -27,7 +27,7 @@ from drakedeburr.plan.program_reading import (
     program_orientation_error,
 )
 from drakedeburr.plan.results import IkStep
-from drakedeburr.plan.spin import optimize_spin, spin_frames
+from drakedeburr.plan.spin import SpinSearch, optimize_spin, spin_frames
 from drakedeburr.plan.timing import joint_spline
 from drakedeburr.plan.types import FailureRecord
 
@@ -139,9 +139,9 @@ def _spin(ctx: PlanContext, cp, q0: np.ndarray, step: float, spin_mode: str, w: 
     if spin_mode == "search" and opt.spin_search:
         # the spin program keeps its travel resolution (every 2nd sample at the base step)
         # when the cut is sampled more finely
-        X_spin, stats = optimize_spin(ctx.kin, cp.X_HT, cp.s, q0, wrist_margin=opt.ik.min_wrist,
-                                      psi_ref=cp.psi_ik, band=opt.spin_band,
-                                      stride=max(1, round(2 * opt.dense_step / step)))
+        search = SpinSearch(wrist_margin=opt.ik.min_wrist, band=opt.spin_band,
+                            stride=max(1, round(2 * opt.dense_step / step)))
+        X_spin, stats = optimize_spin(ctx.kin, cp.X_HT, cp.s, q0, search, psi_ref=cp.psi_ik)
         if stats["ok"]:
             X_tg = cp.X_target.copy()
             X_tg[:, :3, :3] = X_spin[cp.target_index, :3, :3]
@@ -170,8 +170,9 @@ def track_cut(ctx: PlanContext, wt, ik: IkStep, step: float) -> _Try:
     q0 = wik.q[good[0]]
     for attempt in range(6):
         dist = None
-        cp = cut_path(X_ik, wt.cone_retract_H[order], wt.cone_half_angle, step=step,
-                      spin_sigma=opt.spin_sigma, axis_margin=opt.axis_margin, pin=pin,
+        shape = CutPathOptions(step=step, spin_sigma=opt.spin_sigma,
+                               axes=AxisSmoothing(margin=opt.axis_margin))
+        cp = cut_path(X_ik, wt.cone_retract_H[order], wt.cone_half_angle, shape, pin=pin,
                       deviation=dev)
         cp, spin_mode = _spin(ctx, cp, q0, step, spin_mode, w)
         q_d, ok_d = kin.track(kin.X_WF_from_X_HT(cp.X_HT), q0)

@@ -38,8 +38,8 @@ from drakedeburr.plan.program_reading import cone_axes_on_moves
 
 log = logging.getLogger(__name__)
 
-__all__ = ["BlendedPath", "blend_corners", "smooth_axes", "least_axis_curvature", "CutPath",
-           "cut_path", "axes_interp"]
+__all__ = ["BlendedPath", "blend_corners", "AxisSmoothing", "smooth_axes",
+           "least_axis_curvature", "CutPath", "CutPathOptions", "cut_path", "axes_interp"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,10 +171,27 @@ def _add_cone(prog, u_i, axis: np.ndarray, cos_a: float) -> None:
 PIN_MARGIN = 0.5e-3
 
 
+@dataclass(frozen=True)
+class AxisSmoothing:
+    """Weights and margins of :func:`smooth_axes`.
+
+    Attributes:
+        margin: kept inside the cone [rad] (a pinned sample keeps ``min(PIN_MARGIN, margin)``).
+        w_pref, w_rate, w_curv: weights of the distance to the preferred axes, of the
+            axis' rate and of its curvature (per metre of path).
+        pin_angle: a pinned sample's axis stays within this of its pin axis [rad].
+    """
+
+    margin: float = 2e-3
+    w_pref: float = 1.0
+    w_rate: float = 1e-4
+    w_curv: float = 1e-10
+    pin_angle: float = 0.004
+
+
 def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_angle: float,
-                *, margin: float = 2e-3, w_pref: float = 1.0, w_rate: float = 1e-4,
-                w_curv: float = 1e-10, pin: np.ndarray | None = None,
-                pin_angle: float = 0.004, pin_axes: np.ndarray | None = None) -> np.ndarray:
+                weights: AxisSmoothing = AxisSmoothing(), pin: np.ndarray | None = None,
+                pin_axes: np.ndarray | None = None) -> np.ndarray:
     """Smoothest tool-axis curve inside per-sample cones (a second-order cone program).
 
     Minimises ``w_rate * sum |du/ds|^2 ds + w_curv * sum |d2u/ds2|^2 ds + w_pref * sum |u -
@@ -184,17 +201,20 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     Args:
         s: (N,) arc length [m], increasing.
         a_pref: (N, 3) preferred unit axes; cone_axis: (N, 3) unit cone axes.
-        half_angle: cone half-angle [rad]; margin: kept inside it [rad].
-        pin: (N,) bool samples whose axis must stay within ``pin_angle`` of the preferred
-            one (where the smoothed axis cost clearance: the preferred axes come from the
-            clearance-constrained IK); pin_axes: (N, 3) the axes to stay near (default
-            ``a_pref``).
+        half_angle: cone half-angle [rad].
+        weights: margin, weights and pin angle (:class:`AxisSmoothing`).
+        pin: (N,) bool samples whose axis must stay within ``weights.pin_angle`` of the
+            preferred one (where the smoothed axis cost clearance: the preferred axes come
+            from the clearance-constrained IK); pin_axes: (N, 3) the axes to stay near
+            (default ``a_pref``).
 
     Returns:
         (N, 3) unit axes, or None if the program fails (no axis curve in the cones).
     """
     from pydrake.solvers import ClarabelSolver, MathematicalProgram
 
+    margin, w_pref, w_rate, w_curv = (weights.margin, weights.w_pref, weights.w_rate,
+                                      weights.w_curv)
     s = np.asarray(s, float)
     a_pref = np.asarray(a_pref, float)
     c = np.asarray(cone_axis, float)
@@ -239,7 +259,7 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
         ap = (a_pref if pin_axes is None else np.asarray(pin_axes, float)) @ E
         ap /= np.linalg.norm(ap, axis=1, keepdims=True)
         for i in np.flatnonzero(pin):
-            _add_cone(prog, u[i], ap[i], np.cos(pin_angle))
+            _add_cone(prog, u[i], ap[i], np.cos(weights.pin_angle))
     prog.SetInitialGuess(u, u_pref)
     res = ClarabelSolver().Solve(prog)
     if not res.is_success():
@@ -342,28 +362,44 @@ def _rotate_axis_to(R: np.ndarray, a_new: np.ndarray) -> np.ndarray:
     return Rotation.from_rotvec(axis * ang[:, None]).as_matrix() @ R
 
 
-def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: float, *,
-             deviation: float | np.ndarray = 0.03e-3, step: float = 0.5e-3,
-             spin_sigma: float = 3e-3,
-             axis_margin: float = 2e-3, w_rate: float = 1e-4, w_curv: float = 1e-10,
-             spin: str = "fixed",
-             pin: np.ndarray | None = None, pin_angle: float = 0.004) -> CutPath:
+@dataclass(frozen=True)
+class CutPathOptions:
+    """Settings of :func:`cut_path`.
+
+    Attributes:
+        step: dense sample spacing [m].
+        spin_sigma: Gaussian width of the orientation smoothing before the axis program [m].
+        spin: "fixed" (one X direction for the whole cut) or anything else (the smoothed
+            IK's spin).
+        axes: the axis program's margin inside the cone, weights and pin angle
+            (:class:`AxisSmoothing`).
+    """
+
+    step: float = 0.5e-3
+    spin_sigma: float = 3e-3
+    spin: str = "fixed"
+    axes: AxisSmoothing = AxisSmoothing()
+
+
+def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: float,
+             options: CutPathOptions = CutPathOptions(), *,
+             deviation: float | np.ndarray = 0.03e-3,
+             pin: np.ndarray | None = None) -> CutPath:
     """The executed cut through target poses: blended corners, smooth axis and spin.
 
     Args:
         X_targets: (K, 4, 4) target tool poses in H from the IK (tool point on the CL target,
             axis in the cone) [m].
         cone_retract_H: (K, 3) unit cone axes at the targets (tip -> spindle); half_angle [rad].
-        deviation: corner blend tolerance [m] (or (K,) per target); step: dense sample
-            spacing [m].
-        spin_sigma: Gaussian width of the orientation smoothing before the axis program [m].
-        axis_margin: kept inside the cone [rad]; w_rate, w_curv: axis program weights.
+        options: sampling, smoothing and the axis program's settings (:class:`CutPathOptions`).
+        deviation: corner blend tolerance [m] (or (K,) per target).
         pin: (P, 2) travel intervals [m] whose axis stays near the IK's (see
             :func:`smooth_axes`).
 
     Returns:
         CutPath.
     """
+    step, spin_sigma, spin = options.step, options.spin_sigma, options.spin
     X_targets = np.asarray(X_targets, float)
     bp = blend_corners(X_targets[:, :3, 3], deviation, step)
     rot = Rotation.from_matrix(X_targets[:, :3, :3])
@@ -381,8 +417,7 @@ def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: floa
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
     # the cone where the verifier reads it (on the program's moves); by travel where that
     # leaves the smoothing no axis (at a pinned sample of a tight corner)
-    kw = dict(margin=axis_margin, w_rate=w_rate, w_curv=w_curv, pin=_in_intervals(bp.s, pin),
-              pin_axes=a_ik, pin_angle=pin_angle)
+    kw = dict(weights=options.axes, pin=_in_intervals(bp.s, pin), pin_axes=a_ik)
     a = smooth_axes(bp.s, -R[:, :, 2], cone_axes_on_moves(bp.p, X_targets[:, :3, 3],
                                                           cone_retract_H), half_angle, **kw)
     if a is None:

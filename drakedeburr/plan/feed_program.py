@@ -41,7 +41,7 @@ import scipy.sparse as sps
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
-__all__ = ["FeedProgramOptions", "FeedResult", "hold_feed"]
+__all__ = ["FeedProgramOptions", "FeedResult", "FeedStretch", "hold_feed"]
 
 
 @dataclass(frozen=True)
@@ -95,6 +95,25 @@ class FeedResult:
     held: bool
     sigma: tuple
     seconds: float
+
+
+@dataclass(frozen=True, eq=False)
+class FeedStretch:
+    """The timed cut and the stretch of it whose frames :func:`hold_feed` turns.
+
+    Attributes:
+        s: (N,) travel [m]; X_HT: (N, 4, 4) tool poses in H; q: (N, 6) their joints [rad].
+        cone: (N, 3) cone axes (tip -> spindle); half_angle: [rad].
+        lo, hi: the stretch (sample indices).
+    """
+
+    s: np.ndarray
+    X_HT: np.ndarray
+    q: np.ndarray
+    cone: np.ndarray
+    half_angle: float
+    lo: int
+    hi: int
 
 
 def _near_ik(kin, X_HT: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
@@ -156,9 +175,23 @@ class _Layout:
         return self.nw + 6 * (self.ns - 2) + np.asarray(k)
 
 
-def _spline_rows(lay: _Layout, h, qs, G, free_of, M_end):
+@dataclass(frozen=True, eq=False)
+class _Linearised:
+    """One linearisation of the padded range: spacings ``h`` (ns - 1,), joints ``qs`` (ns, 6),
+    ``G`` (nf, 6, 3) d q / d w at the free samples, ``free_of`` (ns,) each sample's free index
+    (-1: fixed) and the whole cut's spline second derivatives ``M_end`` (2, 6) at the ends."""
+
+    h: np.ndarray
+    qs: np.ndarray
+    G: np.ndarray
+    free_of: np.ndarray
+    M_end: np.ndarray
+
+
+def _spline_rows(lay: _Layout, lin: _Linearised):
     """Equality rows (A, b) of the spline's tridiagonal equations at the interior samples, with
     the joints ``qs + G w`` at the free samples and ``M`` fixed to ``M_end`` (2, 6) at the ends."""
+    h, qs, G, free_of, M_end = lin.h, lin.qs, lin.G, lin.free_of, lin.M_end
     ns = lay.ns
     rows, cols, vals, rhs = [], [], [], np.zeros((ns - 2, 6))
     k = np.arange(1, ns - 1)
@@ -181,11 +214,12 @@ def _spline_rows(lay: _Layout, h, qs, G, free_of, M_end):
     return A, rhs.reshape(-1)
 
 
-def _limit_rows(lay: _Layout, h, qs, G, free_of, M_end, v, dv, acc_max, vel_max):
+def _limit_rows(lay: _Layout, lin: _Linearised, v, dv, acc_max, vel_max):
     """Inequality rows (A, ub) at the interior samples k, for the feed profile ``v`` (ns,) with
     slope ``dv`` = dv/ds: joint accelerations ``|v_k^2 M_kj + v_k dv_k q'_kj| <= acc_max_j (1 +
     sigma_k)`` and speeds ``|v_k q'_kj| <= vel_max_j (1 + sigma_k)``, q' the spline's first
     derivative ``(Q_{k+1} - Q_k) / h_k - h_k (2 M_k + M_{k+1}) / 6``."""
+    h, qs, G, free_of, M_end = lin.h, lin.qs, lin.G, lin.free_of, lin.M_end
     ns = lay.ns
     k = np.arange(1, ns - 1)
     n = len(k)
@@ -235,12 +269,13 @@ def _scaled(A, b):
     return sps.diags(sc) @ A, b * sc
 
 
-def _program(lay, A_eq, b_eq, A_in, ub, R, cone, half, opt: FeedProgramOptions,
-             m_scale: float = 1.0):
-    """One convex step: (w (nf, 3), sigma (ns)) or None. The spline's second derivatives are
-    solved for in units of ``m_scale`` (their bound's size; w is ~0.01 rad)."""
+def _program(lay, eq, ineq, R, cone, half, opt: FeedProgramOptions, m_scale: float = 1.0):
+    """One convex step: (w (nf, 3), sigma (ns)) or None, under the equality rows ``eq`` =
+    (A_eq, b_eq) and the inequality rows ``ineq`` = (A_in, ub). The spline's second derivatives
+    are solved for in units of ``m_scale`` (their bound's size; w is ~0.01 rad)."""
     from pydrake.solvers import ClarabelSolver, MathematicalProgram, SolverOptions
 
+    (A_eq, b_eq), (A_in, ub) = eq, ineq
     col = np.ones(lay.n)
     col[lay.nw:lay.nw + 6 * (lay.ns - 2)] = m_scale
     A_eq, A_in = A_eq @ sps.diags(col), A_in @ sps.diags(col)
@@ -277,19 +312,17 @@ def _program(lay, A_eq, b_eq, A_in, ub, R, cone, half, opt: FeedProgramOptions,
     return res.GetSolution(w), res.GetSolution(sig)
 
 
-def hold_feed(kin, s: np.ndarray, X_HT: np.ndarray, q: np.ndarray, cone: np.ndarray,
-              half_angle: float, lo: int, hi: int, v: float, acc_max: np.ndarray,
+def hold_feed(kin, cut: FeedStretch, v: float | np.ndarray, acc_max: np.ndarray,
               vel_max: np.ndarray, options: FeedProgramOptions = FeedProgramOptions()
               ) -> FeedResult:
-    """Frames of the cut's samples ``lo..hi`` that let the joints follow it at the constant feed
-    ``v`` (module docstring).
+    """Frames of the cut's samples ``cut.lo..cut.hi`` that let the joints follow it at the
+    constant feed ``v`` (module docstring).
 
     Args:
         kin: the cell's :class:`drakedeburr.plan.kinematics.CellKinematics`.
-        s: (N,) travel [m]; X_HT: (N, 4, 4) tool poses in H; q: (N, 6) their joints [rad].
-        cone: (N, 3) cone axes (tip -> spindle); half_angle: [rad].
-        lo, hi: the stretch (sample indices).
-        v: the feed to hold [m/s]: a constant, or (N,) a speed profile along ``s``;
+        cut: the timed cut's travel, poses, joints, cones and the stretch
+            (:class:`FeedStretch`).
+        v: the feed to hold [m/s]: a constant, or (N,) a speed profile along ``cut.s``;
             acc_max, vel_max: (6,) the joint limits the timing uses [rad/s^2], [rad/s] (its
             shares of the model's).
     """
@@ -297,6 +330,8 @@ def hold_feed(kin, s: np.ndarray, X_HT: np.ndarray, q: np.ndarray, cone: np.ndar
 
     t0 = time.perf_counter()
     opt = options
+    s, X_HT, q, cone, half_angle, lo, hi = (cut.s, cut.X_HT, cut.q, cut.cone, cut.half_angle,
+                                            cut.lo, cut.hi)
     a0, a1 = max(lo - opt.pad, 0), min(hi + opt.pad, len(s) - 1)
     free = np.arange(lo + opt.fixed, hi - opt.fixed + 1)
     lay = _Layout(nf=len(free), ns=a1 - a0 + 1)
@@ -320,10 +355,10 @@ def hold_feed(kin, s: np.ndarray, X_HT: np.ndarray, q: np.ndarray, cone: np.ndar
         q_full = np.array(q, float)
         q_full[a0:a1 + 1] = qs
         M_end = CubicSpline(s, q_full, axis=0)(s[[a0, a1]], 2)
-        A_eq, b_eq = _spline_rows(lay, h, qs, G, free_of, M_end)
-        A_in, ub = _limit_rows(lay, h, qs, G, free_of, M_end, v_sub, dv_sub, acc_lim, vel_lim)
-        step = _program(lay, A_eq, b_eq, A_in, ub, R, cone[free], half_angle, opt,
-                        m_scale=float(np.max(acc_lim) / np.min(v_sub) ** 2))
+        lin = _Linearised(h, qs, G, free_of, M_end)
+        step = _program(lay, _spline_rows(lay, lin),
+                        _limit_rows(lay, lin, v_sub, dv_sub, acc_lim, vel_lim), R, cone[free],
+                        half_angle, opt, m_scale=float(np.max(acc_lim) / np.min(v_sub) ** 2))
         if step is None:
             break
         w, sig = step

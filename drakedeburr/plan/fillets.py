@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from drakedeburr.frames.vectors import angle_between
-from drakedeburr.plan.feed_program import FeedProgramOptions, hold_feed
+from drakedeburr.plan.feed_program import FeedProgramOptions, FeedStretch, hold_feed
 
 log = logging.getLogger(__name__)
 
@@ -282,7 +282,7 @@ def _stretch_frames(ctx, cur: CutSamples, run, lim, fo):
             return None, lo, hi, False
         fr = np.asarray(lim.acceleration_fraction) * np.asarray(lim.a_max)
         vr = np.asarray(lim.velocity_fraction) * np.asarray(lim.v_max)
-        res = hold_feed(ctx.kin, s, cur.X_HT, cur.q, cur.cone, cur.half_angle, lo, hi,
+        res = hold_feed(ctx.kin, FeedStretch(s, cur.X_HT, cur.q, cur.cone, cur.half_angle, lo, hi),
                         fo.speed_share * v_g, fr, vr, fo.program)
         return (res.R if res.held else None), lo, hi, res.held
     lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))

@@ -20,7 +20,7 @@ from drakedeburr.plan.results import (
     WindowStats,
     WindowStatus,
 )
-from drakedeburr.plan.stretch import make_target, time_cartesian
+from drakedeburr.plan.stretch import TargetPoint, make_target, time_cartesian
 from drakedeburr.plan.transitions import approach_pose
 from drakedeburr.plan.types import FailureRecord
 
@@ -108,7 +108,8 @@ def _cut_targets(ctx: PlanContext, wt, ex: ExecutedCut, order: np.ndarray,
             n_H = n_H / np.linalg.norm(n_H)
             i = -1
         out.append(make_target(ctx.kin, ex.q_targets[j], wt.window_index, "cut", i,
-                               float(speeds[j]), "linear", p_HC, n_H, zone=float(cp.zone[j])))
+                               float(speeds[j]), "linear",
+                               TargetPoint(p_HC, n_H, zone=float(cp.zone[j]))))
     return out
 
 
@@ -188,8 +189,8 @@ def finish_window(ctx: PlanContext, wt, ik: IkStep, cut: CutStep) -> WindowPlan:
     i0 = int(order[0])
     stretches = [
         Stretch("approach", w, timed_app, [make_target(ctx.kin, q_app[-1], w, "approach", i0,
-                                                       v_app, "linear", wt.p_HC[i0],
-                                                       wt.n_H[i0])]),
+                                                       v_app, "linear",
+                                                       TargetPoint(wt.p_HC[i0], wt.n_H[i0]))]),
         Stretch("cut", w, timed_cut, _cut_targets(
             ctx, wt, ex, order, move_speeds(timed_cut.v_tcp, ex.cut.target_index,
                                             ctx.config.tolerances.speed_quantum))[1:]),

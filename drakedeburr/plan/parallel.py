@@ -17,21 +17,9 @@ import logging
 from collections.abc import Callable, Sequence
 
 from drakedeburr.cell.fingerprint import geometry_digest
-from drakedeburr.pool import (
-    logged_call,
-    map_calls,
-    map_tasks,
-    replay_records,
-    running_workers,
-    shutdown_pool,
-    warm_pool,
-    worker_count,
-)
+from drakedeburr.pool import logged_call, map_tasks, replay_records, worker_count
 
-#: the pool itself is :mod:`drakedeburr.pool`; its functions are named here too for the
-#: planner's modules that still import them from here
-__all__ = ["plan_all_windows", "map_windows", "worker_cell", "planning_cell", "map_tasks",
-           "map_calls", "warm_pool", "worker_count", "shutdown_pool", "running_workers"]
+__all__ = ["plan_all_windows", "map_windows", "worker_cell", "planning_cell"]
 
 log = logging.getLogger(__name__)
 

@@ -15,12 +15,14 @@ program over the analytic IK; no maintained library offers it for our kinematics
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from drakedeburr.plan.kinematics import CellKinematics
 
-__all__ = ["spin_frames", "optimize_spin"]
+__all__ = ["spin_frames", "SpinSearch", "optimize_spin"]
 
 
 def spin_frames(R: np.ndarray, psi: np.ndarray) -> np.ndarray:
@@ -36,10 +38,29 @@ def _wrap(a: np.ndarray) -> np.ndarray:
     return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
 
 
+@dataclass(frozen=True)
+class SpinSearch:
+    """Settings of :func:`optimize_spin`.
+
+    Attributes:
+        n_spin: spin grid size over a full turn; max_step: largest grid step between samples.
+        wrist_margin: smallest |J5| allowed [rad].
+        sigma: Gaussian width of the final smoothing [m].
+        stride: the program runs on every ``stride``-th sample (the result is interpolated).
+        band: spins farther than this from the reference spin are not considered [rad].
+    """
+
+    n_spin: int = 72
+    max_step: int = 4
+    wrist_margin: float = 0.15
+    sigma: float = 4e-3
+    stride: int = 2
+    band: float = float(np.pi)
+
+
 def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch: np.ndarray,
-                  *, n_spin: int = 72, max_step: int = 4, wrist_margin: float = 0.15,
-                  sigma: float = 4e-3, stride: int = 2, psi_ref: np.ndarray | None = None,
-                  band: float = np.pi) -> tuple[np.ndarray, dict]:
+                  options: SpinSearch = SpinSearch(), psi_ref: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, dict]:
     """Smooth spin along a dense cut that minimises the joint motion.
 
     Args:
@@ -47,12 +68,9 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         X_HT: (N, 4, 4) dense tool poses in H [m]; their Z axes (and positions) are kept.
         s: (N,) travel [m].
         q_branch: (6,) joints whose (shoulder, elbow, wrist) branch the cut keeps [rad].
-        n_spin: spin grid size over a full turn; max_step: largest grid step between samples.
-        wrist_margin: smallest |J5| allowed [rad].
-        sigma: Gaussian width of the final smoothing [m].
-        stride: the program runs on every ``stride``-th sample (the result is interpolated).
+        options: grid, steps, wrist margin, smoothing, stride and band (:class:`SpinSearch`).
         psi_ref: (N,) reference spin [rad] (the IK's, chosen with the clearance constraint);
-            band: spins farther than this from it are not considered [rad]. The search does
+            spins farther than ``options.band`` from it are not considered. The search does
             not query distances (too slow for 72 spins x every sample): staying near the IK's
             spin keeps the spindle body where the IK found room, and the caller re-checks.
 
@@ -60,6 +78,8 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         (N, 4, 4) poses with the chosen spin, and stats (cost, feasible share, spin range).
         When no spin path is feasible the input poses are returned and stats["ok"] is False.
     """
+    n_spin, max_step, wrist_margin = options.n_spin, options.max_step, options.wrist_margin
+    sigma, stride, band = options.sigma, options.stride, options.band
     X_HT = np.asarray(X_HT, float)
     N = len(X_HT)
     sel = np.unique(np.concatenate([np.arange(0, N, stride), [N - 1]]))

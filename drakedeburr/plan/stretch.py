@@ -4,6 +4,8 @@ home."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from drakedeburr.plan.kinematics import DISTANCE_SLACK
@@ -13,13 +15,24 @@ from drakedeburr.plan.timing import TimedPath, air_limits, rest_path, time_path
 from drakedeburr.plan.transitions import faster_move, joint_move
 from drakedeburr.plan.types import CartesianTarget, FailureRecord
 
-__all__ = ["make_target", "time_cartesian", "time_joint", "joint_stretch"]
+__all__ = ["TargetPoint", "make_target", "time_cartesian", "time_joint", "joint_stretch"]
 
 
-def make_target(kin, q, window, seg, cl, speed, motion, p_HC=None, n_H=None,
-                zone: float = 0.0) -> CartesianTarget:
-    """A program target at joints ``q`` (its poses by the analytic FK)."""
+@dataclass(frozen=True, eq=False)
+class TargetPoint:
+    """What a program target machines: the CL point ``p_HC`` (3,) [m] and its inner normal
+    ``n_H`` (3,) in H (None: a target off the edge), and its corner ``zone`` [m]."""
+
+    p_HC: np.ndarray | None = None
+    n_H: np.ndarray | None = None
+    zone: float = 0.0
+
+
+def make_target(kin, q, window, seg, cl, speed, motion,
+                point: TargetPoint = TargetPoint()) -> CartesianTarget:
+    """A program target at joints ``q`` (its poses by the analytic FK) machining ``point``."""
     q = np.asarray(q, float)
+    p_HC, n_H, zone = point.p_HC, point.n_H, point.zone
     return CartesianTarget(window_index=window, segment=seg, cl_index=cl,
                            X_HT=kin.X_HT_from_q(q), X_WF=kin.fk_flange(q), q=q.copy(),
                            speed=float(speed), zone=float(zone), motion=motion,

@@ -9,14 +9,17 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
         "fit_touch_points",
     ),
     "cl_post": (
-        "PostResult", "PostSettings", "PostSummary", "pose_from_mm_deg", "post_cl_file",
+        "PostOutput", "PostResult", "PostSettings", "PostSummary", "pose_from_mm_deg",
+        "post_cl_file",
         "program_from_cl",
     ),
     "cl_reader": (
-        "ClMove", "ClParseError", "ClProgram", "ClToolPath", "ClWarning", "ClWordCount",
+        "ClMove", "ClParseError", "ClProgram", "ClReadOptions", "ClToolPath", "ClWarning",
+        "ClWordCount",
         "iter_cl_moves", "parse_cl_text", "read_cl",
     ),
-    "tool_axis": ("ToolAxisPathResult", "path_travel", "solve_tool_axis_path", "tool_frames"),
+    "tool_axis": ("ToolAxisOptions", "ToolAxisPathResult", "path_travel", "solve_tool_axis_path",
+                  "tool_frames"),
     "virtual_tcp": (
         "contour_frames", "offset_contour", "part_contour_at_virtual", "virtual_tcp_poses",
     ),

@@ -332,7 +332,7 @@ def check_program(cal: CellCalibration, data: TouchData, target: str, robot, nam
         InputError: a feature the arm cannot reach with the fitted frames.
     """
     from drakedeburr.post.tool_axis import READY_POSE
-    from drakedeburr.programs.program import JOINT, LINEAR, RobotProgram
+    from drakedeburr.programs.program import JOINT, LINEAR, MoveDetails, RobotProgram
     from drakedeburr.robots import solve_path
 
     res = cal.target(target)
@@ -355,7 +355,8 @@ def check_program(cal: CellCalibration, data: TouchData, target: str, robot, nam
         raise InputError(f"{data.source}: {target} feature {path.failed[0] // 3 + 1} is out of "
                          "reach through the fitted frames")
     return RobotProgram.from_poses(
-        name, X_WT, path.q, speed=speed, zone=0.0, move_type=kinds, comments=notes,
+        name, X_WT, path.q, speed=speed, zone=0.0, move_type=kinds,
+        details=MoveDetails(comments=notes),
         X_FT=cal.X_FT, X_WO=X_BT, robot=robot, tool_name="tCalib", wobj_name=f"w{target}",
         source=Path(data.source).name, flag="UNVERIFIED",
         flag_reason="calibration check program: joint limits checked; collisions NOT checked",

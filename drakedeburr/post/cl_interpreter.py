@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Iterator
+from typing import NamedTuple
 
 import numpy as np
 
@@ -25,7 +26,18 @@ from drakedeburr.post.cl_types import (
 )
 from drakedeburr.units import INCH_M, MM_PER_M
 
-__all__ = ["ClInterpreter"]
+__all__ = ["ClInterpreter", "ClCircle", "arc_points"]
+
+
+class ClCircle(NamedTuple):
+    """A CIRCLE statement waiting for its end GOTO: its CL ``line``, ``center`` (3,) [m], unit
+    normal ``n`` (3,), ``radius`` [m] and the radius token as written (for messages)."""
+
+    line: int
+    center: np.ndarray
+    n: np.ndarray
+    radius: float
+    r_token: str
 
 _ORTHO_TOL = 1e-3  # MSYS axes: unit length and orthogonality as printed with ~7 digits
 
@@ -102,7 +114,7 @@ class ClInterpreter:
         self.rapid_next = False
         self.p_prev: tuple[float, float, float] | None = None
         self.p_from: tuple[float, float, float] | None = None
-        self.circle: tuple | None = None
+        self.circle: ClCircle | None = None
         self.cycle: DrillCycle | None = None
         self.cycle_last: DrillCycle | None = None
         self.cycle_start: np.ndarray | None = None
@@ -446,15 +458,15 @@ class ClInterpreter:
         if nn < 1e-9 or v[3] <= 0:
             self._fail(line, ",".join(args), "CIRCLE axis must be non-zero and radius > 0")
         n = n / nn if self.msys is None else self.msys[0] @ (n / nn)
-        self.circle = (line, center, n, v[3] * self.scale, args[6])
+        self.circle = ClCircle(line, center, n, v[3] * self.scale, args[6])
 
     def _arc(self, line: int, p: tuple[float, float, float], rapid: bool) -> Iterator[ClMove]:
-        c_line, center, n, radius, r_token = self.circle
+        circle, c_line = self.circle, self.circle.line
         self.circle = None
         if self.p_prev is None:
             self._fail(c_line, "CIRCLE", "CIRCLE before any position")
-        for q in arc_points(self.source, c_line, np.array(self.p_prev), np.array(p), center,
-                            n, radius, r_token, self.arc_tolerance):
+        for q in arc_points(self.source, circle, np.array(self.p_prev), np.array(p),
+                            self.arc_tolerance):
             yield self._move(c_line, (float(q[0]), float(q[1]), float(q[2])), rapid,
                              circle=True)
 
@@ -489,10 +501,11 @@ class ClInterpreter:
             yield self._move(line, p, rapid, cycle=True, feed=feed)
 
 
-def arc_points(source: str, line: int, p0: np.ndarray, p1: np.ndarray, center: np.ndarray,
-               n: np.ndarray, radius: float, r_token: str, tol: float) -> np.ndarray:
-    """(K, 3) interior points of the arc p0 -> p1 [m], right-handed about the unit normal n
-    (a helix along n is allowed), at most ``tol`` chord-height error."""
+def arc_points(source: str, circle: ClCircle, p0: np.ndarray, p1: np.ndarray,
+               tol: float) -> np.ndarray:
+    """(K, 3) interior points of the arc p0 -> p1 [m] on ``circle``, right-handed about its
+    unit normal n (a helix along n is allowed), at most ``tol`` chord-height error."""
+    line, center, n, radius, r_token = circle
     r0, r1 = p0 - center, p1 - center
     h0, h1 = r0 @ n, r1 @ n
     r0p, r1p = r0 - h0 * n, r1 - h1 * n

@@ -34,8 +34,12 @@ import numpy as np
 
 from drakedeburr.config import ProcessParameters
 from drakedeburr.errors import InputError
-from drakedeburr.post.cl_reader import ClProgram, read_cl
-from drakedeburr.post.tool_axis import ToolAxisPathResult, solve_tool_axis_path
+from drakedeburr.post.cl_reader import ClProgram, ClReadOptions, read_cl
+from drakedeburr.post.tool_axis import (
+    ToolAxisOptions,
+    ToolAxisPathResult,
+    solve_tool_axis_path,
+)
 from drakedeburr.programs.program import (
     JOINT,
     LINEAR,
@@ -47,7 +51,7 @@ from drakedeburr.programs.program import (
 from drakedeburr.robots import IRB1600_10_120_ROBOT, RobotKinematics
 from drakedeburr.units import m_from_mm, rad_from_deg
 
-__all__ = ["PostResult", "PostSettings", "PostSummary", "PostIO", "program_from_cl",
+__all__ = ["PostResult", "PostSettings", "PostSummary", "PostIO", "PostOutput", "program_from_cl",
            "post_cl_file", "pose_from_mm_deg", "robot_kinematics", "io_actions", "MAX_MOVES",
            "program_moves", "unreachable_flag", "part_file"]
 
@@ -276,12 +280,12 @@ def _solve(cl: ClProgram, s: PostSettings,
         raise InputError(f"{cl.source}: no moves in the CL file")
     X_WO, X_FT = s.frames()
     if s.stationary_tool:  # CL data stay in the held part's frame; the spindle is X_WO
-        return solve_tool_axis_path(s.robot, cl.p_C, cl.axis_C, X_FT, mode=s.spin_mode,
-                                    q_start=s.q_start, progress=progress, X_WS=X_WO)
+        return solve_tool_axis_path(s.robot, cl.p_C, cl.axis_C, X_FT, s.spin_mode,
+                                    ToolAxisOptions(q_start=s.q_start), progress, X_WS=X_WO)
     p_W = cl.p_C @ X_WO[:3, :3].T + X_WO[:3, 3]
     axis_W = cl.axis_C @ X_WO[:3, :3].T
-    return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, mode=s.spin_mode,
-                                q_start=s.q_start, progress=progress)
+    return solve_tool_axis_path(s.robot, p_W, axis_W, X_FT, s.spin_mode,
+                                ToolAxisOptions(q_start=s.q_start), progress)
 
 
 def file_notes(cl: ClProgram, spin_mode: str, change_lines: tuple[int, ...],
@@ -386,48 +390,27 @@ def unreachable_flag(bad: tuple[int, ...]) -> tuple[str, str]:
 def program_from_cl(
     cl: ClProgram,
     name: str,
-    robot: RobotKinematics = IRB1600_10_120_ROBOT,
-    X_WO: np.ndarray | None = None,
-    X_FT: np.ndarray | None = None,
-    spin_mode: str = "min_travel",
-    zone: float = 1e-3,
-    feed: float | None = None,
-    rapid_speed: float | None = None,
-    force: bool = False,
-    process: ProcessParameters | None = None,
-    q_start: np.ndarray | None = None,
+    settings: PostSettings = PostSettings(),
     progress: Callable[[int, int, str], None] | None = None,
-    stationary_tool: bool = False,
-    io: PostIO | None = None,
 ) -> PostResult:
     """Post-process a read CL file for a robot.
 
     Args:
         cl: the CL data (:func:`~drakedeburr.post.cl_reader.read_cl`).
         name: program name.
-        robot: kinematics and limits.
-        X_WO, X_FT: the fixed and the flange-carried frames (:class:`PostSettings`).
-        spin_mode: "min_travel", "greedy" or "theta6_zero".
-        zone: corner zone of feed moves [m] (the last move is always a stop point).
-        feed: TCP speed of feed moves [m/s]; None = the CL file's FEDRAT, else
-            ``process.grinding_speed``.
-        rapid_speed: speed of RAPID moves [m/s]; None = ``process.window_switch_speed``.
-        force: build the program even with unreachable points (they are left out and the
-            header says FORCED).
-        process: process parameters for the defaults.
-        q_start: (6,) joints the robot starts from [rad] (default: tool_axis.READY_POSE);
-            the first point's configuration is the one closest to it.
+        settings: robot, frames, spin rule, zone, speeds, start joints, I/O and ``force``
+            (:class:`PostSettings`): the last move is always a stop point; with ``force``
+            the program is built even with unreachable points (they are left out and the
+            header says FORCED); the first point's configuration is the one closest to
+            ``q_start``.
         progress: optional callback (done, total, label).
-        stationary_tool: workpiece in hand (module docstring).
-        io: the outputs SPINDL / COOLNT set (:class:`PostIO`; None: not written).
     """
-    s = PostSettings(robot, X_WO, X_FT, spin_mode, zone, feed, rapid_speed, force, q_start,
-                     process, stationary_tool, io)
+    s = settings
     res = _solve(cl, s, progress)
     bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
-    notes = tuple(file_notes(cl, spin_mode, changes, io))
-    if bad and not force:
+    notes = tuple(file_notes(cl, s.spin_mode, changes, s.io))
+    if bad and not s.force:
         log.warning("%d CL point(s) unreachable, first at line(s) %s", len(bad),
                     ", ".join(map(str, bad[:10])))
         return PostResult(None, bad, changes, res, notes)
@@ -439,7 +422,7 @@ def program_from_cl(
     before, end = _io_before(cl, s, keep)
     program = zones_within_half_moves(RobotProgram(
         name=name, moves=tuple(program_moves(cl, res, keep, s, int(keep[-1]), before)),
-        X_FT=X_FT_, X_WO=X_WO_, robot=robot, source=Path(cl.source).name, flag=flag,
+        X_FT=X_FT_, X_WO=X_WO_, robot=s.robot, source=Path(cl.source).name, flag=flag,
         flag_reason=reason, notes=notes, io_end=tuple(end), **_names(s)))
     return PostResult(program, bad, changes, res, notes)
 
@@ -465,6 +448,30 @@ class PostSummary:
     cl: ClProgram
 
 
+@dataclass(frozen=True)
+class PostOutput:
+    """The program :func:`post_cl_file` writes.
+
+    Attributes:
+        path: program file (.mod / .src / .ls); parts are ``out_001.ext``, ``out_002.ext``...
+        fmt: 'rapid', 'krl' or 'ls'.
+        name: program name (parts get ``_001`` ... appended, within 24 characters).
+        max_moves: moves per written file; a longer program is written as numbered parts,
+            each continuing where the previous ended.
+    """
+
+    path: str | Path
+    fmt: str
+    name: str
+    max_moves: int = MAX_MOVES
+
+    def checked_max_moves(self) -> int:
+        """``max_moves``; InputError when below 1."""
+        if self.max_moves < 1:
+            raise InputError(f"max_moves must be >= 1, got {self.max_moves}")
+        return self.max_moves
+
+
 def part_file(out: Path, k: int, n_parts: int) -> Path:
     """The file of part ``k`` of ``n_parts`` (``out`` itself for one part, else ``_001`` ...)."""
     return out if n_parts == 1 else out.with_name(f"{out.stem}_{k + 1:03d}{out.suffix}")
@@ -472,27 +479,20 @@ def part_file(out: Path, k: int, n_parts: int) -> Path:
 
 def post_cl_file(
     cl_path: str | Path,
-    out: str | Path,
-    fmt: str,
-    name: str,
+    output: PostOutput,
     settings: PostSettings = PostSettings(),
-    units: str = "mm",
-    cutcom: str = "refuse",
-    max_moves: int = MAX_MOVES,
+    read: ClReadOptions | None = None,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> PostSummary:
     """Read a CL file, solve the joints and write the program (streaming, bounded memory).
 
     Args:
         cl_path: the CL/APT file.
-        out: program file (.mod / .src / .ls); parts are ``out_001.ext``, ``out_002.ext``...
-        fmt: 'rapid', 'krl' or 'ls'.
-        name: program name (parts get ``_001`` ... appended, within 24 characters).
+        output: the program file, format, name and moves per file (:class:`PostOutput`).
         settings: see :class:`PostSettings`.
-        units: CL length unit until a UNITS statement ('mm' or 'inch').
-        cutcom: 'refuse' cutter compensation, or 'ignore' it (CL points = tool centre).
-        max_moves: moves per written file; a longer program is written as numbered parts,
-            each continuing where the previous ended.
+        read: how the CL file is read (:class:`~drakedeburr.post.cl_reader.ClReadOptions`;
+            None = the defaults:
+            units until a UNITS statement, cutter compensation refused or ignored).
         progress: callback (done, total, label) with labels 'read CL', 'spin + IK', 'write'.
 
     Raises:
@@ -500,9 +500,10 @@ def post_cl_file(
     """
     from drakedeburr.programs.writers import write_program
 
-    if max_moves < 1:
-        raise InputError(f"max_moves must be >= 1, got {max_moves}")
-    cl = read_cl(cl_path, units=units, cutcom=cutcom, progress=progress)
+    max_moves, name = output.checked_max_moves(), output.name
+    read = read or ClReadOptions()
+    cl = read_cl(cl_path, read.units, read.arc_tolerance, read.require_end, read.cutcom,
+                 progress)
     res = _solve(cl, settings, progress)
     bad = tuple(sorted({int(cl.lines[i]) for i in res.failed}))
     changes = tuple(sorted({int(cl.lines[i]) for i in res.configuration_changes}))
@@ -529,7 +530,7 @@ def post_cl_file(
             X_FT=X_FT, X_WO=X_WO, robot=settings.robot, source=Path(cl.source).name,
             flag=flag, flag_reason=reason, notes=notes + extra,
             io_end=tuple(end) if k == len(parts) - 1 else (), **_names(settings))
-        files += write_program(program, part_file(Path(out), k, len(parts)), fmt)
+        files += write_program(program, part_file(Path(output.path), k, len(parts)), output.fmt)
         del program
         if progress is not None:
             progress(k + 1, len(parts), "write")

@@ -62,6 +62,7 @@ __all__ = [
     "ClToolPath",
     "ClWordCount",
     "ClProgram",
+    "ClReadOptions",
     "ClReadState",
     "iter_cl_moves",
     "read_cl",
@@ -73,6 +74,24 @@ log = logging.getLogger(__name__)
 _CHUNK = 65536  # moves per column block while reading
 _COMMENTS_KEPT = 10000
 _PROGRESS_LINES = 65536  # progress callback every this many lines
+
+
+@dataclass(frozen=True)
+class ClReadOptions:
+    """How a CL file is read.
+
+    Attributes:
+        units: length unit until a UNITS statement says otherwise: 'mm' or 'inch' (NX CLSF
+            files usually carry no UNITS statement; inch files say FEDRAT/IPM).
+        arc_tolerance: maximum chord-height error of CIRCLE expansion [m].
+        require_end: raise if the file ends without FINI or a closing END-OF-PATH (truncated).
+        cutcom: 'refuse' cutter compensation (default) or 'ignore' it (CL = tool centre).
+    """
+
+    units: str = "mm"
+    arc_tolerance: float = 1e-5
+    require_end: bool = True
+    cutcom: str = "refuse"
 
 
 @dataclass
@@ -148,13 +167,10 @@ def _statements(lines: Iterable[str], source: str, counter: list[int],
 def iter_cl_moves(
     lines: Iterable[str],
     source: str = "<cl>",
-    units: str = "mm",
-    arc_tolerance: float = 1e-5,
+    options: ClReadOptions = ClReadOptions(),
     on_warning: Callable[[ClWarning], None] | None = None,
     on_comment: Callable[[int, str], None] | None = None,
-    require_end: bool = True,
     state_out: dict | ClReadState | None = None,
-    cutcom: str = "refuse",
     progress: Callable[[int, int], None] | None = None,
 ) -> Iterator[ClMove]:
     """Yield the moves of a CL file as it is read (streaming).
@@ -162,22 +178,20 @@ def iter_cl_moves(
     Args:
         lines: the file's lines (an open text file works).
         source: name used in messages.
-        units: length unit until a UNITS statement says otherwise: 'mm' or 'inch' (NX CLSF
-            files usually carry no UNITS statement; inch files say FEDRAT/IPM).
-        arc_tolerance: maximum chord-height error of CIRCLE expansion [m].
+        options: units, arc tolerance, end required, cutter compensation
+            (:class:`ClReadOptions`).
         on_warning: called with each :class:`ClWarning` (at most 20 per word).
         on_comment: called with (line, text) of each comment / PPRINT.
-        require_end: raise if the file ends without FINI or a closing END-OF-PATH (truncated).
         state_out: a :class:`ClReadState` (or a dict, which receives 'units' and 'end_line')
             filled at the end.
-        cutcom: 'refuse' cutter compensation (default) or 'ignore' it (CL = tool centre).
         progress: called with (lines read, characters read) every 65536 lines.
 
     Raises:
         ClParseError: malformed or unsupported statement, non-finite number, truncated file.
     """
     notes = Notes(on_warning)
-    interp = ClInterpreter(source, units, arc_tolerance, notes, on_comment, cutcom)
+    interp = ClInterpreter(source, options.units, options.arc_tolerance, notes, on_comment,
+                           options.cutcom)
     counter = [0, 0]
     for line, stmt in _statements(lines, source, counter, progress):
         yield from interp.statement(line, stmt)
@@ -186,7 +200,7 @@ def iter_cl_moves(
         raise ClParseError(source, last_line, "CIRCLE",
                            f"CIRCLE on line {interp.circle[0]} has no end GOTO (truncated?)")
     closed = interp.paths and not interp.path_open and interp.paths[-1].end_line > 0
-    if require_end and not (interp.ended or closed):
+    if options.require_end and not (interp.ended or closed):
         raise ClParseError(source, last_line, "EOF",
                            "file ends without FINI or END-OF-PATH (truncated?)"
                            if counter[0] else "empty file")
@@ -373,8 +387,8 @@ def read_cl(
                                                                     "read CL"))
     with path.open("r", encoding="utf-8", errors="replace", newline="") as f:
         prog = _program(str(path), iter_cl_moves(
-            f, str(path), units, arc_tolerance, None, _comment_sink(comments), require_end,
-            state, cutcom, tick), state, comments)
+            f, str(path), ClReadOptions(units, arc_tolerance, require_end, cutcom), None,
+            _comment_sink(comments), state, tick), state, comments)
     if progress is not None:
         progress(size, size, "read CL")
     for w in prog.warnings:
@@ -389,5 +403,5 @@ def parse_cl_text(text: str, source: str = "<text>", units: str = "mm",
     state = ClReadState()
     comments: list[tuple[int, str]] = []
     return _program(source, iter_cl_moves(
-        text.splitlines(), source, units, arc_tolerance, None, _comment_sink(comments),
-        require_end, state, cutcom), state, comments)
+        text.splitlines(), source, ClReadOptions(units, arc_tolerance, require_end, cutcom),
+        None, _comment_sink(comments), state), state, comments)

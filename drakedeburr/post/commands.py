@@ -239,7 +239,8 @@ def _report(summary, robot: str, io=None) -> None:
 
 def _run_post(args) -> int:
     from drakedeburr.errors import InputError
-    from drakedeburr.post.cl_post import MAX_MOVES, post_cl_file
+    from drakedeburr.post.cl_post import MAX_MOVES, PostOutput, post_cl_file
+    from drakedeburr.post.cl_reader import ClReadOptions
     from drakedeburr.programs.writers import format_for_controller
 
     _check_args(args)
@@ -273,11 +274,13 @@ def _run_post(args) -> int:
                     settings.frames()[1])
     try:
         summary = post(
-            args.cl_file, args.output,
-            args.fmt or format_for_controller(settings.robot.controller), name, settings,
-            units=args.units,
-            cutcom="ignore" if args.ignore_cutcom else "refuse",
-            max_moves=args.max_moves or MAX_MOVES, progress=_phase_progress(), **extra)
+            args.cl_file,
+            PostOutput(args.output, args.fmt or format_for_controller(settings.robot.controller),
+                       name, args.max_moves or MAX_MOVES),
+            settings,
+            ClReadOptions(units=args.units,
+                          cutcom="ignore" if args.ignore_cutcom else "refuse"),
+            progress=_phase_progress(), **extra)
     except KeyboardInterrupt:
         log.error("interrupted: nothing new written")
         return 130

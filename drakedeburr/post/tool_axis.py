@@ -44,6 +44,7 @@ from drakedeburr.robots.opw_ik import RobotKinematics, ik_opw, travel_weights
 
 __all__ = [
     "SPIN_MODES",
+    "ToolAxisOptions",
     "SEGMENT",
     "OVERLAP",
     "ToolAxisPathResult",
@@ -101,6 +102,21 @@ def tool_frames(p_W: np.ndarray, axis_W: np.ndarray, spin: np.ndarray | float = 
     X[:, :3, 0], X[:, :3, 1], X[:, :3, 2], X[:, :3, 3] = x, y, z, p_W
     X[:, 3, 3] = 1.0
     return X
+
+
+@dataclass(frozen=True)
+class ToolAxisOptions:
+    """Start and spin grid of :func:`solve_tool_axis_path`.
+
+    Attributes:
+        q_start: (6,) joints before the first point [rad] (None: :data:`READY_POSE`).
+        n_spin: spin grid of the dynamic programme (then refined continuously), >= 4.
+        x_ref_W: spin-0 reference direction of X_T.
+    """
+
+    q_start: np.ndarray | None = None
+    n_spin: int = 16
+    x_ref_W: tuple[float, float, float] | np.ndarray = (1.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -472,9 +488,7 @@ def solve_tool_axis_path(
     axis_W: np.ndarray,
     X_FT: np.ndarray,
     mode: str = "min_travel",
-    q_start: np.ndarray | None = None,
-    n_spin: int = 16,
-    x_ref_W: np.ndarray = (1.0, 0.0, 0.0),
+    options: ToolAxisOptions = ToolAxisOptions(),
     progress: Callable[[int, int, str], None] | None = None,
     X_WS: np.ndarray | None = None,
 ) -> ToolAxisPathResult:
@@ -486,9 +500,7 @@ def solve_tool_axis_path(
         axis_W: (N, 3) unit tool axes tip -> spindle (CAM convention) in the robot base.
         X_FT: (4, 4) tool in the flange frame [m].
         mode: "min_travel", "greedy" or "theta6_zero".
-        q_start: (6,) joints before the first point [rad] (default :data:`READY_POSE`).
-        n_spin: spin grid of the dynamic programme (then refined continuously).
-        x_ref_W: spin-0 reference direction of X_T.
+        options: start joints and spin grid (:class:`ToolAxisOptions`).
         progress: optional callback (done, total, label), once per segment.
         X_WS: (4, 4) the stationary tool's TCP in the robot base (workpiece in hand); then
             ``p_W``/``axis_W`` are in the held part's frame O, ``X_FT`` is O in the flange
@@ -497,7 +509,8 @@ def solve_tool_axis_path(
     Returns:
         ToolAxisPathResult; unreachable points are listed, not raised.
     """
-    prob = _problem(robot, p_W, axis_W, X_FT, mode, x_ref_W, X_WS)
+    q_start, n_spin = options.q_start, options.n_spin
+    prob = _problem(robot, p_W, axis_W, X_FT, mode, options.x_ref_W, X_WS)
     if n_spin < 4:
         raise InputError(f"n_spin must be >= 4, got {n_spin}")
     n = prob.p_W.shape[0]

@@ -35,7 +35,7 @@ from scipy.spatial.transform import Rotation
 
 from drakedeburr.errors import InputError
 from drakedeburr.post.cl_post import (
-    MAX_MOVES,
+    PostOutput,
     PostResult,
     PostSettings,
     PostSummary,
@@ -44,7 +44,7 @@ from drakedeburr.post.cl_post import (
     program_moves,
     unreachable_flag,
 )
-from drakedeburr.post.cl_reader import ClProgram, read_cl
+from drakedeburr.post.cl_reader import ClProgram, ClReadOptions, read_cl
 from drakedeburr.post.tool_axis import READY_POSE, ToolAxisPathResult
 from drakedeburr.programs.program import RobotProgram, zones_within_half_moves
 from drakedeburr.robots import RobotKinematics, solve_path, travel_weights
@@ -212,16 +212,17 @@ def virtual_tcp_program_from_cl(cl: ClProgram, name: str, s: PostSettings,
 
 
 def post_cl_file_virtual_tcp(
-    cl_path: str | Path, out: str | Path, fmt: str, name: str, settings: PostSettings,
-    units: str = "mm", cutcom: str = "refuse", max_moves: int = MAX_MOVES,
+    cl_path: str | Path, output: PostOutput, settings: PostSettings,
+    read: ClReadOptions | None = None,
     progress: Callable[[int, int, str], None] | None = None, X_OP: np.ndarray | None = None,
 ) -> PostSummary:
     """:func:`~drakedeburr.post.cl_post.post_cl_file` writing the virtual-TCP program."""
     from drakedeburr.programs.writers import write_program
 
-    if max_moves < 1:
-        raise InputError(f"max_moves must be >= 1, got {max_moves}")
-    cl = read_cl(cl_path, units=units, cutcom=cutcom, progress=progress)
+    max_moves, name = output.checked_max_moves(), output.name
+    read = read or ClReadOptions()
+    cl = read_cl(cl_path, read.units, read.arc_tolerance, read.require_end, read.cutcom,
+                 progress)
     result = virtual_tcp_program_from_cl(cl, name, settings, X_OP)
     prog = result.program
     if prog is None:
@@ -237,7 +238,7 @@ def post_cl_file_virtual_tcp(
             X_FT=prog.X_FT, X_WO=prog.X_WO, robot=prog.robot, source=prog.source,
             flag=prog.flag, flag_reason=prog.flag_reason, notes=prog.notes + extra,
             tool_name=prog.tool_name, wobj_name=prog.wobj_name)
-        files += write_program(piece, part_file(Path(out), k, len(parts)), fmt)
+        files += write_program(piece, part_file(Path(output.path), k, len(parts)), output.fmt)
         if progress is not None:
             progress(k + 1, len(parts), "write")
     return PostSummary(tuple(files), len(moves), result.unreachable_lines,

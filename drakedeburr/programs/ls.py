@@ -328,7 +328,10 @@ def read_ls(path: str | Path, check_name: bool = True) -> ReadProgram:
     return _program(name, file, st, pos)
 
 
-def _move(k, kind, n, speed_text, term, options, frames, pos, file) -> ReadMove:
+def _move(motion: tuple, pos: dict, file: str) -> ReadMove:
+    """The ReadMove of one parsed motion line ``(line, kind, position number, speed text,
+    termination, options, (uframe, utool))`` with its /POS entry."""
+    k, kind, n, speed_text, term, options, frames = motion
     if n not in pos:
         raise ProgramFormatError(f"{file}:{k}: P[{n}] has no position in /POS")
     X, config, (tline, oline, cline), uf_ut = pos[n]
@@ -359,7 +362,7 @@ def _move(k, kind, n, speed_text, term, options, frames, pos, file) -> ReadMove:
 
 
 def _program(name: str, file: str, st: _MnState, pos: dict) -> ReadProgram:
-    moves = tuple(_move(*mo, pos, file) for mo in st.motions)
+    moves = tuple(_move(mo, pos, file) for mo in st.motions)
     rtcp = [("RTCP" in (o.upper() for o in m.options)) for m in moves if m.move_type == LINEAR]
     if rtcp and any(rtcp) and not all(rtcp):
         first = next(m for m in moves if m.move_type == LINEAR and "RTCP" not in m.options)

@@ -35,7 +35,8 @@ from drakedeburr.robots import (
     fk_opw,
 )
 
-__all__ = ["ProgramMove", "RobotProgram", "IoAction", "LINEAR", "JOINT", "check_pose",
+__all__ = ["ProgramMove", "RobotProgram", "MoveDetails", "IoAction", "LINEAR", "JOINT",
+           "check_pose",
            "DEFAULT_JOINT_SPEED_FRACTION", "zones_within_half_moves"]
 
 LINEAR = "linear"
@@ -131,6 +132,23 @@ class ProgramMove:
     source_line: int | None = None
     joint_fraction: float | None = None
     io: tuple[IoAction, ...] = ()
+
+
+@dataclass(frozen=True)
+class MoveDetails:
+    """Per-move columns of :meth:`RobotProgram.from_poses` beyond pose, speed, zone and type
+    (each None, or one entry per move).
+
+    Attributes:
+        comments: the moves' comments ("" where none).
+        source_lines: the input lines the moves come from (CL / plan), None where none.
+        joint_fractions: a joint move's fraction of the axes' top speed (None: the
+            program's ``joint_speed_fraction``).
+    """
+
+    comments: Sequence[str] | None = None
+    source_lines: Sequence[int | None] | None = None
+    joint_fractions: Sequence[float | None] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,13 +256,14 @@ class RobotProgram:
         speed: float | Sequence[float] = 0.150,
         zone: float | Sequence[float] = 0.0,
         move_type: str | Sequence[str] = LINEAR,
-        comments: Sequence[str] | None = None,
-        source_lines: Sequence[int | None] | None = None,
-        joint_fractions: Sequence[float | None] | None = None,
+        details: MoveDetails = MoveDetails(),
         **kwargs,
     ) -> RobotProgram:
         """Build a program from arrays: X_WT (N, 4, 4) [m], q (N, 6) [rad], per-move or
-        scalar speed [m/s], zone [m] and move type; other fields by keyword."""
+        scalar speed [m/s], zone [m] and move type, per-move comments, source lines and
+        joint fractions (:class:`MoveDetails`); other fields by keyword."""
+        comments, source_lines = details.comments, details.source_lines
+        joint_fractions = details.joint_fractions
         X_WT = np.asarray(X_WT, float).reshape(-1, 4, 4)
         q = np.asarray(q, float).reshape(-1, 6)
         n = X_WT.shape[0]

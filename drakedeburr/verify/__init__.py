@@ -3,7 +3,7 @@
 from drakedeburr._lazy import lazy_exports
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
-    "batch": ("BatchJob", "verify_all"),
+    "batch": ("BatchJob", "JobSettings", "verify_all"),
     "checks": ("verify_plan",),
     "html": ("report_html", "write_report_html"),
     "report": ("SCHEMA", "CheckItem", "VerificationReport", "report_json", "write_report_json"),

@@ -20,9 +20,32 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.errors import InputError
 from drakedeburr.viz.scene import collect_here
 
-__all__ = ["BatchJob", "hub_folders", "make_plan", "run_job", "verify_all", "summary_markdown"]
+__all__ = ["BatchJob", "JobSettings", "hub_folders", "make_plan", "run_job", "verify_all",
+           "summary_markdown"]
 
 log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class JobSettings:
+    """How each job of a batch plans and verifies its hub.
+
+    Attributes:
+        planner: "plan_hub" (the planning stage) or "reference" (verify.synthetic).
+        windows: windows to plan and expect (None: all).
+        quick: coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate.
+        html: also write ``report.html`` (without the Meshcat replay).
+        grinding_speed: override of the process speed [m/s] (None: the hub's recipe).
+        keep_failed_plans: write the plan folder (``<out_dir>/plan``) of a hub that fails, to
+            look into it afterwards.
+    """
+
+    planner: str = "plan_hub"
+    windows: tuple[int, ...] | None = None
+    quick: bool = False
+    html: bool = False
+    grinding_speed: float | None = None
+    keep_failed_plans: bool = False
 
 
 @dataclass(frozen=True)
@@ -33,13 +56,7 @@ class BatchJob:
         scenario: bundled scenario name or path.
         hub: hub folder (or bundled name).
         out_dir: where ``report.json`` (and optionally ``report.html``) go.
-        planner: "plan_hub" (the planning stage) or "reference" (verify.synthetic).
-        windows: windows to plan and expect (None: all).
-        quick: coarse sampling (2 mm / 0.1 s): a smoke test, not a certificate.
-        html: also write ``report.html`` (without the Meshcat replay).
-        grinding_speed: override of the process speed [m/s] (None: the hub's recipe).
-        keep_failed_plans: write the plan folder (``<out_dir>/plan``) of a hub that fails, to
-            look into it afterwards.
+        settings: planner, windows, sampling, outputs (:class:`JobSettings`).
         one_process: plan and verify in the process running the job, no pool of worker
             processes (sets ``$DRAKEDEBURR_WORKERS`` to 1 there: a cluster's worker runs
             several jobs at once, and a pool shared by their threads would mix their tasks).
@@ -51,13 +68,8 @@ class BatchJob:
     scenario: str
     hub: str
     out_dir: str
-    planner: str = "plan_hub"
-    windows: tuple[int, ...] | None = None
-    quick: bool = False
-    html: bool = False
-    grinding_speed: float | None = None
+    settings: JobSettings = JobSettings()
     extra: dict = field(default_factory=dict)
-    keep_failed_plans: bool = False
     one_process: bool = False
     robot: str | None = None
 
@@ -110,25 +122,26 @@ def run_job(job: BatchJob) -> dict:
         from drakedeburr.cell.loads import arm_or_rated_default
         from drakedeburr.config import default_tolerances, load_config
 
-        tol = default_tolerances(**QUICK_SAMPLING) if job.quick else None
+        js = job.settings
+        tol = default_tolerances(**QUICK_SAMPLING) if js.quick else None
         # no robot named: the scenario's arm, or one rated for what it carries (as verify/plan)
         robot = arm_or_rated_default(job.robot, job.scenario, job.hub)
         row["robot"] = robot
         config = load_config(job.scenario, job.hub, tolerances=tol, robot=robot,
-                             grinding_speed=job.grinding_speed)
+                             grinding_speed=js.grinding_speed)
         t0 = time.perf_counter()
-        plan = make_plan(config, job.planner, job.windows)
+        plan = make_plan(config, js.planner, js.windows)
         row["plan_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        report = verify_plan(plan, config, expected_windows=job.windows)
+        report = verify_plan(plan, config, expected_windows=js.windows)
         row["verify_s"] = time.perf_counter() - t0
         out = Path(job.out_dir)
         write_report_json(report, out / "report.json")
-        if job.html:
+        if js.html:
             from drakedeburr.verify.html import write_report_html
 
             write_report_html(report, out / "report.html")
-        if job.keep_failed_plans and not report.passed:
+        if js.keep_failed_plans and not report.passed:
             from drakedeburr.plan.io import save_plan
 
             save_plan(plan, out / "plan")
@@ -156,13 +169,8 @@ def verify_all(
     scenarios: Sequence[str] = ("tool_in_hand", "workpiece_in_hand"),
     workers: int = 1,
     scheduler: str | object | None = None,
-    planner: str = "plan_hub",
-    windows: Sequence[int] | None = None,
-    quick: bool = False,
-    html: bool = False,
-    grinding_speed: float | None = None,
+    settings: JobSettings = JobSettings(),
     progress: Callable[[int, int, str], None] | None = None,
-    keep_failed_plans: bool = False,
 ) -> dict:
     """Verify every (scenario, hub) and write ``summary.json`` / ``summary.md`` in ``out_dir``.
 
@@ -173,9 +181,8 @@ def verify_all(
         workers: processes on this machine (1 = in this process, no pool).
         scheduler: a Dask scheduler address (``tcp://host:8786``) or a ``distributed.Client``;
             when given, ``workers`` is ignored and the cluster runs the jobs.
-        planner, windows, quick, html, grinding_speed: see :class:`BatchJob`.
+        settings: planner, windows, sampling, outputs of every job (:class:`JobSettings`).
         progress: callback (done, total, label).
-        keep_failed_plans: also write the plan of every hub that fails (see :class:`BatchJob`).
 
     Returns:
         The summary: ``{"passed": bool, "rows": [...], "elapsed_s": float, "executor": str}``.
@@ -185,10 +192,10 @@ def verify_all(
     else:
         hub_list = [str(h) for h in hubs]
     out_dir = Path(out_dir)
+    if settings.windows is not None:
+        settings = replace(settings, windows=tuple(settings.windows) or None)
     jobs = [BatchJob(scenario=s, hub=h, out_dir=str(out_dir / Path(s).stem / Path(h).name),
-                     planner=planner, windows=tuple(windows) if windows else None, quick=quick,
-                     html=html, grinding_speed=grinding_speed,
-                     keep_failed_plans=keep_failed_plans)
+                     settings=settings)
             for s in scenarios for h in hub_list]
     started = time.perf_counter()
     rows: list[dict] = []

@@ -341,7 +341,7 @@ def _run_verify_all(args: argparse.Namespace) -> int:
     from drakedeburr.cli import tqdm_progress
     from drakedeburr.errors import InputError
     from drakedeburr.resources import scenario_path
-    from drakedeburr.verify.batch import summary_markdown, verify_all
+    from drakedeburr.verify.batch import JobSettings, summary_markdown, verify_all
 
     if not Path(args.hubs).is_dir():
         raise InputError(f"{args.hubs}: no such catalogue folder (a folder of hub folders)")
@@ -356,12 +356,12 @@ def _run_verify_all(args: argparse.Namespace) -> int:
         check_path_name(hub.name, f"{args.hubs}: hub folder")
 
     scenarios = args.scenario or ["tool_in_hand", "workpiece_in_hand"]
+    settings = JobSettings(
+        planner=args.planner, windows=_windows(args.windows), quick=args.quick, html=args.html,
+        grinding_speed=None if args.grinding_speed is None else m_from_mm(args.grinding_speed))
     summary = verify_all(
         args.hubs, args.out, scenarios=scenarios, workers=args.workers,
-        scheduler=args.scheduler, planner=args.planner, windows=_windows(args.windows),
-        quick=args.quick, html=args.html,
-        grinding_speed=None if args.grinding_speed is None else m_from_mm(args.grinding_speed),
-        progress=tqdm_progress("verify-all"))
+        scheduler=args.scheduler, settings=settings, progress=tqdm_progress("verify-all"))
     print(summary_markdown(summary), end="")
     return 0 if summary["passed"] else 1
 

@@ -19,7 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell import BURR, ReachTarget, face_targets, load_cell, survey_reach
+from drakedeburr.cell import (
+    BURR,
+    ReachOptions,
+    ReachTarget,
+    face_targets,
+    load_cell,
+    survey_reach,
+)
 from drakedeburr.resources import hub_names, models_dir
 from drakedeburr.viz import (
     get_meshcat,
@@ -115,7 +122,7 @@ def main() -> None:
     if not targets:  # a plain SDF hub without edges: points of its face instead
         targets = face_targets(0.175, rings=1, per_ring=4, tilt=0.5, tilts=2)
     for name, cell in cells.items():
-        survey = survey_reach(cell, targets, min_distance=None)
+        survey = survey_reach(cell, targets, ReachOptions(min_distance=None))
         reached = [r for r in survey.results if r.success]
         worst = max(r.position_error for r in reached)
         print(f"{name}: {len(reached)}/{len(targets)} edge targets reached "

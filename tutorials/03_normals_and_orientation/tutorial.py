@@ -23,7 +23,7 @@ import numpy as np
 
 from drakedeburr._io import atomic_write_text
 from drakedeburr.frames import inner_normals_from_cloud
-from drakedeburr.hub import load_hub, simulate_scan
+from drakedeburr.hub import ScannerModel, load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, PsoOptions, orient_window
 from drakedeburr.path import fit_edge_curve, plan_cl
 
@@ -76,8 +76,8 @@ def main() -> None:
     mid = np.angle(np.exp(1j * ang).mean())
     d = np.angle(np.exp(1j * (ang - mid)))  # polar angles relative to their mean, no wrap
     sector = (mid + d.min() - 0.15, mid + d.max() + 0.15)
-    scan = simulate_scan(hub, sigma=0.05e-3, seed=0, spacing=0.3e-3, max_edge_distance=9e-3,
-                         partial=sector)
+    scan = simulate_scan(hub, ScannerModel(sigma=0.05e-3), seed=0, spacing=0.3e-3,
+                         max_edge_distance=9e-3, partial=sector)
     print(f"scan: {len(scan.p_S)} points near the edges of windows "
           f"{[w.index for w in windows]}")
 

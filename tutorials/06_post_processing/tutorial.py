@@ -27,6 +27,7 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 
 from drakedeburr.errors import InputError  # noqa: E402
 from drakedeburr.post import (  # noqa: E402
+    PostSettings,
     contour_frames,
     fit_touch_points,
     offset_contour,
@@ -91,7 +92,7 @@ def step3_programs(cl: dict, out: Path, test_mode: bool) -> dict:
     # the Creo part is clamped 700 mm in front of the robot, 300 mm up, turned 30 deg
     X_WO = pose_from_mm_deg([700, 0, 300, 0, 0, 30])
     X_FT = pose_from_mm_deg([0, 0, 200, 0, 0, 0])  # burr 200 mm out along the flange axis
-    result = program_from_cl(cl["creo"], "creo_profile", X_WO=X_WO, X_FT=X_FT)
+    result = program_from_cl(cl["creo"], "creo_profile", PostSettings(X_WO=X_WO, X_FT=X_FT))
     print(f"   {len(result.program.moves)} moves, unreachable CL lines: "
           f"{result.unreachable_lines or 'none'}")
     # the program is written in the arm's own language (RAPID for the ABB) and read back
@@ -106,7 +107,7 @@ def step3_programs(cl: dict, out: Path, test_mode: bool) -> dict:
     except InputError as exc:
         print(f"   KRL refused: {exc}")
     # without the work object the CL coordinates are robot base coordinates: unreachable
-    base = program_from_cl(cl["creo"], "creo_base", X_FT=X_FT)
+    base = program_from_cl(cl["creo"], "creo_base", PostSettings(X_FT=X_FT))
     print(f"   same file in the robot base frame: {len(base.unreachable_lines)} unreachable "
           f"lines (first {base.unreachable_lines[:3]}), no program unless forced")
 

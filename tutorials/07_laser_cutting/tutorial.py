@@ -153,7 +153,7 @@ def main() -> None:
 
     # 4. A larger contour by the robot ("Feature" settings), in the plate frame (UFRAME) -----
     from drakedeburr.laser.fanuc_ls import job_programs_ls
-    from drakedeburr.laser.robot_job import LaserCell, plan_job
+    from drakedeburr.laser.robot_job import LaserCell, LaserProcess, plan_job
 
     X_RP = np.eye(4)
     X_RP[:3, 3] = [0.8, 0.0, 0.2]  # the plate 0.8 m in front of the M-10iA, 0.2 m up
@@ -170,7 +170,7 @@ def main() -> None:
                                    lead_in=0.005),
                    [((0.03, 0.01), Circle(diameter=0.008, lead_in=0.002)),
                     ((-0.03, -0.01), Slot(length=0.015, width=0.005, lead_in=0.002))],
-                   g, feature)
+                   g, LaserProcess(settings=feature))
     for name, text in job_programs_ls(job, "part_a").items():
         write_ls(out / f"{name.lower()}.ls", text)
     print(f"  job: {len(job.holes)} holes (CALLed), contour CONFIGs "
