@@ -141,6 +141,25 @@ def test_empty_or_odd_plans_are_refused():
         mut.program_from_plan(replace(_plan(), targets=()))
     with pytest.raises(InputError, match="neither 'tool' nor 'workpiece'"):
         mut.program_from_plan(replace(_plan(), mode="both"))
+    for mode, lost in (("tool", "X_FT"), ("workpiece", "X_FH"), ("workpiece", "X_WT")):
+        plan = _plan(mode=mode)
+        meta = {k: v for k, v in plan.meta.items() if k != lost}
+        with pytest.raises(InputError, match=f"no {lost} "):
+            mut.program_from_plan(replace(plan, meta=meta))
+
+
+def test_the_plans_cell_frames_are_typed_from_its_record():
+    plan = _plan(X_WB=np.diag([1.0, -1.0, -1.0, 1.0]))
+    f = plan.frames
+    np.testing.assert_array_equal(f.X_WB, plan.meta["X_WB"])
+    np.testing.assert_array_equal(f.X_FT, plan.meta["X_FT"])
+    assert f.carried("tool")[1] is None
+    X_FH, X_WT = f.carried("workpiece")
+    np.testing.assert_array_equal(X_FH, plan.meta["X_FH"])
+    np.testing.assert_array_equal(X_WT, plan.meta["X_WT"])
+    old = replace(plan, meta={"X_FT": plan.meta["X_FT"]}).frames  # before mounts: base = world
+    np.testing.assert_array_equal(old.X_WB, np.eye(4))
+    assert old.X_FH is None and old.X_WT is None
 
 
 def test_a_plan_made_with_another_burr_says_so_in_the_program(tmp_path):

@@ -21,7 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 __all__ = ["SegmentKind", "CartesianTarget", "PlanSegment", "JointTrajectory", "Plan",
-           "FailureRecord"]
+           "FailureRecord", "CellFrames"]
 
 SegmentKind = Literal["home", "approach", "cut", "retract", "transition"]
 
@@ -211,6 +211,50 @@ class Plan:
     failures: tuple[FailureRecord, ...] = ()
     meta: dict = field(default_factory=dict)
     run: dict = field(default_factory=dict)
+
+    @property
+    def frames(self) -> CellFrames:
+        """The cell's frames the plan was made in (read from its record, ``meta``)."""
+        return CellFrames.from_meta(self.meta)
+
+
+def _pose(v) -> np.ndarray | None:
+    return None if v is None else np.asarray(v, float).reshape(4, 4)
+
+
+@dataclass(frozen=True, eq=False)
+class CellFrames:
+    """The cell's frames of a plan (4x4 poses [m]; None where the cell has no such frame).
+
+    Attributes:
+        X_WB: the robot base in the world (identity for plans made before mounts existed).
+        X_FT: the tool (burr tip frame) on the flange: tool in hand.
+        X_FH: the hub on the flange (gripper): workpiece in hand.
+        X_WT: the stationary tool in the world: workpiece in hand.
+    """
+
+    X_WB: np.ndarray
+    X_FT: np.ndarray | None = None
+    X_FH: np.ndarray | None = None
+    X_WT: np.ndarray | None = None
+
+    @classmethod
+    def from_meta(cls, meta: dict) -> CellFrames:
+        return cls(X_WB=_pose(meta.get("X_WB", np.eye(4))), X_FT=_pose(meta.get("X_FT")),
+                   X_FH=_pose(meta.get("X_FH")), X_WT=_pose(meta.get("X_WT")))
+
+    def carried(self, mode: str) -> tuple[np.ndarray, np.ndarray | None]:
+        """(the frame the flange carries, the stationary tool in the world or None) of a plan
+        ``mode``: the tool X_FT in "tool" mode, the hub X_FH and the tool X_WT in "workpiece"
+        mode. Raises KeyError naming the frame the record lacks."""
+        if mode == "tool":
+            if self.X_FT is None:
+                raise KeyError("X_FT")
+            return self.X_FT, None
+        for name in ("X_FH", "X_WT"):
+            if getattr(self, name) is None:
+                raise KeyError(name)
+        return self.X_FH, self.X_WT
 
 
 TOOL_PATH_ARRAYS = ("p_HC", "R_HL", "zT_H", "theta_A", "theta_B", "cone_zT_H")

@@ -13,7 +13,7 @@ the planned trajectory reaches on the way there.
   the fixed frame is the spindle's TCP (``X_WO := X_BT``).
 
 Poses are expressed in the arm's base frame B: ``X_BF = X_WB^-1 X_WF`` with the mount ``X_WB``
-recorded in the plan (``meta["X_WB"]``; identity for plans made before mounts existed).
+recorded in the plan (``plan.frames.X_WB``; identity for plans made before mounts existed).
 """
 
 from __future__ import annotations
@@ -169,14 +169,19 @@ def program_from_plan(
     keep = [k for k, t in enumerate(plan.targets)
             if include_transitions or t.segment not in _JOINT_SEGMENTS]
     targets = [plan.targets[k] for k in keep]
-    X_BW = np.linalg.inv(np.asarray(plan.meta.get("X_WB", np.eye(4)), float))
-    if plan.mode == "tool":
-        X_Fc, X_BO, tool_name = np.asarray(plan.meta["X_FT"], float), X_BW @ plan.X_WH, "tBurr"
-    elif plan.mode == "workpiece":
-        X_Fc = np.asarray(plan.meta["X_FH"], float)
-        X_BO, tool_name = X_BW @ np.asarray(plan.meta["X_WT"], float), "tSpindle"
-    else:
+    frames = plan.frames
+    X_BW = np.linalg.inv(frames.X_WB)
+    if plan.mode not in ("tool", "workpiece"):
         raise InputError(f"plan mode {plan.mode!r} is neither 'tool' nor 'workpiece'")
+    try:
+        X_Fc, X_WT = frames.carried(plan.mode)
+    except KeyError as exc:
+        raise InputError(f"the plan's record has no {exc.args[0]} (the {plan.mode}-in-hand "
+                         "cell's frame): re-plan") from exc
+    if plan.mode == "tool":
+        X_BO, tool_name = X_BW @ plan.X_WH, "tBurr"
+    else:
+        X_BO, tool_name = X_BW @ X_WT, "tSpindle"
     fractions = joint_fractions(plan, spec)
     comments = _comments(targets)
     moves = []
