@@ -8,7 +8,10 @@ started with the interpreter, not forked - Drake is not fork-safe - and not thro
 worker fails or cannot take runs here: the same result); :func:`map_calls` is the same for
 short calls on the workers already running; :func:`warm_pool` gives idle workers a task
 ahead of time. The workers stay up for later runs of the process (:func:`shutdown_pool`, at
-exit); the log records a worker emits are handed back and emitted here.
+exit); the log records a worker emits are handed back and emitted here. In a worker,
+:func:`worker_cell` keeps the caller's cell (built once from its recipe, checked by its
+geometry digest) and what a stage builds on it (the planner's checkers, the verifier's pair
+scene).
 
 Why hand-written: a process pool that never imports the caller's main module, where the
 calling process works too (a worker's start-up, ~2 s of imports and model building, is hidden
@@ -21,7 +24,7 @@ import logging
 import os
 from collections.abc import Callable
 
-__all__ = ["map_tasks", "map_calls", "warm_pool", "worker_count", "shutdown_pool",
+__all__ = ["worker_cell", "map_tasks", "map_calls", "warm_pool", "worker_count", "shutdown_pool",
            "running_workers", "logged_call", "replay_records"]
 
 log = logging.getLogger(__name__)
@@ -358,3 +361,23 @@ def _feed_loop(pool: list, todo, lock, sends: list, replies, stop) -> None:
             status, value = w.receive()
             if k != _WARM:
                 replies.put((k, status, value))
+
+
+def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) -> tuple:
+    """In a worker: (the caller's cell, ``build(cell)``), kept in ``cache`` (one cell at a
+    time) and built again when the kept cell's fingerprint is not the caller's (a model
+    rewritten since). Raises RuntimeError when even a fresh build differs (the caller then
+    runs the task itself). ``fingerprint`` None (a warm-up before the caller has built its
+    cell): the kept or fresh cell, unchecked; every task checks it again."""
+    from drakedeburr.cell.fingerprint import geometry_digest
+    from drakedeburr.cell.station import load_cell
+
+    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
+    got = cache.get(key)
+    if got is None or fingerprint not in (None, geometry_digest(got[0])):
+        cache.clear()
+        cell = load_cell(**recipe)
+        if fingerprint not in (None, geometry_digest(cell)):
+            raise RuntimeError("the worker's cell differs from the caller's")
+        got = cache[key] = (cell, build(cell))
+    return got

@@ -88,7 +88,7 @@ def test_a_worker_never_takes_a_rewritten_model_for_the_callers(tmp_path):
 
     from drakedeburr.cell.fingerprint import geometry_digest
     from drakedeburr.cell.station import load_cell
-    from drakedeburr.plan.parallel import worker_cell
+    from drakedeburr.pool import worker_cell
     from drakedeburr.resources import hub_dir
 
     hub = tmp_path / "hub"
@@ -201,7 +201,7 @@ def test_a_plans_cell_recipe_is_the_one_its_cell_records():
     from drakedeburr.cell.fingerprint import geometry_digest
     from drakedeburr.cell.recipe import plan_cell_args
     from drakedeburr.cell.station import load_plan_cell
-    from drakedeburr.plan.parallel import worker_cell
+    from drakedeburr.pool import worker_cell
 
     X = np.eye(4)
     X[:3, 3] = [0.001, -0.002, 0.0]  # as a placement search leaves it, in plan.json (lists)

@@ -17,9 +17,9 @@ import logging
 from collections.abc import Callable, Sequence
 
 from drakedeburr.cell.fingerprint import geometry_digest
-from drakedeburr.pool import logged_call, map_tasks, replay_records, worker_count
+from drakedeburr.pool import logged_call, map_tasks, replay_records, worker_cell, worker_count
 
-__all__ = ["plan_all_windows", "map_windows", "worker_cell", "planning_cell"]
+__all__ = ["plan_all_windows", "map_windows", "planning_cell"]
 
 log = logging.getLogger(__name__)
 
@@ -29,25 +29,6 @@ _WORKER: dict = {}  # in a worker: recipe key -> (cell, {tolerances: (kin, check
 def _recipe(ctx) -> dict | None:
     args = ctx.cell.recipe
     return None if args is None else dict(args)
-
-
-def worker_cell(recipe: dict, fingerprint: str, cache: dict, build: Callable) -> tuple:
-    """In a worker: (the caller's cell, ``build(cell)``), kept in ``cache`` (one cell at a
-    time) and built again when the kept cell's fingerprint is not the caller's (a model
-    rewritten since). Raises RuntimeError when even a fresh build differs (the caller then
-    runs the task itself). ``fingerprint`` None (a warm-up before the caller has built its
-    cell): the kept or fresh cell, unchecked; every task checks it again."""
-    from drakedeburr.cell.station import load_cell
-
-    key = repr(sorted((k, repr(v)) for k, v in recipe.items()))
-    got = cache.get(key)
-    if got is None or fingerprint not in (None, geometry_digest(got[0])):
-        cache.clear()
-        cell = load_cell(**recipe)
-        if fingerprint not in (None, geometry_digest(cell)):
-            raise RuntimeError("the worker's cell differs from the caller's")
-        got = cache[key] = (cell, build(cell))
-    return got
 
 
 def planning_cell(recipe: dict, fingerprint: str | None = None) -> tuple:

@@ -315,7 +315,7 @@ _WORKER_SCENE: dict = {}  # in a pool worker: the caller's cell and its PairScen
 def worker_scene(recipe: dict, fingerprint: str | None) -> PairScene:
     """In a pool worker: the pair scene of the cell built from ``recipe`` (kept for the
     worker's life, rebuilt when ``fingerprint`` differs)."""
-    from drakedeburr.plan.parallel import worker_cell
+    from drakedeburr.pool import worker_cell
 
     return worker_cell(recipe, fingerprint, _WORKER_SCENE, pair_scene_of)[1]
 
