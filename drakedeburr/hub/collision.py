@@ -125,9 +125,9 @@ def front_probes(spec: HubSpec, windows: list[Window], geom: PlateGeometry) -> n
     """Points ``COLL_FRONT_REACH_MM`` above the front face (normal to it) on rings 1 to
     ``COLL_FRONT_BAND_MM`` out from each window outline, 2 mm apart [mm]: a plate hull that
     contains one stands further proud of the face where the tool works. Without them the
-    average-thickness rule let hulls on a dished face bridge its curvature by up to 3.9 mm
-    (r271128_032, piece 286, 3 mm from a CL point), and the burr shank met that phantom
-    material in planning and verification (0.22 mm read, the true face some 4 mm away)."""
+    average-thickness rule lets a hull on a dished face bridge its curvature (by up to 3.9 mm
+    seen 3 mm from a CL point), and the burr shank meets that phantom material in planning and
+    verification (0.22 mm read where the true face is some 4 mm away)."""
     surf = geom.surface
     pts = []
     for w in windows:

@@ -22,11 +22,10 @@ window is planned again (at most :data:`ROUNDS` times). The deburring line stays
 moves by more than the depth of cut. The move is a departure from the recipe and recorded as one
 (``WindowStats.chamfer_relief``, ``plan.meta["recipe_deviations"]``).
 
-Design notes: on an unseen catalogue hub with a 62 mm dish (hub r271128_017 of ``drakedeburr hub
-random --seed 271128``: the face normal 38 degrees off the hub axis, 53 degrees of material at
-the edge) the burr went 1.39-1.63 mm into the material against the verifier's ``burr_contact``
-bound of depth of cut + ``edge_deviation`` (1.37 mm), at 445 samples of four windows, while
-nothing in planning read it; this module is the planner's reading of it.
+Why: on a deeply dished face (a 62 mm dish: the face normal 38 degrees off the hub axis, 53
+degrees of material at the edge) the burr goes 1.39-1.63 mm into the material, over the
+verifier's ``burr_contact`` bound of depth of cut + ``edge_deviation`` (1.37 mm), while nothing
+else in planning reads it; this module is the planner's reading of it.
 """
 
 from __future__ import annotations

@@ -28,8 +28,8 @@ def _limit_ratios(sp, cfg, t0: float, t1: float, dt: float = 0.5e-3):
     """On a ``dt`` grid over [t0, t1] (independent of the verification sampling) and at the
     trajectory's knots inside it (both sides: the timing bounds the limits there, and between
     knots a degree-6 piece's acceleration can fall off within a fraction of a millisecond, so
-    a grid alone misses the peaks: J3 read 0.83-0.85 of its limit on a slow stretch where it
-    is at 0.90 at every knot, catalogue hub 271128_043): times, tool travel from t0 [m], per
+    a grid alone misses the peaks: 0.83-0.85 of a limit read on a slow stretch where the joint
+    is at 0.90 at every knot): times, tool travel from t0 [m], per
     limit of :data:`_LIMITS` its share in use (|qd|/v_max, |qdd|/a_max, |TCP path
     acceleration|/the process's), and which points are the grid's."""
     from drakedeburr.verify.sampling import path_acceleration
