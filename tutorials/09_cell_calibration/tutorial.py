@@ -71,6 +71,7 @@ def step1_calibrate(out: Path) -> dict:
                       "--scenario", "tool_in_hand", "--scenario-out", str(out / "cell.yaml"),
                       "--program", str(out / "check.mod")])
     rep = yaml.safe_load((out / "calibration.yaml").read_text())
+    assert rc == 0 and (out / "cell.yaml").is_file() and (out / "check.mod").is_file(), rc
     print(f"   exit {rc}; TCP {rep['tcp']['tool_mm_deg'][:3]} mm (true 0.8, -0.6, 201.5); "
           f"table {rep['table']['frame_mm_deg']} (true 752.5, -1.8, -458.8, 0.3, -0.2, 0.8)")
     print(f"   residual RMS {rep['table']['rms_mm']} mm; a part point 300 mm outside the "
@@ -157,7 +158,29 @@ def main() -> None:
     summary = {"calibration": step1_calibrate(args.out),
                "scale_compensation": step2_scale_compensation()}
     (args.out / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+    check(summary)
     print(f"\noutputs in {args.out}")
+
+
+def check(summary: dict) -> None:
+    """What the tutorial shows, held against the simulated truth: the fitted TCP and table
+    within the touch noise's reach (0.02 mm a touch), the files written, each compensation
+    better than none and the richer maps better, scaling the model the wrong way worse."""
+    cal, comp = summary["calibration"], summary["scale_compensation"]
+    assert cal["ok"], cal["failures"]
+    tcp_err = np.linalg.norm(np.array(cal["tcp"]["tool_mm_deg"][:3]) - TIP_TRUE * 1e3)
+    assert tcp_err < 0.1, f"TCP {tcp_err:.3f} mm from the true tip"
+    frame = pose_from_mm_deg(cal["table"]["frame_mm_deg"])
+    pos_err = np.linalg.norm(frame[:3, 3] - TABLE_TRUE[:3, 3]) * 1e3
+    turn = np.degrees(Rotation.from_matrix(frame[:3, :3].T @ TABLE_TRUE[:3, :3]).magnitude())
+    assert pos_err < 0.1 and turn < 0.02, f"table {pos_err:.3f} mm / {turn:.4f} deg off"
+    assert cal["table"]["rms_mm"] < 0.05  # the touch noise, not a misfit
+    after = [comp[k]["after_mm"] for k in ("scale", "similarity", "affine")]
+    assert comp["before_mm"] > 1.0 and after[0] < 0.25 * comp["before_mm"], comp
+    assert after[0] > after[1] > after[2], after
+    for k in ("scale", "similarity", "affine"):  # the fit predicts what the re-cut gives
+        assert abs(comp[k]["predicted_mm"] - comp[k]["after_mm"]) < 0.01, (k, comp[k])
+    assert comp["wrong_way_mm"] > comp["before_mm"], comp
 
 
 if __name__ == "__main__":
