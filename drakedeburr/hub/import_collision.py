@@ -12,9 +12,16 @@
 * **Open meshes** (not watertight, several parts, inconsistent winding): inside and outside
   are undefined, so the pieces cover the *surface*: triangles are subdivided to at most
   ``shell_max_edge``, a plan-view quadtree groups them into cells, each connected group of a
-  cell becomes the hull of its triangles offset by +-``shell_thickness``/2 along their
-  normals, and a cell is split while a hull holds a probe (in a window opening, or above the
-  front surface). A tool reaching the hub from outside must cross such a shell first.
+  cell becomes the hull of its triangles and their copies offset along their normals, and a
+  cell is split while a hull holds a probe (in a window opening, or above the front surface).
+  A tool reaching the hub from outside must cross such a shell first. Where the front view
+  tells the material's side (:func:`front_sides`: a connected part whose winding is
+  consistent and whose triangles seen first from +Z_H all face the same way) the shell lies
+  behind the surface, ``shell_thickness`` deep, so the pieces stand no higher than the surface
+  itself; elsewhere it is ``shell_thickness``/2 either side. (Measured on the audibot rim, an
+  open game mesh: the +-0.5 mm shell read the burr shank 0.49 mm (median) closer than the
+  true mesh all along window 1, where the bundled hubs' solid pieces read 0.04 mm, and the
+  shank passes only ~2.1 mm over the face against the IK's 2.05 mm bound.)
 * **Closed meshes whose refinement does not converge** (a piece still holds a probe after
   ``max_refine_rounds``): each such piece is dropped and the mesh surface it covered is
   covered by shell pieces instead (:func:`shell_patch`). The solid's interior there is no
@@ -28,7 +35,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["front_probes", "solid_pieces", "shell_pieces", "shell_patch", "coacd_version"]
+__all__ = ["front_probes", "front_sides", "solid_pieces", "shell_pieces", "shell_patch",
+           "coacd_version"]
 
 Progress = Callable[[int, int, str], None] | None
 
@@ -182,13 +190,49 @@ def _components(faces: np.ndarray) -> np.ndarray:
     return connected_components(adj, directed=False)[1]
 
 
+def front_sides(V: np.ndarray, F: np.ndarray, spacing: float = 2e-3,
+                agree: float = 0.98) -> np.ndarray:
+    """(M,) per triangle +1 / -1: its normal (by winding) points out of the material, or into
+    it; 0: not known. Known for each connected part (shared vertices) whose winding is
+    consistent and whose triangles met first by rays along -Z_H (plan grid ``spacing`` [m])
+    face +Z_H (+1) or -Z_H (-1) in at least ``agree`` of the hits: the tool works from the
+    front, so the side a front ray comes from is outside."""
+    import open3d as o3d
+    import trimesh
+
+    from drakedeburr.hub.extract import ray_scene
+
+    n = trimesh.Trimesh(V, F, process=False).face_normals
+    lo, hi = V[:, :2].min(axis=0), V[:, :2].max(axis=0)
+    gx, gy = np.meshgrid(np.arange(lo[0], hi[0], spacing), np.arange(lo[1], hi[1], spacing),
+                         indexing="ij")
+    rays = np.zeros((gx.size, 6), np.float32)
+    rays[:, 0], rays[:, 1] = gx.ravel(), gy.ravel()
+    rays[:, 2], rays[:, 5] = float(V[:, 2].max()) + 0.01, -1.0
+    ans = ray_scene(V, F).cast_rays(o3d.core.Tensor(rays))
+    seen = ans["primitive_ids"].numpy()[np.isfinite(ans["t_hit"].numpy())].astype(np.int64)
+    labels = _components(F)
+    sides = np.zeros(len(F))
+    for lab in np.unique(labels[seen]):
+        up = n[seen[labels[seen] == lab], 2] > 0.0
+        share = float(up.mean())
+        part = np.flatnonzero(labels == lab)
+        if max(share, 1.0 - share) < agree or not trimesh.Trimesh(
+                V, F[part], process=False).is_winding_consistent:
+            continue
+        sides[part] = 1.0 if share >= agree else -1.0
+    return sides
+
+
 def _shell_hull(V: np.ndarray, faces: np.ndarray, normals: np.ndarray,
-                half: float) -> np.ndarray | None:
+                offsets: np.ndarray) -> np.ndarray | None:
+    """Hull of the triangles ``faces`` moved along their ``normals`` by each of their two
+    ``offsets`` (k, 2) [m]."""
     from scipy.spatial import ConvexHull, QhullError
 
     tri = V[faces]  # (k, 3, 3)
-    off = normals[:, None, :] * half
-    pts = np.concatenate([(tri + off).reshape(-1, 3), (tri - off).reshape(-1, 3)])
+    pts = np.concatenate([(tri + normals[:, None, :] * offsets[:, j, None, None]).reshape(-1, 3)
+                          for j in (0, 1)])
     try:
         return pts[ConvexHull(pts).vertices]
     except QhullError:
@@ -196,7 +240,8 @@ def _shell_hull(V: np.ndarray, faces: np.ndarray, normals: np.ndarray,
 
 
 def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
-                 progress: Progress = None) -> tuple[list[np.ndarray], dict]:
+                 progress: Progress = None,
+                 sides: np.ndarray | None = None) -> tuple[list[np.ndarray], dict]:
     """Convex pieces covering the surface of an open mesh (module doc) and statistics.
 
     Args:
@@ -204,16 +249,25 @@ def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
         probes: :class:`~drakedeburr.hub.collision.WindowProbes` (metres) that must stay
             outside every piece.
         options: :class:`~drakedeburr.hub.import_options.ImportOptions`.
+        sides: (M,) the material's side of each triangle (:func:`front_sides`; 0: both);
+            None: :func:`front_sides` of (``V``, ``F``) if ``options.shell_behind``, else 0.
     """
     import trimesh
 
     t0 = time.perf_counter()
-    V, F = trimesh.remesh.subdivide_to_size(V, F, options.shell_max_edge)
+    if sides is None:
+        sides = front_sides(V, F) if options.shell_behind else np.zeros(len(F))
+    V, F, src = trimesh.remesh.subdivide_to_size(V, F, options.shell_max_edge,
+                                                 return_index=True)
     tri = V[F]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     c = tri.mean(axis=1)
     half = 0.5 * options.shell_thickness
+    s = np.asarray(sides, float)[src]
+    # a known side: from the surface to shell_thickness behind it; else half either side
+    offsets = np.where((s == 0.0)[:, None], [[half, -half]],
+                       np.c_[np.zeros(len(s)), -options.shell_thickness * s])
     lo = c[:, :2].min(axis=0) - 1e-6
     size = float((c[:, :2].max(axis=0) - lo).max()) + 2e-6
     n0 = int(np.ceil(size / options.shell_cell))
@@ -231,7 +285,7 @@ def shell_pieces(V: np.ndarray, F: np.ndarray, probes, options,
         hulls, split = [], False
         for lab in np.unique(labels):
             part = sel[labels == lab]
-            hull = _shell_hull(V, F[part], n[part], half)
+            hull = _shell_hull(V, F[part], n[part], offsets[part])
             if hull is None:
                 continue
             if len(probes.inside(hull)):
@@ -317,7 +371,8 @@ def shell_patch(pieces: list[np.ndarray], V: np.ndarray, F: np.ndarray, probes, 
     dropped = set(bad)
     keep = [p for i, p in enumerate(pieces) if i not in dropped]
     if chosen.any():
-        patch, shell = shell_pieces(V, F[chosen], probes, options, progress)
+        patch, shell = shell_pieces(V, F[chosen], probes, options, progress,
+                                    sides=np.zeros(int(chosen.sum())))
         keep.extend(patch)
         stats["shell_patch_pieces"] = len(patch)
         stats["shell_patch_pieces_with_probes"] = shell["pieces_with_probes"]
