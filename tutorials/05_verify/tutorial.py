@@ -77,6 +77,7 @@ def main() -> None:
     common = {"expected_windows": windows, "cell": cell, "hub_model": hub}
     report = verify_plan(plan, config, **common)
     show("the plan", report)
+    assert report.passed, f"the plan fails {report.failed}"  # the faults below start from a pass
     for name in ("path_deviation", "edge_deviation", "clearance", "tcp_speed_band",
                  "joint_acceleration", "wrist_singularity"):
         it = report.item(name)
