@@ -107,6 +107,14 @@ def test_faster_move_takes_the_tcp_line_where_clear_and_faster(kin):
     assert mut.faster_move(kin, _Clear(0.01), kto, _tcp_time(kin), 2e-3, 0.004) is kto
     via = mut.JointMove(q=mv.q, s=mv.s, clearance=0.01, method="via", ok=True)
     assert mut.faster_move(kin, _Clear(0.01), via, _tcp_time(kin), 2e-3, 0.004) is via
+    # no move at all (home to home when no window was planned): kept, never timed
+    still = mut.JointMove(q=np.vstack([q0, q0]), s=np.zeros(2), clearance=0.01,
+                          method="straight", ok=True)
+
+    def no_timing(q, s):
+        raise AssertionError("a move of no length was timed")
+
+    assert mut.faster_move(kin, _Clear(0.01), still, no_timing, 2e-3, 0.004) is still
 
 
 def _via_move(way, step=0.004):

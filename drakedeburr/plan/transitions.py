@@ -247,7 +247,7 @@ def faster_move(kin: CellKinematics, checker: ClearanceChecker, mv: JointMove,
     ``duration(q, s)`` [s] (the caller's timing of the move) finds faster by 1 ms or more and
     that keeps ``min_distance`` at every sample (the check ``joint_move`` makes); else ``mv``.
     """
-    if not mv.ok or len(mv.q) < 2:
+    if not mv.ok or len(mv.q) < 2 or not mv.s[-1] > 0:  # no move (a window's ends coincide)
         return mv
     if mv.method == "straight":
         tries = [("tcp_line", lambda: tcp_line(kin, mv.q[0], mv.q[-1], step))]
