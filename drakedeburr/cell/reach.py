@@ -26,7 +26,7 @@ from drakedeburr.cell.station import Cell
 from drakedeburr.frames.vectors import angle_between
 
 __all__ = ["ReachTarget", "ReachOptions", "ReachResult", "ReachSurvey", "face_targets",
-           "survey_reach"]
+           "survey_reach", "WRIST_MARGIN"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,11 @@ class ReachTarget:
 
     p_HQ: np.ndarray
     a_H: np.ndarray
+
+
+#: [rad] smallest |J5| a reachable target keeps (J5 = 0 is the wrist singularity): the mount
+#: study's, and the planner's IK, seeds, cone probe and home (drakedeburr.plan.kinematics)
+WRIST_MARGIN = 0.25
 
 
 @dataclass(frozen=True)
@@ -57,7 +62,7 @@ class ReachOptions:
     """
 
     joint_margin: float = float(np.radians(10.0))
-    wrist_margin: float = 0.25
+    wrist_margin: float = WRIST_MARGIN
     min_distance: float | None = 0.005
     axis_tolerance: float = 0.01
     position_tolerance: float = 1e-6

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drakedeburr.cell.narrowphase import ShapeSupport, certified_distance
+from drakedeburr.cell.reach import WRIST_MARGIN as REACH_WRIST_MARGIN
 from drakedeburr.frames.vectors import inverse_transform
 
 #: cone probe results kept per checker (:meth:`ClearanceChecker.memo_probe`), at most this many
@@ -33,9 +34,9 @@ __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_lev
 JOINT_WEIGHTS = (1.0, 1.0, 1.0, 0.3, 0.3, 0.3)
 
 #: [rad] smallest |J5| the planner's IK, seeds, cone probe and home keep (J5 = 0 is the wrist
-#: singularity), as the mount study (:mod:`drakedeburr.cell.mounts`); above the verifier's
-#: ``Tolerances.wrist_margin``
-WRIST_MARGIN = 0.25
+#: singularity): the mount study's own (:data:`drakedeburr.cell.reach.WRIST_MARGIN`), above the
+#: verifier's ``Tolerances.wrist_margin``
+WRIST_MARGIN = REACH_WRIST_MARGIN
 
 # numerical slack of the clearance acceptance [m]: the IK's own bound ends exactly on 2 mm at a
 # few fillet targets, and the signed-distance query of the mesh pieces is good to ~1e-7 m
