@@ -11,7 +11,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -139,20 +138,57 @@ def _plan_cmd(out: Path, env: dict | None = None) -> list[str]:
             vs.HUB, "--windows", "0", "--source", "edges", "-o", str(out)]
 
 
+# The child is the real CLI, run by a driver that kills it (SIGKILL, nothing runs after) at a
+# chosen moment of writing the new plan beside the old one: "writing" when the second file
+# inside the temporary folder is opened, "swap" when the finished temporary folder is about to
+# replace the plan. A test that polled for the temporary folder could miss it under load (the
+# folder lives a few ms) and then saw the finished new plan.
+_KILL_DRIVER = """
+import builtins, io, os, runpy, signal, sys
+point = sys.argv.pop(1)
+def tmp(p):
+    return isinstance(p, (str, bytes, os.PathLike)) and ".plan.tmp-" in os.fsdecode(p)
+def die():
+    os.kill(os.getpid(), signal.SIGKILL)
+if point == "writing":
+    opened = [0]
+    real_open = builtins.open
+    def open_(file, mode="r", *a, **k):
+        if tmp(file) and any(c in mode for c in "wax"):
+            opened[0] += 1
+            if opened[0] == 2:
+                die()
+        return real_open(file, mode, *a, **k)
+    builtins.open = io.open = open_
+else:
+    import drakedeburr._io as dio
+    real_rename, real_exchange = os.rename, dio._exchange
+    def rename(a, b, *r, **k):
+        if tmp(a):
+            die()
+        return real_rename(a, b, *r, **k)
+    def exchange(a, b):
+        if tmp(a):
+            die()
+        return real_exchange(a, b)
+    os.rename, dio._exchange = rename, exchange
+sys.argv[0] = "drakedeburr"
+runpy.run_module("drakedeburr", run_name="__main__", alter_sys=True)
+"""
+
+
 @pytest.mark.slow
-def test_kill_during_plan_leaves_the_old_plan_which_still_verifies(verified, tmp_path):
+@pytest.mark.parametrize("point", ["writing", "swap"])
+def test_kill_during_plan_leaves_the_old_plan_which_still_verifies(verified, tmp_path, point):
     folder = tmp_path / "plan"
     shutil.copytree(verified, folder)
     digest = plan_digest(load_plan(folder))
-    proc = subprocess.Popen(_plan_cmd(folder), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 600
-    # kill -9 once the new plan is being written beside the old one
-    while not list(tmp_path.glob(".plan.tmp-*")) and proc.poll() is None:
-        assert time.monotonic() < deadline
-        time.sleep(0.002)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
+    cmd = _plan_cmd(folder)
+    proc = subprocess.run([sys.executable, "-c", _KILL_DRIVER, point, *cmd[3:]],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=900)
+    # killed at that moment, not finished (a finished run would have replaced the plan)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()[-2000:]
+    assert list(tmp_path.glob(".plan.tmp-*"))  # the kill left the half-written new plan
     assert plan_digest(load_plan(folder)) == digest
     assert gate(folder, load_plan(folder)).ok  # its report still holds
     save_plan(load_plan(folder), folder)  # the next run removes what the kill left
