@@ -33,37 +33,28 @@ slope = np.degrees(np.arcsin(np.abs(wt.tool_path.cl_path.t_H[:, 2])))
 depth = (wt.p_HC[:, 2].max() - wt.p_HC[:, 2]) * 1e3
 res = []
 t0 = time.time()
-for i in range(len(wt)):
-    a = cone_clearance_probe(
+
+
+def probe(i, half_angle, axis_H):
+    """The Drake cone probe at target i: a cone of ``half_angle`` about the retract ``axis_H``."""
+    return cone_clearance_probe(
         kin,
         checker,
         pQ[i],
         wt.cone_retract_H[i],
-        wt.cone_half_angle,
-        wt.retract_H[i],
+        half_angle,
+        axis_H,
         wt.t_H[i],
         kin.q_home,
         lift=lift,
         bound=opt.min_distance_floor,
         min_wrist=opt.min_wrist,
     )
-    b = (
-        a
-        if a["feasible"]
-        else cone_clearance_probe(
-            kin,
-            checker,
-            pQ[i],
-            wt.cone_retract_H[i],
-            np.radians(45),
-            wt.cone_retract_H[i],
-            wt.t_H[i],
-            kin.q_home,
-            lift=lift,
-            bound=opt.min_distance_floor,
-            min_wrist=opt.min_wrist,
-        )
-    )
+
+
+for i in range(len(wt)):
+    a = probe(i, wt.cone_half_angle, wt.retract_H[i])
+    b = a if a["feasible"] else probe(i, np.radians(45), wt.cone_retract_H[i])
     part = (a["pair"][0] or "").split("::")[-1].split("/")[0]
     res.append((i, slope[i], depth[i], a["feasible"], b["feasible"], a["best_clearance"], part))
 pickle.dump(res, open(wtfile + f".{TOOL or 'std'}.cls", "wb"))
