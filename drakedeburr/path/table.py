@@ -86,7 +86,8 @@ def cl_table(
     for k, w in enumerate(windows):
         if progress:
             progress(k, len(windows), f"window {w.index}")
-        curve = fit_window_edge(w.p_HE, name=f"{desc} window {w.index}")
+        curve = fit_window_edge(w.p_HE, chord_tolerance=params.delta_max,
+                                name=f"{desc} window {w.index}")
         entry = {"index": w.index, "kind": w.kind, "initial_count": len(w.p_HE),
                  "length_m": curve.length, "edge_fit": curve.fit, "methods": {}}
         paths = {}

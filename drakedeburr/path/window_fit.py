@@ -10,13 +10,22 @@ points (spacing h) turns each corner's theta within about one spacing, at a curv
 about theta / h; the CL planner places its points by that curvature and the orientation stage
 turns the tool with the curve's frame, so both would follow every facet corner. The loop is
 therefore fitted with :func:`~drakedeburr.path.edge_curve.fit_faceted_curve` (free by up to
-each facet's sagitta in the middle of a facet, through the corners) when its points resolve
-facets of at least ``FACET_MIN_SPACINGS`` data spacings (L >= 3 h: the interpolant's corner
-curvature is then at least 3 x the facets') joined at a corner of a tessellation (at most
-``FACET_MAX_TURN``, :func:`~drakedeburr.path.edge_curve.polygon_facets`). A loop without such
-a corner (a densely sampled designed curve, the generator's ground truth, an exact CAD edge)
-keeps the interpolating fit, point for point: its plans do not change. The choice is made
-from the points, never from the source's name.
+each facet's sagitta in the middle of a facet, through the corners) when
+
+* its points resolve facets of at least ``FACET_MIN_SPACINGS`` data spacings (L >= 3 h: the
+  interpolant's corner curvature is then at least 3 x the facets') joined at a corner of a
+  tessellation (at most ``FACET_MAX_TURN``, :func:`~drakedeburr.path.edge_curve.polygon_facets`),
+* and some facet's sagitta exceeds the CL chord-height tolerance delta the path is planned
+  with: that facet is then longer than the chords the CL planner lays on the designed curve
+  (a chord of sagitta delta on curvature k is sqrt(8 delta / k) long, the facet sqrt(8 s / k)),
+  so the CL points would resolve, and follow, its corners. Smaller facets lie within the path's
+  own tolerance of the polygon and are spanned by its chords (the bundled hubs' ground truth
+  is a polyline through the generator's mesh vertices: facets of 0.2-0.5 mm, sagitta <= 2.1
+  um).
+
+Any other loop (a densely sampled designed curve, an exact CAD edge) keeps the interpolating
+fit, spline for spline: its plans do not change. The choice is made from the points, never
+from the source's name.
 
 **What is reported** (``EdgeCurve.fit``, copied into every ClPath's ``metrics["edge_fit"]``
 and the ``cl`` table): the fit used, the facets (count, median length, share of the loop,
@@ -43,11 +52,11 @@ from drakedeburr.path.edge_curve import (
 __all__ = ["fit_window_edge", "edge_fit_figures", "is_faceted"]
 
 
-def is_faceted(facets: dict) -> bool:
+def is_faceted(facets: dict, chord_tolerance: float) -> bool:
     """True when :func:`facet_sagitta`'s figures show a tessellation corner between two
-    straight facets that the points resolve (module doc): some point is free by more than the
-    vertex precision ``FACET_POINT_SIGMA``."""
-    return facets["sagitta_max"] > FACET_POINT_SIGMA
+    straight facets that the points resolve with a sagitta above ``chord_tolerance`` [m], the
+    CL chord-height tolerance (module doc)."""
+    return facets["sagitta_max"] > max(chord_tolerance, FACET_POINT_SIGMA)
 
 
 def edge_fit_figures(curve: EdgeCurve, facets: dict, fit: str) -> dict:
@@ -65,15 +74,21 @@ def edge_fit_figures(curve: EdgeCurve, facets: dict, fit: str) -> dict:
             "inflections": rep["inflections"]}
 
 
-def fit_window_edge(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
+def fit_window_edge(p: np.ndarray, *, chord_tolerance: float, name: str = "edge") -> EdgeCurve:
     """The window edge's NURBS fit (module doc): :func:`fit_faceted_curve` for a faceted
     loop, :func:`fit_edge_curve` otherwise, with the figures in ``EdgeCurve.fit``.
+
+    Args:
+        p: (N, 3) loop points [m].
+        chord_tolerance: the CL chord-height tolerance the path is planned with [m]
+            (``PlannerParams.delta_max``): facets of a smaller sagitta are not smoothed.
+        name: for error messages.
 
     Raises:
         InputError: as :func:`fit_edge_curve`.
     """
     facets = facet_sagitta(np.asarray(p, float))
-    if is_faceted(facets):
+    if is_faceted(facets, chord_tolerance):
         curve, fit = fit_faceted_curve(p, name=name), "faceted"
     else:
         curve, fit = fit_edge_curve(p, name=name), "interpolating"
