@@ -17,15 +17,17 @@ chamfer), then the face. A sample belongs to the face when its normal is less th
 turns gentler than that: a wall of the opening seen from the front, whose top is the front
 boundary; a real rim's spoke flanks are drafted 12-14 deg, 76-78 deg off the axis), does not
 differ by more than
-``BAND_ANGLE`` from the normal ``lag`` further out where that one faces the front more (the
-band turns faster, up into the face; a surface turning away beyond the face is a crease
-further out, not the band), and the profile
+``BAND_ANGLE`` from the normal ``lag`` further out where that one faces the front more or
+the normal turns right here, within a quarter ``lag`` (the band turns faster, up into the
+face; a flat stretch before a surface turning away is face before a crease, not the band),
+and the profile
 does not jump there (a step of more than ``JUMP`` between samples is a wall hidden from the
 front). The edge point is the first sample of the first run of ``run`` face samples, unless
 the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
 wider front part): then the first run after that step. It then steps on by up to
-``REFINE_LENGTH`` while the surface still turns toward the front by more than ``FACE_ANGLE``
-over ``lag`` (the BAND_ANGLE test stops R sin(BAND_ANGLE) inside a round of radius R). A
+``REFINE_LENGTH`` (and sin(BAND_ANGLE) x the band's width) while the surface still turns
+toward the front by more than ``FACE_ANGLE`` over ``lag`` (the BAND_ANGLE test stops
+R sin(BAND_ANGLE) inside a round of radius R). A
 profile goes ``FAR_REACH`` times ``reach`` out (a 40 mm tall drafted flank's top lies 10-12 mm
 out); nearly every profile finds its face within the first millimetres.
 
@@ -149,6 +151,13 @@ def _outward(xy: np.ndarray) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
+def _shifted(a: np.ndarray, k: int) -> np.ndarray:
+    """a[:, j + k] along axis 1 (k < 0: behind), the end values repeated past the ends."""
+    if k >= 0:
+        return np.concatenate([a[:, k:], np.repeat(a[:, -1:], k, axis=1)], axis=1)
+    return np.concatenate([np.repeat(a[:, :1], -k, axis=1), a[:, :k]], axis=1)
+
+
 def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
                 run: int, ledge: int, refine: int = 0) -> np.ndarray:
     """Per profile (rows) the index of the edge sample, or -1 (module doc).
@@ -172,16 +181,21 @@ def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
     z_next = np.take_along_axis(np.where(hit, z, -np.inf), np.minimum(nxt, K - 1), axis=1)
     with np.errstate(invalid="ignore"):  # misses: -inf - -inf, masked by `hit`
         steep |= hit & ~gentle & (nxt < K) & (z_next - z > FLANK_RISE)
-    # the band: the normal turns by more than BAND_ANGLE over `lag` samples toward the front
-    # (facets of a non-watertight mesh may face either way: compare |n . n'|). A convex round
-    # or chamfer turns from the wall up into the face: the surface `lag` further out faces the
-    # front at least as much. Where it faces the front less, the profile has crossed the band
-    # and meets a crease beyond the face (the disc face of a CAD wheel is a 1.8 mm strip
-    # between a window's round and a 31 deg slope: read as band, the edge went past the crease)
-    ahead = np.concatenate([n[:, lag:], np.repeat(n[:, -1:], lag, axis=1)], axis=1)
-    hit_ahead = np.concatenate([hit[:, lag:], np.repeat(hit[:, -1:], lag, axis=1)], axis=1)
+    # the band: the normal turns by more than BAND_ANGLE over `lag` samples (facets of a
+    # non-watertight mesh may face either way: compare |n . n'|), toward the front or here.
+    # A convex round or chamfer turns from the wall up into the face: the surface `lag` further
+    # out faces the front at least as much, or (a round running into a concave face) the
+    # normal turns right here, within a quarter lag. A flat stretch whose surface turns away
+    # from the front only further out has crossed the band and meets a crease beyond the face
+    # (the disc face of a CAD wheel is a 1.8 mm strip between a window's round and a 31 deg
+    # slope: read as band, the edge went past the crease, 1.9 mm off)
+    ahead, hit_ahead = _shifted(n, lag), _shifted(hit, lag)
     toward_front = ~hit_ahead | (np.abs(ahead[..., 2]) >= np.abs(n[..., 2]))
-    turning = (np.abs(np.einsum("pkd,pkd->pk", n, ahead)) < math.cos(BAND_ANGLE)) & toward_front
+    m = max(1, lag // 4)
+    here = ((np.abs(np.einsum("pkd,pkd->pk", n, _shifted(n, m))) < math.cos(FACE_ANGLE))
+            | (np.abs(np.einsum("pkd,pkd->pk", n, _shifted(n, -m))) < math.cos(FACE_ANGLE)))
+    turning = ((np.abs(np.einsum("pkd,pkd->pk", n, ahead)) < math.cos(BAND_ANGLE))
+               & (toward_front | here))
     with np.errstate(invalid="ignore"):  # between two misses: nan, never a jump
         dz = np.diff(z, axis=1, prepend=z[:, :1])
     jump_tol = JUMP * step / 1e-4
@@ -202,12 +216,21 @@ def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
         later = win & (cols >= last_up[:, None])
         first = np.where(moved, np.where(later.any(axis=1), np.argmax(later, axis=1), -1), first)
     # the band test stops where the round is within BAND_ANGLE of the face: R sin(BAND_ANGLE)
-    # before its face-side line (0.14 mm on a 1 mm round). Step on while the surface still
-    # turns toward the front by more than FACE_ANGLE over `lag`, at most REFINE samples
+    # before its face-side line (0.14 mm on a 1 mm round, whose band reads about R wide). Step
+    # on while the surface still turns toward the front by more than FACE_ANGLE over `lag`, by
+    # at most sin(BAND_ANGLE) x the band's width read before the face start (the round's own
+    # error: a convex face beyond the round turns toward the front too; the random catalogue's
+    # loops moved 0.10-0.15 -> 0.14-0.22 mm from the generator's with the step, the CAD
+    # wheel's fine STL 0.189 -> 0.103 mm from its B-rep edges) and at most `refine` samples
     settling = (np.abs(np.einsum("pkd,pkd->pk", n, ahead)) < math.cos(FACE_ANGLE)) \
         & toward_front & face
-    for _ in range(refine):
-        step_on = (first >= 0) & settling[np.arange(len(first)), np.maximum(first, 0)]
+    rows = np.arange(len(first))
+    k = np.arange(turning.shape[1])
+    last_flat = np.maximum.accumulate(np.where(turning, -1, k), axis=1)  # last non-band index
+    band = np.where(first > 0, first - 1 - last_flat[rows, np.maximum(first - 1, 0)], 0)
+    cap = np.minimum(np.ceil(band * math.sin(BAND_ANGLE)), refine)
+    for j in range(refine):
+        step_on = (first >= 0) & (j < cap) & settling[rows, np.maximum(first, 0)]
         if not step_on.any():
             break
         first = np.where(step_on, first + 1, first)
