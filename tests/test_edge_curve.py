@@ -85,7 +85,7 @@ def test_batched_bounded_search_is_scipys_bounded_brent_per_problem():
     problem must end where its own scipy call ends (same x-tolerance rule, same iterates)."""
     from scipy.optimize import minimize_scalar
 
-    from drakedeburr.path.edge_curve import minimize_bounded_batch
+    from drakedeburr.path.brent import minimize_bounded_batch
 
     rng = np.random.default_rng(3)
     m = 40

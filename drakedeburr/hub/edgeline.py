@@ -17,13 +17,19 @@ chamfer), then the face. A sample belongs to the face when its normal is less th
 turns gentler than that: a wall of the opening seen from the front, whose top is the front
 boundary; a real rim's spoke flanks are drafted 12-14 deg, 76-78 deg off the axis), does not
 differ by more than
-``BAND_ANGLE`` from the normal ``lag`` further out (the band turns faster), and the profile
+``BAND_ANGLE`` from the normal ``lag`` further out where that one faces the front more or
+the normal turns right here, within a quarter ``lag`` (the band turns faster, up into the
+face; a flat stretch before a surface turning away is face before a crease, not the band),
+and the profile
 does not jump there (a step of more than ``JUMP`` between samples is a wall hidden from the
 front). The edge point is the first sample of the first run of ``run`` face samples, unless
 the profile steps *up* within ``ledge`` after it (a ledge inside the opening, seen through its
-wider front part): then the first run after that step. A profile goes ``FAR_REACH`` times
-``reach`` out (a 40 mm tall drafted flank's top lies 10-12 mm out); nearly every profile finds
-its face within the first millimetres.
+wider front part): then the first run after that step. It then steps on by up to
+``REFINE_LENGTH`` (and sin(BAND_ANGLE) x the band's width) while the surface still turns
+toward the front by more than ``FACE_ANGLE`` over ``lag`` (the BAND_ANGLE test stops
+R sin(BAND_ANGLE) inside a round of radius R). A
+profile goes ``FAR_REACH`` times ``reach`` out (a 40 mm tall drafted flank's top lies 10-12 mm
+out); nearly every profile finds its face within the first millimetres.
 
 **Noise.** A profile reads the face start on its own 0.1 mm grid from the facets of a
 tessellated round, so neighbouring profiles can disagree by a facet. The band width (outline to
@@ -56,6 +62,9 @@ import numpy as np
 __all__ = ["EdgeLine", "opening_outline", "deburr_line", "BAND_ANGLE", "WALL_ANGLE"]
 
 BAND_ANGLE = math.radians(8.0)  # a round/chamfer band turns more than this per lag
+FACE_ANGLE = math.radians(1.5)  # past the band test, a surface still turning this much per
+#                                 lag toward the front is the round's last facets
+REFINE_LENGTH = 0.3e-3  # [m] how far the face start moves on by FACE_ANGLE
 WALL_ANGLE = math.radians(80.0)  # surfaces steeper than this (off the axis) are walls
 FLANK_ANGLE = math.radians(60.0)  # steeper (off the axis) and climbing FLANK_RISE: a flank
 FLANK_RISE = 3e-3  # [m] a flank's climb to the next gentle sample that makes it a wall
@@ -142,8 +151,15 @@ def _outward(xy: np.ndarray) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
+def _shifted(a: np.ndarray, k: int) -> np.ndarray:
+    """a[:, j + k] along axis 1 (k < 0: behind), the end values repeated past the ends."""
+    if k >= 0:
+        return np.concatenate([a[:, k:], np.repeat(a[:, -1:], k, axis=1)], axis=1)
+    return np.concatenate([np.repeat(a[:, :1], -k, axis=1), a[:, :k]], axis=1)
+
+
 def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
-                run: int, ledge: int) -> np.ndarray:
+                run: int, ledge: int, refine: int = 0) -> np.ndarray:
     """Per profile (rows) the index of the edge sample, or -1 (module doc).
 
     Args:
@@ -166,9 +182,20 @@ def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
     with np.errstate(invalid="ignore"):  # misses: -inf - -inf, masked by `hit`
         steep |= hit & ~gentle & (nxt < K) & (z_next - z > FLANK_RISE)
     # the band: the normal turns by more than BAND_ANGLE over `lag` samples (facets of a
-    # non-watertight mesh may face either way: compare |n . n'|)
-    nxt = np.concatenate([n[:, lag:], np.repeat(n[:, -1:], lag, axis=1)], axis=1)
-    turning = np.abs(np.einsum("pkd,pkd->pk", n, nxt)) < math.cos(BAND_ANGLE)
+    # non-watertight mesh may face either way: compare |n . n'|), toward the front or here.
+    # A convex round or chamfer turns from the wall up into the face: the surface `lag` further
+    # out faces the front at least as much, or (a round running into a concave face) the
+    # normal turns right here, within a quarter lag. A flat stretch whose surface turns away
+    # from the front only further out has crossed the band and meets a crease beyond the face
+    # (the disc face of a CAD wheel is a 1.8 mm strip between a window's round and a 31 deg
+    # slope: read as band, the edge went past the crease, 1.9 mm off)
+    ahead, hit_ahead = _shifted(n, lag), _shifted(hit, lag)
+    toward_front = ~hit_ahead | (np.abs(ahead[..., 2]) >= np.abs(n[..., 2]))
+    m = max(1, lag // 4)
+    here = ((np.abs(np.einsum("pkd,pkd->pk", n, _shifted(n, m))) < math.cos(FACE_ANGLE))
+            | (np.abs(np.einsum("pkd,pkd->pk", n, _shifted(n, -m))) < math.cos(FACE_ANGLE)))
+    turning = ((np.abs(np.einsum("pkd,pkd->pk", n, ahead)) < math.cos(BAND_ANGLE))
+               & (toward_front | here))
     with np.errstate(invalid="ignore"):  # between two misses: nan, never a jump
         dz = np.diff(z, axis=1, prepend=z[:, :1])
     jump_tol = JUMP * step / 1e-4
@@ -188,6 +215,25 @@ def _face_start(t: np.ndarray, n: np.ndarray, z0: float, step: float, lag: int,
         moved = last_up >= 0
         later = win & (cols >= last_up[:, None])
         first = np.where(moved, np.where(later.any(axis=1), np.argmax(later, axis=1), -1), first)
+    # the band test stops where the round is within BAND_ANGLE of the face: R sin(BAND_ANGLE)
+    # before its face-side line (0.14 mm on a 1 mm round, whose band reads about R wide). Step
+    # on while the surface still turns toward the front by more than FACE_ANGLE over `lag`, by
+    # at most sin(BAND_ANGLE) x the band's width read before the face start (the round's own
+    # error: a convex face beyond the round turns toward the front too; the random catalogue's
+    # loops moved 0.10-0.15 -> 0.14-0.22 mm from the generator's with the step, the CAD
+    # wheel's fine STL 0.189 -> 0.103 mm from its B-rep edges) and at most `refine` samples
+    settling = (np.abs(np.einsum("pkd,pkd->pk", n, ahead)) < math.cos(FACE_ANGLE)) \
+        & toward_front & face
+    rows = np.arange(len(first))
+    k = np.arange(turning.shape[1])
+    last_flat = np.maximum.accumulate(np.where(turning, -1, k), axis=1)  # last non-band index
+    band = np.where(first > 0, first - 1 - last_flat[rows, np.maximum(first - 1, 0)], 0)
+    cap = np.minimum(np.ceil(band * math.sin(BAND_ANGLE)), refine)
+    for j in range(refine):
+        step_on = (first >= 0) & (j < cap) & settling[rows, np.maximum(first, 0)]
+        if not step_on.any():
+            break
+        first = np.where(step_on, first + 1, first)
     return first
 
 
@@ -209,7 +255,8 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
     out = _outward(outline_xy)
     lag, run = max(1, int(round(lag_length / step))), max(2, int(round(run_length / step)))
     xy, t, first = _profiles(scene, outline_xy, out, z0, step, reach,
-                             (lag, run, int(round(ledge_length / step))))
+                             (lag, run, int(round(ledge_length / step)),
+                              int(round(REFINE_LENGTH / step))))
     s = 0.02e-3 + np.arange(xy.shape[1]) * step
     P = len(outline_xy)
     ok = first >= 0
@@ -243,9 +290,10 @@ def deburr_line(scene, outline_xy: np.ndarray, z0: float, *, step: float = 0.1e-
 
 
 def _profiles(scene, outline_xy: np.ndarray, out: np.ndarray, z0: float, step: float,
-              reach: float, samples: tuple[int, int, int]):
+              reach: float, samples: tuple[int, int, int, int]):
     """The profiles and their face starts (module doc), ``FAR_REACH`` times ``reach`` long
-    (``samples``: the band lag, face run and ledge of :func:`_face_start` in samples):
+    (``samples``: the band lag, face run, ledge and refinement of :func:`_face_start` in
+    samples):
     a drafted flank's top (where the flank rule of :func:`_face_start` needs to see the
     gentle surface) can lie further out than ``reach`` (mkz13 rim: 39 mm tall flanks 78 deg
     off the axis reach 10.5-12 mm out).

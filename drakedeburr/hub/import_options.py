@@ -11,10 +11,11 @@ from drakedeburr.hub.openings import DEFAULT_BURR_DIAMETER, DEFAULT_CLEARANCE
 
 __all__ = ["ImportOptions", "IMPORT_VERSION"]
 
-# 13: an open mesh's shell behind its surface where the front view gives the side;
-# 12: drafted flanks are walls, 30 mm profiles; 11: into-the-opening from the outline on steep
-# stretches; 5-10: 3-D loops, burrs (issue 42); 4: front_band; 3: band filter
-IMPORT_VERSION = 13
+# 14: the edge band turns toward the front, the face start steps past a round's last facets
+# (hub.edgeline FACE_ANGLE); 13: an open mesh's shell behind its surface where the front view
+# gives the side; 12: drafted flanks are walls, 30 mm profiles; 11: into-the-opening from the
+# outline on steep stretches; 5-10: 3-D loops, burrs (issue 42); 4: front_band; 3: band filter
+IMPORT_VERSION = 14
 
 
 @dataclass(frozen=True)

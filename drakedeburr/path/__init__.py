@@ -8,4 +8,5 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "metrics": ("cl_metrics", "coefficient_of_variation", "segment_figures"),
     "table": ("cl_table", "format_table", "windows_from_source"),
     "types": ("ClPath",),
+    "window_fit": ("fit_window_edge",),
 })

@@ -513,6 +513,8 @@ def plan_cl(
     u = np.sort(np.mod(np.asarray(_PLANNERS[method](curve, params), float), 1.0))
     metrics = cl_metrics(curve, u)
     metrics["method"] = method
+    if curve.fit:  # how the edge was fitted, against its facets (path.window_fit)
+        metrics["edge_fit"] = dict(curve.fit)
     return ClPath(
         window_index=window_index,
         kind=kind,

@@ -16,15 +16,16 @@ Shape features (all SI, derivatives analytic from the spline):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline
 
 from drakedeburr.errors import InputError
+from drakedeburr.path.brent import minimize_bounded_batch
 
 __all__ = ["EdgeCurve", "fit_edge_curve", "fit_faceted_curve", "facet_sagitta",
-           "chord_parameters", "polyline_fit_report"]
+           "polygon_facets", "chord_parameters", "polyline_fit_report"]
 
 # samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
 _GAUSS_ORDER = 8
@@ -71,6 +72,7 @@ class EdgeCurve:
         s_table: (K,) arc length [m] at the parameters ``u_table`` (monotone, s(1) = length).
         u_table: (K,) parameters of the arc-length table.
         length: total length of the closed curve [m].
+        fit: how the curve was fitted, against the loop's facets (:mod:`.window_fit`), or {}.
     """
 
     spline: BSpline
@@ -79,6 +81,7 @@ class EdgeCurve:
     u_table: np.ndarray
     s_table: np.ndarray
     length: float
+    fit: dict = field(default_factory=dict)
 
     # ----- evaluation ---------------------------------------------------------------------
     def position(self, u) -> np.ndarray:
@@ -257,69 +260,6 @@ class EdgeCurve:
         return out
 
 
-def minimize_bounded_batch(func, lo: np.ndarray, hi: np.ndarray, xatol: np.ndarray,
-                           maxfun: int = 500) -> np.ndarray:
-    """Minimum values of M independent bounded scalar problems, (M,).
-
-    ``func`` maps (M,) points to (M,) values (problem m sees only entry m). This is scipy's
-    ``minimize_scalar(method="bounded")`` (Brent's method, scipy 1.17 ``_minimize_scalar_bounded``)
-    step for step, run in lockstep over the problems: every problem gets the very same iterates
-    and result as its own scipy call. Written by hand because scipy solves one problem per
-    call (~0.4 ms of Python each; the true chord heights of a plan are hundreds of them).
-    """
-    sqrt_eps, golden_mean = np.sqrt(2.2e-16), 0.5 * (3.0 - np.sqrt(5.0))
-    a, b = np.array(lo, float), np.array(hi, float)
-    xf = nfc = fulc = a + golden_mean * (b - a)
-    rat = e = np.zeros_like(a)
-    fx = ffulc = fnfc = func(xf)
-    num = 1
-    xm = 0.5 * (a + b)
-    tol1 = sqrt_eps * np.abs(xf) + xatol / 3.0
-    tol2 = 2.0 * tol1
-    act = np.abs(xf - xm) > (tol2 - 0.5 * (b - a))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        while act.any():
-            # parabolic fit (used where |e| > tol1 and the parabola is acceptable)
-            r = (xf - nfc) * (fx - ffulc)
-            q = (xf - fulc) * (fx - fnfc)
-            p = (xf - fulc) * q - (xf - nfc) * r
-            q = 2.0 * (q - r)
-            p = np.where(q > 0.0, -p, p)
-            q = np.abs(q)
-            para = (np.abs(e) > tol1) & (np.abs(p) < np.abs(0.5 * q * e)) & (p > q * (a - xf)) \
-                & (p < q * (b - xf))
-            rat_p = (p + 0.0) / q
-            x_p = xf + rat_p
-            near = ((x_p - a) < tol2) | ((b - x_p) < tol2)
-            rat_p = np.where(near, tol1 * (np.sign(xm - xf) + ((xm - xf) == 0)), rat_p)
-            e_g = np.where(xf >= xm, a - xf, b - xf)  # golden-section step
-            e_new = np.where(para, rat, e_g)
-            rat = np.where(act, np.where(para, rat_p, golden_mean * e_g), rat)
-            e = np.where(act, e_new, e)
-            x = xf + (np.sign(rat) + (rat == 0)) * np.maximum(np.abs(rat), tol1)
-            fu = func(x)
-            num += 1
-            better = act & (fu <= fx)
-            worse = act & ~(fu <= fx)
-            right = x >= xf
-            a = np.where(better & right, xf, np.where(worse & ~right, x, a))
-            b = np.where(better & ~right, xf, np.where(worse & right, x, b))
-            c1 = worse & ((fu <= fnfc) | (nfc == xf))
-            c2 = worse & ~c1 & ((fu <= ffulc) | (fulc == xf) | (fulc == nfc))
-            fulc, ffulc = (np.where(better | c1, nfc, np.where(c2, x, fulc)),
-                           np.where(better | c1, fnfc, np.where(c2, fu, ffulc)))
-            nfc, fnfc = (np.where(better, xf, np.where(c1, x, nfc)),
-                         np.where(better, fx, np.where(c1, fu, fnfc)))
-            xf, fx = np.where(better, x, xf), np.where(better, fu, fx)
-            xm = 0.5 * (a + b)
-            tol1 = sqrt_eps * np.abs(xf) + xatol / 3.0
-            tol2 = 2.0 * tol1
-            act = act & (np.abs(xf - xm) > (tol2 - 0.5 * (b - a)))
-            if num >= maxfun:
-                break
-    return fx
-
-
 def _dist_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ab = b - a
     L2 = np.maximum((ab * ab).sum(-1, keepdims=True), 1e-300)
@@ -386,6 +326,63 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
 #: the smallest expected deviation of a data point from the true curve [m] (a point on a
 #: straight facet, or at a corner: the mesh's own vertex precision)
 FACET_POINT_SIGMA = 1e-6
+#: the largest turn [rad] at a corner of a tessellated smooth curve: a mesher cuts a curve into
+#: at least 12 chords a full turn (30 deg a corner; STL exports' angular tolerances are 0.1-0.5
+#: rad). A loop turning more at one point has a real corner there (a window's loop turning down
+#: a spoke flank), which the smoothing fit must keep, not cut by a "sagitta" of its facets
+FACET_MAX_TURN = np.radians(32.0)
+#: a straight facet spans at least this many data spacings (shorter ones are not resolved: the
+#: points near a corner are the corner; see :mod:`drakedeburr.path.window_fit`)
+FACET_MIN_SPACINGS = 3.0
+
+
+def _turns(p: np.ndarray):
+    """(turn (N,) at each point between its chords [rad], arc positions s (N + 1,), median
+    chord [m]) of a closed polyline."""
+    chord = np.roll(p, -1, axis=0) - p
+    length = _norm(chord)
+    unit = chord / np.maximum(length, 1e-300)[:, None]
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
+    return turn, np.concatenate([[0.0], np.cumsum(length)]), float(np.median(length))
+
+
+def polygon_facets(p: np.ndarray, *, corner_angle: float = np.radians(1.0)) -> dict:
+    """The straight facets of a closed polyline: stretches between two tessellation corners
+    whose points turn, all together, by less than ``corner_angle`` (a chord of the mesh).
+
+    A tessellation corner is a point turning by more than ``corner_angle`` (or two neighbours:
+    equal-arc resampling cuts a vertex into two turns at neighbouring points), by at
+    most ``FACET_MAX_TURN`` in all; a facet is at least ``FACET_MIN_SPACINGS`` spacings long.
+    A longer run of turning points is a densely sampled curve (a fillet: its points lie on the
+    curve), a sharper turn a real corner; the stretches beside them are not facets.
+
+    Returns:
+        ``{"corner_pos": (K,) arc positions [m], "corner_turn": (K,) [rad], "facet": (K,)
+        lengths [m] (facet k from corner k to k + 1), "straight": (K,) bool, "s": (N + 1,)
+        arc positions of the points [m], "length": loop length [m], "spacing": median data
+        spacing [m]}``.
+    """
+    turn, s, spacing = _turns(np.asarray(p, float))
+    pos, tot, i0, i1 = _corner_runs(turn, s, corner_angle, 1.5 * spacing)
+    total = float(s[-1])
+    if not len(pos):
+        return {"corner_pos": pos, "corner_turn": tot, "facet": np.zeros(0), "s": s,
+                "straight": np.zeros(0, bool), "length": total, "spacing": spacing}
+    n = len(turn)
+    span = np.mod(s[i1] - s[i0], total)
+    # the points next to a run carry what is left of a vertex cut unevenly by the resampling
+    tot = tot + turn[(i0 - 1) % n] + turn[(i1 + 1) % n]
+    tess = (span <= 1.5 * spacing) & (tot <= FACET_MAX_TURN)
+    facet = np.diff(np.r_[pos, pos[0] + total])
+    # turn of the points inside facet k (after run k's last + 1, before run k + 1's first - 1)
+    cs = np.concatenate([[0.0], np.cumsum(np.r_[turn, turn])])
+    nxt0 = np.roll(i0, -1)
+    nxt0 = np.where(nxt0 <= i1, nxt0 + n, nxt0)
+    inner = np.maximum(cs[np.maximum(nxt0 - 1, i1 + 2)] - cs[i1 + 2], 0.0)
+    straight = (tess & np.roll(tess, -1) & (inner <= corner_angle) & (len(pos) > 1)
+                & (facet >= FACET_MIN_SPACINGS * spacing))
+    return {"corner_pos": pos, "corner_turn": tot, "facet": facet, "straight": straight,
+            "s": s, "length": total, "spacing": spacing}
 
 
 def facet_sagitta(p: np.ndarray, *, corner_angle: float = np.radians(1.0)) -> dict:
@@ -394,36 +391,44 @@ def facet_sagitta(p: np.ndarray, *, corner_angle: float = np.radians(1.0)) -> di
 
     A mesher cuts a curve into chords within a chordal tolerance: a facet of length L on a
     curve of curvature k lies up to k L^2 / 8 (its sagitta) off the curve, at its middle, and
-    on it at its corners. The curvature a corner implies is its turn over its shorter facet
-    (:func:`polyline_fit_report` splits the loop into facets), so a facet's sagitta is at
-    most ``turn * L_short / 8`` of either of its corners (the smaller: a long straight facet
-    beside a tight corner is straight, as a chord-tolerance mesher makes it), and a point's
+    on it at its corners. The curvature a corner between two straight facets implies is its
+    turn over its shorter facet (:func:`polygon_facets` finds the straight facets), so a
+    facet's sagitta is at most ``turn * L_short / 8`` of either of its corners (the smaller: a
+    long straight facet beside a tight corner is straight, as a chord-tolerance mesher makes
+    it; a facet beside a curve or a real corner is a designed straight: 0), and a point's
     expected deviation is that sagitta times ``4 x (1 - x)`` at the fraction x along its
-    facet (at least ``FACET_POINT_SIGMA``).
+    facet (at least ``FACET_POINT_SIGMA``). Points that are on no straight facet (a densely
+    sampled curve, a real corner) are on the curve: ``FACET_POINT_SIGMA``.
 
     Returns:
-        ``{"sigma": (N,) [m], "facets": count, "facet_median": [m], "sagitta_max": [m]}``;
-        fewer than 3 corners: every point ``FACET_POINT_SIGMA`` (not a polygon).
+        ``{"sigma": (N,) [m], "facets": straight facets, "facet_median": their median length
+        [m] (0 without), "facet_share": their share of the loop length, "sagitta_max": [m],
+        "kappa_facets": the largest curvature the facets imply, corner turn over the mean of
+        its two facets [1/m] (0 without)}``.
     """
     p = np.asarray(p, float)
-    chord = np.roll(p, -1, axis=0) - p
-    length = _norm(chord)
-    unit = chord / np.maximum(length, 1e-300)[:, None]
-    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
-    s = np.concatenate([[0.0], np.cumsum(length)])
-    pos, tot = _corners(turn, s, corner_angle, 2.5 * float(np.median(length)))
-    if len(pos) < 3:
-        return {"sigma": np.full(len(p), FACET_POINT_SIGMA), "facets": int(len(pos)),
-                "facet_median": float(s[-1]), "sagitta_max": 0.0}
-    total = s[-1]
-    facet = np.diff(np.r_[pos, pos[0] + total])
-    corner_sag = tot * np.minimum(facet, np.roll(facet, 1)) / 8.0  # facet k runs corner k->k+1
-    sag = np.minimum(corner_sag, np.roll(corner_sag, -1))
+    f = polygon_facets(p, corner_angle=corner_angle)
+    s = f["s"]
+    straight = f["straight"]
+    if not straight.any():
+        return {"sigma": np.full(len(p), FACET_POINT_SIGMA), "facets": 0, "facet_median": 0.0,
+                "facet_share": 0.0, "sagitta_max": 0.0, "kappa_facets": 0.0}
+    pos, tot, facet, total = f["corner_pos"], f["corner_turn"], f["facet"], f["length"]
+    # facet k runs corner k -> k + 1; only a corner between two straight facets implies a
+    # curvature (a facet beside a curve or a real corner is a designed straight: sagitta 0)
+    both = straight & np.roll(straight, 1)  # corner k joins facets k - 1 and k
+    corner_sag = np.where(both, tot * np.minimum(facet, np.roll(facet, 1)) / 8.0, 0.0)
+    sag = np.where(straight, np.minimum(corner_sag, np.roll(corner_sag, -1)), 0.0)
     k = (np.searchsorted(pos, s[:-1], side="right") - 1) % len(pos)
     x = np.mod(s[:-1] - pos[k], total) / facet[k]
     sigma = np.maximum(4.0 * x * (1.0 - x) * sag[k], FACET_POINT_SIGMA)
-    return {"sigma": sigma, "facets": int(len(pos)), "facet_median": float(np.median(facet)),
-            "sagitta_max": float(sag.max())}
+    # corners between two straight facets: their turn over the mean facet
+    k_implied = tot / np.maximum(0.5 * (facet + np.roll(facet, 1)), 1e-300)
+    return {"sigma": sigma, "facets": int(straight.sum()),
+            "facet_median": float(np.median(facet[straight])),
+            "facet_share": float(facet[straight].sum() / total),
+            "sagitta_max": float(sag.max()),
+            "kappa_facets": float(k_implied[both].max()) if both.any() else 0.0}
 
 
 def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
@@ -436,8 +441,9 @@ def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
     each point's expected deviation from the true curve (:func:`facet_sagitta`), and the
     smoothing factor s = N: the fit stays within about one sigma of the points on average,
     on the corners and on straight facets (sigma = 1 um) and free by up to the sagitta in the
-    middle of a curved facet. A loop without facets (a dense smooth edge) is fitted within
-    1 um: practically the interpolating fit.
+    middle of a curved facet (a bound on the sum: one facet of a real mesh loop took 1.4 x its
+    sagitta, tests/test_window_fit.py). A loop without facets (a dense smooth edge) is fitted
+    within 1 um: practically the interpolating fit.
 
     Raises:
         InputError: as :func:`fit_edge_curve`.
@@ -458,13 +464,14 @@ def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
     return _edge_curve(spline, u, p)
 
 
-def _corners(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):
-    """(arc positions (K,), turns (K,)) of a closed polyline's corners: points turning more
-    than ``angle``, runs of them within ``merge`` of each other joined (turn summed, position
-    turn-weighted)."""
+def _corner_runs(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):
+    """(arc positions (K,), turns (K,), first (K,) and last (K,) point index) of a closed
+    polyline's corners: points turning more than ``angle``, runs of them within ``merge`` of
+    each other joined (turn summed, position turn-weighted), in loop order."""
     idx = np.flatnonzero(turn > angle)
     if not len(idx):
-        return np.zeros(0), np.zeros(0)
+        empty = np.zeros(0, int)
+        return np.zeros(0), np.zeros(0), empty, empty
     L = s[-1]
     groups = [[idx[0]]]
     for i in idx[1:]:
@@ -478,7 +485,9 @@ def _corners(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):
         pos.append(float(np.average(sg, weights=turn[g])) % L)
         tot.append(float(turn[g].sum()))
     order = np.argsort(pos)
-    return np.asarray(pos)[order], np.asarray(tot)[order]
+    first = np.array([g[0] for g in groups])[order]
+    last = np.array([g[-1] for g in groups])[order]
+    return np.asarray(pos)[order], np.asarray(tot)[order], first, last
 
 
 def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.0),
@@ -503,13 +512,9 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
       wiggles); ``facets``: facet count.
     """
     p = curve.p_data
-    chord = np.roll(p, -1, axis=0) - p
-    length = _norm(chord)
-    unit = chord / np.maximum(length, 1e-300)[:, None]
-    turn = np.arccos(np.clip(np.einsum("ij,ij->i", np.roll(unit, 1, axis=0), unit), -1, 1))
-    s = np.concatenate([[0.0], np.cumsum(length)])
-    spacing = float(np.median(length))
-    corners, turns = _corners(turn, s, corner_angle, 2.5 * spacing)
+    turn, s, spacing = _turns(p)
+    unit = np.roll(p, -1, axis=0) - p
+    corners, turns = _corner_runs(turn, s, corner_angle, 2.5 * spacing)[:2]
     if len(corners) < 3:
         corners, turns = s[:-1], turn
     facet = np.diff(np.r_[corners, corners[0] + s[-1]])

@@ -12,7 +12,7 @@ from pathlib import Path
 from drakedeburr.errors import InputError
 from drakedeburr.hub.types import WindowEdge
 from drakedeburr.path.cl_planning import METHODS, PlannerParams, plan_cl
-from drakedeburr.path.edge_curve import fit_edge_curve
+from drakedeburr.path.window_fit import fit_window_edge
 
 __all__ = ["windows_from_source", "cl_table", "format_table"]
 
@@ -73,7 +73,8 @@ def cl_table(
 
     Returns:
         {"source", "params", "windows": [{"index", "kind", "initial_count", "length_m",
-        "methods": {name: {count, cv, cv_pairwise, max_chord_height_m, ..., "time_s"}}}]}
+        "edge_fit" (:func:`drakedeburr.path.window_fit.edge_fit_figures`), "methods": {name:
+        {count, cv, cv_pairwise, max_chord_height_m, ..., "edge_fit", "time_s"}}}]}
     """
     params = params or PlannerParams()
     if isinstance(source, (str, Path)):
@@ -85,9 +86,10 @@ def cl_table(
     for k, w in enumerate(windows):
         if progress:
             progress(k, len(windows), f"window {w.index}")
-        curve = fit_edge_curve(w.p_HE, name=f"{desc} window {w.index}")
+        curve = fit_window_edge(w.p_HE, chord_tolerance=params.delta_max,
+                                name=f"{desc} window {w.index}")
         entry = {"index": w.index, "kind": w.kind, "initial_count": len(w.p_HE),
-                 "length_m": curve.length, "methods": {}}
+                 "length_m": curve.length, "edge_fit": curve.fit, "methods": {}}
         paths = {}
         for m in methods:  # one at a time to time each
             p = params
@@ -119,4 +121,21 @@ def format_table(table: dict) -> str:
             if key.endswith("_m"):
                 vals = [v * 1e3 for v in vals]
             lines.append(f"{label} {m}".ljust(34) + "".join(fmt.format(v) for v in vals))
-    return "\n".join(lines)
+    return "\n".join(lines + _fit_rows(wins))
+
+
+def _fit_rows(wins: list[dict]) -> list[str]:
+    """The edge fit rows (path.window_fit): which fit, the facets, the fit's chord error
+    against the polygon and its largest curvature against the facets' [1/mm]."""
+    fits = [w.get("edge_fit") or {} for w in wins]
+    if not any(fits):
+        return []
+    rows = (("edge fit", lambda f: f["fit"][:8], "{:<10s}"),
+            ("facets", lambda f: f["facets"], "{:<10d}"),
+            ("facet median [mm]", lambda f: f["facet_median_m"] * 1e3, "{:<10.2f}"),
+            ("facet sagitta max [mm]", lambda f: f["sagitta_max_m"] * 1e3, "{:<10.4f}"),
+            ("fit chord error [mm]", lambda f: f["chord_error_m"] * 1e3, "{:<10.4f}"),
+            ("fit max curvature [1/mm]", lambda f: f["kappa_max"] * 1e-3, "{:<10.3f}"),
+            ("facets' curvature [1/mm]", lambda f: f["kappa_facets"] * 1e-3, "{:<10.3f}"))
+    return [label.ljust(34) + "".join(fmt.format(get(f)) if f else "-".ljust(10) for f in fits)
+            for label, get, fmt in rows]

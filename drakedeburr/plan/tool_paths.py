@@ -23,10 +23,13 @@ def tool_path(edge, params: ProcessParameters):
     from scipy.spatial import cKDTree
 
     from drakedeburr.orientation.orient import orient_window
-    from drakedeburr.path import fit_edge_curve, plan_cl
+    from drakedeburr.path import fit_window_edge, plan_cl
     from drakedeburr.path.cl_planning import PlannerParams
 
-    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+    # the interpolating NURBS of a smooth loop, the smoothing fit of a faceted one (a low-poly
+    # mesh's edge: facets of >= 3 point spacings joined at tessellation corners, sagitta above
+    # the CL chord height), chosen from the points (drakedeburr.path.window_fit)
+    curve = fit_window_edge(edge.p_HE, chord_tolerance=CL_DELTA, name=f"window {edge.index}")
     cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
                                                             count_budget=CL_COUNT_BUDGET),
                  window_index=edge.index, kind=edge.kind)

@@ -1,0 +1,95 @@
+"""The edge curve of one window as the pipeline fits it: the interpolating NURBS of a smooth
+loop, the smoothing fit of a faceted one, chosen by the loop's own geometry (issue 42 item 3:
+the NURBS fit of a polygonal loop does not invent wiggles; chord error and curvature are
+reported against the facet size).
+
+**Which fit.** A loop from a low-poly mesh (the face-side line of a tessellated edge) is a
+polygon: straight facets of length L joined at corners turning by theta, the chords of the
+designed curve, whose curvature is about theta / L. The interpolating spline through its
+points (spacing h) turns each corner's theta within about one spacing, at a curvature of
+about theta / h; the CL planner places its points by that curvature and the orientation stage
+turns the tool with the curve's frame, so both would follow every facet corner. The loop is
+therefore fitted with :func:`~drakedeburr.path.edge_curve.fit_faceted_curve` (free by up to
+each facet's sagitta in the middle of a facet, through the corners) when
+
+* its points resolve facets of at least ``FACET_MIN_SPACINGS`` data spacings (L >= 3 h: the
+  interpolant's corner curvature is then at least 3 x the facets') joined at a corner of a
+  tessellation (at most ``FACET_MAX_TURN``, :func:`~drakedeburr.path.edge_curve.polygon_facets`),
+* and some facet's sagitta exceeds the CL chord-height tolerance delta the path is planned
+  with: that facet is then longer than the chords the CL planner lays on the designed curve
+  (a chord of sagitta delta on curvature k is sqrt(8 delta / k) long, the facet sqrt(8 s / k)),
+  so the CL points would resolve, and follow, its corners. Smaller facets lie within the path's
+  own tolerance of the polygon and are spanned by its chords (the bundled hubs' ground truth
+  is a polyline through the generator's mesh vertices: facets of 0.2-0.5 mm, sagitta <= 2.1
+  um).
+
+Any other loop (a densely sampled designed curve, an exact CAD edge) keeps the interpolating
+fit, spline for spline: its plans do not change. The choice is made from the points, never
+from the source's name.
+
+**What is reported** (``EdgeCurve.fit``, copied into every ClPath's ``metrics["edge_fit"]``
+and the ``cl`` table): the fit used, the facets (count, median length, share of the loop,
+largest sagitta), the chord error of the fit against the polygon (largest distance of the
+curve from the data polyline), the fit's largest curvature against the largest curvature the
+facets imply (corner turn over the mean of its two facets) and the inflections the fit adds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from drakedeburr.path.edge_curve import (
+    FACET_POINT_SIGMA,
+    EdgeCurve,
+    facet_sagitta,
+    fit_edge_curve,
+    fit_faceted_curve,
+    polyline_fit_report,
+)
+
+__all__ = ["fit_window_edge", "edge_fit_figures", "is_faceted"]
+
+
+def is_faceted(facets: dict, chord_tolerance: float) -> bool:
+    """True when :func:`facet_sagitta`'s figures show a tessellation corner between two
+    straight facets that the points resolve with a sagitta above ``chord_tolerance`` [m], the
+    CL chord-height tolerance (module doc)."""
+    return facets["sagitta_max"] > max(chord_tolerance, FACET_POINT_SIGMA)
+
+
+def edge_fit_figures(curve: EdgeCurve, facets: dict, fit: str) -> dict:
+    """The report of one window's fit (module doc), SI: ``fit`` ("faceted" or
+    "interpolating"), ``facets``, ``facet_median_m``, ``facet_share``, ``sagitta_max_m``,
+    ``chord_error_m`` (fit against the data polyline), ``kappa_max`` and ``kappa_facets``
+    [1/m], ``kappa_ratio`` (kappa_max / kappa_facets, None without facet corners),
+    ``inflections``."""
+    rep = polyline_fit_report(curve)
+    kf = facets["kappa_facets"]
+    return {"fit": fit, "facets": facets["facets"], "facet_median_m": facets["facet_median"],
+            "facet_share": facets["facet_share"], "sagitta_max_m": facets["sagitta_max"],
+            "chord_error_m": rep["deviation_max"], "kappa_max": rep["kappa_max"],
+            "kappa_facets": kf, "kappa_ratio": rep["kappa_max"] / kf if kf > 0 else None,
+            "inflections": rep["inflections"]}
+
+
+def fit_window_edge(p: np.ndarray, *, chord_tolerance: float, name: str = "edge") -> EdgeCurve:
+    """The window edge's NURBS fit (module doc): :func:`fit_faceted_curve` for a faceted
+    loop, :func:`fit_edge_curve` otherwise, with the figures in ``EdgeCurve.fit``.
+
+    Args:
+        p: (N, 3) loop points [m].
+        chord_tolerance: the CL chord-height tolerance the path is planned with [m]
+            (``PlannerParams.delta_max``): facets of a smaller sagitta are not smoothed.
+        name: for error messages.
+
+    Raises:
+        InputError: as :func:`fit_edge_curve`.
+    """
+    facets = facet_sagitta(np.asarray(p, float))
+    if is_faceted(facets, chord_tolerance):
+        curve, fit = fit_faceted_curve(p, name=name), "faceted"
+    else:
+        curve, fit = fit_edge_curve(p, name=name), "interpolating"
+    return replace(curve, fit=edge_fit_figures(curve, facets, fit))
