@@ -143,3 +143,13 @@ def test_the_timing_holds_the_feed_through_the_fillet_afterwards(case):
     assert after.v_tcp[lo:hi + 1].min() >= (1 - BAND) * FEED
     assert after.t[-1] < case["before"].t[-1] - 0.05
     assert slow_stretches(s, after.v_tcp, (1 - BAND) * FEED) == []
+
+
+def test_hold_feed_refuses_a_feed_that_stops(case):
+    """A profile with a stop would divide the program's scaling by zero: refused up front."""
+    kin, s, X, q, cone, lo, hi = (case[k] for k in ("kin", "s", "X", "q", "cone", "lo", "hi"))
+    v = np.full(len(s), FEED)
+    v[0] = 0.0
+    with pytest.raises(ValueError, match="positive"):
+        mut.hold_feed(kin, mut.FeedStretch(s, X, q, cone, HALF, lo, hi), v, case["acc"],
+                      case["vel"])

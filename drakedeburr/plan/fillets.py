@@ -304,9 +304,14 @@ def _stretch_frames(ctx, cur: CutSamples, run, lim, fo, v_now: np.ndarray):
         if not fo.slower:
             return None, lo, hi, False, None
         # the fillet cannot be passed at the feed: faster than now, if an orientation lets
-        # the joints follow the timed profile sped up (the program's rows carry dv/ds)
+        # the joints follow the timed profile sped up (the program's rows carry dv/ds); the
+        # profile no slower than the run's least speed anywhere on the padded range (the
+        # cut's rest at its ends demands less), and no try where the timed cut stops
+        slowest = float(v_now[c])
+        if slowest <= 0.01 * v_g:
+            return None, lo, hi, False, None
         for gain in fo.slower_gains:
-            v_up = np.minimum(gain * v_now, v)
+            v_up = np.minimum(gain * np.maximum(v_now, slowest), v)
             res = hold_feed(ctx.kin, stretch, v_up, fr, vr, fo.program)
             if res.held:
                 return res.R, lo, hi, False, float(np.min(v_up[a:b + 1]))
