@@ -13,8 +13,12 @@ a prescribed constant speed, the cut's joints and path velocity at both ends; 3-
 The stretch takes the new orientation (the positions stay exactly on the executed path; the
 analytic IK re-solves the joints) only if the whole cut then has more of its travel in the band
 and is no slower, stays inside the cones, as clear of the hub as before and on one
-configuration. Each stretch is reported (:func:`repair_fillets`): where it was, whether the
-feed can be held there, whether the change was kept.
+configuration. Where the program cannot hold the feed (the joints cannot follow the fillet
+at the feed with any orientation in the cones: on the default hub, J3 at the window fillets
+inside the 7 degree cone), it is asked again for the timed cut's own speed profile there sped
+up (``FilletOptions.slower``); that orientation is kept if the whole cut is then faster with
+no less of it in the band. Each stretch is reported (:func:`repair_fillets`): where it was,
+whether the feed can be held there, the speed held, whether the change was kept.
 """
 
 from __future__ import annotations
