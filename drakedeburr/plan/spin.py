@@ -48,9 +48,6 @@ class SpinSearch:
         sigma: Gaussian width of the final smoothing [m].
         stride: the program runs on every ``stride``-th sample (the result is interpolated).
         band: spins farther than this from the reference spin are not considered [rad].
-        wrist_weight: the wrist joints' (J4-J6) steps count this many times their motion in
-            time at full speed in the step cost (1: every joint by its time; above 1 the
-            search trades arm motion for less wrist travel).
     """
 
     n_spin: int = 72
@@ -59,7 +56,6 @@ class SpinSearch:
     sigma: float = 4e-3
     stride: int = 2
     band: float = float(np.pi)
-    wrist_weight: float = 1.0
 
 
 def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch: np.ndarray,
@@ -115,7 +111,6 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
     bad |= np.any((qq < kin.q_lower) | (qq > kin.q_upper), axis=2)
     bad |= np.abs(qq[..., 4]) < wrist_margin
     w = 1.0 / np.asarray(kin.v_max, float)
-    w[3:] *= options.wrist_weight
     # state m at sample k comes from state P[m, i] = m - shift_i (mod n_spin) at k - 1; the
     # step costs of every transition at once: (n - 1, n_spin, shifts) weighted squared motion
     shifts = np.arange(-max_step, max_step + 1)
