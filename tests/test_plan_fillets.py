@@ -31,8 +31,10 @@ def test_fillet_repair_holds_the_feed_where_it_says_and_still_passes_the_verifie
     """h5_straight window 0, tool in hand, real chain: with the repair (the default) more of the
     cut is in the band and it is no slower, the planner leaves no failure record, every slow
     stretch it reports as held and kept is in the band by the verifier's own reading (its
-    dense samples of the timed trajectory), the planner's bound is at least the measured share,
-    and the verifier passes every required item, the tcp_speed_band item showing the bound."""
+    dense samples of the timed trajectory), one kept under the feed (FilletOptions.slower)
+    reports a speed held above the cut's slowest there, the planner's bound is at least the
+    measured share, and the verifier passes every required item, the tcp_speed_band item
+    showing the bound."""
     from drakedeburr.verify.checks import config_for_plan, verify_plan
 
     plans = [plan_hub(load_config("tool_in_hand", "h5_straight"), source="toolpath",
@@ -44,7 +46,14 @@ def test_fillet_repair_holds_the_feed_where_it_says_and_still_passes_the_verifie
     assert after["speed_in_band_fraction"] > before["speed_in_band_fraction"] + 0.03
     assert after["cut_seconds"] <= before["cut_seconds"] + 1e-3
     kept = [f for f in after["fillets"] if f["kept"]]
-    assert kept and all(f["held"] for f in kept)
+    held = [f for f in kept if f["held"]]
+    assert held
+    v_g = load_config("tool_in_hand", "h5_straight").process.grinding_speed
+    for f in kept:  # held at the feed, or (FilletOptions.slower) faster than before, under it
+        if f["held"]:
+            assert f["held_mps"] == pytest.approx(mut.FilletOptions().speed_share * v_g)
+        else:
+            assert f["slowest_mps"] < f["held_mps"] < v_g
     assert after["speed_in_band_bound"] >= after["speed_in_band_fraction"]
     report = verify_plan(plans[1], config_for_plan(plans[1]), expected_windows=[0])
     assert report.passed, report.failed
@@ -54,6 +63,6 @@ def test_fillet_repair_holds_the_feed_where_it_says_and_still_passes_the_verifie
     assert "planner's own figure" in band.detail
     w0 = band.per_window[0]
     assert w0["planner_bound_in_band"] == pytest.approx(after["speed_in_band_bound"])
-    for f in kept:  # the verifier finds no slow stretch inside a held one
+    for f in held:  # the verifier finds no slow stretch inside a held one
         for st in w0["slow_stretches"]:
             assert st["to_m"] <= f["from_m"] + 1e-3 or st["from_m"] >= f["to_m"] - 1e-3, (f, st)

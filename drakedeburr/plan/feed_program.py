@@ -343,6 +343,8 @@ def hold_feed(kin, cut: FeedStretch, v: float | np.ndarray, acc_max: np.ndarray,
     acc_lim = opt.limit_share * np.asarray(acc_max, float)
     vel_lim = opt.limit_share * np.asarray(vel_max, float)
     v_all = np.broadcast_to(np.asarray(v, float), s.shape)
+    if not np.all(v_all > 0):
+        raise ValueError("hold_feed: the feed to hold must be positive along the cut")
     v_sub = v_all[a0:a1 + 1]
     dv_sub = np.gradient(v_all, s)[a0:a1 + 1]
     sigmas: list[float] = []

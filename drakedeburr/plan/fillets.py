@@ -13,8 +13,12 @@ a prescribed constant speed, the cut's joints and path velocity at both ends; 3-
 The stretch takes the new orientation (the positions stay exactly on the executed path; the
 analytic IK re-solves the joints) only if the whole cut then has more of its travel in the band
 and is no slower, stays inside the cones, as clear of the hub as before and on one
-configuration. Each stretch is reported (:func:`repair_fillets`): where it was, whether the
-feed can be held there, whether the change was kept.
+configuration. Where the program cannot hold the feed (the joints cannot follow the fillet
+at the feed with any orientation in the cones: on the default hub, J3 at the window fillets
+inside the 7 degree cone), it is asked again for the timed cut's own speed profile there sped
+up (``FilletOptions.slower``); that orientation is kept if the whole cut is then faster with
+no less of it in the band. Each stretch is reported (:func:`repair_fillets`): where it was,
+whether the feed can be held there, the speed held, whether the change was kept.
 """
 
 from __future__ import annotations
@@ -52,6 +56,12 @@ class FilletOptions:
         method: "program" (the feed program) or "kto".
         margin: the program's stretch reaches this far either side of a slow run [m].
         program: the feed program's settings.
+        slower: where the program cannot hold the feed, run it again at the timed cut's own
+            speed profile there times each of ``slower_gains`` in turn (capped at the feed)
+            until one holds: a fillet the joints cannot pass at the feed inside the cone is
+            then passed faster if an orientation in the cones lets them (kept only if the
+            whole cut is then faster with no less of it in the band).
+        slower_gains: those factors on the timed speed profile, largest first.
     """
 
     speed_share: float = 0.96
@@ -67,6 +77,8 @@ class FilletOptions:
     method: str = "program"
     margin: float = 0.02
     program: FeedProgramOptions = field(default_factory=FeedProgramOptions)
+    slower: bool = True
+    slower_gains: tuple[float, ...] = (1.25, 1.12)
 
     def __post_init__(self) -> None:
         if self.method not in ("program", "kto"):
@@ -84,7 +96,11 @@ class FilletStretch:
         from_m, to_m: where the stretch runs, as travel along the cut [m].
         slowest_mps: the timed cut's slowest TCP speed on it [m/s].
         held: the feed can be held there, by the repair method's own reading.
-        kept: the new orientation was kept (the whole cut more in the band, no slower).
+        kept: the new orientation was kept (the whole cut more in the band and no slower, or
+            no less in the band and faster).
+        held_mps: the least speed on the stretch the feed program held there [m/s] (below
+            the feed when it cannot hold the feed: :attr:`FilletOptions.slower`; None: none
+            held).
     """
 
     from_m: float
@@ -92,6 +108,7 @@ class FilletStretch:
     slowest_mps: float
     held: bool
     kept: bool = False
+    held_mps: float | None = None
 
     def as_dict(self) -> dict:
         """JSON-ready record (the plan's ``meta["windows"][i]["fillets"]`` entries)."""
@@ -269,9 +286,10 @@ def _in_band(v: np.ndarray, v_g: float, band: float) -> float:
     return float(np.mean(np.abs(v_cut - v_g) <= band * v_g)) if len(v_cut) else 0.0
 
 
-def _stretch_frames(ctx, cur: CutSamples, run, lim, fo):
-    """New frames for one slow run ``(a, b, slowest)`` of the timed cut ``cur``: (R (n, 3, 3)
-    over the samples ``lo..hi`` or None, lo, hi, held)."""
+def _stretch_frames(ctx, cur: CutSamples, run, lim, fo, v_now: np.ndarray):
+    """New frames for one slow run ``(a, b, c)`` of the timed cut ``cur`` (``v_now`` (N,) its
+    TCP speed [m/s]): (R (n, 3, 3) over the samples ``lo..hi`` or None, lo, hi, held, the
+    least speed held on the run [m/s] or None)."""
     s = cur.s
     a, b, c = run
     v_g = ctx.process.grinding_speed
@@ -279,59 +297,96 @@ def _stretch_frames(ctx, cur: CutSamples, run, lim, fo):
         lo = int(np.searchsorted(s, max(s[a] - fo.margin, 0.01)))
         hi = int(np.searchsorted(s, min(s[b] + fo.margin, s[-1] - 0.01)))
         if hi - lo < 2 * fo.program.fixed + 8:
-            return None, lo, hi, False
+            return None, lo, hi, False, None
         fr = np.asarray(lim.acceleration_fraction) * np.asarray(lim.a_max)
         vr = np.asarray(lim.velocity_fraction) * np.asarray(lim.v_max)
-        res = hold_feed(ctx.kin, FeedStretch(s, cur.X_HT, cur.q, cur.cone, cur.half_angle, lo, hi),
-                        fo.speed_share * v_g, fr, vr, fo.program)
-        return (res.R if res.held else None), lo, hi, res.held
+        stretch = FeedStretch(s, cur.X_HT, cur.q, cur.cone, cur.half_angle, lo, hi)
+        v = fo.speed_share * v_g
+        res = hold_feed(ctx.kin, stretch, v, fr, vr, fo.program)
+        if res.held:
+            return res.R, lo, hi, True, v
+        if not fo.slower:
+            return None, lo, hi, False, None
+        # the fillet cannot be passed at the feed: faster than now, if an orientation lets
+        # the joints follow the timed profile sped up (the program's rows carry dv/ds); the
+        # profile no slower than the run's least speed anywhere on the padded range (the
+        # cut's rest at its ends demands less), and no try where the timed cut stops
+        slowest = float(v_now[c])
+        if slowest <= 0.01 * v_g:
+            return None, lo, hi, False, None
+        for gain in fo.slower_gains:
+            v_up = np.minimum(gain * np.maximum(v_now, slowest), v)
+            res = hold_feed(ctx.kin, stretch, v_up, fr, vr, fo.program)
+            if res.held:
+                return res.R, lo, hi, False, float(np.min(v_up[a:b + 1]))
+        return None, lo, hi, False, None
     lo = int(np.searchsorted(s, max(s[c] - fo.half_span, 0.01)))
     hi = int(np.searchsorted(s, min(s[c] + fo.half_span, s[-1] - 0.01)))
     if hi - lo < 20:
-        return None, lo, hi, False
+        return None, lo, hi, False, None
     R = orientation_by_kto(ctx.cell, ctx.kin, ctx.checker, cur.part(slice(lo, hi + 1)),
                            fo.speed_share * v_g, np.asarray(lim.a_max), np.asarray(lim.v_max),
                            fo)
-    return R, lo, hi, R is not None
+    return R, lo, hi, R is not None, (fo.speed_share * v_g if R is not None else None)
 
 
-def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
-    """The cut with a new orientation (:func:`_stretch_frames`) on each stretch around a fillet
-    where the timed cut falls below the speed band, each kept only if the whole cut then has
-    more travel in the band and is no slower, the axis stays 1 mrad inside its cone, the joints
-    track on the same configuration without jumps and no sample loses clearance (below the
-    bound). ``ctx`` is the planner's :class:`drakedeburr.plan.options.PlanContext`. Returns
-    (CutPath, DensePath, distances, report): the report is a :class:`FilletStretch` for each
-    slow stretch."""
+def _try_run(ctx, cur: CutSamples, d, run, v_now, best, window: int):
+    """One try at the slow run ``run`` of the cut ``cur`` (distances ``d``; ``v_now`` its timed
+    TCP speed; ``best`` its (time, share in band)): (its :class:`FilletStretch`, the new
+    (poses, joints, distances) if better else None, the cut's (time, share) after)."""
     from drakedeburr.plan.timing import time_path
 
     fo = ctx.options.fillets
     v_g = ctx.process.grinding_speed
     tol_band = ctx.config.tolerances.speed_band
     lim = ctx.limits(v_g)
+    s = cur.s
+    slowest = float(v_now[run[2]])
+    R, lo, hi, held, v_held = _stretch_frames(ctx, cur, run, lim, fo, v_now)
+    rec = FilletStretch(from_m=float(s[run[0]]), to_m=float(s[run[1]]), slowest_mps=slowest,
+                        held=bool(held), held_mps=None if v_held is None else float(v_held))
+    new = None if R is None else _repair_one(ctx, cur, d, slice(lo, hi + 1), R, window,
+                                             s[run[2]])
+    if new is None:
+        return rec, None, best
+    timed = time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT)
+    t_new, share = float(timed.t[-1]), _in_band(timed.v_tcp, v_g, tol_band)
+    log.debug("window %d: fillet at %.0f mm (%.0f mm/s, held at %.0f mm/s): cut %.3f s -> "
+              "%.3f s, in band %.3f -> %.3f", window, 1e3 * s[run[2]], 1e3 * slowest,
+              1e3 * v_held, best[0], t_new, best[1], share)
+    # held at the feed: more in the band and no slower; held below it: faster, no less in
+    # the band
+    better = (share > best[1] + 1e-9 and t_new <= best[0] + 1e-3) if held else (
+        share >= best[1] - 1e-9 and t_new < best[0] - 1e-3)
+    if not better:
+        return rec, None, best
+    return replace(rec, kept=True), new, (t_new, share)
+
+
+def repair_fillets(ctx, cp, cut, dist, cone, half_angle, window):
+    """The cut with a new orientation (:func:`_stretch_frames`) on each stretch around a fillet
+    where the timed cut falls below the speed band, each kept only if the whole cut then has
+    more travel in the band and is no slower (held at the feed) or no less in the band and
+    faster (held below it: :attr:`FilletOptions.slower`), the axis stays 1 mrad inside its
+    cone, the joints track on the same configuration without jumps and no sample loses
+    clearance (below the bound). ``ctx`` is the planner's
+    :class:`drakedeburr.plan.options.PlanContext`. Returns (CutPath, DensePath, distances,
+    report): the report is a :class:`FilletStretch` for each slow stretch."""
+    from drakedeburr.plan.timing import time_path
+
+    v_g = ctx.process.grinding_speed
+    tol_band = ctx.config.tolerances.speed_band
     s = cut.s
-    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], lim, fk=ctx.kin.p_HT)
+    base = time_path(s, cut.q, cut.X_HT[:, :3, 3], ctx.limits(v_g), fk=ctx.kin.p_HT)
     X, q, d = cut.X_HT, cut.q, dist
-    best_t, best_share = float(base.t[-1]), _in_band(base.v_tcp, v_g, tol_band)
+    best = (float(base.t[-1]), _in_band(base.v_tcp, v_g, tol_band))
     report: list[FilletStretch] = []
     for run in slow_stretches(s, base.v_tcp, (1 - tol_band) * v_g):
-        cur = CutSamples(s, q, X, cone, half_angle)
-        R, lo, hi, held = _stretch_frames(ctx, cur, run, lim, fo)
-        report.append(FilletStretch(from_m=float(s[run[0]]), to_m=float(s[run[1]]),
-                                    slowest_mps=float(base.v_tcp[run[2]]), held=bool(held)))
-        if R is None:
-            continue
-        new = _repair_one(ctx, cur, d, slice(lo, hi + 1), R, window, s[run[2]])
-        if new is None:
-            continue
-        timed = time_path(s, new[1], new[0][:, :3, 3], lim, fk=ctx.kin.p_HT)
-        t_new, share = float(timed.t[-1]), _in_band(timed.v_tcp, v_g, tol_band)
-        log.debug("window %d: fillet at %.0f mm (%.0f mm/s): cut %.3f s -> %.3f s, in band "
-                  "%.3f -> %.3f", window, 1e3 * s[run[2]], 1e3 * base.v_tcp[run[2]], best_t,
-                  t_new, best_share, share)
-        if share > best_share + 1e-9 and t_new <= best_t + 1e-3:
-            (X, q, d), best_t, best_share = new, t_new, share
-            report[-1] = replace(report[-1], kept=True)
+        rec, new, best = _try_run(ctx, CutSamples(s, q, X, cone, half_angle), d, run,
+                                  base.v_tcp, best, window)
+        report.append(rec)
+        if new is not None:
+            X, q, d = new
     if X is cut.X_HT:
         return cp, cut, dist, report
     X_tg = cp.X_target.copy()
