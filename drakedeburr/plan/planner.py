@@ -43,7 +43,7 @@ from drakedeburr.plan import relax
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
-from drakedeburr.plan.order import air_costs, best_order
+from drakedeburr.plan.order import air_costs, best_order, move_seconds
 from drakedeburr.plan.parallel import map_windows, plan_all_windows
 from drakedeburr.plan.policy import (
     CellPasses,
@@ -60,7 +60,7 @@ from drakedeburr.plan.results import (
     Stretch,
     WindowStatus,
 )
-from drakedeburr.plan.stretch import joint_stretch, make_target, time_joint
+from drakedeburr.plan.stretch import joint_stretch, make_target
 from drakedeburr.plan.targets import contact_geometry
 from drakedeburr.plan.tool_paths import CL_COUNT_BUDGET, CL_DELTA, tool_path
 from drakedeburr.plan.types import FailureRecord, JointTrajectory, Plan, PlanSegment
@@ -213,19 +213,20 @@ def _chain(ctx: PlanContext, pairs: Sequence[tuple]) -> _Chain:
 
 def chosen_order(ctx: PlanContext, results: Sequence) -> list[int]:
     """The order (positions into ``results``, planned windows) of least estimated air time
-    (:func:`drakedeburr.plan.order.best_order`: each move's straight joint line timed as the
-    planner times it)."""
+    (:func:`drakedeburr.plan.order.best_order`; each move by
+    :func:`drakedeburr.plan.order.move_seconds`: rest to rest at the joint limits the planner
+    times air moves with, and the straight tool-point distance at the move's programmed
+    speed)."""
     process = ctx.config.process
     speed = {"home": process.home_speed, "transition": process.window_switch_speed}
+    lim = ctx.limits(1.0)
+    v_max = np.asarray(lim.v_max) * lim.velocity_fraction
+    a_max = np.asarray(lim.a_max) * lim.acceleration_fraction
 
     def seconds(q0, q1, kind: str) -> float:
-        q = np.stack([np.asarray(q0, float), np.asarray(q1, float)])
-        n = max(1, int(np.ceil(np.max(np.abs(q[1] - q[0])) / ctx.options.joint_step)))
-        if n == 1 and not np.any(q[1] != q[0]):
-            return 0.0
-        qs = q[0] + np.linspace(0.0, 1.0, n + 1)[:, None] * (q[1] - q[0])
-        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(qs, axis=0), axis=1))])
-        return float(time_joint(ctx, qs, s, speed[kind]).t[-1])
+        p = ctx.kin.p_HT(np.stack([q0, q1]))
+        return move_seconds(np.asarray(q1, float) - np.asarray(q0, float), v_max, a_max,
+                            float(np.linalg.norm(p[1] - p[0])), speed[kind])
 
     costs = air_costs(ctx.kin.q_home, [r.q_start for r in results],
                       [r.stretches[-1].timed.q[-1] for r in results], seconds)
