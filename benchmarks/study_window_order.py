@@ -31,7 +31,6 @@ FULL_ARGS = ("--catalogue", "/tmp/h4_before", "/tmp/h4_after",
              "--pair", "default_hub/workpiece_in_hand",
              "/tmp/h4_plan_before_workpiece_in_hand.report.json",
              "/tmp/h4_plan_after_workpiece_in_hand.report.json")
-QUICK_ARGS = FULL_ARGS
 
 AIR_BETWEEN = ("home", "transition")
 
@@ -49,10 +48,30 @@ def figures(report: dict) -> dict:
                 bound += m["bound_s"]
     j6 = {int(w): float(np.degrees(v["J6_range_rad"]))
           for w, v in (items["j4_j6_range"].get("per_window") or {}).items()}
-    order = [int(w) for w in budget if int(w) >= 0]  # the budget's windows: in cutting order
+    order = cutting_order(budget)
     return {"passed": bool(report["passed"]), "cycle_s": float(report["plan"]["duration_s"]),
             "ratio": float(items["cycle_time"]["value"]), "air_s": air, "air_bound_s": bound,
             "j6_deg": j6, "order": order}
+
+
+def cutting_order(budget: dict) -> list[int]:
+    """The windows in cutting order, read off ``time_budget``'s moves: the first window's moves
+    start at home; each other's start with the retract of the window cut before it."""
+    after = {}
+    first = None
+    for w, v in budget.items():
+        moves = v.get("air_before", [])
+        if int(w) < 0 or not moves:
+            continue
+        if moves[0]["kind"] == "home":
+            first = int(w)
+        elif moves[0]["kind"] == "retract":
+            after[int(moves[0]["window"])] = int(w)
+    order = []
+    while first is not None and first not in order:
+        order.append(first)
+        first = after.get(first)
+    return order
 
 
 def _read(path: Path) -> dict | None:
