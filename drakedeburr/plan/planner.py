@@ -32,7 +32,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -43,6 +43,7 @@ from drakedeburr.plan import relax
 from drakedeburr.plan.io import jsonable
 from drakedeburr.plan.kinematics import ClearanceChecker, cell_kinematics
 from drakedeburr.plan.options import PlanContext, PlanOptions, RunMode
+from drakedeburr.plan.order import air_costs, best_order, move_seconds
 from drakedeburr.plan.parallel import map_windows, plan_all_windows
 from drakedeburr.plan.policy import (
     CellPasses,
@@ -118,53 +119,118 @@ def _context(cell, config: Config, options: PlanOptions, q_refs: dict | None) ->
 
 def assemble_windows(ctx: PlanContext, windows: Sequence[WindowTargets], results: Sequence,
                      progress: Progress, t_start: float) -> PlanDraft:
-    """The plan of independently planned windows (one result per window, in execution
-    order): from home through every planned window and back, with its transitions; its
-    record holds the cell's frames, the figures, the tool points moved out of the material
-    (deviations) and the timings since ``t_start`` (``time.perf_counter()``)."""
-    kin, process = ctx.kin, ctx.config.process
-    failures, stretches, window_stats, window_seconds = [], [], [], []
-    q_cur = kin.q_home.copy()
-    home = make_target(kin, q_cur, -1, "home", -1, process.home_speed, "joint")
-    n = len(windows)
-    t_transitions = 0.0
+    """The plan of independently planned windows (one result per window, in the given
+    order): from home through every planned window and back, with its transitions; the
+    planned windows cut in the order of least air time (:func:`chosen_order`); its record
+    holds the cell's frames, the figures, the tool points moved out of the material
+    (deviations), the order chosen and the timings since ``t_start``
+    (``time.perf_counter()``)."""
+    failures = []
     for wt, res in zip(windows, results, strict=True):
         failures += res.failures
         if res.status is WindowStatus.ABANDONED:  # abandoned for relaxation (policy)
             log.debug("window %d: an IK target failed under the recipe", wt.window_index)
-            continue
-        if not res.status.planned:
+        elif not res.status.planned:
             log.warning("window %d not planned (%s): %s", wt.window_index, res.status.value,
                         res.failures[-1].reason if res.failures else "")
-            continue
-        st = res.stats
-        log.info("window %d: %s, cut %.2f s, %.0f %% at the feed, %d/%d CL points, %d via "
-                 "targets%s", wt.window_index, res.status.value, st.cut_seconds,
-                 100 * st.speed_in_band_fraction, st.reached, st.cl_points + 1, st.via_targets,
-                 f", {len(res.failures)} failure records" if res.failures else "")
+        else:
+            st = res.stats
+            log.info("window %d: %s, cut %.2f s, %.0f %% at the feed, %d/%d CL points, %d via "
+                     "targets%s", wt.window_index, res.status.value, st.cut_seconds,
+                     100 * st.speed_in_band_fraction, st.reached, st.cl_points + 1,
+                     st.via_targets,
+                     f", {len(res.failures)} failure records" if res.failures else "")
+    planned = [k for k, res in enumerate(results) if res.status.planned]
+    t0 = time.perf_counter()
+    given = _chain(ctx, [(windows[k], results[k]) for k in planned])
+    chain, order_record = given, None
+    if len(planned) > 1:
+        order = chosen_order(ctx, [results[k] for k in planned])
+        if order != list(range(len(planned))):
+            other = _chain(ctx, [(windows[planned[i]], results[planned[i]]) for i in order])
+            kept = (len(other.failures), other.air_seconds) < (len(given.failures),
+                                                               given.air_seconds - 1e-3)
+            chain = other if kept else given
+            order_record = {"given": [windows[k].window_index for k in planned],
+                            "chosen": [windows[planned[i]].window_index for i in order],
+                            "given_air_s": given.air_seconds, "chosen_air_s": other.air_seconds,
+                            "kept": "chosen" if kept else "given"}
+            log.info("window order %s: moves off the cut %.3f s (given order %s: %.3f s)%s",
+                     order_record["chosen"], other.air_seconds, order_record["given"],
+                     given.air_seconds, "" if kept else "; the given order kept")
+    t_transitions = time.perf_counter() - t0
+    if progress is not None:
+        progress(len(windows), len(windows), "done")
+    stats = PlanStats(total_seconds=time.perf_counter() - t_start,
+                      transition_seconds=t_transitions)
+    ordered = list(chain.windows) + [wt for k, wt in enumerate(windows) if k not in planned]
+    home = make_target(ctx.kin, ctx.kin.q_home, -1, "home", -1, ctx.config.process.home_speed,
+                       "joint")
+    draft = _assemble(ctx, chain.stretches, home, chain.window_stats,
+                      failures + chain.failures, ordered, order_record)
+    return draft.with_record(timings=stats, window_seconds=chain.window_seconds)
+
+
+@dataclass(frozen=True)
+class _Chain:
+    """Planned windows joined from home and back: the stretches, the windows (in cutting
+    order) with their figures and planning times, the moves' failure records and the moves'
+    time [s] (home, transitions, approaches and retracts)."""
+
+    stretches: list
+    windows: tuple
+    window_stats: list
+    window_seconds: tuple
+    failures: list
+    air_seconds: float
+
+
+def _chain(ctx: PlanContext, pairs: Sequence[tuple]) -> _Chain:
+    """The planned windows ``pairs`` ((targets, WindowPlan), in cutting order) joined by
+    joint moves from home, between them and back home (:func:`joint_stretch`)."""
+    kin, process = ctx.kin, ctx.config.process
+    q_cur = kin.q_home.copy()
+    stretches, window_stats, window_seconds, failures = [], [], [], []
+    for wt, res in pairs:
         speed = process.home_speed if not stretches else process.window_switch_speed
         kind = "home" if not stretches else "transition"
-        t0 = time.perf_counter()
         js, mv, recs = joint_stretch(ctx, q_cur, res.q_start, speed, kind,
                                      f"to window {wt.window_index}")
-        t_transitions += time.perf_counter() - t0
         failures += recs
         stretches += [js, *res.stretches]
         window_stats.append({**res.stats.to_dict(), "transition_method": mv.method})
         window_seconds.append(res.seconds)
         q_cur = res.stretches[-1].timed.q[-1]
-    t0 = time.perf_counter()
     js, mv, recs = joint_stretch(ctx, q_cur, kin.q_home, process.home_speed, "home",
                                  "return home")
-    t_transitions += time.perf_counter() - t0
     failures += recs
     stretches.append(js)
-    if progress is not None:
-        progress(n, n, "done")
-    stats = PlanStats(total_seconds=time.perf_counter() - t_start,
-                      transition_seconds=t_transitions)
-    draft = _assemble(ctx, stretches, home, window_stats, failures, windows)
-    return draft.with_record(timings=stats, window_seconds=tuple(window_seconds))
+    air = sum(float(st.timed.t[-1]) for st in stretches if st.kind != "cut")
+    return _Chain(stretches=stretches, windows=tuple(wt for wt, _ in pairs),
+                  window_stats=window_stats, window_seconds=tuple(window_seconds),
+                  failures=failures, air_seconds=air)
+
+
+def chosen_order(ctx: PlanContext, results: Sequence) -> list[int]:
+    """The order (positions into ``results``, planned windows) of least estimated air time
+    (:func:`drakedeburr.plan.order.best_order`; each move by
+    :func:`drakedeburr.plan.order.move_seconds`: rest to rest at the joint limits the planner
+    times air moves with, and the straight tool-point distance at the move's programmed
+    speed)."""
+    process = ctx.config.process
+    speed = {"home": process.home_speed, "transition": process.window_switch_speed}
+    lim = ctx.limits(1.0)
+    v_max = np.asarray(lim.v_max) * lim.velocity_fraction
+    a_max = np.asarray(lim.a_max) * lim.acceleration_fraction
+
+    def seconds(q0, q1, kind: str) -> float:
+        p = ctx.kin.p_HT(np.stack([q0, q1]))
+        return move_seconds(np.asarray(q1, float) - np.asarray(q0, float), v_max, a_max,
+                            float(np.linalg.norm(p[1] - p[0])), speed[kind])
+
+    costs = air_costs(ctx.kin.q_home, [r.q_start for r in results],
+                      [r.stretches[-1].timed.q[-1] for r in results], seconds)
+    return best_order(costs)
 
 
 _REST_SECONDS = 0.1  # [s] a plan that moves nowhere holds home this long (a trajectory has pieces)
@@ -198,7 +264,8 @@ def _concatenate(kin, stretches: list[Stretch], home):
                                               c=np.concatenate(c_all, axis=1))
 
 
-def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows) -> PlanDraft:
+def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows,
+              order_record: dict | None = None) -> PlanDraft:
     kin, cell, config = ctx.kin, ctx.cell, ctx.config
     targets, segments, traj = _concatenate(kin, stretches, home)
     v_g = config.process.grinding_speed
@@ -218,6 +285,8 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
         physical_cut_seconds=edge_total / v_g,
         cut_time_ratio=cut_time / (edge_total / v_g) if edge_total else None,
     )
+    if order_record is not None:  # the windows cut in another order than given
+        figures["window_order"] = order_record
     other_tool = cell.tool not in (None, DEFAULT_TOOL)
     record = PlanRecord(
         config=config.to_record(),
