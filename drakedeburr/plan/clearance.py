@@ -51,6 +51,7 @@ motion bound along a given path is not offered for capped signed distances.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,7 +59,8 @@ import numpy as np
 from drakedeburr.cell.narrowphase import bounding_points
 
 __all__ = ["MotionBound", "motion_bound", "step_displacements", "distances_along",
-           "QUERY_SLACK"]
+           "QUERY_SLACK", "AxisSearch", "ToolScene", "tool_scene", "spin_invariant_parts",
+           "axes_about", "tool_axis_clearance", "AXIS_RINGS", "AXES_PER_RING"]
 
 #: margin [m] a skipped pair keeps over the cap: the distance query's own inconsistency
 #: between neighbouring configurations (module docstring; 0.55 mm measured)
@@ -330,3 +332,198 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
         at[due] = k
         out[k] = min(out[k], float(d[due].min()))
     return out, stats
+
+
+# --- the tool alone against the part: is there any axis at a CL target? -------------------
+
+#: the sampled axes of :func:`axes_about`: rings (shares of the half-angle) and axes per ring
+AXIS_RINGS = (0.25, 0.5, 0.75, 1.0)
+AXES_PER_RING = 16
+
+
+@dataclass(frozen=True, eq=False)
+class AxisSearch:
+    """What :func:`tool_axis_clearance` found at each CL target of a window.
+
+    Attributes:
+        best: (M,) the largest clearance [m] of the round tool parts (shank, collet, spindle
+            body, its clamp: the parts symmetric about the burr axis) to the part over the
+            axes searched (negative: minus the penetration depth of the least bad axis).
+        part: (M,) the tool part nearest the part at that axis (geometry name).
+        best_axis_H: (M, 3) that axis (unit, tip -> spindle).
+        slack: (M,) how much more any axis of the cone between the sampled ones can clear
+            [m]: the sampled axes lie within ``cover`` of every axis of the cone, and turning
+            the tool by that about its constrained point moves the tool part of each sampled
+            axis's nearest pair by at most its reach from that point times ``cover``; a
+            target with ``best + slack`` below the bound has no clear axis in the cone.
+        cover: the covering angle of the sampled axes [rad]; axes: axes sampled per target.
+        half_angle: the cone's half-angle [rad].
+    """
+
+    best: np.ndarray
+    part: tuple
+    best_axis_H: np.ndarray
+    slack: np.ndarray
+    cover: float
+    axes: int
+    half_angle: float
+
+
+class ToolScene:
+    """The round tool parts and the part's collision pieces in one standalone ``SceneGraph``
+    (hub pieces anchored in H, the tool parts on one frame posed at X_HT), for the question no
+    arm pose can change: with the burr's cutting circle on the edge and the axis ``a``, does
+    the tool clear the part? The parts are those whose distance to the hub is the same for
+    every spin about the burr axis and every arm pose (:meth:`ClearanceChecker.spin_invariant`),
+    with the cell's own shapes, proximity properties and relative poses (read at home), so a
+    reading here is the cell's reading of that pair at any pose with that tool point and axis.
+
+    Args:
+        checker: a :class:`~drakedeburr.plan.kinematics.ClearanceChecker` of the cell.
+    """
+
+    def __init__(self, checker) -> None:
+        from pydrake.geometry import (
+            FramePoseVector,
+            GeometryFrame,
+            GeometryInstance,
+            ProximityProperties,
+            SceneGraph,
+        )
+        from pydrake.math import RigidTransform
+
+        cell = checker.cell
+        sym = spin_invariant_parts(checker)  # first: finding them poses the context
+        query = checker.query_at(cell.q_home)
+        inspector = query.inspector()
+        X_WT = cell.tool_frame.CalcPoseInWorld(checker.plant_context).GetAsMatrix4()
+        X_WH = cell.hub_frame.CalcPoseInWorld(checker.plant_context).GetAsMatrix4()
+        sg = SceneGraph()
+        source = sg.RegisterSource("drakedeburr.tool_scene")
+        self._frame = sg.RegisterFrame(source, GeometryFrame("tool"))
+        self.names: dict = {}
+        self.reach: dict = {}  # tool part -> farthest point from T [m]
+
+        def add(g, X_ref, frame=None):
+            X_RG = np.linalg.inv(X_ref) @ query.GetPoseInWorld(g).GetAsMatrix4()
+            shape = inspector.GetShape(g)
+            inst = GeometryInstance(RigidTransform(X_RG), shape.Clone(), inspector.GetName(g))
+            inst.set_proximity_properties(ProximityProperties(
+                inspector.GetProximityProperties(g)))
+            if frame is None:
+                gid = sg.RegisterAnchoredGeometry(source, inst)
+            else:
+                gid = sg.RegisterGeometry(source, frame, inst)
+                P, rho = bounding_points(shape)
+                P_T = P @ X_RG[:3, :3].T + X_RG[:3, 3]
+                self.reach[gid] = float(np.linalg.norm(P_T, axis=1).max() + rho)
+            self.names[gid] = inspector.GetName(g).split("::")[-1]
+
+        for g in sorted(cell.hub_ids, key=lambda g: g.get_value()):
+            add(g, X_WH)
+        self.tool_parts = sym
+        for g in sym:
+            add(g, X_WT, self._frame)
+        self._sg, self._ctx = sg, sg.CreateDefaultContext()
+        self._port = sg.get_source_pose_port(source)
+        self._poses = FramePoseVector()
+        self._rt = RigidTransform
+
+    def clearance(self, X_HT: np.ndarray, max_distance: float) -> tuple[float, object]:
+        """(distance [m] of the round tool parts to the part, capped at ``max_distance``, or
+        minus the deepest penetration in contact; the tool part's geometry id, None when
+        nothing is within the cap) at the tool pose ``X_HT`` (4, 4)."""
+        self._poses.set_value(self._frame, self._rt(np.asarray(X_HT, float)))
+        self._port.FixValue(self._ctx, self._poses)
+        query = self._sg.get_query_output_port().Eval(self._ctx)
+        if query.HasCollisions():
+            pen = max(query.ComputePointPairPenetration(), key=lambda p: p.depth)
+            return -float(pen.depth), pen.id_A if pen.id_A in self.reach else pen.id_B
+        best, part = float(max_distance), None
+        for r in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
+            if r.distance < best:
+                best, part = float(r.distance), r.id_A if r.id_A in self.reach else r.id_B
+        return best, part
+
+
+def spin_invariant_parts(checker) -> tuple:
+    """The cell's tool geometries whose distance to the hub is the same at every spin about the
+    burr axis (:meth:`ClearanceChecker.spin_invariant`: shank, collet, a coaxial spindle body
+    and its clamp), in geometry-id order."""
+    cell = checker.cell
+    invariant = checker.spin_invariant()
+    hub = next(iter(cell.hub_ids))
+    return tuple(sorted((g for g in cell.robot_ids | cell.environment_ids if invariant(g, hub)),
+                        key=lambda g: g.get_value()))
+
+
+_SCENES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def tool_scene(checker) -> ToolScene:
+    """The :class:`ToolScene` of a checker's cell, built once per checker."""
+    if checker not in _SCENES:
+        _SCENES[checker] = ToolScene(checker)
+    return _SCENES[checker]
+
+
+def axes_about(c: np.ndarray, half_angle: float, rings: tuple = AXIS_RINGS,
+               per_ring: int = AXES_PER_RING) -> tuple[np.ndarray, float]:
+    """(K, 3) unit axes, ``c`` and ``per_ring`` axes on each ring of ``rings`` x
+    ``half_angle`` [rad] about it, and their covering angle [rad]: every axis within
+    ``half_angle`` of ``c`` is within it of one of them (half the widest gap between rings,
+    or between ``c`` and the first, and half the arc between neighbours on the outer ring,
+    combined; x 1.1 for the sphere's curvature at cones up to 60 deg)."""
+    from drakedeburr.frames.vectors import perpendicular_basis
+
+    c = np.asarray(c, float) / np.linalg.norm(c)
+    e1, e2, _ = perpendicular_basis(c).T
+    f = np.linspace(0.0, 2 * np.pi, per_ring, endpoint=False)
+    ring = np.cos(f)[:, None] * e1 + np.sin(f)[:, None] * e2
+    out = [c[None]] + [np.cos(r * half_angle) * c + np.sin(r * half_angle) * ring for r in rings]
+    gaps = np.diff(np.concatenate([[0.0], rings]))
+    cover = 1.1 * half_angle * float(np.hypot(0.5 * gaps.max(), np.pi / per_ring))
+    return np.vstack(out), cover
+
+
+def tool_axis_clearance(scene: ToolScene, wt, p_HQ: np.ndarray, lift: float, *, bound: float,
+                        half_angle: float | None = None, about: np.ndarray | None = None,
+                        stop_at_bound: bool = True) -> AxisSearch:
+    """Per CL target of a window: the best clearance of the round tool parts to the part over
+    the sampled axes of a cone, the constrained point held where the IK holds it.
+
+    Args:
+        scene: the :class:`ToolScene`; wt: the window's
+            :class:`~drakedeburr.plan.window_targets.WindowTargets`.
+        p_HQ: (M, 3) the IK's constrained points (the cutting circle's centre, ``lift`` below
+            T on the axis; :func:`drakedeburr.plan.window.cut_targets`) [m].
+        bound: the clearance sought [m]; a target's search stops at the first axis with it
+            when ``stop_at_bound``.
+        half_angle: cone half-angle [rad] (default the window's); about: (M, 3) cone axes
+            (tip -> spindle; default the window's ``cone_retract_H``).
+    """
+    from drakedeburr.plan.targets import X_HT_from_axis
+
+    half = float(wt.cone_half_angle if half_angle is None else half_angle)
+    c_all = np.asarray(wt.cone_retract_H if about is None else about, float)
+    m = len(wt)
+    best, slack, best_axis = np.full(m, -np.inf), np.zeros(m), np.zeros((m, 3))
+    part: list = [""] * m
+    count, cover = 0, 0.0
+    for i in range(m):
+        ring, cover = axes_about(c_all[i], half)
+        axes = np.vstack([wt.retract_H[i], ring])  # the preferred axis first
+        count = len(axes)
+        X = X_HT_from_axis(p_HQ[i][None] + lift * axes, axes,
+                           np.repeat(wt.t_H[i][None], len(axes), 0))
+        for k in range(len(axes)):
+            d, gid = scene.clearance(X[k], bound + 1e-3)
+            if gid is not None:
+                slack[i] = max(slack[i], (scene.reach[gid] + lift) * cover)
+            if d > best[i]:
+                best[i], best_axis[i] = d, axes[k]
+                part[i] = scene.names[gid] if gid is not None else ""
+            if stop_at_bound and d >= bound:
+                break
+    return AxisSearch(best=best, part=tuple(part), best_axis_H=best_axis, slack=slack,
+                      cover=cover, axes=count, half_angle=half)
