@@ -51,6 +51,7 @@ motion bound along a given path is not offered for capped signed distances.
 
 from __future__ import annotations
 
+import heapq
 import weakref
 from dataclasses import dataclass
 
@@ -60,7 +61,7 @@ from drakedeburr.cell.narrowphase import bounding_points
 
 __all__ = ["MotionBound", "motion_bound", "step_displacements", "distances_along",
            "QUERY_SLACK", "AxisSearch", "ToolScene", "tool_scene", "spin_invariant_parts",
-           "axes_about", "tool_axis_clearance", "AXIS_RINGS", "AXES_PER_RING"]
+           "tool_axis_clearance", "CONE_CELLS", "CONE_HALVINGS", "CONE_READS"]
 
 #: margin [m] a skipped pair keeps over the cap: the distance query's own inconsistency
 #: between neighbouring configurations (module docstring; 0.55 mm measured)
@@ -336,9 +337,11 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
 
 # --- the tool alone against the part: is there any axis at a CL target? -------------------
 
-#: the sampled axes of :func:`axes_about`: rings (shares of the half-angle) and axes per ring
-AXIS_RINGS = (0.25, 0.5, 0.75, 1.0)
-AXES_PER_RING = 16
+#: the cone search (:func:`tool_axis_clearance`): cells across the cone's tangent-plane disc
+#: at the start, halvings of a cell at most, axes read at one target at most
+CONE_CELLS = 4
+CONE_HALVINGS = 4
+CONE_READS = 400
 
 
 @dataclass(frozen=True, eq=False)
@@ -348,24 +351,21 @@ class AxisSearch:
     Attributes:
         best: (M,) the largest clearance [m] of the round tool parts (shank, collet, spindle
             body, its clamp: the parts symmetric about the burr axis) to the part over the
-            axes searched (negative: minus the penetration depth of the least bad axis).
+            axes read (negative: minus the penetration depth of the least bad axis).
         part: (M,) the tool part nearest the part at that axis (geometry name).
         best_axis_H: (M, 3) that axis (unit, tip -> spindle).
-        slack: (M,) how much more any axis of the cone between the sampled ones can clear
-            [m]: the sampled axes lie within ``cover`` of every axis of the cone, and turning
-            the tool by that about its constrained point moves the tool part of each sampled
-            axis's nearest pair by at most its reach from that point times ``cover``; a
-            target with ``best + slack`` below the bound has no clear axis in the cone.
-        cover: the covering angle of the sampled axes [rad]; axes: axes sampled per target.
+        proven: (M,) True where the search proved that NO axis of the cone reaches the bound
+            (every cell of the cone ruled out, see :func:`tool_axis_clearance`); False where
+            an axis reached it or the search stopped at its limits.
+        reads: (M,) axes read at each target.
         half_angle: the cone's half-angle [rad].
     """
 
     best: np.ndarray
     part: tuple
     best_axis_H: np.ndarray
-    slack: np.ndarray
-    cover: float
-    axes: int
+    proven: np.ndarray
+    reads: np.ndarray
     half_angle: float
 
 
@@ -467,63 +467,83 @@ def tool_scene(checker) -> ToolScene:
     return _SCENES[checker]
 
 
-def axes_about(c: np.ndarray, half_angle: float, rings: tuple = AXIS_RINGS,
-               per_ring: int = AXES_PER_RING) -> tuple[np.ndarray, float]:
-    """(K, 3) unit axes, ``c`` and ``per_ring`` axes on each ring of ``rings`` x
-    ``half_angle`` [rad] about it, and their covering angle [rad]: every axis within
-    ``half_angle`` of ``c`` is within it of one of them (half the widest gap between rings,
-    or between ``c`` and the first, and half the arc between neighbours on the outer ring,
-    combined; x 1.1 for the sphere's curvature at cones up to 60 deg)."""
-    from drakedeburr.frames.vectors import perpendicular_basis
-
-    c = np.asarray(c, float) / np.linalg.norm(c)
-    e1, e2, _ = perpendicular_basis(c).T
-    f = np.linspace(0.0, 2 * np.pi, per_ring, endpoint=False)
-    ring = np.cos(f)[:, None] * e1 + np.sin(f)[:, None] * e2
-    out = [c[None]] + [np.cos(r * half_angle) * c + np.sin(r * half_angle) * ring for r in rings]
-    gaps = np.diff(np.concatenate([[0.0], rings]))
-    cover = 1.1 * half_angle * float(np.hypot(0.5 * gaps.max(), np.pi / per_ring))
-    return np.vstack(out), cover
-
-
 def tool_axis_clearance(scene: ToolScene, wt, p_HQ: np.ndarray, lift: float, *, bound: float,
-                        half_angle: float | None = None, about: np.ndarray | None = None,
-                        stop_at_bound: bool = True) -> AxisSearch:
-    """Per CL target of a window: the best clearance of the round tool parts to the part over
-    the sampled axes of a cone, the constrained point held where the IK holds it.
+                        margin: float = 0.0, half_angle: float | None = None,
+                        about: np.ndarray | None = None) -> AxisSearch:
+    """Per CL target of a window: is there an axis in the cone on which the round tool parts
+    keep ``bound`` off the part, the constrained point held where the IK holds it? A branch
+    and bound over the cone, in its gnomonic tangent plane (axis ``c + x e1 + y e2``,
+    normalised; the cone is the disc ``|(x, y)| <= tan(half_angle)``): square cells, each read
+    at its centre (pulled into the disc). Turning the tool about its constrained point by an
+    angle ``phi`` moves a point of a tool part ``r`` from that point by at most ``r phi``, so
+    the nearest pair at the read axis (its tool part reaching ``r`` from the constrained point)
+    is at most ``r phi`` farther at any axis of the cell, whose axes lie within ``phi`` of the
+    read one (the gnomonic map shortens distances: ``phi`` <= the cell's radius in the plane).
+    A cell whose reading plus that is below ``bound - margin`` holds no clear axis and is
+    dropped; the others are halved (:data:`CONE_HALVINGS`, :data:`CONE_READS` at most), the
+    cell with the highest bound read first. The preferred axis is read first; a target's
+    search stops at the first axis with ``bound``.
 
     Args:
         scene: the :class:`ToolScene`; wt: the window's
             :class:`~drakedeburr.plan.window_targets.WindowTargets`.
         p_HQ: (M, 3) the IK's constrained points (the cutting circle's centre, ``lift`` below
             T on the axis; :func:`drakedeburr.plan.window.cut_targets`) [m].
-        bound: the clearance sought [m]; a target's search stops at the first axis with it
-            when ``stop_at_bound``.
+        bound: the clearance sought [m]; margin: how far under it a cell must stay to be
+            dropped [m] (the readings' own spread).
         half_angle: cone half-angle [rad] (default the window's); about: (M, 3) cone axes
             (tip -> spindle; default the window's ``cone_retract_H``).
     """
+    from drakedeburr.frames.vectors import perpendicular_basis
     from drakedeburr.plan.targets import X_HT_from_axis
 
     half = float(wt.cone_half_angle if half_angle is None else half_angle)
     c_all = np.asarray(wt.cone_retract_H if about is None else about, float)
-    m = len(wt)
-    best, slack, best_axis = np.full(m, -np.inf), np.zeros(m), np.zeros((m, 3))
+    m, rad = len(wt), float(np.tan(half))
+    best, best_axis = np.full(m, -np.inf), np.zeros((m, 3))
+    proven, reads = np.zeros(m, bool), np.zeros(m, int)
     part: list = [""] * m
-    count, cover = 0, 0.0
+    s0 = rad / CONE_CELLS
+    g = -rad + s0 * (2 * np.arange(2 * CONE_CELLS) + 1)
+    start = [(x, y, s0) for x in g for y in g if np.hypot(x, y) - np.sqrt(2) * s0 <= rad]
     for i in range(m):
-        ring, cover = axes_about(c_all[i], half)
-        axes = np.vstack([wt.retract_H[i], ring])  # the preferred axis first
-        count = len(axes)
-        X = X_HT_from_axis(p_HQ[i][None] + lift * axes, axes,
-                           np.repeat(wt.t_H[i][None], len(axes), 0))
-        for k in range(len(axes)):
-            d, gid = scene.clearance(X[k], bound + 1e-3)
-            if gid is not None:
-                slack[i] = max(slack[i], (scene.reach[gid] + lift) * cover)
-            if d > best[i]:
-                best[i], best_axis[i] = d, axes[k]
-                part[i] = scene.names[gid] if gid is not None else ""
-            if stop_at_bound and d >= bound:
+        c = c_all[i] / np.linalg.norm(c_all[i])
+        e1, e2, _ = perpendicular_basis(c).T
+
+        def read(a, _i=i):
+            a = a / np.linalg.norm(a)
+            X = X_HT_from_axis((p_HQ[_i] + lift * a)[None], a[None], wt.t_H[_i][None])[0]
+            d, gid = scene.clearance(X, bound + 1e-3)
+            reads[_i] += 1
+            if d > best[_i]:
+                best[_i], best_axis[_i] = d, a
+                part[_i] = scene.names[gid] if gid is not None else ""
+            return d, (scene.reach[gid] + lift if gid is not None else np.inf)
+
+        if read(wt.retract_H[i])[0] >= bound:
+            continue
+        # best first: the cell whose parent's bound is highest (the start cells first)
+        cells = [(-np.inf, k, cell) for k, cell in enumerate(start)]
+        heapq.heapify(cells)
+        clear, order, open_end = False, len(cells), False
+        while cells and not clear and reads[i] < CONE_READS:
+            _, _, (x, y, s) = heapq.heappop(cells)
+            r = np.hypot(x, y)
+            px, py = (x, y) if r <= rad else (x * rad / r, y * rad / r)
+            d, reach = read(c + px * e1 + py * e2)
+            clear = d >= bound
+            upper = d + reach * (np.hypot(px - x, py - y) + np.sqrt(2) * s)
+            if clear or upper < bound - margin:
+                continue
+            if s <= s0 / 2 ** CONE_HALVINGS:
+                open_end = True  # the search's resolution: not proven
                 break
-    return AxisSearch(best=best, part=tuple(part), best_axis_H=best_axis, slack=slack,
-                      cover=cover, axes=count, half_angle=half)
+            h = s / 2
+            for dx in (-h, h):
+                for dy in (-h, h):
+                    if np.hypot(x + dx, y + dy) - np.sqrt(2) * h <= rad:
+                        order += 1
+                        heapq.heappush(cells, (-upper, order, (x + dx, y + dy, h)))
+        proven[i] = not clear and not cells and not open_end
+    return AxisSearch(best=best, part=tuple(part), best_axis_H=best_axis, proven=proven,
+                      reads=reads, half_angle=half)

@@ -42,14 +42,14 @@ for w in wins:
     res = {}
     for name, half, about in fams:
         t0 = time.time()
-        s = tool_axis_clearance(scene, wt, pQ, lift, bound=bound, half_angle=half, about=about)
+        s = tool_axis_clearance(scene, wt, pQ, lift, bound=bound, margin=0.2e-3, half_angle=half, about=about)
         res[name] = s
         ok = s.best >= bound
         worst = int(np.argmin(s.best))
         print(f"  {name:8s}: clear {int(ok.sum()):3d}/{m} (steep {int((ok & (slope > 30)).sum())}/"
               f"{int((slope > 30).sum())}); blocked best median {np.median(s.best[~ok]) * 1e3 if (~ok).any() else 0:6.1f} mm; "
               f"worst {s.best[worst] * 1e3:6.1f} mm at CL {worst} {np.round(wt.p_HC[worst] * 1e3, 1).tolist()} "
-              f"slope {slope[worst]:.0f}; parts {sorted(set(p for p, o in zip(s.part, ok) if not o))} certain {int((s.best + s.slack < bound).sum())} (cover {np.degrees(s.cover):.2f} deg) [{time.time() - t0:.1f} s]",
+              f"slope {slope[worst]:.0f}; parts {sorted(set(p for p, o in zip(s.part, ok) if not o))} proven blocked {int(s.proven.sum())} ({int(s.reads.sum())} reads) [{time.time() - t0:.1f} s]",
               flush=True)
     np.savez(f"/tmp/h1/axis_cones_w{w}_{TOOL or 'std'}.npz", slope=slope, p_HC=wt.p_HC,
              **{k: v.best for k, v in res.items()})
