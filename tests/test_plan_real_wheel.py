@@ -151,8 +151,10 @@ def test_the_refusal_rechecked_on_the_raw_mesh(audibot):
     # every refused point: at each random axis the raw surface is inside a round part or
     # within the 2 mm clearance of it (depth > -2 mm)
     assert min(best.values()) > -ctx.min_clearance, best
-    # most of them deep inside (the spindle body against the spoke)
-    assert np.mean([v > 0 for v in best.values()]) >= 0.8
+    # where the record reads the tool over 1 mm deep in the pieces, the raw surface is inside
+    drake = np.asarray(rec.where["best_clearance_mm"]) * 1e-3
+    deep = [i for i in best if drake[i] < -1e-3]
+    assert len(deep) >= 3 and all(best[i] > 0.0 for i in deep), (best, drake[list(best)])
     worst = rec.point
     assert best[worst] > 0.0
     assert best[worst] <= -rec.value + 1.5e-3  # raw depth <= the pieces' (+ shell offset)
@@ -160,8 +162,9 @@ def test_the_refusal_rechecked_on_the_raw_mesh(audibot):
 
 
 def test_tool_scene_agrees_with_the_cell_checker(audibot):
-    """A ToolScene reading at a tool pose equals the cell's own spin-invariant reading at an
-    arm pose with that tool pose (the same shapes, the same narrow phase)."""
+    """A ToolScene reading at a tool pose equals the cell's own reading of the round tool parts
+    against the hub at an arm pose with that tool pose (the same shapes, the same narrow
+    phase)."""
     from drakedeburr.plan.clearance import spin_invariant_parts, tool_scene
 
     ctx = audibot.ctx
@@ -179,4 +182,6 @@ def test_tool_scene_agrees_with_the_cell_checker(audibot):
     d_cell = min((r.distance for r in query.ComputeSignedDistancePairwiseClosestPoints(0.5)
                   if (r.id_A in parts and r.id_B in hub) or (r.id_B in parts and r.id_A in hub)),
                  default=0.5)
-    assert d_scene == pytest.approx(d_cell, abs=1e-9)
+    # the poses are composed otherwise (X_HT from the arm's FK, then the parts' offsets in T):
+    # the same reading to well under a micrometre (0.5 um measured at home)
+    assert d_scene == pytest.approx(d_cell, abs=2e-6)
