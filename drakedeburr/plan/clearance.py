@@ -47,6 +47,14 @@ has its own bound (drakedeburr/verify); the two are to be unified.
 
 Why hand-written: Drake's collision checkers query every configuration in full; skipping by a
 motion bound along a given path is not offered for capped signed distances.
+
+The second half of the module asks what no arm pose can change (issue 42, real wheels whose
+loops run down spoke flanks): :class:`ToolScene` holds the cell's round tool parts (shank,
+collet, spindle body, clamp: the same distance to the hub at every spin about the burr axis)
+and the hub's pieces in one standalone SceneGraph, and :func:`tool_axis_clearance` searches a
+cone of axes at each CL target by branch and bound (Drake readings; the bound is the tool's
+rigid turn about its constrained point), proving where no axis of the cone keeps the
+clearance. :func:`drakedeburr.plan.window.tool_refusal` refuses such a window before its IK.
 """
 
 from __future__ import annotations
