@@ -52,7 +52,9 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
 def plan_window(ctx: PlanContext, wt: WindowTargets,
                 mode: RunMode = RunMode.FULL) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
-    refusal = tool_refusal(ctx, wt) if ctx.options.tool_precheck else None
+    # (a stand-in context without a cell has nothing to search)
+    refusal = (tool_refusal(ctx, wt) if ctx.options.tool_precheck and ctx.checker is not None
+               else None)
     if refusal is not None:
         log.info("window %d refused before its IK: %s", wt.window_index, refusal.reason)
         return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [refusal])
