@@ -47,10 +47,20 @@ has its own bound (drakedeburr/verify); the two are to be unified.
 
 Why hand-written: Drake's collision checkers query every configuration in full; skipping by a
 motion bound along a given path is not offered for capped signed distances.
+
+The second half of the module asks what no arm pose can change (issue 42, real wheels whose
+loops run down spoke flanks): :class:`ToolScene` holds the cell's round tool parts (shank,
+collet, spindle body, clamp: the same distance to the hub at every spin about the burr axis)
+and the hub's pieces in one standalone SceneGraph, and :func:`tool_axis_clearance` searches a
+cone of axes at each CL target by branch and bound (Drake readings; the bound is the tool's
+rigid turn about its constrained point), proving where no axis of the cone keeps the
+clearance. :func:`drakedeburr.plan.window.tool_refusal` refuses such a window before its IK.
 """
 
 from __future__ import annotations
 
+import heapq
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,7 +68,8 @@ import numpy as np
 from drakedeburr.cell.narrowphase import bounding_points
 
 __all__ = ["MotionBound", "motion_bound", "step_displacements", "distances_along",
-           "QUERY_SLACK"]
+           "QUERY_SLACK", "AxisSearch", "ToolScene", "tool_scene", "spin_invariant_parts",
+           "tool_axis_clearance", "CONE_CELLS", "CONE_HALVINGS", "CONE_READS"]
 
 #: margin [m] a skipped pair keeps over the cap: the distance query's own inconsistency
 #: between neighbouring configurations (module docstring; 0.55 mm measured)
@@ -330,3 +341,217 @@ def distances_along(checker, q: np.ndarray, cap: float, reach: float = 20e-3,
         at[due] = k
         out[k] = min(out[k], float(d[due].min()))
     return out, stats
+
+
+# --- the tool alone against the part: is there any axis at a CL target? -------------------
+
+#: the cone search (:func:`tool_axis_clearance`): cells across the cone's tangent-plane disc
+#: at the start, halvings of a cell at most, axes read at one target at most
+CONE_CELLS = 4
+CONE_HALVINGS = 4
+CONE_READS = 400
+
+
+@dataclass(frozen=True, eq=False)
+class AxisSearch:
+    """What :func:`tool_axis_clearance` found at each CL target of a window.
+
+    Attributes:
+        best: (M,) the largest clearance [m] of the round tool parts (shank, collet, spindle
+            body, its clamp: the parts symmetric about the burr axis) to the part over the
+            axes read (negative: minus the penetration depth of the least bad axis).
+        part: (M,) the tool part nearest the part at that axis (geometry name).
+        best_axis_H: (M, 3) that axis (unit, tip -> spindle).
+        proven: (M,) True where the search proved that NO axis of the cone reaches the bound
+            (every cell of the cone ruled out, see :func:`tool_axis_clearance`); False where
+            an axis reached it or the search stopped at its limits.
+        reads: (M,) axes read at each target.
+        half_angle: the cone's half-angle [rad].
+    """
+
+    best: np.ndarray
+    part: tuple
+    best_axis_H: np.ndarray
+    proven: np.ndarray
+    reads: np.ndarray
+    half_angle: float
+
+
+class ToolScene:
+    """The round tool parts and the part's collision pieces in one standalone ``SceneGraph``
+    (hub pieces anchored in H, the tool parts on one frame posed at X_HT), for the question no
+    arm pose can change: with the burr's cutting circle on the edge and the axis ``a``, does
+    the tool clear the part? The parts are those whose distance to the hub is the same for
+    every spin about the burr axis and every arm pose (:meth:`ClearanceChecker.spin_invariant`),
+    with the cell's own shapes, proximity properties and relative poses (read at home), so a
+    reading here is the cell's reading of that pair at any pose with that tool point and axis.
+
+    Args:
+        checker: a :class:`~drakedeburr.plan.kinematics.ClearanceChecker` of the cell.
+    """
+
+    def __init__(self, checker) -> None:
+        from pydrake.geometry import (
+            FramePoseVector,
+            GeometryFrame,
+            GeometryInstance,
+            ProximityProperties,
+            SceneGraph,
+        )
+        from pydrake.math import RigidTransform
+
+        cell = checker.cell
+        sym = spin_invariant_parts(checker)  # first: finding them poses the context
+        query = checker.query_at(cell.q_home)
+        inspector = query.inspector()
+        X_WT = cell.tool_frame.CalcPoseInWorld(checker.plant_context).GetAsMatrix4()
+        X_WH = cell.hub_frame.CalcPoseInWorld(checker.plant_context).GetAsMatrix4()
+        sg = SceneGraph()
+        source = sg.RegisterSource("drakedeburr.tool_scene")
+        self._frame = sg.RegisterFrame(source, GeometryFrame("tool"))
+        self.names: dict = {}
+        self.reach: dict = {}  # tool part -> farthest point from T [m]
+
+        def add(g, X_ref, frame=None):
+            X_RG = np.linalg.inv(X_ref) @ query.GetPoseInWorld(g).GetAsMatrix4()
+            shape = inspector.GetShape(g)
+            inst = GeometryInstance(RigidTransform(X_RG), shape.Clone(), inspector.GetName(g))
+            inst.set_proximity_properties(ProximityProperties(
+                inspector.GetProximityProperties(g)))
+            if frame is None:
+                gid = sg.RegisterAnchoredGeometry(source, inst)
+            else:
+                gid = sg.RegisterGeometry(source, frame, inst)
+                P, rho = bounding_points(shape)
+                P_T = P @ X_RG[:3, :3].T + X_RG[:3, 3]
+                self.reach[gid] = float(np.linalg.norm(P_T, axis=1).max() + rho)
+            self.names[gid] = inspector.GetName(g).split("::")[-1]
+
+        for g in sorted(cell.hub_ids, key=lambda g: g.get_value()):
+            add(g, X_WH)
+        self.tool_parts = sym
+        for g in sym:
+            add(g, X_WT, self._frame)
+        self._sg, self._ctx = sg, sg.CreateDefaultContext()
+        self._port = sg.get_source_pose_port(source)
+        self._poses = FramePoseVector()
+        self._rt = RigidTransform
+
+    def clearance(self, X_HT: np.ndarray, max_distance: float) -> tuple[float, object]:
+        """(distance [m] of the round tool parts to the part, capped at ``max_distance``, or
+        minus the deepest penetration in contact; the tool part's geometry id, None when
+        nothing is within the cap) at the tool pose ``X_HT`` (4, 4)."""
+        self._poses.set_value(self._frame, self._rt(np.asarray(X_HT, float)))
+        self._port.FixValue(self._ctx, self._poses)
+        query = self._sg.get_query_output_port().Eval(self._ctx)
+        if query.HasCollisions():
+            pen = max(query.ComputePointPairPenetration(), key=lambda p: p.depth)
+            return -float(pen.depth), pen.id_A if pen.id_A in self.reach else pen.id_B
+        best, part = float(max_distance), None
+        for r in query.ComputeSignedDistancePairwiseClosestPoints(max_distance):
+            if r.distance < best:
+                best, part = float(r.distance), r.id_A if r.id_A in self.reach else r.id_B
+        return best, part
+
+
+def spin_invariant_parts(checker) -> tuple:
+    """The cell's tool geometries whose distance to the hub is the same at every spin about the
+    burr axis (:meth:`ClearanceChecker.spin_invariant`: shank, collet, a coaxial spindle body
+    and its clamp), in geometry-id order."""
+    cell = checker.cell
+    invariant = checker.spin_invariant()
+    hub = next(iter(cell.hub_ids))
+    return tuple(sorted((g for g in cell.robot_ids | cell.environment_ids if invariant(g, hub)),
+                        key=lambda g: g.get_value()))
+
+
+_SCENES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def tool_scene(checker) -> ToolScene:
+    """The :class:`ToolScene` of a checker's cell, built once per checker."""
+    if checker not in _SCENES:
+        _SCENES[checker] = ToolScene(checker)
+    return _SCENES[checker]
+
+
+def tool_axis_clearance(scene: ToolScene, wt, p_HQ: np.ndarray, lift: float, *, bound: float,
+                        margin: float = 0.0, half_angle: float | None = None,
+                        about: np.ndarray | None = None) -> AxisSearch:
+    """Per CL target of a window: is there an axis in the cone on which the round tool parts
+    keep ``bound`` off the part, the constrained point held where the IK holds it? A branch
+    and bound over the cone, in its gnomonic tangent plane (axis ``c + x e1 + y e2``,
+    normalised; the cone is the disc ``|(x, y)| <= tan(half_angle)``): square cells, each read
+    at its centre (pulled into the disc). Turning the tool about its constrained point by an
+    angle ``phi`` moves a point of a tool part ``r`` from that point by at most ``r phi``, so
+    the nearest pair at the read axis (its tool part reaching ``r`` from the constrained point)
+    is at most ``r phi`` farther at any axis of the cell, whose axes lie within ``phi`` of the
+    read one (the gnomonic map shortens distances: ``phi`` <= the cell's radius in the plane).
+    A cell whose reading plus that is below ``bound - margin`` holds no clear axis and is
+    dropped; the others are halved (:data:`CONE_HALVINGS`, :data:`CONE_READS` at most), the
+    cell with the highest bound read first. The preferred axis is read first; a target's
+    search stops at the first axis with ``bound``.
+
+    Args:
+        scene: the :class:`ToolScene`; wt: the window's
+            :class:`~drakedeburr.plan.window_targets.WindowTargets`.
+        p_HQ: (M, 3) the IK's constrained points (the cutting circle's centre, ``lift`` below
+            T on the axis; :func:`drakedeburr.plan.window.cut_targets`) [m].
+        bound: the clearance sought [m]; margin: how far under it a cell must stay to be
+            dropped [m] (the readings' own spread).
+        half_angle: cone half-angle [rad] (default the window's); about: (M, 3) cone axes
+            (tip -> spindle; default the window's ``cone_retract_H``).
+    """
+    from drakedeburr.frames.vectors import perpendicular_basis
+    from drakedeburr.plan.targets import X_HT_from_axis
+
+    half = float(wt.cone_half_angle if half_angle is None else half_angle)
+    c_all = np.asarray(wt.cone_retract_H if about is None else about, float)
+    m, rad = len(wt), float(np.tan(half))
+    best, best_axis = np.full(m, -np.inf), np.zeros((m, 3))
+    proven, reads = np.zeros(m, bool), np.zeros(m, int)
+    part: list = [""] * m
+    s0 = rad / CONE_CELLS
+    g = -rad + s0 * (2 * np.arange(2 * CONE_CELLS) + 1)
+    start = [(x, y, s0) for x in g for y in g if np.hypot(x, y) - np.sqrt(2) * s0 <= rad]
+    for i in range(m):
+        c = c_all[i] / np.linalg.norm(c_all[i])
+        e1, e2, _ = perpendicular_basis(c).T
+
+        def read(a, _i=i):
+            a = a / np.linalg.norm(a)
+            X = X_HT_from_axis((p_HQ[_i] + lift * a)[None], a[None], wt.t_H[_i][None])[0]
+            d, gid = scene.clearance(X, bound + 1e-3)
+            reads[_i] += 1
+            if d > best[_i]:
+                best[_i], best_axis[_i] = d, a
+                part[_i] = scene.names[gid] if gid is not None else ""
+            return d, (scene.reach[gid] + lift if gid is not None else np.inf)
+
+        if read(wt.retract_H[i])[0] >= bound:
+            continue
+        # best first: the cell whose parent's bound is highest (the start cells first)
+        cells = [(-np.inf, k, cell) for k, cell in enumerate(start)]
+        heapq.heapify(cells)
+        clear, order, open_end = False, len(cells), False
+        while cells and not clear and reads[i] < CONE_READS:
+            _, _, (x, y, s) = heapq.heappop(cells)
+            r = np.hypot(x, y)
+            px, py = (x, y) if r <= rad else (x * rad / r, y * rad / r)
+            d, reach = read(c + px * e1 + py * e2)
+            clear = d >= bound
+            upper = d + reach * (np.hypot(px - x, py - y) + np.sqrt(2) * s)
+            if clear or upper < bound - margin:
+                continue
+            if s <= s0 / 2 ** CONE_HALVINGS:
+                open_end = True  # the search's resolution: not proven
+                break
+            h = s / 2
+            for dx in (-h, h):
+                for dy in (-h, h):
+                    if np.hypot(x + dx, y + dy) - np.sqrt(2) * h <= rad:
+                        order += 1
+                        heapq.heappush(cells, (-upper, order, (x + dx, y + dy, h)))
+        proven[i] = not clear and not cells and not open_end
+    return AxisSearch(best=best, part=tuple(part), best_axis_H=best_axis, proven=proven,
+                      reads=reads, half_angle=half)

@@ -103,6 +103,10 @@ class PlanOptions:
             the cell's mount puts it, each window's starts ranked from home.
         relax: plan a window the recipe cannot cut again with a milder tilt box, the
             deviation recorded (:mod:`drakedeburr.plan.relax`).
+        tool_precheck: before a window's IK, search the cone at each target for an axis on
+            which the round tool parts clear the part (:func:`drakedeburr.plan.window.
+            tool_refusal`); a window with a target where none can is refused with that
+            reason and no IK is run. False: every window goes to the IK (a baseline).
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
             the cores this process may use, 1: one after the other here). The plan is the
             same whatever the number (it is not recorded in the plan).
@@ -128,6 +132,7 @@ class PlanOptions:
     via_rounds: int = 8
     conform_program: bool = True
     retry_in_band: float = 0.5
+    tool_precheck: bool = True
     acceleration_scale: float = 1.0
     fillets: FilletOptions | None = field(default_factory=FilletOptions)
     placement: bool = True

@@ -28,8 +28,8 @@ from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "plan_window_pass", "cut_targets", "ik_step", "execute_cut",
-           "needs_other_rule", "better_of", "rewound_start"]
+__all__ = ["plan_window", "tool_refusal", "REFUSAL_MARGIN", "plan_window_pass", "cut_targets",
+           "ik_step", "execute_cut", "needs_other_rule", "better_of", "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +52,12 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
 def plan_window(ctx: PlanContext, wt: WindowTargets,
                 mode: RunMode = RunMode.FULL) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
+    # (a stand-in context without a cell has nothing to search)
+    refusal = (tool_refusal(ctx, wt) if ctx.options.tool_precheck and ctx.checker is not None
+               else None)
+    if refusal is not None:
+        log.info("window %d refused before its IK: %s", wt.window_index, refusal.reason)
+        return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [refusal])
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from, mode)
     if mode is RunMode.REPORT_ONLY or not needs_other_rule(first, ctx.options.retry_in_band):
@@ -65,6 +71,59 @@ def plan_window(ctx: PlanContext, wt: WindowTargets,
         log.debug("window %d: %d failure records; planning it again with the %r warm-start "
                   "spin", wt.window_index, len(first.failures), other)
     return better_of(first, _plan_window_once(ctx2, wt, q_from, mode))
+
+
+#: a target is refused only when every axis of its cone is proven this far under the
+#: clearance bound [m] (the distance readings' own spread)
+REFUSAL_MARGIN = 0.2e-3
+
+
+def tool_refusal(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
+    """The window refused before its IK, or None: the round tool parts (shank, collet, spindle
+    body, clamp; the same at every spin and arm pose) searched over the window's cone at
+    every CL target, the cutting circle held where the IK holds it
+    (:func:`drakedeburr.plan.clearance.tool_axis_clearance`). A target where that search
+    proves every axis of the cone :data:`REFUSAL_MARGIN` or more under the clearance bound has
+    no admissible pose whatever the robot does; the record names how many, the tool part, how
+    deep the least bad axis puts it into the part, and the worst target with its edge slope."""
+    from drakedeburr.plan.clearance import tool_axis_clearance, tool_scene
+
+    bound = ctx.min_clearance
+    targets = cut_targets(ctx, wt, np.zeros((len(wt), 3)))
+    m = len(wt)
+    search = tool_axis_clearance(tool_scene(ctx.checker), wt, targets.p_HQ[:m], targets.lift,
+                                 bound=bound, margin=REFUSAL_MARGIN)
+    blocked = np.flatnonzero(search.proven)
+    if not blocked.size:
+        return None
+    worst = int(blocked[np.argmin(search.best[blocked])])
+    t_edge = getattr(getattr(wt.tool_path, "cl_path", None), "t_H", wt.t_H)
+    slope = np.degrees(np.arcsin(np.clip(np.abs(np.asarray(t_edge)[:, 2]), 0.0, 1.0)))
+    inside = blocked[search.best[blocked] < 0.0]
+    parts = sorted({search.part[i] for i in blocked})
+    depth = -search.best[inside] if inside.size else np.zeros(0)
+    how = (f"puts the {'/'.join(sorted({search.part[i] for i in inside}))} up to "
+           f"{1e3 * depth.max():.1f} mm (median {1e3 * np.median(depth):.1f} mm) inside the "
+           f"part at {inside.size} of them" if inside.size else
+           f"leaves the {'/'.join(parts)} at most {1e3 * search.best[blocked].max():.2f} mm "
+           "from the part")
+    reason = (f"at {blocked.size} of {m} CL points every tool axis within the "
+              f"{np.degrees(search.half_angle):.1f} deg cone {how} ({1e3 * bound:.1f} mm "
+              f"clearance needed; the worst at CL {worst}, "
+              f"{tuple(np.round(wt.p_HC[worst] * 1e3, 1).tolist())} mm, where the edge runs "
+              f"at {slope[worst]:.0f} deg to the face plane: "
+              f"{1e3 * search.best[worst]:.1f} mm); no arm pose changes that (the parts are "
+              f"round about the burr axis; the whole cone searched at each of them, "
+              f"{int(search.reads[blocked].sum())} axes read)")
+    return FailureRecord(
+        window=wt.window_index, kind="window", point=worst, value=float(search.best[worst]),
+        limit=float(bound), unit="m", reason=reason,
+        where={"pair": (f"tool::{search.part[worst]}", "hub::hub"),
+               "blocked_points": blocked.tolist(),
+               "best_clearance_mm": np.round(1e3 * search.best, 3).tolist(),
+               "edge_slope_deg": float(slope[worst])},
+        tried=(f"{int(search.reads.sum())} tool axes read over the cone "
+               f"({np.degrees(search.half_angle):.1f} deg) at the {m} CL points",))
 
 
 def needs_other_rule(first: WindowPlan, retry_in_band: float) -> bool:
