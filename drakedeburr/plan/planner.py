@@ -304,12 +304,15 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
     return PlanDraft(failures=tuple(failures), record=record, motion=motion)
 
 
-def cell_passes(ctx: PlanContext, progress: Progress, t_start: float) -> CellPasses:
+def cell_passes(ctx: PlanContext, progress: Progress, t_start: float,
+                cl_paths: dict | None = None) -> CellPasses:
     """How the hub-level policy (:mod:`drakedeburr.plan.policy`) plans and assembles windows
     in ``ctx``'s cell: each window by :func:`drakedeburr.plan.window.plan_window` in the
     policy's run mode, on the pool's workers (:func:`drakedeburr.plan.parallel.map_windows`),
     the milder recipes' ladders by :func:`drakedeburr.plan.relax.plan_ladder`, the plans by
-    :func:`assemble_windows` (timed from ``t_start``)."""
+    :func:`assemble_windows` (timed from ``t_start``). ``cl_paths``: window -> the ClPath of
+    its first pass's targets (:func:`drakedeburr.plan.relax.first_cl_paths`), which the
+    milder recipes orient again instead of planning the CL points anew."""
     from drakedeburr.plan.window import plan_window
 
     params, workers = ctx.config.process, ctx.options.workers
@@ -320,7 +323,8 @@ def cell_passes(ctx: PlanContext, progress: Progress, t_start: float) -> CellPas
 
     def ladders(edges, mode: RunMode) -> list:
         return map_windows(ctx, functools.partial(relax.plan_ladder, mode=mode),
-                           [(e, params) for e in edges], workers,
+                           [(e, params, (cl_paths or {}).get(e.index)) for e in edges],
+                           workers,
                            name=lambda item: f"window {item[0].index}'s milder recipes")
 
     return CellPasses(plan=plan, ladders=ladders,
@@ -479,7 +483,7 @@ def plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
         ctx = _context(cell, config, options, q_refs)
     if only is not None:
         wts = [wt for wt in wts if wt.window_index in only]
-    draft = cell_pass(cell_passes(ctx, progress, t_windows),
+    draft = cell_pass(cell_passes(ctx, progress, t_windows, relax.first_cl_paths(wts)),
                       {e.index: e for e in hub_model.windows}, wts, options.relax)
     if home_moved is not None:
         draft = draft.with_deviations(front=(home_moved,)).with_record(q_home=q_home.copy())

@@ -46,8 +46,8 @@ from drakedeburr.plan.results import Deviation
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
-           "plan_ladder", "reach_may_help", "choose_tool", "keep_standard", "failing_windows",
-           "long_reach"]
+           "plan_ladder", "oriented", "first_cl_paths", "reach_may_help", "choose_tool",
+           "keep_standard", "failing_windows", "long_reach"]
 
 log = logging.getLogger(__name__)
 
@@ -100,12 +100,31 @@ def relax_windows(edges, params, failed_reasons: dict, ladders):
     return accepted, tried
 
 
-def window_ladder(edge, params, plan_one) -> list:
+def oriented(edge, cl, params):
+    """The ToolPath of ``edge`` from its CL points ``cl`` (a ClPath, which the box does not
+    change) in the box of ``params``: the orientation stage of
+    :func:`drakedeburr.plan.tool_paths.tool_path` alone, its face normals the wall normals
+    nearest to the CL points, as there."""
+    from scipy.spatial import cKDTree
+
+    from drakedeburr.orientation.orient import orient_window
+
+    return orient_window(cl, edge.n_wall_H[cKDTree(edge.p_HE).query(cl.p_HC)[1]],
+                         params=params)
+
+
+def window_ladder(edge, params, plan_one, cl=None) -> list:
     """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
     box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
     record -> [(box, WindowTargets, result)] in the order planned; a box whose tool path gives
     no targets (InputError: e.g. an axis into the part) is ``(box, None, why)`` and the next box
-    is tried, so the window keeps its first-pass failure and the hub its report."""
+    is tried, so the window keeps its first-pass failure and the hub its report.
+
+    ``cl``: the window's CL points (the ClPath of its first pass's ToolPath), or None. The
+    path stage (edge fit, adaptive CL points) reads only the edge, not the tilt box, and is
+    deterministic, so each box's ToolPath is the orientation of that same ClPath
+    (:func:`oriented`): the same targets as :func:`~drakedeburr.plan.tool_paths.tool_path`
+    would make, without planning the CL points again per box."""
     from drakedeburr.errors import InputError
     from drakedeburr.plan.tool_paths import tool_path
     from drakedeburr.plan.window_targets import WindowTargets
@@ -117,7 +136,8 @@ def window_ladder(edge, params, plan_one) -> list:
             continue  # not milder than the recipe's own box
         p = replace(params, bounds_large=box, bounds_small=box)
         try:
-            wt = WindowTargets.from_tool_path(tool_path(edge, p))
+            wt = WindowTargets.from_tool_path(tool_path(edge, p) if cl is None
+                                              else oriented(edge, cl, p))
         except InputError as exc:
             log.info("window %d: %s gives no targets: %s", edge.index, _box(box), exc)
             out.append((box, None, f"no targets: {exc}"))
@@ -130,13 +150,26 @@ def window_ladder(edge, params, plan_one) -> list:
 
 
 def plan_ladder(ctx, item, mode: RunMode = RunMode.FULL) -> list:
-    """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters), each variant by
+    """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters) or (WindowEdge,
+    ProcessParameters, its ClPath or None), each variant by
     :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode`` (a task for
     :func:`drakedeburr.plan.parallel.map_windows`)."""
     from drakedeburr.plan.window import plan_window
 
-    edge, params = item
-    return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode))
+    edge, params, *cl = item
+    return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode),
+                         cl[0] if cl else None)
+
+
+def first_cl_paths(wts) -> dict:
+    """Window -> the ClPath of its targets' ToolPath (``wt.tool_path.cl_path``), for the
+    windows whose targets came from the path and orientation stages (:func:`window_ladder`)."""
+    out = {}
+    for wt in wts:
+        cl = getattr(getattr(wt, "tool_path", None), "cl_path", None)
+        if cl is not None:
+            out[wt.window_index] = cl
+    return out
 
 
 def long_reach():
