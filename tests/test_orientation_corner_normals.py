@@ -110,3 +110,36 @@ def test_audibot_windows_face_the_front_where_a_corner_normal_was_repaired(tmp_p
         up = -tp.zT_H @ Z
         if w == 9:
             assert (up > 0.0).all(), np.flatnonzero(up <= 0.0)
+
+
+def test_an_axis_into_the_hub_at_a_corner_says_the_turn_the_normal_and_by_how_much():
+    """plan.window_targets: where the ToolPath's axis points into the hub on a stretch that is
+    not steep, the refusal measures the corner (turn, inner normal to the face plane here and
+    on either side, how far below the face plane the axis is)."""
+    from types import SimpleNamespace
+
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    s = np.radians([0.0, 0.0, 40.0, 80.0, 80.0])  # the edge turns 80 deg in the face plane
+    t = np.c_[np.cos(s), np.sin(s), np.zeros(5)]
+    n = np.cross(Z, t)
+    tilt = np.radians(-50.0)  # the corner point's normal 50 deg below the face plane
+    n[2] = np.cos(tilt) * n[2] + np.sin(tilt) * Z
+    p = np.cumsum(np.r_[np.zeros((1, 3)), 0.5e-3 * t[:-1]], axis=0)
+    R = R_HL_from_normals(t, n)
+    below = np.radians(2.0)
+    ax = -R[:, :, 2]  # tip -> spindle: upright (-Z_L = +Z_H) everywhere ...
+    h = np.cross(Z, n[2])
+    h /= np.linalg.norm(h)
+    ax[2] = np.cos(below) * h - np.sin(below) * Z  # ... but 2 deg below the plane at CL 2
+    tp = SimpleNamespace(window_index=4, kind="small", p_HC=p, R_HL=R, zT_H=-ax, cone_zT_H=-ax,
+                         cone_half_angle=0.1, cone_outer_half_angle=0.12, depth_of_cut=0.3e-3)
+    assert (ax @ Z <= 0.0).tolist() == [False, False, True, False, False]
+    with pytest.raises(InputError) as exc:
+        WindowTargets.from_tool_path(tp)
+    msg = str(exc.value)
+    assert "CL point 2" in msg and "a corner of the loop (the edge turns 80 deg within 1.0 mm" \
+        in msg, msg
+    assert "inner normal is -50 deg to the face plane (+0 and +0 deg" in msg, msg
+    assert "leaves the axis 2.0 deg below the face plane" in msg, msg
