@@ -110,6 +110,13 @@ def test_audibot_windows_face_the_front_where_a_corner_normal_was_repaired(tmp_p
         up = -tp.zT_H @ Z
         if w == 9:
             assert (up > 0.0).all(), np.flatnonzero(up <= 0.0)
+        if (up <= 0.0).any():  # what is left is refused with what the geometry there is
+            from drakedeburr.errors import InputError
+            from drakedeburr.plan.window_targets import WindowTargets
+
+            with pytest.raises(InputError, match=r"runs at \d+ deg to the face plane|a corner "
+                                                 r"of the loop \(the edge turns \d+ deg"):
+                WindowTargets.from_tool_path(tp)
 
 
 def test_an_axis_into_the_hub_at_a_corner_says_the_turn_the_normal_and_by_how_much():
