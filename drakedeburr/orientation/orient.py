@@ -15,6 +15,7 @@ from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.errors import InputError
 from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
 from drakedeburr.frames.vectors import angle_between
+from drakedeburr.orientation.corner_normals import side_consistent_normals
 from drakedeburr.orientation.exact import ExactOptions, SolveReport, solve_exact
 from drakedeburr.orientation.models import ModelName, OrientationProblem, make_problem
 from drakedeburr.orientation.pso import PsoOptions, pso_minimize
@@ -173,6 +174,12 @@ def orient_window(
         raise InputError(f"window {cl.window_index}: n_H has shape {n.shape}, "
                          f"expected {cl.p_HC.shape} (one normal per CL point)")
     t_frame = slope_limited_tangents(cl.t_H, n, options.max_frame_slope)
+    # a CL point beside a tessellated corner may carry the wall normal of the corner's other
+    # side (the frame upside down): it gets its neighbour's (orientation.corner_normals)
+    n, fixed = side_consistent_normals(t_frame, n)
+    if fixed:
+        log.debug("window %d: inner normal from across a corner at CL %s: the neighbour's "
+                  "carried over", cl.window_index, fixed)
     R_HL = R_HL_from_normals(t_frame, n, name=f"window {cl.window_index}")
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)

@@ -116,17 +116,11 @@ class WindowTargets:
         half = float(tp.cone_outer_half_angle if cone_mapping == "outer" else tp.cone_half_angle)
         bad = np.flatnonzero(axis @ face <= 0.0)
         if bad.size:
-            t_bad = _unit(np.asarray(tp.R_HL)[bad[0], :, 1])
-            slope = float(np.degrees(np.arcsin(min(1.0, abs(float(t_bad @ face))))))
             where = np.round(np.asarray(tp.p_HC)[bad[0]] * 1e3, 1).tolist()
-            why = (f": the edge there runs at {slope:.0f} deg to the face plane (down a flank, "
-                   f"along the hub axis): an axis across the edge is at least {slope:.0f} deg "
-                   f"off the face normal, beyond the recipe's tilt and lead, so a burr coming "
-                   f"from the front cannot follow it" if slope > 45.0 else "")
             raise InputError(f"ToolPath of window {tp.window_index}: tool axis (tip -> spindle) "
                              f"points into the hub at CL point {int(bad[0])} at {where} mm "
                              f"(axis {np.round(axis[bad[0]], 3).tolist()}, face normal "
-                             f"{face.tolist()}){why}")
+                             f"{face.tolist()}){_why_into_hub(tp, int(bad[0]), axis, face)}")
         return cls(window_index=int(tp.window_index), kind=str(tp.kind),
                    p_HC=np.asarray(tp.p_HC, float), t_H=_unit(np.asarray(tp.R_HL)[:, :, 1]),
                    n_H=_unit(np.asarray(tp.R_HL)[:, :, 0]), retract_H=axis, cone_retract_H=cone,
@@ -178,3 +172,31 @@ class WindowTargets:
                    n_H=n_wall, retract_H=axis, cone_retract_H=axis.copy(),
                    cone_half_angle=float(cone_half_angle), depth_of_cut=float(depth),
                    source=f"window edge, fixed tilt {th:.3f} rad")
+
+
+def _why_into_hub(tp, i: int, axis: np.ndarray, face: np.ndarray) -> str:
+    """What the geometry at CL point ``i`` is where the ToolPath's axis points into the hub:
+    a steep stretch (slope > 45 deg) or a corner (the tangent's turn over the neighbouring CL
+    points, the inner normal's angle to the face plane there and on either side, and by how
+    much the recipe's box about that frame leaves the axis below the face plane)."""
+    R = np.asarray(tp.R_HL)
+    p = np.asarray(tp.p_HC)
+    m = len(p)
+    t = _unit(R[:, :, 1])
+    slope = float(np.degrees(np.arcsin(min(1.0, abs(float(t[i] @ face))))))
+    if slope > 45.0:
+        return (f": the edge there runs at {slope:.0f} deg to the face plane (down a flank, "
+                f"along the hub axis): an axis across the edge is at least {slope:.0f} deg "
+                f"off the face normal, beyond the recipe's tilt and lead, so a burr coming "
+                f"from the front cannot follow it")
+    a, b = (i - 1) % m, (i + 1) % m
+    turn = float(np.degrees(np.arccos(np.clip(t[a] @ t[b], -1.0, 1.0))))
+    span = 1e3 * float(np.linalg.norm(p[i] - p[a]) + np.linalg.norm(p[b] - p[i]))
+    tilt = np.degrees(np.arcsin(np.clip(_unit(R[[a, i, b], :, 0]) @ face, -1.0, 1.0)))
+    below = float(np.degrees(np.arcsin(min(1.0, -float(axis[i] @ face)))))
+    return (f": a corner of the loop (the edge turns {turn:.0f} deg within {span:.1f} mm, "
+            f"slope {slope:.0f} deg) where the inner normal is {tilt[1]:+.0f} deg to the face "
+            f"plane ({tilt[0]:+.0f} and {tilt[2]:+.0f} deg at the CL points on either side); "
+            f"the recipe's tilt/lead box about that frame leaves the axis {below:.1f} deg below "
+            f"the face plane: the box would have to tilt more than {below:.1f} deg toward the "
+            f"face normal there")
