@@ -102,15 +102,11 @@ def relax_windows(edges, params, failed_reasons: dict, ladders):
 
 def oriented(edge, cl, params):
     """The ToolPath of ``edge`` from its CL points ``cl`` (a ClPath, which the box does not
-    change) in the box of ``params``: the orientation stage of
-    :func:`drakedeburr.plan.tool_paths.tool_path` alone, its face normals the wall normals
-    nearest to the CL points, as there."""
-    from scipy.spatial import cKDTree
+    change) in the box of ``params``: :func:`drakedeburr.plan.tool_paths.oriented`, the
+    orientation stage of :func:`~drakedeburr.plan.tool_paths.tool_path` alone."""
+    from drakedeburr.plan import tool_paths
 
-    from drakedeburr.orientation.orient import orient_window
-
-    return orient_window(cl, edge.n_wall_H[cKDTree(edge.p_HE).query(cl.p_HC)[1]],
-                         params=params)
+    return tool_paths.oriented(edge, cl, params)
 
 
 def window_ladder(edge, params, plan_one, cl=None) -> list:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from drakedeburr.config import ProcessParameters
 
-__all__ = ["CL_DELTA", "CL_COUNT_BUDGET", "tool_path"]
+__all__ = ["CL_DELTA", "CL_COUNT_BUDGET", "tool_path", "oriented"]
 
 # CL targets of the real chain: the path stage's ``adaptive`` segmentation at 0.03 mm chord
 # height (the executed linear moves stay within it of the edge curve), with the FEWEST points
@@ -18,11 +18,19 @@ CL_DELTA = 0.03e-3
 CL_COUNT_BUDGET = 1
 
 
-def tool_path(edge, params: ProcessParameters):
-    """CL points and tool axes of one window by the path and orientation stages."""
+def oriented(edge, cl, params: ProcessParameters):
+    """The ToolPath of ``edge`` from its CL points ``cl`` (a ClPath) in the box of ``params``:
+    the orientation stage alone, its face normals the wall normals nearest to the CL points."""
     from scipy.spatial import cKDTree
 
     from drakedeburr.orientation.orient import orient_window
+
+    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
+    return orient_window(cl, edge.n_wall_H[nearest], params=params)
+
+
+def tool_path(edge, params: ProcessParameters):
+    """CL points and tool axes of one window by the path and orientation stages."""
     from drakedeburr.path import fit_window_edge, plan_cl
     from drakedeburr.path.cl_planning import PlannerParams
 
@@ -33,5 +41,4 @@ def tool_path(edge, params: ProcessParameters):
     cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
                                                             count_budget=CL_COUNT_BUDGET),
                  window_index=edge.index, kind=edge.kind)
-    nearest = cKDTree(edge.p_HE).query(cl.p_HC)[1]
-    return orient_window(cl, edge.n_wall_H[nearest], params=params)
+    return oriented(edge, cl, params)
