@@ -1,17 +1,32 @@
 """What each window's cut is checked against (the plan's ToolPath, else the hub's ground-truth
-edge), and how each program target is executed."""
+edge), and how each program target is executed.
+
+The fallback frames (a plan without a ToolPath) are built from the hub's edge samples: tangent
+``t_H`` and wall normal ``n_wall_H``. On an imported mesh a sample beside a tessellated corner
+may carry the wall normal of the corner's other side (the probe hit the neighbouring facet),
+which turns its frame upside down. The verifier repairs that with the same function the
+orientation stage uses (:func:`drakedeburr.orientation.corner_normals.side_consistent_normals`).
+That does not make the check depend on the planner: the repair is a property of the mesh's
+normals along the hub's own edge (which wall a sample belongs to), not a choice of the plan; it
+is applied here to the hub's dense edge loop, independently of the plan's CL points, tangents
+or axes, and without a reversal (every smooth loop) it returns the normals bit for bit.
+"""
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from drakedeburr.frames.local_frames import R_HL_from_normals
+from drakedeburr.orientation.corner_normals import side_consistent_normals
 from drakedeburr.verify.geometry import closed_polyline_distance
 
 __all__ = ["LINEAR_KINDS", "WindowRef", "target_motion", "tool_paths_of", "via_anchors",
-           "window_ref", "cone_half_angle"]
+           "window_ref", "cone_half_angle", "edge_wall_normals"]
+
+log = logging.getLogger(__name__)
 
 #: segment kinds executed as linear Cartesian moves unless a target says otherwise
 LINEAR_KINDS = ("approach", "cut", "retract")
@@ -94,8 +109,9 @@ def window_ref(w, targets, tool_path, edge, params) -> WindowRef | None:
     p_T = np.array([targets[k].X_HT[:3, 3] for k in loop])
     _, C = closed_polyline_distance(p_T, p_E)
     _, v = cKDTree(p_E).query(C)
+    n_E = edge_wall_normals(edge, w)
     # the project's one definition of the local frames (frames.local_frames, right-handed)
-    R_HL = R_HL_from_normals(edge.t_H[v], edge.n_wall_H[v], name=f"window {w}")
+    R_HL = R_HL_from_normals(np.asarray(edge.t_H, float)[v], n_E[v], name=f"window {w}")
     # a closed loop ends on its first point: one CL point for both
     unique, cl_of = [], {}
     for i, k in enumerate(loop):
@@ -108,6 +124,17 @@ def window_ref(w, targets, tool_path, edge, params) -> WindowRef | None:
     bounds = params.bounds(edge.kind)
     return WindowRef(C[sel], R_HL[sel], bounds, cl_of, None,
                       "hub edge (the plan carries no ToolPath)")
+
+
+def edge_wall_normals(edge, w: int) -> np.ndarray:
+    """(N, 3) the hub edge's wall normals, a sample that took its normal from across a
+    tessellated corner given its neighbour's (see the module docstring); the loop is closed."""
+    n_E, fixed = side_consistent_normals(np.asarray(edge.t_H, float),
+                                         np.asarray(edge.n_wall_H, float), closed=True)
+    if fixed:
+        log.debug("window %d: hub edge samples %s took the wall normal from across a corner: "
+                  "the neighbour's carried over for the reference frames", w, fixed)
+    return n_E
 
 
 def cone_half_angle(plan, window: int, tool_path) -> float:
