@@ -78,13 +78,18 @@ def cl_points_from_edge(edge, spacing: float):
 
 def cl_points_planned(edge, method: str):
     """CL points from the path stage (NURBS fit + planner) and, for each, the index of the
-    nearest edge-loop point (for ground-truth comparisons)."""
+    nearest edge-loop point (for ground-truth comparisons). The fit is the pipeline's
+    (:func:`drakedeburr.path.window_fit.fit_window_edge`: the smoothing fit of a faceted
+    low-poly loop, the interpolating one otherwise, at the planner's chord tolerance); its
+    record is in ``cl.metrics["edge_fit"]``."""
     from scipy.spatial import cKDTree
 
-    from drakedeburr.path import fit_edge_curve, plan_cl
+    from drakedeburr.path import PlannerParams, fit_window_edge, plan_cl
 
-    curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
-    cl = plan_cl(curve, method, window_index=edge.index, kind=edge.kind)
+    params = PlannerParams()
+    curve = fit_window_edge(edge.p_HE, chord_tolerance=params.delta_max,
+                            name=f"window {edge.index}")
+    cl = plan_cl(curve, method, params, window_index=edge.index, kind=edge.kind)
     _, idx = cKDTree(edge.p_HE).query(cl.p_HC)
     return cl, idx
 
@@ -150,6 +155,8 @@ def run_orient(hub, run: OrientRun = OrientRun(), progress=None) -> list[dict]:
         tp = orient_window(cl, n_H, model=model, solver=solver, params=hub.process)
         row = tool_path_summary(tp)
         row["normals"] = normals
+        if "edge_fit" in cl.metrics:  # which NURBS fit the CL points lie on (path.window_fit)
+            row["edge_fit"] = dict(cl.metrics["edge_fit"])
         if edge.n_wall_H is not None:
             err = np.degrees(np.arccos(np.clip(
                 np.einsum("ij,ij->i", n_H, np.asarray(edge.n_wall_H)[idx]), -1.0, 1.0)))

@@ -4,7 +4,9 @@ Run:  python tutorials/02_cl_points/tutorial.py [--out DIR] [--test-mode] [--mes
 
 1. get a window edge: from a hub mesh (``--mesh``) via edge-loop extraction, else a hub-like
    analytic window;
-2. fit the closed NURBS curve (EdgeCurve) and look at its curvature;
+2. fit the closed NURBS curve (EdgeCurve) as the pipeline does (``fit_window_edge``: the
+   interpolating fit of a smooth loop, the smoothing fit of a faceted low-poly one) and look
+   at its curvature;
 3. plan CL points with the source's method, the two baselines and our adaptive planner;
 4. print the Tab. 1-2 style figures and save a plot of the four plans.
 """
@@ -23,7 +25,7 @@ from drakedeburr.path import (  # noqa: E402
     METHODS,
     PlannerParams,
     cl_table,
-    fit_edge_curve,
+    fit_window_edge,
     format_table,
     plan_all,
 )
@@ -50,11 +52,14 @@ else:
                WindowEdge(1, "small", hub_like_window("small", 63, angle=1.2))]
 w = windows[-1] if args.test_mode else windows[0]
 
-# 2. the closed NURBS (periodic B-spline) fit
-curve = fit_edge_curve(w.p_HE)
+# 2. the closed NURBS (periodic B-spline) fit, chosen from the loop's points (a low-poly mesh's
+# faceted loop gets the smoothing fit, which does not follow every facet corner)
+curve = fit_window_edge(w.p_HE, chord_tolerance=PlannerParams().delta_max,
+                        name=f"window {w.index}")
 u = np.linspace(0, 1, 2000, endpoint=False)
 print(f"window {w.index}: {len(w.p_HE)} initial points, length {curve.length * 1e3:.1f} mm, "
-      f"max curvature {curve.curvature(u).max() / 1e3:.3f} 1/mm")
+      f"max curvature {curve.curvature(u).max() / 1e3:.3f} 1/mm, {curve.fit['fit']} fit "
+      f"({curve.fit['facets']} facets, chord error {curve.fit['chord_error_m'] * 1e3:.4f} mm)")
 
 # 3. the four planners on one window
 paths = plan_all(curve, kind=w.kind, window_index=w.index)

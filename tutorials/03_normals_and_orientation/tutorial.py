@@ -6,7 +6,8 @@ Run:  python tutorial.py [--hub h5_split] [--out DIR] [--test-mode]
 2. estimate the inner-side normals at the CL points of one large and one small window
    (the source's procedure: radius search, k-means, RANSAC plane / quadric fit) and compare
    them with the model's ground truth;
-   (CL points from the path stage: NURBS fit + the source's planner);
+   (CL points from the path stage: the pipeline's NURBS fit, ``fit_window_edge``, + the
+   source's planner);
 3. build the local frames [N, T, -B] and optimise the tool axis with the `axis` model
    (exact solver) - and, for comparison, the source's eq. 11 with its PSO;
 4. write a meshcat scene as static HTML (normals = green, tool axes = red, source's
@@ -25,7 +26,7 @@ from drakedeburr._io import atomic_write_text
 from drakedeburr.frames import inner_normals_from_cloud
 from drakedeburr.hub import ScannerModel, load_hub, simulate_scan
 from drakedeburr.orientation import OrientOptions, PsoOptions, orient_window
-from drakedeburr.path import fit_edge_curve, plan_cl
+from drakedeburr.path import PlannerParams, fit_window_edge, plan_cl
 
 
 def check_figures(edge, cl, err, tp, tp_paper) -> None:
@@ -84,7 +85,10 @@ def main() -> None:
     results = []
     pso = OrientOptions(pso=PsoOptions(iterations=50 if args.test_mode else 200))
     for edge in windows:
-        curve = fit_edge_curve(edge.p_HE, name=f"window {edge.index}")
+        # the pipeline's fit (path.window_fit): interpolating on a smooth loop, smoothing on a
+        # faceted low-poly one
+        curve = fit_window_edge(edge.p_HE, chord_tolerance=PlannerParams().delta_max,
+                                name=f"window {edge.index}")
         cl = plan_cl(curve, method, window_index=edge.index, kind=edge.kind)
         # 2. normals from the cloud vs ground truth (at the nearest point of the model's loop)
         est = inner_normals_from_cloud(scan, cl)
