@@ -69,7 +69,7 @@ from drakedeburr.cell.narrowphase import bounding_points
 
 __all__ = ["MotionBound", "motion_bound", "step_displacements", "distances_along",
            "QUERY_SLACK", "AxisSearch", "ToolScene", "tool_scene", "spin_invariant_parts",
-           "tool_axis_clearance", "CONE_CELLS", "CONE_HALVINGS", "CONE_READS"]
+           "tool_axis_clearance", "cone_poses", "CONE_CELLS", "CONE_HALVINGS", "CONE_READS"]
 
 #: margin [m] a skipped pair keeps over the cap: the distance query's own inconsistency
 #: between neighbouring configurations (module docstring; 0.55 mm measured)
@@ -503,7 +503,6 @@ def tool_axis_clearance(scene: ToolScene, wt, p_HQ: np.ndarray, lift: float, *, 
             (tip -> spindle; default the window's ``cone_retract_H``).
     """
     from drakedeburr.frames.vectors import perpendicular_basis
-    from drakedeburr.plan.targets import X_HT_from_axis
 
     half = float(wt.cone_half_angle if half_angle is None else half_angle)
     c_all = np.asarray(wt.cone_retract_H if about is None else about, float)
@@ -513,45 +512,88 @@ def tool_axis_clearance(scene: ToolScene, wt, p_HQ: np.ndarray, lift: float, *, 
     part: list = [""] * m
     s0 = rad / CONE_CELLS
     g = -rad + s0 * (2 * np.arange(2 * CONE_CELLS) + 1)
-    start = [(x, y, s0) for x in g for y in g if np.hypot(x, y) - np.sqrt(2) * s0 <= rad]
+    start = np.array([(x, y, s0) for x in g for y in g
+                      if np.hypot(x, y) - np.sqrt(2) * s0 <= rad])
     for i in range(m):
         c = c_all[i] / np.linalg.norm(c_all[i])
         e1, e2, _ = perpendicular_basis(c).T
-
-        def read(a, _i=i):
-            a = a / np.linalg.norm(a)
-            X = X_HT_from_axis((p_HQ[_i] + lift * a)[None], a[None], wt.t_H[_i][None])[0]
-            d, gid = scene.clearance(X, bound + 1e-3)
-            reads[_i] += 1
-            if d > best[_i]:
-                best[_i], best_axis[_i] = d, a
-                part[_i] = scene.names[gid] if gid is not None else ""
-            return d, (scene.reach[gid] + lift if gid is not None else np.inf)
-
-        if read(wt.retract_H[i])[0] >= bound:
-            continue
-        # best first: the cell whose parent's bound is highest (the start cells first)
-        cells = [(-np.inf, k, cell) for k, cell in enumerate(start)]
-        heapq.heapify(cells)
-        clear, order, open_end = False, len(cells), False
-        while cells and not clear and reads[i] < CONE_READS:
-            _, _, (x, y, s) = heapq.heappop(cells)
-            r = np.hypot(x, y)
-            px, py = (x, y) if r <= rad else (x * rad / r, y * rad / r)
-            d, reach = read(c + px * e1 + py * e2)
-            clear = d >= bound
-            upper = d + reach * (np.hypot(px - x, py - y) + np.sqrt(2) * s)
-            if clear or upper < bound - margin:
-                continue
-            if s <= s0 / 2 ** CONE_HALVINGS:
-                open_end = True  # the search's resolution: not proven
-                break
-            h = s / 2
-            for dx in (-h, h):
-                for dy in (-h, h):
-                    if np.hypot(x + dx, y + dy) - np.sqrt(2) * h <= rad:
-                        order += 1
-                        heapq.heappush(cells, (-upper, order, (x + dx, y + dy, h)))
-        proven[i] = not clear and not cells and not open_end
+        t = _Target(scene, p_HQ[i], lift, wt.t_H[i], bound)
+        t.cone = (c, e1, e2, rad)
+        if not t.read(*cone_poses(p_HQ[i], lift, wt.retract_H[i][None], wt.t_H[i]))[2]:
+            proven[i] = _branch_and_bound(t, start, bound - margin, s0)
+        best[i], best_axis[i], reads[i] = t.best, t.axis, t.reads
+        part[i] = scene.names[t.gid] if t.gid is not None else ""
     return AxisSearch(best=best, part=tuple(part), best_axis_H=best_axis, proven=proven,
                       reads=reads, half_angle=half)
+
+
+def cone_poses(p_Q: np.ndarray, lift: float, axes: np.ndarray, t_H: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Tool poses at many axes of one CL target in one call: ((K, 3) unit axes, (K, 4, 4) X_HT,
+    T ``lift`` above ``p_Q`` (3,) on each axis, spin 0 to the feed tangent ``t_H`` (3,)); row k
+    is :func:`~drakedeburr.plan.targets.X_HT_from_axis` of axis k alone, bit for bit."""
+    from drakedeburr.plan.targets import X_HT_from_axis
+
+    A = np.asarray(axes, float)
+    A = A / np.linalg.norm(A, axis=1, keepdims=True)
+    X = X_HT_from_axis(np.asarray(p_Q, float)[None] + lift * A, A,
+                       np.broadcast_to(np.asarray(t_H, float), A.shape))
+    return A, X
+
+
+class _Target:
+    """The readings of one CL target's search: the best axis so far and how many were read."""
+
+    def __init__(self, scene: ToolScene, p_Q, lift: float, t_H, bound: float) -> None:
+        self.scene, self.p_Q, self.lift, self.t_H, self.bound = scene, p_Q, lift, t_H, bound
+        self.best, self.axis, self.gid, self.reads, self.cone = -np.inf, np.zeros(3), None, 0, ()
+
+    def read(self, A: np.ndarray, X: np.ndarray, k: int = 0) -> tuple[float, float, bool]:
+        """(clearance [m] at axis ``A[k]`` (pose ``X[k]``), the reach of its nearest tool
+        part from the constrained point [m] (inf when nothing is near), clear)."""
+        d, gid = self.scene.clearance(X[k], self.bound + 1e-3)
+        self.reads += 1
+        if d > self.best:
+            self.best, self.axis, self.gid = d, A[k], gid
+        return d, (self.scene.reach[gid] + self.lift if gid is not None else np.inf), \
+            d >= self.bound
+
+    def cells(self, xys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cells (K, 3) (centre x, y in the gnomonic plane, half-size) -> (their read points
+        pulled into the cone's disc (K, 2), unit axes (K, 3), poses (K, 4, 4)), in one call."""
+        c, e1, e2, rad = self.cone
+        x, y = xys[:, 0], xys[:, 1]
+        r = np.hypot(x, y)[:, None]
+        inside = r <= rad  # as the scalar search: (x * rad / r, y * rad / r) outside
+        pxy = np.where(inside, xys[:, :2], xys[:, :2] * rad / np.where(inside, 1.0, r))
+        A = c[None] + pxy[:, :1] * e1[None] + pxy[:, 1:] * e2[None]
+        return (pxy, *cone_poses(self.p_Q, self.lift, A, self.t_H))
+
+
+def _branch_and_bound(t: _Target, start: np.ndarray, drop: float, s0: float) -> bool:
+    """The cone search at one target after its preferred axis (:func:`tool_axis_clearance`):
+    True when every cell is ruled out (``reading + reach * radius < drop``)."""
+    rad = t.cone[3]
+    pxy, A, X = t.cells(start)
+    # best first: the cell whose parent's bound is highest (the start cells first)
+    heap = [(-np.inf, k, (start[k], pxy[k], A, X, k)) for k in range(len(start))]
+    heapq.heapify(heap)
+    clear, order = False, len(heap)
+    while heap and not clear and t.reads < CONE_READS:
+        _, _, ((x, y, s), (px, py), A, X, k) = heapq.heappop(heap)
+        d, reach, clear = t.read(A, X, k)
+        upper = d + reach * (np.hypot(px - x, py - y) + np.sqrt(2) * s)
+        if clear or upper < drop:
+            continue
+        if s <= s0 / 2 ** CONE_HALVINGS:
+            return False  # the search's resolution: not proven
+        h = s / 2
+        kids = np.array([(x + dx, y + dy, h) for dx in (-h, h) for dy in (-h, h)
+                         if np.hypot(x + dx, y + dy) - np.sqrt(2) * h <= rad]).reshape(-1, 3)
+        if not len(kids):
+            continue
+        kxy, KA, KX = t.cells(kids)
+        for j in range(len(kids)):
+            order += 1
+            heapq.heappush(heap, (-upper, order, (kids[j], kxy[j], KA, KX, j)))
+    return not clear and not heap
