@@ -193,7 +193,10 @@ class WindowStats:
     partial: dict | None = None
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        out = dataclasses.asdict(self)
+        if out["partial"] is None:  # a whole window: its record as before partial windows
+            del out["partial"]
+        return out
 
 
 @dataclass
