@@ -125,6 +125,8 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
                                                  "theta_B", "cone_margin", "box_margin",
                                                  "s_cut")}
     out.update(contact=np.full((n, 3), np.nan), coverage={}, cone_per_window={})
+    partial = {int(s["window"]) for s in (plan.meta or {}).get("windows") or []
+               if s.get("partial")}
     for w in cut_windows:
         ref = refs.get(w)
         if ref is None or w not in edge_of:
@@ -134,11 +136,12 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
         if not len(idx):
             continue
         edge = np.asarray(edge_of[w].p_HE, float)
-        # a partial window (plan.partial) cuts several open stretches: each its own samples
+        # a partial window (plan.partial) cuts open stretches: each its own samples, the edge
+        # it leaves uncut not counted in its coverage
         chunks = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
         for chunk in chunks:
             _window(plan, samples, program, ref, edge, chunk, out, tol)
-        if len(chunks) > 1:
+        if w in partial:
             out["coverage"][w] = stretch_coverage(plan.targets, program.move, chunks,
                                                   out["contact"], edge)
     return CutGeometry(**out)
