@@ -91,7 +91,7 @@ def test_subset_rolls_the_targets_across_the_start():
 
 @pytest.fixture(scope="module")
 def partial_plan():
-    """Window 0 of the default hub (ground-truth stand-in targets, tool in hand), the
+    """Window 0 of the default hub (the chain's ToolPath targets, tool in hand), the
     pre-check's answer replaced by blocked CL points at two places of the loop: one clear run
     crosses the loop start."""
     if not hub_names():
@@ -99,11 +99,10 @@ def partial_plan():
     import drakedeburr.plan.window as window
     from drakedeburr.cell.station import load_cell
     from drakedeburr.hub import DEFAULT_HUB, load_hub
-    from drakedeburr.plan.planner import plan_windows
-    from drakedeburr.plan.window_targets import WindowTargets
+    from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
 
     cell = load_cell("tool_in_hand", DEFAULT_HUB)
-    wt = WindowTargets.from_window_edge(load_hub(DEFAULT_HUB).windows[0])
+    wt = window_targets_for_hub(load_hub(DEFAULT_HUB), source="toolpath", windows=[0])[0]
     m = len(wt)
     blocked = [m // 3 + k for k in range(-2, 3)] + [(2 * m) // 3 + k for k in range(-2, 3)]
 
@@ -181,3 +180,57 @@ def test_partial_windows_off_restores_the_refusal(partial_plan, monkeypatch):
                       options=PlanOptions(partial_windows=False))
     res = window.plan_window(ctx, wt)
     assert res.status is WindowStatus.IK_FAILED and res.failures == [rec]
+
+
+def test_verdict_and_partial_export(partial_plan, tmp_path, monkeypatch):
+    """The report of the partial plan fails on uncut_edge (cut N of M mm per window, the
+    uncut stretches and why) while the geometric checks of the motion planned pass (edge
+    coverage of the stretches, edge, path, cone, clearance, windows' CL points); export refuses
+    it; ``--partial`` writes only a plan failing on uncut_edge alone, with a PARTIAL header
+    naming the uncut stretches."""
+    import json
+
+    import drakedeburr.verify.gate as gate_mod
+    from drakedeburr.cli import main
+    from drakedeburr.config import load_config
+    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.plan.io import save_plan
+    from drakedeburr.verify import verify_plan
+    from drakedeburr.verify.html import write_report_files
+
+    cell, wt, _, plan = partial_plan
+    folder = save_plan(plan, tmp_path / "plan")
+    rep = verify_plan(plan, load_config("tool_in_hand", DEFAULT_HUB), expected_windows=[0],
+                      cell=cell)
+    assert not rep.passed
+    write_report_files(rep, folder, plan=plan, replay=False)
+    report = json.loads((folder / "report.json").read_text())
+    items = {i["name"]: i for i in report["items"]}
+    assert "uncut_edge" in report["summary"]["failed"]
+    for name in ("planner_failures", "windows", "edge_coverage", "edge_deviation",
+                 "path_deviation", "cone", "clearance", "clearance_certificate", "structure",
+                 "fk_agreement", "target_consistency", "burr_engagement"):
+        assert items[name]["passed"] and items[name]["required"], (name, items[name]["detail"])
+    item = items["uncut_edge"]
+    loop = item["per_window"][str(wt.window_index)]
+    assert f"window {wt.window_index}: cut {loop['cut_mm']:.1f} of {loop['loop_mm']:.1f} mm" \
+        in item["detail"] and "test: the spindle body" in item["detail"]
+    out = tmp_path / "p.mod"
+    args = ["-q", "export", str(folder), "--format", "rapid", "-o", str(out)]
+    assert main(args) == 1 and not out.exists()
+    only_uncut = report["summary"]["failed"] == ["uncut_edge"]
+    assert (main([*args, "--partial"]) == 0) is only_uncut
+    if not only_uncut:  # another required check failed: --partial does not write it; the
+        # header as it is written when uncut_edge alone fails (the gate's answer then)
+        real = gate_mod.gate
+
+        def uncut_only(folder_, plan_):
+            g = real(folder_, plan_)
+            return gate_mod.GateResult(False, "FORCED", g.reason, partial=item["detail"])
+
+        monkeypatch.setattr(gate_mod, "gate", uncut_only)
+        assert main([*args, "--partial"]) == 0
+    text = out.read_text()
+    u = loop["uncut"][0]
+    assert "PARTIAL" in text and f"CL {u['cl'][0]}..{u['cl'][1]}" in text
+    assert "FORCED" not in text
