@@ -79,8 +79,11 @@ def planner_failures(sp, cfg) -> CheckItem:
 def partial_windows(plan) -> dict:
     """Window -> its partial record (``plan.meta["windows"][i]["partial"]``, written by
     :mod:`drakedeburr.plan.partial`): the windows cut in open stretches, the rest uncut."""
-    return {int(s["window"]): s["partial"] for s in (plan.meta or {}).get("windows") or []
-            if s.get("partial")}
+    stats = (plan.meta or {}).get("windows")
+    if not isinstance(stats, (list, tuple)):  # a plan recording no per-window figures
+        return {}
+    return {int(s["window"]): s["partial"] for s in stats
+            if isinstance(s, dict) and s.get("partial")}
 
 
 def _run_cl(run: dict, m: int) -> set:

@@ -125,8 +125,9 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
                                                  "theta_B", "cone_margin", "box_margin",
                                                  "s_cut")}
     out.update(contact=np.full((n, 3), np.nan), coverage={}, cone_per_window={})
-    partial = {int(s["window"]) for s in (plan.meta or {}).get("windows") or []
-               if s.get("partial")}
+    from drakedeburr.verify.checks_plan import partial_windows
+
+    partial = set(partial_windows(plan))
     for w in cut_windows:
         ref = refs.get(w)
         if ref is None or w not in edge_of:
