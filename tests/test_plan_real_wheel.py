@@ -119,8 +119,12 @@ def test_a_large_window_refused_before_its_ik_with_the_physical_reason(audibot):
     assert float(m[5]) >= 20.0  # the spindle body meets the spoke, not a near miss
     worst = int(m[8])
     assert rec.point == worst and rec.value == pytest.approx(-1e-3 * float(m[5]), rel=1e-3)
-    # the IK is not run: plan_window returns the refusal alone
-    plan = mut.plan_window(ctx, wt)
+    # the IK is not run: plan_window returns the refusal alone (partial windows off: with
+    # them the clear runs are planned, tests/test_plan_partial.py)
+    from dataclasses import replace
+
+    whole = replace(ctx, options=replace(ctx.options, partial_windows=False))
+    plan = mut.plan_window(whole, wt)
     assert plan.status is WindowStatus.IK_FAILED and plan.failures == [rec]
     audibot.record = rec
 

@@ -156,7 +156,7 @@ def _run_export(args: argparse.Namespace) -> int:
     folder, plan, fmt = _check_export_args(args)
     try:
         done = export_plan(folder, args.output, fmt, name=args.name, force=args.force,
-                           robot=args.robot, plan=plan)
+                           robot=args.robot, plan=plan, partial=args.partial)
     except ExportRefused as exc:
         print(f"drakedeburr export: {exc}", file=sys.stderr)
         return 1
@@ -219,4 +219,8 @@ def register(subparsers) -> None:
                    help="check that the plan was made for this arm (the arm comes from the plan)")
     e.add_argument("--force", action="store_true",
                    help="write even when the gate refuses (the header says why)")
+    e.add_argument("--partial", action="store_true",
+                   help="write a plan whose verification failed only on uncut_edge (partial "
+                        "windows; every other required check passed on the motion planned): "
+                        "the header says PARTIAL and lists the uncut stretches")
     e.set_defaults(_run=_run_export)

@@ -107,6 +107,9 @@ class PlanOptions:
             which the round tool parts clear the part (:func:`drakedeburr.plan.window.
             tool_refusal`); a window with a target where none can is refused with that
             reason and no IK is run. False: every window goes to the IK (a baseline).
+        partial_windows: a window the pre-check refuses has its clear runs planned as open
+            stretches, the rest recorded as uncut (:mod:`drakedeburr.plan.partial`); False:
+            the whole window is refused.
         workers: processes planning windows at once (:mod:`drakedeburr.plan.parallel`; None:
             the cores this process may use, 1: one after the other here). The plan is the
             same whatever the number (it is not recorded in the plan).
@@ -133,6 +136,7 @@ class PlanOptions:
     conform_program: bool = True
     retry_in_band: float = 0.5
     tool_precheck: bool = True
+    partial_windows: bool = True
     acceleration_scale: float = 1.0
     fillets: FilletOptions | None = field(default_factory=FilletOptions)
     placement: bool = True

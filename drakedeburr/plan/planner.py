@@ -264,6 +264,17 @@ def _concatenate(kin, stretches: list[Stretch], home):
                                               c=np.concatenate(c_all, axis=1))
 
 
+def _options_record(options: PlanOptions) -> dict:
+    """The plan's record of its options: all but ``workers`` (no effect on the plan) and
+    ``partial_windows`` when on (the default; each partial window says so in its own figures,
+    ``WindowStats.partial``, so plans without one keep the record they had before the
+    option)."""
+    out = {k: v for k, v in asdict(options).items() if k != "workers"}
+    if out.get("partial_windows"):
+        del out["partial_windows"]
+    return out
+
+
 def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows,
               order_record: dict | None = None) -> PlanDraft:
     kin, cell, config = ctx.kin, ctx.cell, ctx.config
@@ -290,7 +301,7 @@ def _assemble(ctx: PlanContext, stretches, home, window_stats, failures, windows
     other_tool = cell.tool not in (None, DEFAULT_TOOL)
     record = PlanRecord(
         config=config.to_record(),
-        options=jsonable({k: v for k, v in asdict(ctx.options).items() if k != "workers"}),
+        options=jsonable(_options_record(ctx.options)),
         robot=cell.arm.ref, tool=cell.tool if other_tool else None,
         tool_title=tool_variant(cell.tool).title if other_tool else None,
         X_FT=kin.X_FT.copy(), X_FH=kin.X_FH.copy(), X_WT=kin.X_WT.copy(), X_WB=kin.X_WB.copy(),

@@ -188,9 +188,15 @@ class WindowStats:
     #: tool points moved out where the burr would reach too deep into the hub (a rounded or
     #: acute edge, :mod:`drakedeburr.plan.burr_depth`): None when the recipe's held everywhere
     chamfer_relief: dict | None = None
+    #: a partial window (:mod:`drakedeburr.plan.partial`): loop length, cut share, the cut
+    #: and the uncut stretches (CL ranges, mm) and why; None when the loop is cut whole
+    partial: dict | None = None
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        out = dataclasses.asdict(self)
+        if out["partial"] is None:  # a whole window: its record as before partial windows
+            del out["partial"]
+        return out
 
 
 @dataclass

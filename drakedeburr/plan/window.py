@@ -28,8 +28,9 @@ from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "tool_refusal", "REFUSAL_MARGIN", "plan_window_pass", "cut_targets",
-           "ik_step", "execute_cut", "needs_other_rule", "better_of", "rewound_start"]
+__all__ = ["plan_window", "plan_whole", "tool_refusal", "REFUSAL_MARGIN", "plan_window_pass",
+           "cut_targets", "ik_step", "execute_cut", "needs_other_rule", "better_of",
+           "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -56,8 +57,18 @@ def plan_window(ctx: PlanContext, wt: WindowTargets,
     refusal = (tool_refusal(ctx, wt) if ctx.options.tool_precheck and ctx.checker is not None
                else None)
     if refusal is not None:
+        if ctx.options.partial_windows and wt.closed:
+            from drakedeburr.plan.partial import plan_partial
+
+            return plan_partial(ctx, wt, refusal, mode, plan_whole)
         log.info("window %d refused before its IK: %s", wt.window_index, refusal.reason)
         return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [refusal])
+    return plan_whole(ctx, wt, mode)
+
+
+def plan_whole(ctx: PlanContext, wt: WindowTargets, mode: RunMode = RunMode.FULL) -> WindowPlan:
+    """:func:`plan_window` after the pre-check: the IK's warm-start spin rule, and the other
+    one where that leaves failures or a slow cut (module docstring)."""
     q_from = window_reference(ctx, wt)
     first = _plan_window_once(ctx, wt, q_from, mode)
     if mode is RunMode.REPORT_ONLY or not needs_other_rule(first, ctx.options.retry_in_band):

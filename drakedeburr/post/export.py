@@ -35,7 +35,7 @@ class Exported:
 
 def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, *,
                 name: str = "Deburr", force: bool = False, robot: str | None = None,
-                plan=None) -> Exported:
+                plan=None, partial: bool = False) -> Exported:
     """Write the program of the plan in ``folder`` to ``output`` (see module docstring).
 
     Args:
@@ -46,6 +46,9 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
         force: write even when the gate refuses; the header then says why.
         robot: the arm the program is for; it must be the plan's.
         plan: the plan already loaded from ``folder`` (default: load it).
+        partial: write a plan whose verification failed only on ``uncut_edge`` (partial
+            windows: every other required check passed on the motion planned); the header
+            says PARTIAL and lists the uncut stretches (window, CL range, mm, reason).
 
     Raises:
         ExportRefused: the gate refused and ``force`` is not given, or the plan holds no
@@ -64,7 +67,9 @@ def export_plan(folder: str | Path, output: str | Path, fmt: str | None = None, 
                             f"{folder} reports them)")
     verdict = gate(folder, plan)
     flag = reason = ""
-    if not verdict.ok:
+    if not verdict.ok and partial and verdict.partial:
+        flag, reason = "PARTIAL", f"written with --partial: edge left uncut: {verdict.partial}"
+    elif not verdict.ok:
         if not force:
             raise ExportRefused(f"{folder}: refusing to export: {verdict.reason} (use --force "
                                 "to write it anyway; its header then says so)")

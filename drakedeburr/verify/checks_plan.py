@@ -8,7 +8,7 @@ from drakedeburr.plan.program_reading import rot_angle
 from drakedeburr.verify.report import CheckItem
 
 __all__ = ["structure", "planner_failures", "failures_item", "windows", "fk_agreement",
-           "target_consistency", "recipe_deviations"]
+           "target_consistency", "recipe_deviations", "uncut_edge", "partial_windows"]
 
 
 def _structure_problems(plan) -> list[str]:
@@ -51,7 +51,8 @@ def structure(sp, cfg) -> CheckItem:
 def failures_item(plan) -> CheckItem:
     """The planner's failure records: per window what failed, where, by how much and what was
     tried (``per_window``), the first of each window in the detail."""
-    f = plan.failures
+    # the uncut rest of a partial window is its own item (uncut_edge)
+    f = [rec for rec in plan.failures if "partial" not in (rec.where or {})]
     per: dict = {}
     for rec in f:
         entry = per.setdefault(rec.window, {"records": 0, "kinds": [], "first": str(rec),
@@ -75,8 +76,25 @@ def planner_failures(sp, cfg) -> CheckItem:
     return failures_item(sp.plan)
 
 
+def partial_windows(plan) -> dict:
+    """Window -> its partial record (``plan.meta["windows"][i]["partial"]``, written by
+    :mod:`drakedeburr.plan.partial`): the windows cut in open stretches, the rest uncut."""
+    stats = (plan.meta or {}).get("windows")
+    if not isinstance(stats, (list, tuple)):  # a plan recording no per-window figures
+        return {}
+    return {int(s["window"]): s["partial"] for s in stats
+            if isinstance(s, dict) and s.get("partial")}
+
+
+def _run_cl(run: dict, m: int) -> set:
+    """CL indices of a recorded run ``{"cl": [first, last]}`` of a loop of ``m`` points."""
+    first, last = run["cl"]
+    return {(first + k) % m for k in range((last - first) % m + 1)}
+
+
 def _missing_cl(sp) -> dict:
     out = {}
+    partial = partial_windows(sp.plan)
     for w in sp.cut_windows:
         ref = sp.refs[w]
         if ref is None:
@@ -84,7 +102,10 @@ def _missing_cl(sp) -> dict:
             continue
         have = {ref.cl_of[k] for k, t in enumerate(sp.targets)
                 if t.window_index == w and t.segment in ("approach", "cut") and k in ref.cl_of}
-        lost = sorted(set(range(len(ref.p_HC))) - have)
+        # a partial window: the CL points of its planned stretches (the rest: uncut_edge)
+        want = (set().union(*(_run_cl(r, len(ref.p_HC)) for r in partial[w]["cut"]))
+                if w in partial and ref.tool_path is not None else set(range(len(ref.p_HC))))
+        lost = sorted(want - have)
         if lost:
             out[w] = f"CL points {lost[:5]}{'...' if len(lost) > 5 else ''} not targeted"
     return out
@@ -161,3 +182,25 @@ def recipe_deviations(sp, cfg) -> CheckItem:
         "recipe_deviations", True, float(len(devs)), None, "count", "info",
         detail="; ".join(parts) or "the plan follows the part's recipe",
         per_window={d["window"]: d for d in devs if d["window"] >= 0})
+
+
+def uncut_edge(sp, cfg) -> CheckItem:
+    """The edge the plan leaves uncut in its partial windows (:mod:`drakedeburr.plan.partial`):
+    per window "cut N of M mm (x %)", the uncut stretches (CL range, mm) and the pre-check's
+    reason; fails when any is left (the hub is not fully deburred), while every other item
+    judges the motion that is planned."""
+    partial = partial_windows(sp.plan)
+    per = {w: {"cut_mm": p["cut_mm"], "loop_mm": p["loop_mm"], "cut_share": p["cut_share"],
+               "cut": p["cut"], "uncut": p["uncut"], "reason": p["reason"]}
+           for w, p in partial.items()}
+    uncut = sum(p["loop_mm"] - p["cut_mm"] for p in partial.values())
+    lines = [f"window {w}: cut {p['cut_mm']:.1f} of {p['loop_mm']:.1f} mm "
+             f"({100 * p['cut_share']:.0f} %); uncut "
+             + ", ".join(f"CL {u['cl'][0]}..{u['cl'][1]} ({u['length_mm']:.1f} mm)"
+                         for u in p["uncut"]) + f": {p['reason']}"
+             for w, p in partial.items()]
+    return CheckItem(
+        "uncut_edge", not partial, 1e-3 * uncut, 0.0, "m", "<=",
+        window=next(iter(partial), None),
+        detail=("; ".join(lines)[:3000] if partial
+                else "no window left partly uncut"), per_window=per)

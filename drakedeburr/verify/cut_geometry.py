@@ -18,7 +18,7 @@ from drakedeburr.frames.vectors import angle_between
 from drakedeburr.verify.geometry import closed_polyline_distance, lerp_frames, point_segment
 from drakedeburr.verify.refs import cone_half_angle
 
-__all__ = ["cut_geometry"]
+__all__ = ["cut_geometry", "stretch_coverage"]
 
 
 def _anchored(ref, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> dict | None:
@@ -125,13 +125,55 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
                                                  "theta_B", "cone_margin", "box_margin",
                                                  "s_cut")}
     out.update(contact=np.full((n, 3), np.nan), coverage={}, cone_per_window={})
+    from drakedeburr.verify.checks_plan import partial_windows
+
+    partial = set(partial_windows(plan))
     for w in cut_windows:
         ref = refs.get(w)
         if ref is None or w not in edge_of:
             continue
         idx = np.flatnonzero((samples.window == w) & (samples.kind == KIND_CODE["cut"])
                              & (program.move >= 1))
-        if len(idx):
-            _window(plan, samples, program, ref, np.asarray(edge_of[w].p_HE, float), idx, out,
-                    tol)
+        if not len(idx):
+            continue
+        edge = np.asarray(edge_of[w].p_HE, float)
+        # a partial window (plan.partial) cuts open stretches: each its own samples, the edge
+        # it leaves uncut not counted in its coverage
+        chunks = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+        for chunk in chunks:
+            _window(plan, samples, program, ref, edge, chunk, out, tol)
+        if w in partial:
+            out["coverage"][w] = stretch_coverage(plan.targets, program.move, chunks,
+                                                  out["contact"], edge)
     return CutGeometry(**out)
+
+
+def stretch_coverage(targets, move: np.ndarray, chunks: list, contact: np.ndarray,
+                     edge: np.ndarray) -> tuple[float, int]:
+    """(farthest gap [m], edge point) of the edge points a window's open stretches cut from
+    their executed contact paths: each edge point is given to the CL point the plan targets
+    nearest to it; it is checked against its stretch when that CL point is inside the stretch
+    (not its first or last), so the edge left uncut (before, between and after the stretches)
+    is not counted here: the plan's partial record says it is uncut (``uncut_edge``)."""
+    from scipy.spatial import cKDTree
+
+    cl, label, inner = [], [], []
+    for c, chunk in enumerate(chunks):
+        ks = sorted(set(int(k) for k in move[chunk]) | {int(move[chunk][0]) - 1})
+        pts = [targets[k].p_HC for k in ks if targets[k].p_HC is not None]
+        cl += pts
+        label += [c] * len(pts)
+        inner += [0 < i < len(pts) - 1 for i in range(len(pts))]
+    _, near = cKDTree(np.asarray(cl, float)).query(edge)
+    label, inner = np.asarray(label)[near], np.asarray(inner)[near]
+    worst = (0.0, -1)
+    for c, chunk in enumerate(chunks):
+        sel = np.flatnonzero(inner & (label == c))
+        C = contact[chunk]
+        if not sel.size or len(C) < 2:
+            continue
+        dc = point_segment(edge[sel], C[:-1], C[1:])[0]
+        j = int(np.argmax(dc))
+        if dc[j] > worst[0] or worst[1] < 0:
+            worst = (float(dc[j]), int(sel[j]))
+    return worst

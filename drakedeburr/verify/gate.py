@@ -25,6 +25,9 @@ class GateResult:
     ok: bool
     flag: str
     reason: str
+    #: a verification that failed only on ``uncut_edge`` (partial windows, every other
+    #: required check passed on the motion planned): the uncut stretches, else ""
+    partial: str = ""
 
 
 def plan_identity(plan) -> dict:
@@ -137,5 +140,8 @@ def gate(folder: str | Path, plan) -> GateResult:
                                                f"drakedeburr verify {folder} again")
     if not passed:
         failed = ", ".join(report["summary"]["failed"]) or "?"
-        return GateResult(False, "FORCED", f"verification FAILED ({failed}): {path}")
+        uncut = next((i["detail"] for i in report["items"] if i["name"] == "uncut_edge"), "")
+        only_uncut = report["summary"]["failed"] == ["uncut_edge"]
+        return GateResult(False, "FORCED", f"verification FAILED ({failed}): {path}",
+                          partial=uncut if only_uncut else "")
     return GateResult(True, "", f"verified: {path}")

@@ -59,6 +59,8 @@ CHECKS: tuple[Check, ...] = (
     Check("program_zones", path.program_zones, "required",
           "the trajectory passes each target within its zone"),
     Check("windows", plan.windows, "required", "every window cut, every CL point targeted"),
+    Check("uncut_edge", plan.uncut_edge, "required",
+          "no edge left uncut in a partial window (cut N of M mm, the stretches left, why)"),
     Check("edge_deviation", path.edge_deviation, "required",
           "executed contact point vs the hub's true edge"),
     Check("edge_coverage", path.edge_coverage, "required",

@@ -1,0 +1,236 @@
+"""Partial windows (plan.partial, plan.window.plan_window; issue 42): the clear runs of a window
+the tool pre-check refuses are planned as open stretches, the rest recorded as uncut.
+
+The splitting is checked on its own (runs, margins, wrap-around, lengths adding up). The
+planned stretches are checked on a bundled hub with the pre-check's answer replaced (the
+splitting alone is under test there; the stretches go through the real IK, cut and checks):
+FK of the executed cut stays on the stretch's CL points within the path tolerance, and no
+executed pose cuts near a blocked point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import drakedeburr.plan.partial as mut
+from drakedeburr.config import Tolerances, load_config
+from drakedeburr.plan.types import FailureRecord
+from drakedeburr.resources import hub_names
+
+TOL = Tolerances()
+
+
+def _circle(m: int = 100, radius: float = 0.05) -> np.ndarray:
+    a = 2 * np.pi * np.arange(m) / m
+    return np.stack([radius * np.cos(a), radius * np.sin(a), np.zeros(m)], axis=1)
+
+
+def _arc(p, i, j) -> float:
+    """Loop arc length between CL points i and j (the shorter way)."""
+    seg = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
+    d = abs(s[i] - s[j])
+    return min(d, seg.sum() - d)
+
+
+def test_clear_runs_keep_the_margin_and_wrap_the_loop_start():
+    p = _circle()  # 100 points, 3.14 mm apart
+    blocked = [40, 41, 42, 70]
+    margin, min_len = 5e-3, 8e-3
+    runs = mut.clear_runs(p, blocked, margin, min_len)
+    assert len(runs) == 2
+    for r in runs:  # every point at least the margin from every blocked point (own reading)
+        assert min(_arc(p, i, b) for i in r.indices for b in blocked) >= margin - 1e-12
+        assert all((b - a) % 100 == 1 for a, b in zip(r.indices[:-1], r.indices[1:], strict=True))
+        assert r.length_m >= min_len
+    wrap = next(r for r in runs if 0 in r.indices)
+    assert wrap.first > wrap.last and 99 in wrap.indices  # one run across M-1 -> 0
+    # the points next to the margin are kept: the runs are maximal
+    kept = {i for r in runs for i in r.indices}
+    for i in set(range(100)) - kept:
+        assert min(_arc(p, i, b) for b in blocked) < margin
+    uncut = mut.uncut_runs(p, runs)
+    loop = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1).sum()
+    assert sum(r.length_m for r in runs) + sum(r.length_m for r in uncut) == pytest.approx(loop)
+    assert all(set(blocked) & set(r.indices) for r in uncut)
+
+
+def test_short_runs_are_dropped():
+    p = _circle()
+    # points 3.14 mm apart, margin 2.5 spacings: CL 13..17 are clear between the two blocks,
+    # 12.6 mm of edge, shorter than the 15 mm asked
+    runs = mut.clear_runs(p, [10, 20], 2 * np.pi * 0.05 / 100 * 2.5, 15e-3)
+    assert all(20 not in r.indices and 15 not in r.indices for r in runs)
+    assert len(runs) == 1 and 50 in runs[0].indices
+
+
+def test_the_margin_is_the_burrs_footprint():
+    from drakedeburr.plan.targets import contact_geometry
+
+    margin, min_len = mut.run_limits()
+    assert margin == pytest.approx(contact_geometry(None)[0])
+    assert min_len == pytest.approx(2 * margin)
+
+
+def test_subset_rolls_the_targets_across_the_start():
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    p = _circle(20)
+    t = np.roll(p, -1, axis=0) - p
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    n = -p / np.linalg.norm(p, axis=1, keepdims=True)
+    z = np.tile([0.0, 0.0, 1.0], (20, 1))
+    wt = WindowTargets(window_index=3, kind="large", p_HC=p, t_H=t, n_H=n, retract_H=z,
+                       cone_retract_H=z, cone_half_angle=0.1, depth_of_cut=1e-4)
+    sub = mut.subset(wt, [18, 19, 0, 1, 2])
+    assert not sub.closed and len(sub) == 5
+    np.testing.assert_array_equal(sub.p_HC, p[[18, 19, 0, 1, 2]])
+    assert "CL 18..2" in sub.source
+
+
+@pytest.fixture(scope="module")
+def partial_plan():
+    """Window 0 of the default hub (the chain's ToolPath targets, tool in hand), the
+    pre-check's answer replaced by blocked CL points at two places of the loop: one clear run
+    crosses the loop start."""
+    if not hub_names():
+        pytest.skip("no bundled hub models")
+    import drakedeburr.plan.window as window
+    from drakedeburr.cell.station import load_cell
+    from drakedeburr.hub import DEFAULT_HUB, load_hub
+    from drakedeburr.plan.planner import plan_windows, window_targets_for_hub
+
+    cell = load_cell("tool_in_hand", DEFAULT_HUB)
+    wt = window_targets_for_hub(load_hub(DEFAULT_HUB), source="toolpath", windows=[0])[0]
+    m = len(wt)
+    blocked = [m // 3 + k for k in range(-2, 3)] + [(2 * m) // 3 + k for k in range(-2, 3)]
+
+    def fake(ctx, w):
+        return FailureRecord(window=w.window_index, kind="window", point=blocked[2],
+                             value=-0.01, limit=ctx.min_clearance, unit="m",
+                             reason="test: the spindle body in the part",
+                             where={"blocked_points": blocked}, tried=("test",))
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(window, "tool_refusal", fake)
+    try:
+        plan = plan_windows(cell, [wt], load_config("tool_in_hand", DEFAULT_HUB))
+    finally:
+        mp.undo()
+    return cell, wt, blocked, plan
+
+
+def test_the_clear_runs_are_planned_and_recorded(partial_plan):
+    _, wt, blocked, plan = partial_plan
+    cuts = [s for s in plan.segments if s.kind == "cut"]
+    assert len(cuts) == 2
+    rec = [f for f in plan.failures if f.window == wt.window_index and f.kind == "window"]
+    assert len(rec) == 1
+    loop = rec[0].where["partial"]
+    assert plan.meta["windows"][0]["partial"]["cut_share"] == pytest.approx(loop["cut_share"])
+    assert 0.3 < loop["cut_share"] < 1.0 and len(loop["cut"]) == 2 and len(loop["uncut"]) == 2
+    assert "left uncut: CL" in rec[0].reason and "test: the spindle body" in rec[0].reason
+    assert any(c["cl"][0] > c["cl"][1] for c in loop["cut"])  # the run across the loop start
+    total = loop["cut_mm"] + sum(u["length_mm"] for u in loop["uncut"])
+    assert total == pytest.approx(loop["loop_mm"], abs=0.05)
+    cl = {t.cl_index for t in plan.targets if t.segment == "cut" and t.cl_index >= 0}
+    assert not cl & set(blocked)
+    margin, _ = mut.run_limits()
+    assert all(_arc(wt.p_HC, i, b) >= margin for i in cl for b in blocked)
+
+
+def test_fk_of_the_executed_cut_stays_on_the_stretches(partial_plan):
+    """Drake's FK of the trajectory on each cut segment: the tool point within the path
+    tolerance of the commanded targets' polyline, and the edge point it cuts never within the
+    margin of a blocked CL point."""
+    from drakedeburr.plan.targets import edge_point_from_tool_pose
+
+    cell, wt, blocked, plan = partial_plan
+    margin, _ = mut.run_limits()
+    for seg in (s for s in plan.segments if s.kind == "cut"):
+        tg = plan.targets[seg.target_range[0] - 1:seg.target_range[1]]
+        poly = np.array([t.X_HT[:3, 3] for t in tg])
+        tt = np.linspace(*seg.t_range, 400)
+        X = np.array([cell.X_HT(q).GetAsMatrix4() for q in plan.trajectory.value(tt)])
+        p = X[:, :3, 3]
+        a, b = poly[:-1], poly[1:]
+        ab = b - a
+        f = np.clip(np.einsum("kj,nkj->nk", ab, p[:, None] - a[None]) / np.sum(ab * ab, 1), 0, 1)
+        d = np.linalg.norm(p[:, None] - (a[None] + f[:, :, None] * ab[None]), axis=2).min(axis=1)
+        assert d.max() <= TOL.path_deviation
+        cl = np.array([t.cl_index for t in tg if t.cl_index >= 0])
+        k = np.argmin(np.linalg.norm(p[:, None] - wt.p_HC[cl][None], axis=2), axis=1)
+        e = edge_point_from_tool_pose(X, wt.n_H[cl][k], wt.depth_of_cut,
+                                      plan.meta["contact_radius_m"], plan.meta["contact_lift_m"])
+        near = np.linalg.norm(e[:, None] - wt.p_HC[blocked][None], axis=2).min()
+        assert near >= margin - TOL.edge_deviation - 1e-3  # chordal distance <= arc
+
+
+def test_partial_windows_off_restores_the_refusal(partial_plan, monkeypatch):
+    import drakedeburr.plan.window as window
+    from drakedeburr.plan.options import PlanContext, PlanOptions
+    from drakedeburr.plan.results import WindowStatus
+
+    _, wt, blocked, _ = partial_plan
+    rec = FailureRecord(window=wt.window_index, kind="window", reason="test",
+                        where={"blocked_points": blocked})
+    monkeypatch.setattr(window, "tool_refusal", lambda ctx, w: rec)
+    ctx = PlanContext(cell=None, kin=None, checker=object(), free_checker=None, config=None,
+                      options=PlanOptions(partial_windows=False))
+    res = window.plan_window(ctx, wt)
+    assert res.status is WindowStatus.IK_FAILED and res.failures == [rec]
+
+
+def test_verdict_and_partial_export(partial_plan, tmp_path, monkeypatch):
+    """The report of the partial plan fails on uncut_edge (cut N of M mm per window, the
+    uncut stretches and why) while the geometric checks of the motion planned pass (edge
+    coverage of the stretches, edge, path, cone, clearance, windows' CL points); export refuses
+    it; ``--partial`` writes only a plan failing on uncut_edge alone, with a PARTIAL header
+    naming the uncut stretches."""
+    import json
+
+    import drakedeburr.verify.gate as gate_mod
+    from drakedeburr.cli import main
+    from drakedeburr.config import load_config
+    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.plan.io import save_plan
+    from drakedeburr.verify import verify_plan
+    from drakedeburr.verify.html import write_report_files
+
+    cell, wt, _, plan = partial_plan
+    folder = save_plan(plan, tmp_path / "plan")
+    rep = verify_plan(plan, load_config("tool_in_hand", DEFAULT_HUB), expected_windows=[0],
+                      cell=cell)
+    assert not rep.passed
+    write_report_files(rep, folder, plan=plan, replay=False)
+    report = json.loads((folder / "report.json").read_text())
+    items = {i["name"]: i for i in report["items"]}
+    assert "uncut_edge" in report["summary"]["failed"]
+    for name in ("planner_failures", "windows", "edge_coverage", "edge_deviation",
+                 "path_deviation", "cone", "clearance", "clearance_certificate", "structure",
+                 "fk_agreement", "target_consistency", "burr_engagement"):
+        assert items[name]["passed"] and items[name]["required"], (name, items[name]["detail"])
+    item = items["uncut_edge"]
+    loop = item["per_window"][str(wt.window_index)]
+    assert f"window {wt.window_index}: cut {loop['cut_mm']:.1f} of {loop['loop_mm']:.1f} mm" \
+        in item["detail"] and "test: the spindle body" in item["detail"]
+    out = tmp_path / "p.mod"
+    args = ["-q", "export", str(folder), "--format", "rapid", "-o", str(out)]
+    assert main(args) == 1 and not out.exists()
+    only_uncut = report["summary"]["failed"] == ["uncut_edge"]
+    assert (main([*args, "--partial"]) == 0) is only_uncut
+    if not only_uncut:  # another required check failed: --partial does not write it; the
+        # header as it is written when uncut_edge alone fails (the gate's answer then)
+        real = gate_mod.gate
+
+        def uncut_only(folder_, plan_):
+            g = real(folder_, plan_)
+            return gate_mod.GateResult(False, "FORCED", g.reason, partial=item["detail"])
+
+        monkeypatch.setattr(gate_mod, "gate", uncut_only)
+        assert main([*args, "--partial"]) == 0
+    text = out.read_text()
+    u = loop["uncut"][0]
+    assert "PARTIAL" in text and f"CL {u['cl'][0]}..{u['cl'][1]}" in text
+    assert "FORCED" not in text
