@@ -153,3 +153,28 @@ def test_cell_study_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, says):
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and says in err[0], err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("deg", [0, 15])
+def test_straight_and_shallow_mount_frames(tmp_path, bundled, deg):
+    """Mount 0 deg (straight: the burr axis is the J6 axis) and 15 deg: FK of the built cell puts
+    the burr axis at the mount angle from the flange axis (parallel to it at 0 deg), the tip where
+    the bundled tool model turned by the wedge and lifted by the plate says, and the spindle body
+    clear of the wrist at the home pose (the collision model finds no penetration)."""
+    c = mut.MountCandidate(math.radians(deg))
+    cell = load_cell(mut.write_candidate_scenario(c, tmp_path / "s.yaml"), DEFAULT_HUB)
+    q = np.array(bundled.q_home)
+    X_FT, X_FT_ref = _X_FT(cell, q), _X_FT(bundled, q)
+    z_F = X_FT[:3, 2]
+    tilt = math.atan2(math.hypot(z_F[0], z_F[1]), z_F[2])  # well conditioned near 0
+    assert math.degrees(tilt) == pytest.approx(deg, abs=1e-6)
+    if deg == 0:
+        np.testing.assert_allclose(z_F, [0, 0, 1], atol=1e-9)  # parallel to the flange axis
+    wedge = math.radians(deg - 45)
+    lift = FLOATING_SPINDLE.plate_radius * abs(math.sin(wedge))
+    R = _rot_y(wedge)
+    np.testing.assert_allclose(X_FT[:3, 3], R @ X_FT_ref[:3, 3] + [0, 0, lift], atol=1e-9)
+    # the tip's distance from the flange's origin is a rigid property of the spindle model
+    assert np.linalg.norm(X_FT[:3, 3] - [0, 0, lift]) == pytest.approx(
+        np.linalg.norm(X_FT_ref[:3, 3]), abs=1e-9)
+    assert cell.collision_pairs(q) == []
