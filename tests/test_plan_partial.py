@@ -234,3 +234,7 @@ def test_verdict_and_partial_export(partial_plan, tmp_path, monkeypatch):
     u = loop["uncut"][0]
     assert "PARTIAL" in text and f"CL {u['cl'][0]}..{u['cl'][1]}" in text
     assert "FORCED" not in text
+    from rapidchecker.check import check_format  # a checker we did not write
+    from rapidchecker.whitespace_checks import check_whitespace
+
+    assert [str(e) for e in check_format(text) + check_whitespace(text)] == []

@@ -120,12 +120,8 @@ def uncut_runs(p_HC: np.ndarray, cut: list[Run]) -> list[Run]:
 
 def subset(wt, indices) -> object:
     """The open stretch of ``wt``'s CL points ``indices`` (in that order; may wrap around the
-    loop start), as :meth:`~drakedeburr.plan.window_targets.WindowTargets.stretch` does for a
-    slice."""
-    idx = np.asarray(indices, int)
-    return replace(wt, p_HC=wt.p_HC[idx], t_H=wt.t_H[idx], n_H=wt.n_H[idx],
-                   retract_H=wt.retract_H[idx], cone_retract_H=wt.cone_retract_H[idx],
-                   closed=False, source=f"{wt.source} [CL {int(idx[0])}..{int(idx[-1])}]")
+    loop start): :meth:`~drakedeburr.plan.window_targets.WindowTargets.points`."""
+    return wt.points(indices)
 
 
 def run_limits() -> tuple[float, float]:
@@ -206,7 +202,7 @@ def plan_partial(ctx: PlanContext, wt, refusal: FailureRecord, mode: RunMode,
         if res.status.planned:
             parts.append((np.asarray(run.indices, int), res, run))
     cut = [run for _, _, run in parts]
-    loop_m = float(np.linalg.norm(np.roll(wt.p_HC, -1, axis=0) - wt.p_HC, axis=1).sum())
+    loop_m = float(_segments(wt.p_HC).sum())
     cut_m = sum(r.length_m for r in cut)
     loop = {"loop_mm": round(1e3 * loop_m, 2), "cut_mm": round(1e3 * cut_m, 2),
             "cut_share": cut_m / loop_m, "cut": [r.record() for r in cut],

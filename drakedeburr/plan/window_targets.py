@@ -79,11 +79,15 @@ class WindowTargets:
 
     def stretch(self, start: int, stop: int) -> WindowTargets:
         """The open stretch of CL points ``start..stop-1`` (for partial plans and tests)."""
-        sl = slice(start, stop)
-        return replace(self, p_HC=self.p_HC[sl], t_H=self.t_H[sl], n_H=self.n_H[sl],
-                       retract_H=self.retract_H[sl], cone_retract_H=self.cone_retract_H[sl],
-                       closed=False,
-                       source=f"{self.source} [CL {start}..{stop - 1}]")
+        return self.points(np.arange(len(self))[start:stop])  # slice semantics
+
+    def points(self, indices) -> WindowTargets:
+        """The open stretch of the CL points ``indices``, in that order (a stretch of a closed
+        loop may wrap past M-1 -> 0)."""
+        idx = np.asarray(indices, int)
+        return replace(self, p_HC=self.p_HC[idx], t_H=self.t_H[idx], n_H=self.n_H[idx],
+                       retract_H=self.retract_H[idx], cone_retract_H=self.cone_retract_H[idx],
+                       closed=False, source=f"{self.source} [CL {int(idx[0])}..{int(idx[-1])}]")
 
     @classmethod
     def from_tool_path(cls, tool_path, *, face_normal_H: np.ndarray | None = None,
