@@ -182,26 +182,64 @@ def test_partial_windows_off_restores_the_refusal(partial_plan, monkeypatch):
     assert res.status is WindowStatus.IK_FAILED and res.failures == [rec]
 
 
-def test_verdict_and_partial_export(partial_plan, tmp_path, monkeypatch):
+@pytest.fixture(scope="module")
+def partial_report(partial_plan):
+    """The verifier's report of the partial plan."""
+    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.verify import verify_plan
+
+    cell, _, _, plan = partial_plan
+    return verify_plan(plan, load_config("tool_in_hand", DEFAULT_HUB), expected_windows=[0],
+                       cell=cell)
+
+
+def test_each_stretch_is_read_at_the_feed_on_its_own(partial_plan, partial_report):
+    """The speed band of a partial window (verify.checks_process): each planned stretch starts
+    and stops its cut at rest, so each has its own slow start and slow end, read along its own
+    travel (FK of the trajectory); none spans two stretches (the moves off the edge between
+    them are not cut); the limit binding there is in use, so slowdowns_justified passes; the
+    time budget adds the stretches' cut times."""
+    cell, wt, _, plan = partial_plan
+    cuts = [g for g in plan.segments if g.kind == "cut"]
+    travel = []
+    for g in cuts:
+        p = np.array([cell.X_HT(q).GetAsMatrix4()[:3, 3]
+                      for q in plan.trajectory.value(np.linspace(*g.t_range, 2000))])
+        travel.append(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()))
+    ends = np.concatenate([[0.0], np.cumsum(travel)])
+    band = partial_report.item("tcp_speed_band").per_window[wt.window_index]
+    slow = band["slow_stretches"]
+    for k in range(len(cuts)):
+        mine = [st for st in slow if st["stretch"] == k]
+        assert [st["at"] for st in mine][0] == "start" and mine[-1]["at"] == "end"
+        assert sum(st["at"] != "inside" for st in mine) == 2
+        assert mine[0]["from_m"] == pytest.approx(ends[k], abs=1e-3)
+        assert mine[-1]["to_m"] == pytest.approx(ends[k + 1], abs=1e-3)
+        for st in mine:
+            assert ends[k] - 1e-3 <= st["from_m"] <= st["to_m"] <= ends[k + 1] + 1e-3
+            assert st["from_m"] <= st["least_at_m"] <= st["to_m"]
+    item = partial_report.item("slowdowns_justified")
+    assert item.passed and item.value >= Tolerances().forced_slowdown
+    budget = partial_report.item("time_budget").per_window[wt.window_index]
+    assert budget["cut_s"] == pytest.approx(sum(g.t_range[1] - g.t_range[0] for g in cuts))
+
+
+def test_verdict_and_partial_export(partial_plan, partial_report, tmp_path, monkeypatch):
     """The report of the partial plan fails on uncut_edge (cut N of M mm per window, the
     uncut stretches and why) while the geometric checks of the motion planned pass (edge
-    coverage of the stretches, edge, path, cone, clearance, windows' CL points); export refuses
-    it; ``--partial`` writes only a plan failing on uncut_edge alone, with a PARTIAL header
-    naming the uncut stretches."""
+    coverage of the stretches, edge, path, cone, clearance, windows' CL points, slowdowns);
+    export refuses it; ``--partial`` writes only a plan failing on uncut_edge alone, with a
+    PARTIAL header naming the uncut stretches."""
     import json
 
     import drakedeburr.verify.gate as gate_mod
     from drakedeburr.cli import main
-    from drakedeburr.config import load_config
-    from drakedeburr.hub import DEFAULT_HUB
     from drakedeburr.plan.io import save_plan
-    from drakedeburr.verify import verify_plan
     from drakedeburr.verify.html import write_report_files
 
-    cell, wt, _, plan = partial_plan
+    _, wt, _, plan = partial_plan
     folder = save_plan(plan, tmp_path / "plan")
-    rep = verify_plan(plan, load_config("tool_in_hand", DEFAULT_HUB), expected_windows=[0],
-                      cell=cell)
+    rep = partial_report
     assert not rep.passed
     write_report_files(rep, folder, plan=plan, replay=False)
     report = json.loads((folder / "report.json").read_text())
@@ -209,7 +247,8 @@ def test_verdict_and_partial_export(partial_plan, tmp_path, monkeypatch):
     assert "uncut_edge" in report["summary"]["failed"]
     for name in ("planner_failures", "windows", "edge_coverage", "edge_deviation",
                  "path_deviation", "cone", "clearance", "clearance_certificate", "structure",
-                 "fk_agreement", "target_consistency", "burr_engagement"):
+                 "fk_agreement", "target_consistency", "burr_engagement",
+                 "slowdowns_justified"):
         assert items[name]["passed"] and items[name]["required"], (name, items[name]["detail"])
     item = items["uncut_edge"]
     loop = item["per_window"][str(wt.window_index)]

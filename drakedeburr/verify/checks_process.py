@@ -6,7 +6,7 @@ the limit that binds on each slow stretch)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -65,36 +65,70 @@ def _windowed_max(s: np.ndarray, r: np.ndarray, reach: float, centres: np.ndarra
     return peak[best], which[best]
 
 
+def _cut_pieces(sp, w: int) -> list[np.ndarray]:
+    """The sample indices of window ``w``'s cut, one array per cut segment (a partial window,
+    issue 42, has one per planned stretch: its cuts are apart in time and travel, the moves
+    off the edge between them)."""
+    idx = sp.samples_of(w)
+    if len(idx) < 2:
+        return [idx]
+    cut = np.flatnonzero((np.diff(idx) != 1) | (np.diff(sp.samples.segment[idx]) != 0)) + 1
+    return np.split(idx, cut)
+
+
+def _piece_band(sp, cfg, idx: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray, list]:
+    """One cut segment's (sample indices ``idx``) interval lengths, in-band marks and slow
+    stretches, each with the limit that binds there (:func:`_speed_band`); travel from the
+    segment's start."""
+    s, tol = sp.samples, cfg.tolerances
+    ds = np.linalg.norm(np.diff(s.p_HT[idx], axis=0), axis=1)
+    vm = 0.5 * (s.speed[idx][1:] + s.speed[idx][:-1])
+    inside = np.abs(vm / cfg.process.grinding_speed - 1.0) <= tol.speed_band
+    stretches = slow_stretches(inside, ds, vm)
+    if stretches:
+        _, s_all, r_f, on_grid = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
+        bound, which = _windowed_max(s_all, r_f, reach, on_grid)
+        s_f = s_all[on_grid]
+        for st in stretches:
+            on = np.flatnonzero((s_f >= st["from_m"]) & (s_f <= st["to_m"]))
+            if not len(on):  # shorter than the fine grid: its nearest point
+                on = np.array([int(np.argmin(np.abs(s_f - st["from_m"])))])
+            k = on[int(np.argmin(bound[on]))]
+            joint, kind = _LIMITS[which[k]]
+            st.update(joint=joint, limit=kind, ratio=float(bound[k]),
+                      least_at_m=float(s_f[k]))
+            del st["a"], st["b"]
+    return ds, inside, stretches
+
+
 def _speed_band(sp, cfg, reach: float = 1e-3) -> dict:
     """Per cut window: the share of its travel in the feed band, extreme speeds and its slow
     stretches, each with the least, over its points, of the largest share of a limit in use
     within ``reach`` of tool travel of the point (the limit that binds there: on a time-optimal
     timing one always does, switching from one to another where the timing switches between
-    accelerating and braking), and that limit."""
-    s, tol = sp.samples, cfg.tolerances
-    v_g = cfg.process.grinding_speed
+    accelerating and braking), and that limit.
+
+    Each cut segment is read on its own (a partial window's stretches: their travel and the
+    limits along it are the segment's own, a stretch's ends are where its cut starts and
+    stops); ``from_m``/``to_m``/``least_at_m`` count cutting travel from the window's first
+    cut, ``stretch`` is the cut segment's number in the window."""
+    s = sp.samples
     out = {}
     for w in sp.cut_windows:
         idx = sp.samples_of(w)
         if len(idx) < 2:
             continue
-        ds = np.linalg.norm(np.diff(s.p_HT[idx], axis=0), axis=1)
-        vm = 0.5 * (s.speed[idx][1:] + s.speed[idx][:-1])
-        inside = np.abs(vm / v_g - 1.0) <= tol.speed_band
-        stretches = slow_stretches(inside, ds, vm)
-        if stretches:
-            _, s_all, r_f, on_grid = _limit_ratios(sp, cfg, s.t[idx[0]], s.t[idx[-1]])
-            bound, which = _windowed_max(s_all, r_f, reach, on_grid)
-            s_f = s_all[on_grid]
-            for st in stretches:
-                on = np.flatnonzero((s_f >= st["from_m"]) & (s_f <= st["to_m"]))
-                if not len(on):  # shorter than the fine grid: its nearest point
-                    on = np.array([int(np.argmin(np.abs(s_f - st["from_m"])))])
-                k = on[int(np.argmin(bound[on]))]
-                joint, kind = _LIMITS[which[k]]
-                st.update(joint=joint, limit=kind, ratio=float(bound[k]),
-                          least_at_m=float(s_f[k]))
-                del st["a"], st["b"]
+        ds_all, in_all, stretches, run = [], [], [], 0.0
+        for k, piece in enumerate(p for p in _cut_pieces(sp, w) if len(p) >= 2):
+            ds, inside, found = _piece_band(sp, cfg, piece, reach)
+            for st in found:
+                st.update(from_m=st["from_m"] + run, to_m=st["to_m"] + run,
+                          least_at_m=st["least_at_m"] + run, stretch=k)
+            ds_all.append(ds)
+            in_all.append(inside)
+            stretches += found
+            run += float(ds.sum())
+        ds, inside = np.concatenate(ds_all), np.concatenate(in_all)
         out[w] = {"fraction_in_band": float(ds[inside].sum() / max(ds.sum(), 1e-300)),
                   "min_mps": float(s.speed[idx].min()), "max_mps": float(s.speed[idx].max()),
                   "slow_stretches": stretches}
@@ -276,9 +310,12 @@ def _straight_seconds(sp, g) -> float | None:
 
 def _physical_seconds(sp, cfg) -> float:
     """Edge length over the feed plus straight moves at their programmed speeds [s]."""
-    total, v_g = 0.0, cfg.process.grinding_speed
+    total, v_g, seen = 0.0, cfg.process.grinding_speed, set()
     for g in sp.segments:
         if g.kind == "cut" and g.window_index in sp.edge_of:
+            if g.window_index in seen:  # a partial window's next stretch: its edge counted
+                continue
+            seen.add(g.window_index)
             e = np.asarray(sp.edge_of[g.window_index].p_HE)
             total += float(np.linalg.norm(np.diff(np.vstack([e, e[:1]]), axis=0),
                                           axis=1).sum()) / v_g
@@ -388,7 +425,8 @@ class WindowTime:
     """Where one window's time goes.
 
     Attributes:
-        window: the window. cut_s: its cut's time in the plan [s].
+        window: the window. cut_s: its cut's time in the plan [s] (a partial window, issue
+            42: its stretches' cuts added, the moves between them in ``air_before``).
         edge_length_m: the closed polyline through its CL points (the ones the cut is checked
             against: the plan's ToolPath, else read off the hub's true edge) [m];
             tool_path_m: the programmed tool-point path of the cut (from the approach's end
@@ -484,6 +522,16 @@ def _window_times(sp, cfg):
         w = int(g.window_index)
         edge, tool = _edge_and_tool_path(sp, g)
         cut_s = float(g.t_range[1] - g.t_range[0])
+        if w in out:  # a partial window's next stretch: its cut and the moves before it added
+            r = out[w]
+            out[w] = replace(r, cut_s=r.cut_s + cut_s, tool_path_m=r.tool_path_m + tool,
+                             cut_ratio=(r.cut_s + cut_s) / r.edge_seconds
+                             if r.edge_seconds > 0 else np.inf,
+                             air_before=(*r.air_before, *pending),
+                             air_before_s=r.air_before_s + sum(m.duration_s for m in pending),
+                             air_bound_s=r.air_bound_s + sum(m.bound_s for m in pending))
+            pending = []
+            continue
         edge_s = edge / v_g
         rng = wrist.get(w, np.full(3, np.nan))
         info = band.get(w, {})
