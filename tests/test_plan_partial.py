@@ -277,3 +277,95 @@ def test_verdict_and_partial_export(partial_plan, partial_report, tmp_path, monk
     from rapidchecker.whitespace_checks import check_whitespace
 
     assert [str(e) for e in check_format(text) + check_whitespace(text)] == []
+
+
+def _missing_ik(run_idx, at: int, window: int = 0) -> FailureRecord:
+    return FailureRecord(window=window, kind="ik", point=at,
+                         reason="test: position/cone not met", tried=("test",))
+
+
+def test_resplitting_is_bounded_and_reports_the_ik_misses():
+    """A stretch whose IK misses a point is split there again; a planner that misses a point
+    in every stretch it is given stops after RESPLIT_ROUNDS rounds (1 + 2 + 4 stretches
+    planned), nothing is planned, and every uncut stretch says which CL points the IK missed
+    and why."""
+    from drakedeburr.plan.options import RunMode
+    from drakedeburr.plan.results import WindowPlan, WindowStatus
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    p = _circle(200)  # 1.57 mm apart, 314 mm of loop
+    t = np.roll(p, -1, axis=0) - p
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    n = -p / np.linalg.norm(p, axis=1, keepdims=True)
+    z = np.tile([0.0, 0.0, 1.0], (200, 1))
+    wt = WindowTargets(window_index=0, kind="large", p_HC=p, t_H=t, n_H=n, retract_H=z,
+                       cone_retract_H=z, cone_half_angle=0.1, depth_of_cut=1e-4)
+    refusal = FailureRecord(window=0, kind="window", reason="test: blocked",
+                            where={"blocked_points": [0]})
+    calls = []
+
+    def always_misses(ctx, sub, mode):
+        calls.append(len(sub))
+        return WindowPlan.skipped(0, WindowStatus.IK_FAILED, [_missing_ik(None, len(sub) // 2)])
+
+    res = mut.plan_partial(None, wt, refusal, RunMode.FULL, always_misses)
+    assert mut.RESPLIT_ROUNDS == 2 and len(calls) == 1 + 2 + 4
+    assert not res.status.planned
+    loop = res.failures[0].where["partial"]
+    assert loop["rounds"] == 2 and loop["cut"] == [] and loop["stretches_planned"] == 7
+    assert len(loop["ik_missed"]) == 7 and len(res.failures) == 1
+    missed = {m["cl"] for m in loop["ik_missed"]}
+    why = " ".join(w for u in loop["uncut"] for w in u["why"])
+    assert all(f"IK missed CL {i}: test: position/cone not met" in why for i in missed)
+    margin, _ = mut.run_limits()
+    for r in loop["clear_runs"]:  # the last runs (each missing one point, the last round's)
+        first, last = r["cl"]  # keep the margin off the points missed before
+        idx = [(first + k) % 200 for k in range((last - first) % 200 + 1)]
+        own = missed & set(idx)
+        assert len(own) == 1
+        assert min(_arc(p, i, b) for i in idx for b in (missed - own) | {0}) >= margin - 1e-12
+
+
+def test_a_stretch_is_split_again_where_its_ik_misses(partial_plan, monkeypatch):
+    """The faked-block window, its stretches' IK made to miss one CL point in the middle of
+    the longer clear run: that run is split there (the margin kept off the point), the halves
+    planned; the plan records no IK failure and targets no CL point within the margin; the
+    uncut record names the point and the IK's reason."""
+    import drakedeburr.plan.window as window
+    from drakedeburr.hub import DEFAULT_HUB
+    from drakedeburr.plan.planner import plan_windows
+
+    cell, wt, blocked, plan0 = partial_plan
+    loop0 = next(f for f in plan0.failures if "partial" in f.where).where["partial"]
+    longest = max(loop0["cut"], key=lambda c: c["cl_points"])
+    m = len(wt)
+    bad = (longest["cl"][0] + longest["cl_points"] // 2) % m
+    real = window.plan_whole
+    calls = []
+
+    def misses_bad(ctx, sub, mode):
+        res = real(ctx, sub, mode)
+        idx = [int(np.argmin(np.linalg.norm(wt.p_HC - q, axis=1))) for q in sub.p_HC]
+        calls.append(idx)
+        if bad in idx and res.status.planned:
+            res.failures = [*res.failures, _missing_ik(idx, idx.index(bad))]
+        return res
+
+    def fake(ctx, w):
+        return FailureRecord(window=w.window_index, kind="window", point=blocked[2],
+                             reason="test: the spindle body in the part",
+                             where={"blocked_points": blocked}, tried=("test",))
+
+    monkeypatch.setattr(window, "tool_refusal", fake)
+    monkeypatch.setattr(window, "plan_whole", misses_bad)
+    plan = plan_windows(cell, [wt], load_config("tool_in_hand", DEFAULT_HUB))
+    loop = next(f for f in plan.failures if "partial" in f.where).where["partial"]
+    assert loop["rounds"] == 1 and [m_["cl"] for m_ in loop["ik_missed"]] == [bad]
+    assert len(calls) == 4 and len(loop["cut"]) == 3  # two runs, then the halves of one
+    assert not [f for f in plan.failures if f.kind == "ik"]
+    margin, _ = mut.run_limits()
+    cl = {t.cl_index for t in plan.targets if t.segment == "cut" and t.cl_index >= 0}
+    assert all(_arc(wt.p_HC, i, b) >= margin for i in cl for b in [*blocked, bad])
+    why = [w for u in loop["uncut"] for w in u["why"]]
+    assert f"IK missed CL {bad}: test: position/cone not met" in why
+    assert loop["cut_mm"] < loop0["cut_mm"]

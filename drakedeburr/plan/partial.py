@@ -170,49 +170,131 @@ def _merged_stats(parts: list, loop: dict) -> WindowStats:
         partial=loop)
 
 
+#: how many times a window's clear runs are split again at the CL points their stretches'
+#: IK missed (each round plans only the runs it has not planned before): a bound on the
+#: planning a partial window costs, at most 1 + RESPLIT_ROUNDS passes over its runs
+RESPLIT_ROUNDS = 2
+
+
+def _ik_misses(res: WindowPlan, idx) -> dict:
+    """{CL index of the whole loop: its record} of the targets a stretch's (``idx``: its CL
+    points) IK missed."""
+    return {int(idx[f.point]): f for f in res.failures
+            if f.kind == "ik" and 0 <= f.point < len(idx)}
+
+
+def _why_uncut(run: Run, blocked: set, misses: dict, refused: list, reason: str) -> list[str]:
+    """Why the CL points of an uncut ``run`` are not cut: the proven blocked ones (the
+    pre-check's ``reason``), those the IK missed (its reason), the stretches inside it that
+    did not plan (``refused``: (Run, WindowPlan)); the rest lie within the margin of these."""
+    cl = set(run.indices)
+    out = []
+    n = len(cl & blocked)
+    if n:
+        out.append(f"{n} CL point(s) proven blocked: {reason}")
+    for i in sorted(set(misses) & cl, key=run.indices.index):
+        out.append(f"IK missed CL {i}: {misses[i].reason}")
+    for r, res in refused:
+        if set(r.indices) <= cl:
+            first = next((str(f) for f in res.failures), "no record")
+            out.append(f"stretch CL {r.first}..{r.last} {res.status.value}: {first}")
+    return out
+
+
 def _uncut_record(wt, refusal: FailureRecord, loop: dict) -> FailureRecord:
     """The window's record of the edge it leaves uncut (kind "window", as a refusal)."""
     left = "; ".join(f"CL {u['cl'][0]}..{u['cl'][1]} ({u['length_mm']:.1f} mm)"
                      for u in loop["uncut"])
+    missed = len(loop["ik_missed"])
     reason = (f"cut {loop['cut_mm']:.1f} of {loop['loop_mm']:.1f} mm of edge "
               f"({100 * loop['cut_share']:.0f} %) in {len(loop['cut'])} stretch(es); left "
-              f"uncut: {left}: {refusal.reason}")
+              f"uncut: {left}"
+              + (f" ({missed} CL point(s) the stretches' IK missed)" if missed else "")
+              + f": {refusal.reason}")
     return replace(refusal, reason=reason, where={**refusal.where, "partial": loop},
                    tried=(*refusal.tried, "the clear runs planned as open stretches, "
                           f"{1e3 * loop['margin_m']:.1f} mm of edge kept from each proven "
-                          f"point, none shorter than {1e3 * loop['min_length_m']:.1f} mm"))
+                          f"point, none shorter than {1e3 * loop['min_length_m']:.1f} mm",
+                          f"split again at the points their IK missed ({loop['rounds']} of "
+                          f"at most {RESPLIT_ROUNDS} rounds)"))
+
+
+def _plan_runs(ctx: PlanContext, wt, blocked: list, mode: RunMode, plan_whole):
+    """The clear runs of ``wt`` planned as open stretches, split again (at most
+    :data:`RESPLIT_ROUNDS` times) at the CL points their IK missed, each such point then kept
+    the margin off as a blocked one is. Returns (the last runs, {run indices: its plan}, the
+    missed points {CL: record}, rounds used), or the plan of a stretch abandoned (the
+    fail-fast pass: relaxation next)."""
+    margin, min_len = run_limits()
+    misses: dict = {}
+    done: dict = {}
+    rounds = 0
+    while True:
+        runs = clear_runs(wt.p_HC, [*blocked, *misses], margin, min_len)
+        found = {}
+        for run in runs:
+            if run.indices not in done:
+                res = plan_whole(ctx, subset(wt, run.indices), mode)
+                if res.status is WindowStatus.ABANDONED:
+                    return res
+                done[run.indices] = res
+            found.update(_ik_misses(done[run.indices], run.indices))
+        if not found or rounds == RESPLIT_ROUNDS:
+            misses.update(found)
+            return runs, done, misses, rounds
+        log.info("window %d: the stretches' IK missed %d CL point(s); splitting the runs "
+                 "there (round %d of %d)", wt.window_index, len(found), rounds + 1,
+                 RESPLIT_ROUNDS)
+        misses.update(found)
+        rounds += 1
 
 
 def plan_partial(ctx: PlanContext, wt, refusal: FailureRecord, mode: RunMode,
                  plan_whole) -> WindowPlan:
     """The clear runs of a window the pre-check refused (``refusal``, its
     ``where["blocked_points"]``), each planned as an open stretch by ``plan_whole`` (the
-    window pipeline, every check of a whole window), joined by checked joint moves in loop
-    order; the rest recorded as uncut (one failure record, the window's
-    :attr:`WindowStats.partial`). A stretch that does not plan is uncut too (its records
-    kept); none planned: the window is refused with the record."""
+    window pipeline, every check of a whole window) and split again where its IK misses CL
+    points (:func:`_plan_runs`), joined by checked joint moves in loop order; the rest recorded
+    as uncut, with why (one failure record, the window's :attr:`WindowStats.partial`). What is
+    planned is complete: a stretch whose IK still misses points after the last round, or that
+    does not plan, is uncut too (its records in the uncut record); none planned: the window is
+    refused with the record."""
     margin, min_len = run_limits()
-    runs = clear_runs(wt.p_HC, refusal.where["blocked_points"], margin, min_len)
-    parts, failures = [], []
+    blocked = [int(i) for i in refusal.where["blocked_points"]]
+    out = _plan_runs(ctx, wt, blocked, mode, plan_whole)
+    if isinstance(out, WindowPlan):  # relaxation next (policy): as a whole window
+        return WindowPlan.skipped(wt.window_index, out.status, [refusal, *out.failures])
+    runs, done, misses, rounds = out
+    parts, refused, failures = [], [], []
     for run in runs:
-        res = plan_whole(ctx, subset(wt, run.indices), mode)
-        if res.status is WindowStatus.ABANDONED:  # relaxation next (policy): as a whole window
-            return WindowPlan.skipped(wt.window_index, res.status, [refusal, *res.failures])
-        failures += res.failures
-        if res.status.planned:
+        res = done[run.indices]
+        if res.status.planned and not _ik_misses(res, run.indices):
             parts.append((np.asarray(run.indices, int), res, run))
+            failures += res.failures
+        else:
+            refused.append((run, res))
     cut = [run for _, _, run in parts]
     loop_m = float(_segments(wt.p_HC).sum())
     cut_m = sum(r.length_m for r in cut)
+    uncut = [{**r.record(), "why": _why_uncut(r, set(blocked), misses, refused, refusal.reason)}
+             for r in uncut_runs(wt.p_HC, cut)]
     loop = {"loop_mm": round(1e3 * loop_m, 2), "cut_mm": round(1e3 * cut_m, 2),
-            "cut_share": cut_m / loop_m, "cut": [r.record() for r in cut],
-            "uncut": [r.record() for r in uncut_runs(wt.p_HC, cut)],
+            "cut_share": cut_m / loop_m, "cut": [r.record() for r in cut], "uncut": uncut,
             "clear_runs": [r.record() for r in runs], "margin_m": margin,
-            "min_length_m": min_len, "reason": refusal.reason}
+            "min_length_m": min_len, "reason": refusal.reason, "rounds": rounds,
+            "ik_missed": [{"cl": i, "reason": f.reason} for i, f in sorted(misses.items())],
+            "stretches_planned": len(done)}
     record = _uncut_record(wt, refusal, loop)
     log.info("window %d: %s", wt.window_index, record.reason)
     if not parts:
-        return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [record, *failures])
+        return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [record])
+    return _joined(ctx, wt, parts, [record, *failures], loop)
+
+
+def _joined(ctx: PlanContext, wt, parts: list, failures: list, loop: dict) -> WindowPlan:
+    """The planned stretches ``parts`` ((indices, WindowPlan, Run), loop order) joined by
+    checked joint moves into one window's plan, their targets' CL indices the whole loop's."""
+    failures = list(failures)
     stretches = list(parts[0][1].stretches)
     for (_, a, _), (_, b, run) in zip(parts[:-1], parts[1:], strict=True):
         js, _mv, recs = joint_stretch(ctx, a.stretches[-1].timed.q[-1], b.q_start,
@@ -228,5 +310,5 @@ def plan_partial(ctx: PlanContext, wt, refusal: FailureRecord, mode: RunMode,
                for k in parts[0][1].seconds if k != "window"}
     return WindowPlan(window=wt.window_index, status=WindowStatus.DEGRADED, stretches=stretches,
                       stats=_merged_stats([(i, p) for i, p, _ in parts], loop),
-                      q_start=parts[0][1].q_start, failures=[record, *failures],
+                      q_start=parts[0][1].q_start, failures=failures,
                       seconds={"window": wt.window_index, **seconds})

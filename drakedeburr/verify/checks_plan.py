@@ -191,13 +191,17 @@ def uncut_edge(sp, cfg) -> CheckItem:
     judges the motion that is planned."""
     partial = partial_windows(sp.plan)
     per = {w: {"cut_mm": p["cut_mm"], "loop_mm": p["loop_mm"], "cut_share": p["cut_share"],
-               "cut": p["cut"], "uncut": p["uncut"], "reason": p["reason"]}
+               "cut": p["cut"], "uncut": p["uncut"], "reason": p["reason"],
+               "ik_missed": p.get("ik_missed", [])}
            for w, p in partial.items()}
     uncut = sum(p["loop_mm"] - p["cut_mm"] for p in partial.values())
     lines = [f"window {w}: cut {p['cut_mm']:.1f} of {p['loop_mm']:.1f} mm "
              f"({100 * p['cut_share']:.0f} %); uncut "
              + ", ".join(f"CL {u['cl'][0]}..{u['cl'][1]} ({u['length_mm']:.1f} mm)"
-                         for u in p["uncut"]) + f": {p['reason']}"
+                         for u in p["uncut"])
+             + (f" ({len(p['ik_missed'])} CL point(s) the stretches' IK missed: "
+                f"{p['ik_missed'][0]['reason']})" if p.get("ik_missed") else "")
+             + f": {p['reason']}"
              for w, p in partial.items()]
     return CheckItem(
         "uncut_edge", not partial, 1e-3 * uncut, 0.0, "m", "<=",
