@@ -11,8 +11,10 @@ some window into its J4/J6 limits, or slowly around, where the other does not.
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import time
+import weakref
 from dataclasses import replace
 
 import numpy as np
@@ -89,6 +91,22 @@ def plan_whole(ctx: PlanContext, wt: WindowTargets, mode: RunMode = RunMode.FULL
 REFUSAL_MARGIN = 0.2e-3
 
 
+#: the pre-check's cone searches made in this process, per tool scene (its cell and tool):
+#: a window's targets are searched again in each pass of the policy (first pass, the milder
+#: recipes, the report-only pass) with the same inputs, and the search is a function of them
+_SEARCHES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _search_key(wt: WindowTargets, p_HQ: np.ndarray, lift: float, bound: float) -> str:
+    """Digest of everything :func:`~drakedeburr.plan.clearance.tool_axis_clearance` reads of
+    a window (its constrained points, lift, cone, tool axes and tangents, the bound)."""
+    h = hashlib.sha256()
+    for a in (p_HQ, wt.cone_retract_H, wt.retract_H, wt.t_H,
+              [lift, bound, REFUSAL_MARGIN, wt.cone_half_angle]):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return h.hexdigest()
+
+
 def tool_refusal(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
     """The window refused before its IK, or None: the round tool parts (shank, collet, spindle
     body, clamp; the same at every spin and arm pose) searched over the window's cone at
@@ -102,8 +120,15 @@ def tool_refusal(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
     bound = ctx.min_clearance
     targets = cut_targets(ctx, wt, np.zeros((len(wt), 3)))
     m = len(wt)
-    search = tool_axis_clearance(tool_scene(ctx.checker), wt, targets.p_HQ[:m], targets.lift,
-                                 bound=bound, margin=REFUSAL_MARGIN)
+    scene = tool_scene(ctx.checker)
+    key = _search_key(wt, targets.p_HQ[:m], targets.lift, bound)
+    known = _SEARCHES.setdefault(scene, {})
+    if key not in known:
+        known[key] = tool_axis_clearance(scene, wt, targets.p_HQ[:m], targets.lift,
+                                         bound=bound, margin=REFUSAL_MARGIN)
+    else:
+        log.debug("window %d: the pre-check's search of these targets reused", wt.window_index)
+    search = known[key]
     blocked = np.flatnonzero(search.proven)
     if not blocked.size:
         return None
