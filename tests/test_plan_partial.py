@@ -369,3 +369,32 @@ def test_a_stretch_is_split_again_where_its_ik_misses(partial_plan, monkeypatch)
     why = [w for u in loop["uncut"] for w in u["why"]]
     assert f"IK missed CL {bad}: test: position/cone not met" in why
     assert loop["cut_mm"] < loop0["cut_mm"]
+
+
+def test_what_else_was_tried_on_an_uncut_edge_is_the_uncut_edge_item():
+    """plan.relax.on_uncut_edge: a relaxation record of a window cut in part (milder recipes
+    or the long-reach burr tried in vain) is about its uncut edge: planner_failures leaves it
+    to uncut_edge; the same record of a whole window, and a partial window's own records of
+    its planned motion, still fail planner_failures."""
+    from types import SimpleNamespace
+
+    from drakedeburr.plan.relax import on_uncut_edge
+    from drakedeburr.verify.checks_plan import failures_item, uncut_edge
+
+    loop = {"loop_mm": 100.0, "cut_mm": 60.0, "cut_share": 0.6, "cut": [], "uncut": [],
+            "reason": "test"}
+    part = FailureRecord(window=2, kind="window", reason="cut 60 of 100 mm",
+                         where={"partial": loop})
+    dense = FailureRecord(window=2, kind="dense", reason="clearance 1.9 mm")
+    notes = [FailureRecord(window=w, kind="relaxation", reason=f"milder recipes failed too {w}")
+             for w in (2, 5)]
+    marked = on_uncut_edge([part, dense], notes)
+    assert marked[0].where == {"uncut_edge": True} and marked[1].where == {}
+    item = failures_item(SimpleNamespace(failures=[part, dense, *marked]))
+    assert item.value == 2.0 and set(item.per_window) == {2, 5}
+    assert item.per_window[2]["kinds"] == ["dense"]
+    plan = SimpleNamespace(failures=[part, *marked],
+                           meta={"windows": [{"window": 2, "partial": loop}]})
+    u = uncut_edge(SimpleNamespace(plan=plan), None)
+    assert not u.passed and u.per_window[2]["also_tried"] == ["milder recipes failed too 2"]
+    assert failures_item(SimpleNamespace(failures=[part, marked[0]])).passed

@@ -166,7 +166,8 @@ def relax_pass(passes: CellPasses, edges: dict, wts: Sequence,
     if plan is None:
         plan = passes.assemble(wts, results)
     if in_vain:  # said with the failures of whichever plan is kept
-        plan = replace(plan, failures=(*plan.failures, *in_vain))
+        plan = replace(plan, failures=(*plan.failures,
+                                       *relax.on_uncut_edge(plan.failures, in_vain)))
     return plan
 
 

@@ -200,6 +200,17 @@ def keep_standard(plan, first):
                                        "failing, so the hub was not planned again with it")
 
 
+def on_uncut_edge(failures, notes: list) -> list:
+    """``notes`` (relaxation records: what else was tried) with those of a window cut in part
+    (its partial record among ``failures``, :mod:`drakedeburr.plan.partial`) marked as about
+    its uncut edge (``where["uncut_edge"]``): the verifier's ``uncut_edge`` item names them
+    with the edge they did not cut; the planned motion's own records stay in
+    ``planner_failures``."""
+    partial = {f.window for f in failures if "partial" in (f.where or {})}
+    return [replace(n, where={**n.where, "uncut_edge": True}) if n.window in partial else n
+            for n in notes]
+
+
 def _standard_kept(plan, tried, how: str):
     """``plan`` with a relaxation record per failing window: the long-reach burr ``how``
     (its plan ``tried`` gives each window's own reason)."""
@@ -212,7 +223,7 @@ def _standard_kept(plan, tried, how: str):
             reason=f"the {lr.title} {how}" + ("" if own is None else f"; here: {own.reason}")))
     log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title,
              failing_windows(tried))
-    return replace(plan, failures=(*plan.failures, *notes))
+    return replace(plan, failures=(*plan.failures, *on_uncut_edge(plan.failures, notes)))
 
 
 def choose_tool(plan, alt):

@@ -48,11 +48,19 @@ def structure(sp, cfg) -> CheckItem:
         detail="; ".join(problems[:5]) or "segments tile the trajectory and the target list")
 
 
+def _about_uncut(rec) -> bool:
+    """A record of a partial window's uncut edge (its partial record, or a relaxation record
+    of what else was tried to cut it: :func:`drakedeburr.plan.relax.on_uncut_edge`)."""
+    where = rec.where or {}
+    return "partial" in where or bool(where.get("uncut_edge"))
+
+
 def failures_item(plan) -> CheckItem:
     """The planner's failure records: per window what failed, where, by how much and what was
     tried (``per_window``), the first of each window in the detail."""
-    # the uncut rest of a partial window is its own item (uncut_edge)
-    f = [rec for rec in plan.failures if "partial" not in (rec.where or {})]
+    # the uncut rest of a partial window is its own item (uncut_edge), with what else was
+    # tried to cut it (the relaxation's records marked "uncut_edge")
+    f = [rec for rec in plan.failures if not _about_uncut(rec)]
     per: dict = {}
     for rec in f:
         entry = per.setdefault(rec.window, {"records": 0, "kinds": [], "first": str(rec),
@@ -190,9 +198,13 @@ def uncut_edge(sp, cfg) -> CheckItem:
     reason; fails when any is left (the hub is not fully deburred), while every other item
     judges the motion that is planned."""
     partial = partial_windows(sp.plan)
+    tried = {}
+    for rec in sp.plan.failures:
+        if (rec.where or {}).get("uncut_edge"):
+            tried.setdefault(rec.window, []).append(rec.reason)
     per = {w: {"cut_mm": p["cut_mm"], "loop_mm": p["loop_mm"], "cut_share": p["cut_share"],
                "cut": p["cut"], "uncut": p["uncut"], "reason": p["reason"],
-               "ik_missed": p.get("ik_missed", [])}
+               "ik_missed": p.get("ik_missed", []), "also_tried": tried.get(w, [])}
            for w, p in partial.items()}
     uncut = sum(p["loop_mm"] - p["cut_mm"] for p in partial.values())
     lines = [f"window {w}: cut {p['cut_mm']:.1f} of {p['loop_mm']:.1f} mm "
