@@ -398,3 +398,29 @@ def test_what_else_was_tried_on_an_uncut_edge_is_the_uncut_edge_item():
     u = uncut_edge(SimpleNamespace(plan=plan), None)
     assert not u.passed and u.per_window[2]["also_tried"] == ["milder recipes failed too 2"]
     assert failures_item(SimpleNamespace(failures=[part, marked[0]])).passed
+
+
+def test_a_cut_under_the_clearance_marks_the_cl_targets_around_it():
+    """plan.partial._clearance_misses: a stretch's executed cut under the clearance over some
+    mm of its travel (the planner's "dense" record) names the CL targets on that travel and
+    the nearest CL target before and after it (via targets skipped), in the loop's indices;
+    the stretch is then split there like at an IK miss."""
+    from types import SimpleNamespace as NS
+
+    def tgt(x_mm, cl):
+        X = np.eye(4)
+        X[0, 3] = 1e-3 * x_mm
+        return NS(X_HT=X, cl_index=cl)
+
+    # tool points every 2 mm along x, one via target (cl -1) at 7 mm
+    app = NS(kind="approach", targets=[tgt(0, 0)])
+    cut = NS(kind="cut", targets=[tgt(2, 1), tgt(4, 2), tgt(6, 3), tgt(7, -1), tgt(8, 4),
+                                  tgt(10, 5), tgt(12, 6)])
+    rec = FailureRecord(window=0, kind="dense", reason="clearance 1.9 mm",
+                        where={"s_range_mm": [6.5, 7.5]})
+    res = NS(failures=[rec], stretches=[app, cut])
+    idx = np.arange(100, 107)  # the stretch's CL points in the loop
+    got = mut._clearance_misses(res, idx)
+    assert sorted(got) == [103, 104] and got[103] is rec
+    res.failures = [rec, FailureRecord(window=0, kind="ik", point=6, reason="cone")]
+    assert sorted(mut._ik_misses(res, idx)) == [103, 104, 106]

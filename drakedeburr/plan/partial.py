@@ -177,10 +177,40 @@ RESPLIT_ROUNDS = 2
 
 
 def _ik_misses(res: WindowPlan, idx) -> dict:
-    """{CL index of the whole loop: its record} of the targets a stretch's (``idx``: its CL
-    points) IK missed."""
-    return {int(idx[f.point]): f for f in res.failures
-            if f.kind == "ik" and 0 <= f.point < len(idx)}
+    """{CL index of the whole loop: its record} of the CL points a stretch (``idx``: its CL
+    points) did not cut cleanly: the targets its IK missed, and those its executed cut passes
+    under the clearance (:func:`_clearance_misses`)."""
+    out = _clearance_misses(res, idx)
+    out.update({int(idx[f.point]): f for f in res.failures
+                if f.kind == "ik" and 0 <= f.point < len(idx)})
+    return out
+
+
+def _clearance_misses(res: WindowPlan, idx) -> dict:
+    """{CL index of the whole loop: its record} of the CL targets around each stretch of a
+    planned stretch's executed cut under the clearance (records of kind "dense" with
+    ``s_range_mm``: tool travel from the cut's start, the approach's last target): the CL
+    targets on that travel and the nearest one before and after it on the program."""
+    recs = [f for f in res.failures if f.kind == "dense" and "s_range_mm" in (f.where or {})]
+    app = next((st for st in res.stretches if st.kind == "approach"), None)
+    cut = next((st for st in res.stretches if st.kind == "cut"), None)
+    if not recs or app is None or cut is None:
+        return {}
+    tg = [app.targets[-1], *cut.targets]
+    p = np.array([t.X_HT[:3, 3] for t in tg])
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    cl = np.array([t.cl_index for t in tg])
+    out = {}
+    for f in recs:
+        a, b = 1e-3 * np.asarray(f.where["s_range_mm"], float)
+        k0 = max(int(np.searchsorted(s, a, side="right")) - 1, 0)
+        k1 = min(int(np.searchsorted(s, b, side="left")), len(tg) - 1)
+        while k0 > 0 and cl[k0] < 0:
+            k0 -= 1
+        while k1 < len(tg) - 1 and cl[k1] < 0:
+            k1 += 1
+        out.update({int(idx[cl[k]]): f for k in range(k0, k1 + 1) if 0 <= cl[k] < len(idx)})
+    return out
 
 
 def _why_uncut(run: Run, blocked: set, misses: dict, refused: list, reason: str) -> list[str]:
@@ -193,7 +223,8 @@ def _why_uncut(run: Run, blocked: set, misses: dict, refused: list, reason: str)
     if n:
         out.append(f"{n} CL point(s) proven blocked: {reason}")
     for i in sorted(set(misses) & cl, key=run.indices.index):
-        out.append(f"IK missed CL {i}: {misses[i].reason}")
+        what = "IK missed" if misses[i].kind == "ik" else "executed cut under the clearance at"
+        out.append(f"{what} CL {i}: {misses[i].reason}")
     for r, res in refused:
         if set(r.indices) <= cl:
             first = next((str(f) for f in res.failures), "no record")
@@ -209,13 +240,15 @@ def _uncut_record(wt, refusal: FailureRecord, loop: dict) -> FailureRecord:
     reason = (f"cut {loop['cut_mm']:.1f} of {loop['loop_mm']:.1f} mm of edge "
               f"({100 * loop['cut_share']:.0f} %) in {len(loop['cut'])} stretch(es); left "
               f"uncut: {left}"
-              + (f" ({missed} CL point(s) the stretches' IK missed)" if missed else "")
+              + (f" ({missed} CL point(s) the stretches' IK missed or cut under the clearance)"
+                 if missed else "")
               + f": {refusal.reason}")
     return replace(refusal, reason=reason, where={**refusal.where, "partial": loop},
                    tried=(*refusal.tried, "the clear runs planned as open stretches, "
                           f"{1e3 * loop['margin_m']:.1f} mm of edge kept from each proven "
                           f"point, none shorter than {1e3 * loop['min_length_m']:.1f} mm",
-                          f"split again at the points their IK missed ({loop['rounds']} of "
+                          f"split again at the points their IK missed or cut under the clearance "
+                          f"({loop['rounds']} of "
                           f"at most {RESPLIT_ROUNDS} rounds)"))
 
 
@@ -242,7 +275,8 @@ def _plan_runs(ctx: PlanContext, wt, blocked: list, mode: RunMode, plan_whole):
         if not found or rounds == RESPLIT_ROUNDS:
             misses.update(found)
             return runs, done, misses, rounds
-        log.info("window %d: the stretches' IK missed %d CL point(s); splitting the runs "
+        log.info("window %d: the stretches' IK missed or cut under the clearance %d CL "
+                 "point(s); splitting the runs "
                  "there (round %d of %d)", wt.window_index, len(found), rounds + 1,
                  RESPLIT_ROUNDS)
         misses.update(found)
@@ -282,7 +316,8 @@ def plan_partial(ctx: PlanContext, wt, refusal: FailureRecord, mode: RunMode,
             "cut_share": cut_m / loop_m, "cut": [r.record() for r in cut], "uncut": uncut,
             "clear_runs": [r.record() for r in runs], "margin_m": margin,
             "min_length_m": min_len, "reason": refusal.reason, "rounds": rounds,
-            "ik_missed": [{"cl": i, "reason": f.reason} for i, f in sorted(misses.items())],
+            "ik_missed": [{"cl": i, "kind": f.kind, "reason": f.reason}
+                          for i, f in sorted(misses.items())],
             "stretches_planned": len(done)}
     record = _uncut_record(wt, refusal, loop)
     log.info("window %d: %s", wt.window_index, record.reason)
