@@ -143,29 +143,53 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
         for chunk in chunks:
             _window(plan, samples, program, ref, edge, chunk, out, tol)
         if w in partial:
-            out["coverage"][w] = stretch_coverage(plan.targets, program.move, chunks,
-                                                  out["contact"], edge)
+            whole = ref.tool_path is not None
+            out["coverage"][w] = stretch_coverage(
+                plan.targets, program.move, chunks, out["contact"], edge,
+                ref.p_HC if whole else None, ref.cl_of if whole else None)
     return CutGeometry(**out)
 
 
 def stretch_coverage(targets, move: np.ndarray, chunks: list, contact: np.ndarray,
-                     edge: np.ndarray) -> tuple[float, int]:
+                     edge: np.ndarray, loop_cl: np.ndarray | None = None,
+                     cl_of: dict | None = None) -> tuple[float, int]:
     """(farthest gap [m], edge point) of the edge points a window's open stretches cut from
-    their executed contact paths: each edge point is given to the CL point the plan targets
-    nearest to it; it is checked against its stretch when that CL point is inside the stretch
-    (not its first or last), so the edge left uncut (before, between and after the stretches)
-    is not counted here: the plan's partial record says it is uncut (``uncut_edge``)."""
+    their executed contact paths: each edge point is given to the CL point nearest to it; it
+    is checked against its stretch when that CL point is inside the stretch (not its first or
+    last), so the edge left uncut (before, between and after the stretches) is not counted
+    here: the plan's partial record says it is uncut (``uncut_edge``).
+
+    With ``loop_cl`` (the whole loop's CL points, the plan's ToolPath) and ``cl_of`` (target
+    -> its CL index) the nearest CL point is sought over the whole loop, the uncut ones too:
+    on a 3-D loop (down a spoke flank and back) an uncut edge point can lie nearer to a cut
+    stretch's CL point than to the rest of the loop's and be read as a 40 mm gap of that
+    stretch (audibot rim window 2). Without them, over the stretches' own CL targets."""
     from scipy.spatial import cKDTree
 
     cl, label, inner = [], [], []
+    whole = loop_cl is not None and cl_of is not None
     for c, chunk in enumerate(chunks):
         ks = sorted(set(int(k) for k in move[chunk]) | {int(move[chunk][0]) - 1})
+        if whole:
+            ids = [cl_of[k] for k in ks if k in cl_of]
+            cl += ids
+            label += [c] * len(ids)
+            inner += [0 < i < len(ids) - 1 for i in range(len(ids))]
+            continue
         pts = [targets[k].p_HC for k in ks if targets[k].p_HC is not None]
         cl += pts
         label += [c] * len(pts)
         inner += [0 < i < len(pts) - 1 for i in range(len(pts))]
-    _, near = cKDTree(np.asarray(cl, float)).query(edge)
-    label, inner = np.asarray(label)[near], np.asarray(inner)[near]
+    if whole:  # each loop CL point: the stretch it is inside of, or -1
+        of = np.full(len(loop_cl), -1)
+        for i, c, ins in zip(cl, label, inner, strict=True):
+            if ins:
+                of[i] = c
+        _, near = cKDTree(np.asarray(loop_cl, float)).query(edge)
+        label, inner = of[near], of[near] >= 0
+    else:
+        _, near = cKDTree(np.asarray(cl, float)).query(edge)
+        label, inner = np.asarray(label)[near], np.asarray(inner)[near]
     worst = (0.0, -1)
     for c, chunk in enumerate(chunks):
         sel = np.flatnonzero(inner & (label == c))
