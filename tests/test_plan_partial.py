@@ -73,16 +73,23 @@ def test_the_margin_is_the_burrs_footprint():
     assert min_len == pytest.approx(2 * margin)
 
 
-def test_subset_rolls_the_targets_across_the_start():
+def _circle_targets(m: int, window: int):
+    """WindowTargets of a flat circular loop of ``m`` CL points (tangents along it, normals
+    to the centre, the tool axis +z)."""
     from drakedeburr.plan.window_targets import WindowTargets
 
-    p = _circle(20)
+    p = _circle(m)
     t = np.roll(p, -1, axis=0) - p
     t /= np.linalg.norm(t, axis=1, keepdims=True)
     n = -p / np.linalg.norm(p, axis=1, keepdims=True)
-    z = np.tile([0.0, 0.0, 1.0], (20, 1))
-    wt = WindowTargets(window_index=3, kind="large", p_HC=p, t_H=t, n_H=n, retract_H=z,
-                       cone_retract_H=z, cone_half_angle=0.1, depth_of_cut=1e-4)
+    z = np.tile([0.0, 0.0, 1.0], (m, 1))
+    return WindowTargets(window_index=window, kind="large", p_HC=p, t_H=t, n_H=n, retract_H=z,
+                         cone_retract_H=z, cone_half_angle=0.1, depth_of_cut=1e-4)
+
+
+def test_subset_rolls_the_targets_across_the_start():
+    wt = _circle_targets(20, 3)
+    p = wt.p_HC
     sub = mut.subset(wt, [18, 19, 0, 1, 2])
     assert not sub.closed and len(sub) == 5
     np.testing.assert_array_equal(sub.p_HC, p[[18, 19, 0, 1, 2]])
@@ -291,15 +298,9 @@ def test_resplitting_is_bounded_and_reports_the_ik_misses():
     and why."""
     from drakedeburr.plan.options import RunMode
     from drakedeburr.plan.results import WindowPlan, WindowStatus
-    from drakedeburr.plan.window_targets import WindowTargets
 
-    p = _circle(200)  # 1.57 mm apart, 314 mm of loop
-    t = np.roll(p, -1, axis=0) - p
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    n = -p / np.linalg.norm(p, axis=1, keepdims=True)
-    z = np.tile([0.0, 0.0, 1.0], (200, 1))
-    wt = WindowTargets(window_index=0, kind="large", p_HC=p, t_H=t, n_H=n, retract_H=z,
-                       cone_retract_H=z, cone_half_angle=0.1, depth_of_cut=1e-4)
+    wt = _circle_targets(200, 0)  # 1.57 mm apart, 314 mm of loop
+    p = wt.p_HC
     refusal = FailureRecord(window=0, kind="window", reason="test: blocked",
                             where={"blocked_points": [0]})
     calls = []
