@@ -15,8 +15,8 @@ A candidate cell is the bundled tool-in-hand scenario with two changes a cell bu
   flange axis +Z_F through the flange centre (:func:`drakedeburr.cell.tools.coaxial_X_FM`),
   the body's rear on the bracket's flange plate, the bracket a part of its own (model
   ``coaxial_bracket``, welded to the flange, collision geometry like every part) and the
-  spindle model the bundled one without its 45 deg bracket (``floating_spindle_coaxial``). A spin about
-  the burr axis is then J6 alone; a wedge at 0 deg leaves the axis parallel to the flange axis
+  spindle model the bundled one without its 45 deg bracket (``floating_spindle_coaxial``).
+  A spin about the burr axis is then J6 alone; a wedge at 0 deg leaves the axis parallel to the flange axis
   but 102.5 mm off it (the wedge turns the spindle about the flange centre);
 * **the fixture height**: the chuck's weld ``world -> fixture::chuck_top`` moved by
   ``fixture_shift`` along +Z_W (the hub face with it).
@@ -40,8 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell.tools import (COAXIAL_BRACKET_URL, COAXIAL_SPINDLE_URL, FLOATING_SPINDLE,
-                                   coaxial_X_FM)
+from drakedeburr.cell.tools import (
+    COAXIAL_BRACKET_URL,
+    COAXIAL_SPINDLE_URL,
+    FLOATING_SPINDLE,
+    coaxial_X_FM,
+)
 from drakedeburr.errors import InputError
 
 __all__ = ["MountCandidate", "candidate_grid", "quick_grid", "write_candidate_scenario",
@@ -121,7 +125,8 @@ class MountCandidate:
 
     def is_bundled(self) -> bool:
         """The scenario's own cell (no wedge, no offset, fixture where it is)."""
-        return (not self.coaxial and abs(self.wedge) < 1e-12 and self.offset == 0.0 and self.fixture_shift == 0.0)
+        return (not self.coaxial and abs(self.wedge) < 1e-12 and self.offset == 0.0
+                and self.fixture_shift == 0.0)
 
 
 def candidate_grid(angles_deg: Sequence[float], offsets_mm: Sequence[float],
