@@ -285,3 +285,38 @@ def test_coaxial_candidates_from_the_options():
     args.coaxial = False
     with pytest.raises(InputError, match="no candidates"):
         study_setup(args)
+
+
+def _ik_over_spins(cell, tilt: float, spins: np.ndarray) -> np.ndarray:
+    """(spins, 8, 6) every analytic IK branch [rad] for the tool tip 0.14 m out on the hub face,
+    its axis tilted ``tilt`` from the face normal, at each spin about the axis."""
+    from drakedeburr.plan.kinematics import cell_kinematics
+    from drakedeburr.plan.spin import spin_frames
+
+    kin = cell_kinematics(cell)
+    c, s = math.cos(tilt), math.sin(tilt)
+    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]) @ np.diag([1.0, -1.0, -1.0])  # Z_T down
+    X = np.repeat(np.eye(4)[None], len(spins), 0)
+    X[:, :3, :3] = spin_frames(np.repeat(R[None], len(spins), 0), spins)
+    X[:, :3, 3] = (0.12, 0.08, 0.0)
+    return kin.ik_all(kin.X_WF_from_X_HT(X))[0]
+
+
+def test_coaxial_spin_moves_j6_alone(bundled, coaxial_cell):
+    """With the coaxial bracket the analytic IK gives the same J1-J5 at every spin about the
+    tool axis and J6 turned by the spin: J4's and J5's motion along a cut is fixed by the tool
+    axis and the arm's posture, no spin choice changes it. With the bundled 45 deg mount the
+    spin moves J4 and J5 too."""
+    spins = np.linspace(-math.pi, math.pi, 13)[:-1]
+    q = _ik_over_spins(coaxial_cell[2], 0.3, spins)
+    ok = np.all(np.isfinite(q), axis=(0, 2))
+    assert ok.any()
+    for b in np.flatnonzero(ok):
+        d = np.angle(np.exp(1j * (q[:, b, :5] - q[:1, b, :5])))  # (revolute: mod 2 pi)
+        np.testing.assert_allclose(d, 0.0, atol=1e-9)
+        # J6 turned by the spin (mod 2 pi)
+        off = np.angle(np.exp(1j * (q[:, b, 5] - q[0, b, 5] - (spins - spins[0]))))
+        np.testing.assert_allclose(off, 0.0, atol=1e-9)
+    q45 = _ik_over_spins(bundled, 0.3, spins)
+    b = int(np.flatnonzero(np.all(np.isfinite(q45), axis=(0, 2)))[0])
+    assert np.ptp(q45[:, b, 4]) > 0.5  # J5 swings by more than 0.5 rad over the spins
