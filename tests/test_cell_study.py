@@ -323,3 +323,42 @@ def test_coaxial_spin_moves_j6_alone(bundled, coaxial_cell):
     assert reached[:, b].sum() >= 3
     # J5 swings by more than 0.5 rad over the spins this branch reaches
     assert np.ptp(q45[reached[:, b], b, 4]) > 0.5
+
+
+def test_coaxial_spin_search_holds_j6(coaxial_cell):
+    """drakedeburr.plan.spin on the coaxial cell: a cut along a third of a 0.14 m circle on the
+    hub face with the tool axis tilted 0.3 rad towards the centre (the axis turns, J4 winds):
+    the chosen spin holds J6 at the start (under 1 mrad) and leaves J1-J5 those of any
+    other spin (the spin moves J6 alone); the tip and axis stay the cut's."""
+    from drakedeburr.plan.kinematics import cell_kinematics
+    from drakedeburr.plan.spin import optimize_spin
+
+    kin = cell_kinematics(coaxial_cell[2])
+    phi = np.linspace(0.0, 2 * math.pi / 3, 121)
+    X = np.repeat(np.eye(4)[None], len(phi), 0)
+    for k, f in enumerate(phi):
+        r = np.array([math.cos(f), math.sin(f), 0.0])  # radial, in H
+        t = np.array([-math.sin(f), math.cos(f), 0.0])
+        z = -(math.cos(0.3) * np.array([0, 0, 1.0]) + math.sin(0.3) * r)  # Z_T into the face
+        x = np.cross(t, z)
+        X[k, :3, :3] = np.column_stack([x / np.linalg.norm(x), np.cross(z, x / np.linalg.norm(x)),
+                                        z])
+        X[k, :3, 3] = 0.14 * r
+    s = 0.14 * phi
+    q_all = kin.ik_all(kin.X_WF_from_X_HT(X[:1]))[0][0]
+    b = [i for i in range(8) if np.all(np.isfinite(q_all[i])) and abs(q_all[i, 4]) > 0.3
+         and kin.within_limits(q_all[i])]
+    assert b
+    q0 = q_all[b[0]]
+    X_out, stats = optimize_spin(kin, X, s, q0)
+    assert stats["ok"] and stats["rule"] == "hold J6", stats
+    q_out, ok = kin.track(kin.X_WF_from_X_HT(X_out), q0)
+    q_in, ok_in = kin.track(kin.X_WF_from_X_HT(X), q0)
+    assert ok.all() and ok_in.all()
+    # held exactly at the program's samples (every 2nd), the spin interpolated between them
+    assert np.ptp(q_out[::2, 5]) < 1e-9 and abs(q_out[0, 5] - q0[5]) < 1e-9
+    assert np.ptp(q_out[:, 5]) < 1e-3
+    assert np.ptp(q_in[:, 5]) > 0.5  # the cut's own spin winds J6
+    np.testing.assert_allclose(q_out[:, :5], q_in[:, :5], atol=1e-9)
+    np.testing.assert_allclose(X_out[:, :3, 3], X[:, :3, 3], atol=1e-12)
+    np.testing.assert_allclose(X_out[:, :3, 2], X[:, :3, 2], atol=1e-12)

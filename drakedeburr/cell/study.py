@@ -16,8 +16,8 @@ A candidate cell is the bundled tool-in-hand scenario with two changes a cell bu
   the body's rear on the bracket's flange plate, the bracket a part of its own (model
   ``coaxial_bracket``, welded to the flange, collision geometry like every part) and the
   spindle model the bundled one without its 45 deg bracket (``floating_spindle_coaxial``).
-  A spin about the burr axis is then J6 alone; a wedge at 0 deg leaves the axis parallel to the flange axis
-  but 102.5 mm off it (the wedge turns the spindle about the flange centre);
+  A spin about the burr axis is then J6 alone; a wedge at 0 deg leaves the axis parallel to
+  the flange axis but 102.5 mm off it (the wedge turns the spindle about the flange centre);
 * **the fixture height**: the chuck's weld ``world -> fixture::chuck_top`` moved by
   ``fixture_shift`` along +Z_W (the hub face with it).
 
