@@ -8,7 +8,8 @@ cycle time, the worst window's J4 + J5 + J6 travel, name. Printed: the ranking; 
 45 deg cell's figures and the recommended one's against the issue's targets (cycle <= 1.15x
 its physical bound, feed held on >= 85 % of each cut, J6 <= 30 deg per window).
 
-Run:  PYTHONPATH=. python benchmarks/study_cell_design.py [--angles 30,45,60] [--offsets 0,50]
+Run:  PYTHONPATH=. python benchmarks/study_cell_design.py [--angles 30,45,60|none] [--coaxial]
+          [--offsets 0,50]
           [--fixture-heights -50,0,50] [--hub NAME] [--windows 0,1] [--out DIR]
       (--quick: the 45 and 60 deg mounts, window 0)
 """
@@ -47,7 +48,9 @@ def _against_targets(row: dict) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--angles", default="30,45,60")
+    ap.add_argument("--angles", default="30,45,60", help="wedge mount angles [deg] or none")
+    ap.add_argument("--coaxial", action="store_true",
+                    help="add the coaxial straight bracket at each fixture height")
     ap.add_argument("--offsets", default="0,50")
     ap.add_argument("--fixture-heights", default="-50,0,50")
     ap.add_argument("--hub", default=None)

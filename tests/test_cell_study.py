@@ -178,3 +178,187 @@ def test_straight_and_shallow_mount_frames(tmp_path, bundled, deg):
     assert np.linalg.norm(X_FT[:3, 3] - [0, 0, lift]) == pytest.approx(
         np.linalg.norm(X_FT_ref[:3, 3]), abs=1e-9)
     assert cell.collision_pairs(q) == []
+
+
+@pytest.fixture(scope="module")
+def coaxial_cell(tmp_path_factory):
+    c = mut.MountCandidate(0.0, coaxial=True)
+    f = mut.write_candidate_scenario(c, tmp_path_factory.mktemp("coax") / "coax.yaml")
+    return c, f, load_cell(f, DEFAULT_HUB)
+
+
+def test_coaxial_bracket_puts_the_burr_on_the_flange_axis(bundled, coaxial_cell):
+    """The coaxial straight bracket (issue 46): FK of the built cell puts the burr axis on +Z_F
+    and the tip on the flange axis, standing off by the bracket plate, the spindle body and the
+    burr's tip height; turning J6 alone then spins the tool about its own axis (the tip and the
+    axis stay put in W), which no wedge does (the 0 deg wedge leaves the axis 102.5 mm off)."""
+    c, _, cell = coaxial_cell
+    assert c.name == "coax_f+000" and not c.is_bundled()
+    q = np.array(bundled.q_home)
+    X_FT = _X_FT(cell, q)
+    np.testing.assert_allclose(X_FT[:3, 2], [0, 0, 1], atol=1e-12)  # burr axis = +Z_F
+    np.testing.assert_allclose(X_FT[:2, 3], [0, 0], atol=1e-12)  # tip on the flange axis
+    sp = FLOATING_SPINDLE
+    assert X_FT[2, 3] == pytest.approx(sp.plate_thickness + sp.body_length + sp.burr.z_tool_tip,
+                                       abs=1e-12)
+    for dq in (0.3, -1.2, 2.5):
+        q2 = q.copy()
+        q2[5] += dq
+        X0, X1 = cell.X_WT(q).GetAsMatrix4(), cell.X_WT(q2).GetAsMatrix4()
+        np.testing.assert_allclose(X1[:3, 3], X0[:3, 3], atol=1e-12)
+        np.testing.assert_allclose(X1[:3, 2], X0[:3, 2], atol=1e-12)
+        # the spin about the burr axis is dq
+        assert math.atan2(np.cross(X0[:3, 0], X1[:3, 0]) @ X0[:3, 2],
+                          X0[:3, 0] @ X1[:3, 0]) == pytest.approx(dq, abs=1e-12)
+    # the 0 deg wedge: the axis parallel to +Z_F, 102.5 mm off it; J6 moves the tip
+    wedge0 = mut.MountCandidate(0.0)
+    p_F = wedge0.X_FM()[:3, :3] @ sp.p_FT + wedge0.X_FM()[:3, 3]
+    assert math.hypot(p_F[0], p_F[1]) == pytest.approx(
+        abs(np.array([math.cos(sp.mount_angle), 0, -math.sin(sp.mount_angle)]) @ sp.p_FC),
+        abs=1e-12)
+    assert math.hypot(p_F[0], p_F[1]) > 0.1
+
+
+def test_coaxial_bracket_is_a_part_that_collides(bundled, coaxial_cell):
+    """The bracket's flange plate and clamp ring are collision geometry moving with the robot,
+    the spindle's own 45 deg adapter plate and bracket block are gone, nothing penetrates at
+    home, and the bracket is where its model says (the plate on the flange face, the ring round
+    the body's rear)."""
+    from pydrake.geometry import Role
+
+    _, _, cell = coaxial_cell
+    inspector = cell.scene_graph.model_inspector()
+    names = {inspector.GetName(g): g for g in cell.robot_ids}
+    assert {"coaxial_bracket::flange_plate", "coaxial_bracket::clamp_ring"} <= set(names)
+    assert not any(n.startswith("spindle::") and n.split("::")[1] in ("adapter_plate", "bracket")
+                   for n in names)
+    assert all(inspector.GetProximityProperties(names[n]) is not None
+               for n in ("coaxial_bracket::flange_plate", "coaxial_bracket::clamp_ring"))
+    assert len(inspector.GetAllGeometryIds(Role.kProximity)) > 0
+    q = np.array(bundled.q_home)
+    assert cell.collision_pairs(q) == []
+    X_WF = cell.X_WF(q).GetAsMatrix4()
+    plant = cell.plant
+    ctx = plant.GetMyContextFromRoot(cell.create_context())
+    body = plant.GetBodyByName("bracket", plant.GetModelInstanceByName(mut.BRACKET_MODEL))
+    np.testing.assert_allclose(body.EvalPoseInWorld(ctx).GetAsMatrix4(), X_WF, atol=1e-12)
+    # the body's rear face is on the plate: the spindle body cylinder's axis is +Z_F, its rear
+    # end at the plate's top
+    g = names["spindle::spindle_body"]
+    X_WG = plant.GetBodyFromFrameId(inspector.GetFrameId(g)).EvalPoseInWorld(ctx).multiply(
+        inspector.GetPoseInFrame(g)).GetAsMatrix4()
+    X_FG = np.linalg.inv(X_WF) @ X_WG
+    np.testing.assert_allclose(X_FG[:3, 2], [0, 0, 1], atol=1e-12)
+    length = inspector.GetShape(g).length()
+    assert X_FG[2, 3] - length / 2 == pytest.approx(FLOATING_SPINDLE.plate_thickness, abs=1e-12)
+
+
+def test_coaxial_candidate_round_trips_and_refuses_a_tampered_file(tmp_path, coaxial_cell):
+    c, f, _ = coaxial_cell
+    back = mut.candidate_from_scenario(f)
+    assert back == c
+    c2 = mut.MountCandidate(0.0, 0.0, -0.05, coaxial=True)
+    g = mut.write_candidate_scenario(c2, tmp_path / "c2.yaml")
+    assert mut.candidate_from_scenario(g) == c2 and c2.name == "coax_f-050"
+    # the bracket kept but the spindle moved off the axis: not the coaxial bracket
+    text = g.read_text()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace("package://drakedeburr/tools/floating_spindle_coaxial.sdf",
+                                "package://drakedeburr/tools/floating_spindle.sdf"))
+    with pytest.raises(InputError, match="coaxial bracket"):
+        mut.candidate_from_scenario(bad)
+    with pytest.raises(InputError, match="coaxial bracket has mount angle 0"):
+        mut.MountCandidate(math.radians(45), coaxial=True)
+    with pytest.raises(InputError, match="coaxial bracket has mount angle 0"):
+        mut.MountCandidate(0.0, 0.05, coaxial=True)
+
+
+def test_coaxial_candidates_from_the_options():
+    import argparse
+
+    from drakedeburr.cell.commands import study_setup
+
+    args = argparse.Namespace(hub=None, windows=None, quick=False, angles="none", offsets="0",
+                              fixture_heights="0,-50", coaxial=True)
+    _, _, cands = study_setup(args)
+    assert [c.name for c in cands] == ["coax_f+000", "coax_f-050"]
+    args.coaxial = False
+    with pytest.raises(InputError, match="no candidates"):
+        study_setup(args)
+
+
+def _ik_over_spins(cell, tilt: float, spins: np.ndarray) -> np.ndarray:
+    """(spins, 8, 6) every analytic IK branch [rad] for the tool tip 0.14 m out on the hub face,
+    its axis tilted ``tilt`` from the face normal, at each spin about the axis."""
+    from drakedeburr.plan.kinematics import cell_kinematics
+    from drakedeburr.plan.spin import spin_frames
+
+    kin = cell_kinematics(cell)
+    c, s = math.cos(tilt), math.sin(tilt)
+    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]) @ np.diag([1.0, -1.0, -1.0])  # Z_T down
+    X = np.repeat(np.eye(4)[None], len(spins), 0)
+    X[:, :3, :3] = spin_frames(np.repeat(R[None], len(spins), 0), spins)
+    X[:, :3, 3] = (0.12, 0.08, 0.0)
+    return kin.ik_all(kin.X_WF_from_X_HT(X))[0]
+
+
+def test_coaxial_spin_moves_j6_alone(bundled, coaxial_cell):
+    """With the coaxial bracket the analytic IK gives the same J1-J5 at every spin about the
+    tool axis and J6 turned by the spin: J4's and J5's motion along a cut is fixed by the tool
+    axis and the arm's posture, no spin choice changes it. With the bundled 45 deg mount the
+    spin moves J4 and J5 too."""
+    spins = np.linspace(-math.pi, math.pi, 13)[:-1]
+    q = _ik_over_spins(coaxial_cell[2], 0.3, spins)
+    ok = np.all(np.isfinite(q), axis=(0, 2))
+    assert ok.any()
+    for b in np.flatnonzero(ok):
+        d = np.angle(np.exp(1j * (q[:, b, :5] - q[:1, b, :5])))  # (revolute: mod 2 pi)
+        np.testing.assert_allclose(d, 0.0, atol=1e-9)
+        # J6 turned by the spin (mod 2 pi)
+        off = np.angle(np.exp(1j * (q[:, b, 5] - q[0, b, 5] - (spins - spins[0]))))
+        np.testing.assert_allclose(off, 0.0, atol=1e-9)
+    q45 = _ik_over_spins(bundled, 0.3, spins)
+    reached = np.all(np.isfinite(q45), axis=2)  # (spins, branches)
+    b = int(np.argmax(reached.sum(axis=0)))
+    assert reached[:, b].sum() >= 3
+    # J5 swings by more than 0.5 rad over the spins this branch reaches
+    assert np.ptp(q45[reached[:, b], b, 4]) > 0.5
+
+
+def test_coaxial_spin_search_holds_j6(coaxial_cell):
+    """drakedeburr.plan.spin on the coaxial cell: a cut along a third of a 0.14 m circle on the
+    hub face with the tool axis tilted 0.3 rad towards the centre (the axis turns, J4 winds):
+    the chosen spin holds J6 at the start (under 1 mrad) and leaves J1-J5 those of any
+    other spin (the spin moves J6 alone); the tip and axis stay the cut's."""
+    from drakedeburr.plan.kinematics import cell_kinematics
+    from drakedeburr.plan.spin import optimize_spin
+
+    kin = cell_kinematics(coaxial_cell[2])
+    phi = np.linspace(0.0, 2 * math.pi / 3, 121)
+    X = np.repeat(np.eye(4)[None], len(phi), 0)
+    for k, f in enumerate(phi):
+        r = np.array([math.cos(f), math.sin(f), 0.0])  # radial, in H
+        t = np.array([-math.sin(f), math.cos(f), 0.0])
+        z = -(math.cos(0.3) * np.array([0, 0, 1.0]) + math.sin(0.3) * r)  # Z_T into the face
+        x = np.cross(t, z)
+        X[k, :3, :3] = np.column_stack([x / np.linalg.norm(x), np.cross(z, x / np.linalg.norm(x)),
+                                        z])
+        X[k, :3, 3] = 0.14 * r
+    s = 0.14 * phi
+    q_all = kin.ik_all(kin.X_WF_from_X_HT(X[:1]))[0][0]
+    b = [i for i in range(8) if np.all(np.isfinite(q_all[i])) and abs(q_all[i, 4]) > 0.3
+         and kin.within_limits(q_all[i])]
+    assert b
+    q0 = q_all[b[0]]
+    X_out, stats = optimize_spin(kin, X, s, q0)
+    assert stats["ok"] and stats["rule"] == "hold J6", stats
+    q_out, ok = kin.track(kin.X_WF_from_X_HT(X_out), q0)
+    q_in, ok_in = kin.track(kin.X_WF_from_X_HT(X), q0)
+    assert ok.all() and ok_in.all()
+    # held exactly at the program's samples (every 2nd), the spin interpolated between them
+    assert np.ptp(q_out[::2, 5]) < 1e-9 and abs(q_out[0, 5] - q0[5]) < 1e-9
+    assert np.ptp(q_out[:, 5]) < 1e-3
+    assert np.ptp(q_in[:, 5]) > 0.5  # the cut's own spin winds J6
+    np.testing.assert_allclose(q_out[:, :5], q_in[:, :5], atol=1e-9)
+    np.testing.assert_allclose(X_out[:, :3, 3], X[:, :3, 3], atol=1e-12)
+    np.testing.assert_allclose(X_out[:, :3, 2], X[:, :3, 2], atol=1e-12)

@@ -104,13 +104,15 @@ def number_list(text: str, option: str) -> tuple[float, ...]:
 
 def study_setup(args: argparse.Namespace) -> tuple:
     """(hub, windows or None, candidates) from the study's options (``hub``, ``windows``,
-    ``quick``, ``angles``, ``offsets``, ``fixture_heights``), checked.
+    ``quick``, ``angles`` (``none``: no wedge candidates), ``offsets``, ``fixture_heights``,
+    ``coaxial``: the coaxial bracket at each fixture height too), checked.
 
     Raises:
         InputError: a list is malformed, a candidate out of range, a window not the hub's.
     """
     from drakedeburr import argcheck
-    from drakedeburr.cell.study import candidate_grid, quick_grid
+    from drakedeburr.cell.study import candidate_grid, coaxial_candidates, quick_grid
+    from drakedeburr.errors import InputError
     from drakedeburr.hub import DEFAULT_HUB
     from drakedeburr.resources import resolve_hub_dir
 
@@ -120,9 +122,14 @@ def study_setup(args: argparse.Namespace) -> tuple:
     if args.quick:
         candidates, windows = quick_grid(), windows or (0,)
     else:
-        candidates = candidate_grid(number_list(args.angles, "--angles"),
-                                    number_list(args.offsets, "--offsets"),
-                                    number_list(args.fixture_heights, "--fixture-heights"))
+        heights = number_list(args.fixture_heights, "--fixture-heights")
+        candidates = [] if args.angles.strip().lower() == "none" else candidate_grid(
+            number_list(args.angles, "--angles"), number_list(args.offsets, "--offsets"),
+            heights)
+        if getattr(args, "coaxial", False):
+            candidates += coaxial_candidates(heights)
+        if not candidates:
+            raise InputError("cell study: no candidates (--angles none without --coaxial)")
     argcheck.check_windows(windows, argcheck.hub_windows(hub), Path(hub).name)
     return hub, windows, candidates
 
@@ -154,14 +161,18 @@ def register(subparsers) -> None:
     s = sub.add_parser(
         "study", help="rank spindle mounts x fixture heights by planned cycle and wrist travel",
         description="Plan and verify the hub in every candidate tool-in-hand cell (spindle "
-                    "mount angle and offset on a wedge adapter, fixture height), rank the "
+                    "mount angle and offset on a wedge adapter or the coaxial straight bracket, "
+                    "fixture height), rank the "
                     "candidates that pass every required check by cycle time, then the worst "
                     "window's J4+J5+J6 travel, then name, and write the best as "
                     "OUT/recommended.yaml (load it with --scenario). Exit 1 when none passes.")
     s.add_argument("--hub", default=None, help="bundled hub name or folder (default: the "
                                                "default hub)")
-    s.add_argument("--angles", default="30,45,60", help="mount angles [deg] (default "
-                                                        "%(default)s)")
+    s.add_argument("--angles", default="30,45,60", help="wedge mount angles [deg], or none "
+                                                        "(default %(default)s)")
+    s.add_argument("--coaxial", action="store_true",
+                   help="add the coaxial straight bracket (burr axis on the flange axis) at "
+                        "each fixture height")
     s.add_argument("--offsets", default="0,50", help="mount stand-offs [mm] (default "
                                                      "%(default)s)")
     s.add_argument("--fixture-heights", default="-50,0,50",

@@ -11,6 +11,13 @@ A candidate cell is the bundled tool-in-hand scenario with two changes a cell bu
   sine of the wedge angle). The mount is the weld ``robot::flange -> spindle::spindle``'s
   ``X_PC`` in the scenario file, so the file alone (and the cell fingerprint, which hashes it)
   says which mount a plan was made with;
+* or **the coaxial straight bracket** (``coaxial``): the spindle turned so its burr axis is the
+  flange axis +Z_F through the flange centre (:func:`drakedeburr.cell.tools.coaxial_X_FM`),
+  the body's rear on the bracket's flange plate, the bracket a part of its own (model
+  ``coaxial_bracket``, welded to the flange, collision geometry like every part) and the
+  spindle model the bundled one without its 45 deg bracket (``floating_spindle_coaxial``).
+  A spin about the burr axis is then J6 alone; a wedge at 0 deg leaves the axis parallel to
+  the flange axis but 102.5 mm off it (the wedge turns the spindle about the flange centre);
 * **the fixture height**: the chuck's weld ``world -> fixture::chuck_top`` moved by
   ``fixture_shift`` along +Z_W (the hub face with it).
 
@@ -33,18 +40,25 @@ from pathlib import Path
 
 import numpy as np
 
-from drakedeburr.cell.tools import FLOATING_SPINDLE
+from drakedeburr.cell.tools import (
+    COAXIAL_BRACKET_URL,
+    COAXIAL_SPINDLE_URL,
+    FLOATING_SPINDLE,
+    coaxial_X_FM,
+)
 from drakedeburr.errors import InputError
 
 __all__ = ["MountCandidate", "candidate_grid", "quick_grid", "write_candidate_scenario",
-           "candidate_from_scenario", "rank_key", "rank_results", "run_study",
-           "SPINDLE_WELD", "FIXTURE_WELD"]
+           "candidate_from_scenario", "coaxial_candidates", "rank_key", "rank_results", "run_study",
+           "SPINDLE_WELD", "FIXTURE_WELD", "BRACKET_MODEL"]
 
 log = logging.getLogger(__name__)
 
 #: the welds a candidate changes (parent, child) in the tool-in-hand scenario
 SPINDLE_WELD = ("robot::flange", "spindle::spindle")
 FIXTURE_WELD = ("world", "fixture::chuck_top")
+#: the coaxial bracket's model instance (welded robot::flange -> coaxial_bracket::bracket)
+BRACKET_MODEL = "coaxial_bracket"
 BASE_SCENARIO = "tool_in_hand"
 #: ranking resolution: cycles within 10 ms and travels within 0.1 deg count as equal
 CYCLE_QUANTUM_S = 0.01
@@ -59,13 +73,20 @@ class MountCandidate:
         mount_angle: burr axis +Z_T from the flange axis +Z_F, about +Y_F [rad].
         offset: stand-off of the wedge adapter along +Z_F beyond the least it needs [m].
         fixture_shift: the chuck (and the hub face) moved along +Z_W from the scenario's [m].
+        coaxial: the coaxial straight bracket in place of a wedge (``mount_angle`` 0, burr axis
+            on the flange axis; ``offset`` 0: the bracket has one length).
     """
 
     mount_angle: float = FLOATING_SPINDLE.mount_angle
     offset: float = 0.0
     fixture_shift: float = 0.0
+    coaxial: bool = False
 
     def __post_init__(self) -> None:
+        if self.coaxial and (self.mount_angle != 0.0 or self.offset != 0.0):
+            raise InputError("the coaxial bracket has mount angle 0 and no offset, got "
+                             f"{math.degrees(self.mount_angle):.1f} deg, "
+                             f"{self.offset * 1e3:.1f} mm")
         if not 0.0 <= self.mount_angle <= math.pi / 2:
             raise InputError(f"mount angle must be within [0, 90] deg, got "
                              f"{math.degrees(self.mount_angle):.1f} deg")
@@ -78,7 +99,10 @@ class MountCandidate:
 
     @property
     def name(self) -> str:
-        """``m45_o000_f+000``: mount angle [deg], offset [mm], fixture shift [mm]."""
+        """``m45_o000_f+000``: mount angle [deg], offset [mm], fixture shift [mm];
+        ``coax_f+000``: the coaxial bracket, fixture shift [mm]."""
+        if self.coaxial:
+            return f"coax_f{round(self.fixture_shift * 1e3):+04d}"
         return (f"m{round(math.degrees(self.mount_angle)):02d}_o{round(self.offset * 1e3):03d}"
                 f"_f{round(self.fixture_shift * 1e3):+04d}")
 
@@ -90,6 +114,8 @@ class MountCandidate:
     def X_FM(self) -> np.ndarray:
         """(4, 4) the spindle model frame M in the flange frame F [m] (identity: the bundled
         mount)."""
+        if self.coaxial:
+            return coaxial_X_FM(FLOATING_SPINDLE)
         d = self.wedge
         c, s = math.cos(d), math.sin(d)
         X = np.eye(4)
@@ -99,7 +125,8 @@ class MountCandidate:
 
     def is_bundled(self) -> bool:
         """The scenario's own cell (no wedge, no offset, fixture where it is)."""
-        return abs(self.wedge) < 1e-12 and self.offset == 0.0 and self.fixture_shift == 0.0
+        return (not self.coaxial and abs(self.wedge) < 1e-12 and self.offset == 0.0
+                and self.fixture_shift == 0.0)
 
 
 def candidate_grid(angles_deg: Sequence[float], offsets_mm: Sequence[float],
@@ -109,6 +136,11 @@ def candidate_grid(angles_deg: Sequence[float], offsets_mm: Sequence[float],
     first height)."""
     return [MountCandidate(math.radians(a), o * 1e-3, f * 1e-3)
             for f in fixture_shifts_mm for o in offsets_mm for a in angles_deg]
+
+
+def coaxial_candidates(fixture_shifts_mm: Sequence[float]) -> list[MountCandidate]:
+    """The coaxial bracket at each fixture height [mm], in the order given."""
+    return [MountCandidate(0.0, 0.0, f * 1e-3, coaxial=True) for f in fixture_shifts_mm]
 
 
 def quick_grid() -> list[MountCandidate]:
@@ -135,6 +167,22 @@ def _weld(items, parent_child: tuple[str, str], where: Path):
 
 def _X(transform) -> np.ndarray:
     return transform.GetDeterministicValue().GetAsMatrix4()
+
+
+def _spindle_model(items, where: Path):
+    name = SPINDLE_WELD[1].split("::")[0]
+    found = [d.add_model for d in items if d.add_model is not None and d.add_model.name == name]
+    if len(found) != 1:
+        raise InputError(f"{where}: expected one model {name!r}, found {len(found)}")
+    return found[0]
+
+
+def _bracket_directives() -> list:
+    from pydrake.multibody.parsing import AddModel, AddWeld, ModelDirective
+
+    return [ModelDirective(add_model=AddModel(name=BRACKET_MODEL, file=COAXIAL_BRACKET_URL)),
+            ModelDirective(add_weld=AddWeld(parent=SPINDLE_WELD[0],
+                                            child=f"{BRACKET_MODEL}::bracket"))]
 
 
 def write_candidate_scenario(candidate: MountCandidate, path: str | Path,
@@ -166,12 +214,18 @@ def write_candidate_scenario(candidate: MountCandidate, path: str | Path,
     X_WC = _X(fixture.X_PC) if fixture.X_PC is not None else np.eye(4)
     X_WC[2, 3] += candidate.fixture_shift
     fixture.X_PC = _rigid(X_WC)
+    if candidate.coaxial:
+        _spindle_model(items, base_file).file = COAXIAL_SPINDLE_URL
+        items += _bracket_directives()
     directives.directives = items
+    mount = (f"coaxial straight bracket (burr axis on the flange axis, the bracket model "
+             f"{BRACKET_MODEL} welded to {SPINDLE_WELD[0]})" if candidate.coaxial else
+             f"spindle mount {math.degrees(candidate.mount_angle):.1f} deg (bundled 45 deg "
+              f"spindle on a {math.degrees(candidate.wedge):+.1f} deg wedge adapter, offset "
+              f"{candidate.offset * 1e3:.0f} mm)")
     header = [f"Cell-design study candidate {candidate.name} (drakedeburr.cell.study), from "
               f"{base_file.name}:",
-              f"spindle mount {math.degrees(candidate.mount_angle):.1f} deg (bundled 45 deg "
-              f"spindle on a {math.degrees(candidate.wedge):+.1f} deg wedge adapter, offset "
-              f"{candidate.offset * 1e3:.0f} mm), fixture {candidate.fixture_shift * 1e3:+.0f} mm",
+              f"{mount}, fixture {candidate.fixture_shift * 1e3:+.0f} mm",
               *[line for line in note.splitlines() if line.strip()]]
     text = "".join(f"# {line}\n" for line in header) + yaml_dump_typed(directives)
     return atomic_write_text(Path(path), text)
@@ -199,6 +253,17 @@ def candidate_from_scenario(path: str | Path, base: str | Path = BASE_SCENARIO
         return _X(w.X_PC) if w.X_PC is not None else np.eye(4)
 
     X_FM = np.linalg.inv(pose(ref, SPINDLE_WELD, base_file)) @ pose(got, SPINDLE_WELD, path)
+    shift = float(pose(got, FIXTURE_WELD, path)[2, 3] - pose(ref, FIXTURE_WELD, base_file)[2, 3])
+    brackets = [d.add_model for d in got if d.add_model is not None
+                and d.add_model.name == BRACKET_MODEL]
+    if brackets:
+        if not (len(brackets) == 1 and brackets[0].file == COAXIAL_BRACKET_URL
+                and _spindle_model(got, path).file == COAXIAL_SPINDLE_URL
+                and np.allclose(X_FM, coaxial_X_FM(FLOATING_SPINDLE), atol=1e-9)):
+            raise InputError(f"{path}: the {BRACKET_MODEL} model is not the coaxial bracket "
+                             "holding the spindle at drakedeburr.cell.tools.coaxial_X_FM")
+        _weld(got, (SPINDLE_WELD[0], f"{BRACKET_MODEL}::bracket"), path)
+        return MountCandidate(0.0, 0.0, round(shift, 9), coaxial=True)
     R, p = X_FM[:3, :3], X_FM[:3, 3]
     wedge = math.atan2(R[0, 2], R[0, 0])
     if not (np.allclose(R[:, 1], [0, 1, 0], atol=1e-9) and abs(p[0]) < 1e-9
@@ -206,7 +271,6 @@ def candidate_from_scenario(path: str | Path, base: str | Path = BASE_SCENARIO
         raise InputError(f"{path}: the spindle weld is not a wedge about +Y_F with a stand-off "
                          "along +Z_F")
     offset = float(p[2] - FLOATING_SPINDLE.plate_radius * abs(math.sin(wedge)))
-    shift = float(pose(got, FIXTURE_WELD, path)[2, 3] - pose(ref, FIXTURE_WELD, base_file)[2, 3])
     return MountCandidate(FLOATING_SPINDLE.mount_angle + wedge, round(offset, 9), round(shift, 9))
 
 
@@ -256,7 +320,8 @@ def run_study(candidates: Sequence[MountCandidate], evaluate: Evaluator, out_dir
         file = write_candidate_scenario(c, out / "candidates" / f"{c.name}.yaml", base)
         log.info("cell study %d/%d: %s", i + 1, len(candidates), c.name)
         figures = dict(evaluate(c, file))
-        row = {"name": c.name, **{k: float(v) for k, v in asdict(c).items()},
+        row = {"name": c.name, **{k: v if isinstance(v, bool) else float(v)
+                                      for k, v in asdict(c).items()},
                "scenario": str(file), **figures}
         log.info("cell study %d/%d: %s %s, cycle %s s, worst wrist travel %s deg", i + 1,
                  len(candidates), c.name, "passed" if row.get("passed") else

@@ -47,6 +47,9 @@ __all__ = [
     "FLOATING_SPINDLE",
     "SPINDLE_STAND",
     "X_FS_floating",
+    "COAXIAL_BRACKET_URL",
+    "COAXIAL_SPINDLE_URL",
+    "coaxial_X_FM",
     "ToolVariant",
     "TOOL_VARIANTS",
     "DEFAULT_TOOL",
@@ -245,7 +248,7 @@ TOOL_VARIANTS = {
 DEFAULT_TOOL = "standard"
 
 #: the bundled tool models a variant replaces in a scenario (their file names' stems)
-_VARIANT_MODELS = ("floating_spindle", "spindle_stand")
+_VARIANT_MODELS = ("floating_spindle", "spindle_stand", "floating_spindle_coaxial")
 
 
 def tool_variant(name: str | None) -> ToolVariant:
@@ -304,6 +307,55 @@ def X_FS_floating(spindle: FloatingSpindle = FLOATING_SPINDLE) -> np.ndarray:
     X[:3, :3] = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
     X[:3, 3] = spindle.p_FS
     return X
+
+
+#: the coaxial straight bracket's model and the spindle it holds (the bundled spindle without
+#: its 45 deg bracket: adapter plate and bracket block), placed by :func:`coaxial_X_FM`
+#: (``drakedeburr cell study``)
+COAXIAL_BRACKET_URL = "package://drakedeburr/tools/coaxial_bracket.sdf"
+COAXIAL_SPINDLE_URL = "package://drakedeburr/tools/floating_spindle_coaxial.sdf"
+
+
+def coaxial_X_FM(spindle: FloatingSpindle = FLOATING_SPINDLE) -> np.ndarray:
+    """(4, 4) the spindle model frame M in the flange frame F on the coaxial straight bracket [m].
+
+    The bundled model (its burr axis ``mount_angle`` from +Z_M about +Y_M) turned by
+    ``-mount_angle`` about +Y_F, so the burr axis is +Z_F, and moved normal to it so the axis
+    runs through the flange centre; along it, the body's rear face stands on the bracket's
+    flange plate (``plate_thickness`` thick). The burr tip then lies on the flange axis: a spin
+    about the burr axis is J6 alone. The coaxial spindle model (``COAXIAL_SPINDLE_URL``) is the
+    bundled one without its 45 deg bracket, so the body's rear is its lowest point.
+    """
+    a = spindle.mount_angle
+    axis = spindle.axis_F  # the burr axis in M
+    normal = np.array([math.cos(a), 0.0, -math.sin(a)])  # in M, turned onto +X_F
+    p_c = np.asarray(spindle.p_FC, float)
+    lowest = float(axis @ p_c) - spindle.body_length / 2
+    c, s = math.cos(-a), math.sin(-a)
+    X = np.eye(4)
+    X[:3, :3] = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
+    X[:3, 3] = (-float(normal @ p_c), 0.0, spindle.plate_thickness - lowest)
+    return X
+
+
+def _coaxial_bracket_sdf(sp: FloatingSpindle) -> str:
+    """The coaxial straight bracket (model frame = F): a flange plate and a clamp ring round the
+    spindle body's rear (the body stands on the plate), both collision geometry."""
+    r_body = sp.body_diameter / 2
+    ring_len = 0.05
+    return (
+        _HEADER
+        + '  <model name="coaxial_bracket">\n'
+        "    <!-- Model frame = the flange frame F (ABB tool0); drakedeburr.cell.tools."
+        "coaxial_X_FM places the spindle on it. -->\n"
+        '    <link name="bracket">\n'
+        f"      {_inertia(0.6, 6e-4, 6e-4, 5e-4, (0, 0, sp.plate_thickness))}\n"
+        + _shape("c", "flange_plate", (0, 0, sp.plate_thickness / 2), (0, 0, 0),
+                 _cyl(sp.plate_radius, sp.plate_thickness), _DARK, True)
+        + _shape("c", "clamp_ring", (0, 0, sp.plate_thickness + ring_len / 2), (0, 0, 0),
+                 _cyl(r_body + 0.008, ring_len), _DARK, True)
+        + "    </link>\n  </model>\n</sdf>\n"
+    )
 
 
 # --------------------------------------------------------------------------- model writers
@@ -389,7 +441,9 @@ _HEADER = """<?xml version="1.0"?>
 """
 
 
-def _floating_spindle_sdf(sp: FloatingSpindle) -> str:
+def _floating_spindle_sdf(sp: FloatingSpindle, own_bracket: bool = True) -> str:
+    """The floating spindle; ``own_bracket`` False: without its adapter plate and bracket block
+    (held by the coaxial bracket, :func:`coaxial_X_FM`)."""
     burr = sp.burr
     a = sp.mount_angle
     c = np.asarray(sp.p_FC)
@@ -404,10 +458,10 @@ def _floating_spindle_sdf(sp: FloatingSpindle) -> str:
         "    <!-- Model frame = mount frame, welded to the robot flange F (ABB tool0). -->\n"
         '    <link name="spindle">\n'
         f"      {_inertia(sp.mass, 0.017, 0.017, 0.003, tuple(c), (0, a, 0))}\n"
-        + _shape("c", "adapter_plate", (0, 0, sp.plate_thickness / 2), (0, 0, 0),
-                 _cyl(sp.plate_radius, sp.plate_thickness), _DARK, True)
-        + _shape("c", "bracket", (0.0, 0, block_z), (0, 0, 0),
-                 _box(0.07, 0.07, block_h), _DARK, True)
+        + (_shape("c", "adapter_plate", (0, 0, sp.plate_thickness / 2), (0, 0, 0),
+                  _cyl(sp.plate_radius, sp.plate_thickness), _DARK, True)
+           + _shape("c", "bracket", (0.0, 0, block_z), (0, 0, 0),
+                    _box(0.07, 0.07, block_h), _DARK, True) if own_bracket else "")
         + _shape("c", "clamp", tuple(c), (0, a, 0),
                  _cyl(sp.body_diameter / 2 + 0.008, clamp_len), _DARK, True)
         + _shape("c", "spindle_body", tuple(c), (0, a, 0),
@@ -474,11 +528,16 @@ def tool_model_texts(
                          "(burr_head.obj is shared)")
     texts = {"burr_head.obj": _cone_obj(spindle.burr),
              "floating_spindle.sdf": _floating_spindle_sdf(spindle),
-             "spindle_stand.sdf": _spindle_stand_sdf(stand)}
+             "spindle_stand.sdf": _spindle_stand_sdf(stand),
+             "coaxial_bracket.sdf": _coaxial_bracket_sdf(spindle),
+             "floating_spindle_coaxial.sdf": _floating_spindle_sdf(spindle, own_bracket=False)}
     for v in TOOL_VARIANTS.values():
         if v.suffix:  # the same head: burr_head.obj serves every variant
             texts[f"floating_spindle{v.suffix}.sdf"] = _floating_spindle_sdf(
                 replace(spindle, burr=replace(spindle.burr, stick_out=v.burr.stick_out)))
+            texts[f"floating_spindle_coaxial{v.suffix}.sdf"] = _floating_spindle_sdf(
+                replace(spindle, burr=replace(spindle.burr, stick_out=v.burr.stick_out)),
+                own_bracket=False)
             texts[f"spindle_stand{v.suffix}.sdf"] = _spindle_stand_sdf(
                 replace(stand, burr=replace(stand.burr, stick_out=v.burr.stick_out)))
     # numbers to FILE_DIGITS: the same bytes on every machine (issue 43)

@@ -111,6 +111,8 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
     bad |= np.any((qq < kin.q_lower) | (qq > kin.q_upper), axis=2)
     bad |= np.abs(qq[..., 4]) < wrist_margin
     w = 1.0 / np.asarray(kin.v_max, float)
+    if np.all(_j6_alone(q, live)):
+        return _hold_j6(kin, X_HT, s, q, sel, psi, qb, options, w)
     # state m at sample k comes from state P[m, i] = m - shift_i (mod n_spin) at k - 1; the
     # step costs of every transition at once: (n - 1, n_spin, shifts) weighted squared motion
     shifts = np.arange(-max_step, max_step + 1)
@@ -153,6 +155,40 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
         return X_HT, {"ok": False, "reason": "the spin path leaves the limits between samples"}
     return out, {"ok": True, "cost": float(cost[m]), "spin_range_rad": float(np.ptp(ang_full)),
                  "feasible_share": float(np.mean(~bad)), "sigma_m": sig}
+
+
+def _hold_j6(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q: np.ndarray,
+             sel: np.ndarray, psi: np.ndarray, qb: np.ndarray, options: SpinSearch,
+             w: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The spin of a cut on which it moves J6 alone (the burr on the J6 axis: every sample's
+    J1-J5 the same at every spin, :func:`_j6_alone`): J6 held at the start's ``qb[5]``, the
+    least joint motion, in closed form. The grid program cannot find it: its
+    ``2 pi / n_spin`` spin steps cost more than J6's own drift, and where J5 is under the wrist
+    margin no spin can lift it (it is the tool axis's; the tracking and the verifier judge it),
+    so the program's margin would exclude every spin. J6 = J6(spin m) + (spin - psi[m]): the
+    spin turns the flange about its own axis."""
+    solved = np.all(np.isfinite(q), axis=2)
+    m = np.argmax(solved, axis=1)
+    j6 = q[np.arange(len(q)), m, 5]
+    ang = np.unwrap(psi[m] + _wrap(qb[5] - j6))
+    out = X_HT.copy()
+    out[:, :3, :3] = spin_frames(X_HT[:, :3, :3], np.interp(s, s[sel], ang))
+    q_out, ok = kin.track(kin.X_WF_from_X_HT(out), qb)
+    if not (np.all(ok) and bool(np.all(np.abs(q_out[:, 5] - qb[5]) <= np.pi))):
+        return X_HT, {"ok": False, "reason": "the J6-holding spin leaves the limits"}
+    cost = float(np.sum((np.diff(q_out[sel], axis=0) * w) ** 2))
+    return out, {"ok": True, "cost": cost, "spin_range_rad": float(np.ptp(ang)),
+                 "feasible_share": 1.0, "sigma_m": 0.0, "rule": "hold J6"}
+
+
+def _j6_alone(q: np.ndarray, live: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(n,) per sample: at least two spins solved and every solved spin gives the same J1-J5
+    (to ``tol`` rad, whole turns apart): the spin moves J6 alone."""
+    solved = live & np.all(np.isfinite(q), axis=2)
+    first = q[np.arange(len(q)), np.argmax(solved, axis=1), :5]
+    d = np.abs(np.angle(np.exp(1j * (np.where(solved[..., None], q[..., :5], 0.0)
+                                      - first[:, None]))))
+    return np.all(~solved[..., None] | (d <= tol), axis=(1, 2)) & (solved.sum(axis=1) > 1)
 
 
 def _joints_ok(kin: CellKinematics, q: np.ndarray, ok: np.ndarray, qb: np.ndarray,
