@@ -112,7 +112,7 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
     bad |= np.abs(qq[..., 4]) < wrist_margin
     w = 1.0 / np.asarray(kin.v_max, float)
     if np.all(_j6_alone(q, live)):
-        return _hold_j6(kin, X_HT, s, q, sel, psi, qb, options, w)
+        return _hold_j6(kin, X_HT, s, q, sel, psi, qb, w)
     # state m at sample k comes from state P[m, i] = m - shift_i (mod n_spin) at k - 1; the
     # step costs of every transition at once: (n - 1, n_spin, shifts) weighted squared motion
     shifts = np.arange(-max_step, max_step + 1)
@@ -158,7 +158,7 @@ def optimize_spin(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q_branch
 
 
 def _hold_j6(kin: CellKinematics, X_HT: np.ndarray, s: np.ndarray, q: np.ndarray,
-             sel: np.ndarray, psi: np.ndarray, qb: np.ndarray, options: SpinSearch,
+             sel: np.ndarray, psi: np.ndarray, qb: np.ndarray,
              w: np.ndarray) -> tuple[np.ndarray, dict]:
     """The spin of a cut on which it moves J6 alone (the burr on the J6 axis: every sample's
     J1-J5 the same at every spin, :func:`_j6_alone`): J6 held at the start's ``qb[5]``, the
