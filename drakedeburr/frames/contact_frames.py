@@ -14,9 +14,16 @@ for the right-angle edge the source frame assumes, ``n_face = B``; in L: b_L = (
 The spindle direction ``-Z_T`` of such a burr lies on the cone of half-angle alpha about ``b``,
 and every such axis meets the edge line at >= alpha (a line in a tangent plane of a cone is at
 least the half-angle from its axis): the family is the source's upright turned about ``b`` by
-any angle psi. Turning the whole frame about ``b`` leaves every axis of the box in the relation
-to the chamfer plane it has in the source's frame, so the process tilt (SPEC S3.6 bounds) is
-kept as the source applies it; only where it sits along the edge changes.
+any angle psi. Turning the whole frame about ``b`` maps the chamfer plane (normal ``b``, holding
+the edge line) onto itself: the turned upright (theta_A = theta_B = 0) cuts exactly the source's
+symmetric chamfer, and every axis of the box keeps its angle to ``b`` (its process tilt off the
+symmetric-chamfer family, SPEC S3 items 5-6 bounds). What the turn does not keep is the
+direction a tilted axis sees the edge from: the chamfer profile is the cone's silhouette seen
+along ``T`` (apparent half-angle ``asin(sin(alpha) / sin(phi))`` at an angle phi between axis
+and ``T``), so the chamfer a tilted box axis cuts differs from the one it cuts in the source's
+frame (on an analytic 50 deg descent by 1.6-9.8 deg at the box corners, 4-5 deg at the box
+centre; tests/test_orientation_steep.py). The flank condition phi >= alpha is the same
+silhouette's existence condition (below it the burr meets the edge line with its tip).
 
 Rule (:func:`flank_contact_frames`): on a steep stretch the frame is the source's turned about
 ``b`` by the psi that brings the box centre's spindle direction nearest the approach direction
@@ -42,6 +49,8 @@ __all__ = ["BURR_HALF_ANGLE", "box_boundary_axes", "flank_contact_frames", "stee
 BURR_HALF_ANGLE = math.radians(45.0)
 #: the edge bisector of a right-angle edge in the local frame [N_new, T, -B]: (N_new + B)/sqrt2
 B_L = np.array([1.0, 0.0, -1.0]) / math.sqrt(2.0)
+#: the approach direction in H: the tool comes from the front, +Z_H
+APPROACH_H = np.array([0.0, 0.0, 1.0])
 
 
 def rotation_about(axis: np.ndarray, psi: np.ndarray) -> np.ndarray:
@@ -68,7 +77,7 @@ def edge_slopes(t_H: np.ndarray) -> np.ndarray:
 
 
 def flank_contact_frames(R_HL: np.ndarray, theta_min: float, theta_max: float, *,
-                         approach_H: np.ndarray = np.array([0.0, 0.0, 1.0]),
+                         approach_H: np.ndarray = APPROACH_H,
                          half_angle: float = BURR_HALF_ANGLE,
                          step: float = math.radians(0.25)) -> tuple[np.ndarray, np.ndarray]:
     """The source's frames ``R_HL`` (M, 3, 3), built on the true edge tangent, each turned about
