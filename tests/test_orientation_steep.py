@@ -184,3 +184,54 @@ def test_flat_loop_frames_bit_for_bit(amplitude):
     old = R_HL_from_normals(t, n_fixed, name="window 0")
     tp = orient_window(cl, n)
     assert np.array_equal(tp.R_HL, old)
+
+
+def _tilted_circle(tilt_deg: float, m: int = 180):
+    """A CCW circle of radius 30 mm in a plate tilted ``tilt_deg`` about X_H: the edge's slope
+    runs 0 -> tilt; wall normals in the plate, toward the centre (into the opening)."""
+    phi = np.linspace(0, 2 * np.pi, m, endpoint=False)
+    c, s = math.cos(math.radians(tilt_deg)), math.sin(math.radians(tilt_deg))
+    r = 0.03
+    u = np.stack([np.cos(phi), np.sin(phi) * c, np.sin(phi) * s], axis=1)
+    t = np.stack([-np.sin(phi), np.cos(phi) * c, np.cos(phi) * s], axis=1)
+    return r * u, t, -u
+
+
+@pytest.mark.parametrize("tilt_deg", [30.0, 60.0])
+def test_verifier_fallback_frames_follow_the_rule(tilt_deg):
+    """verify.refs (a plan without a ToolPath): the frames from the hub's own edge samples are
+    the source's where the edge is within 45 deg of the face plane (bit for bit) and touch with
+    the flank, on the outer side, nearer +Z_H than the source's where it is steeper."""
+    from types import SimpleNamespace
+
+    from drakedeburr.verify.refs import window_ref
+
+    p, t, n = _tilted_circle(tilt_deg)
+    edge = SimpleNamespace(index=0, kind="large", p_HE=p, t_H=t, n_wall_H=n)
+
+    def tgt(q, seg):
+        X = np.eye(4)
+        X[:3, 3] = q
+        return SimpleNamespace(window_index=0, segment=seg, cl_index=-1, X_HT=X)
+
+    targets = [tgt(p[0], "approach")] + [tgt(q, "cut") for q in p[1:]] + [tgt(p[0], "cut")]
+    ref = window_ref(0, targets, None, edge, ProcessParameters())
+    assert ref is not None and ref.source.startswith("hub edge")
+    np.testing.assert_allclose(ref.p_HC, p, atol=1e-12)
+    src = R_HL_from_normals(t, n)
+    steep = edge_slopes(t) > MAX_SLOPE
+    assert steep.any() == (tilt_deg > 45.0)
+    assert np.array_equal(ref.R_HL[~steep], src[~steep])
+    if not steep.any():
+        return
+    box = BOXES["large"]
+    A = _box_axes(box.theta_min, box.theta_max, 21)
+    c = 0.5 * (box.theta_min + box.theta_max)
+    for i in np.flatnonzero(steep):
+        b = (n[i] + np.cross(t[i], n[i])) / math.sqrt(2.0)
+        sp = -(ref.R_HL[i] @ A.T).T
+        assert _deg(np.abs(sp @ t[i])).min() >= 45.0
+        assert (sp @ b > 0.0).all()
+        new = _deg(-(ref.R_HL[i] @ axis_from_angles(c, c)) @ Z_H)
+        old = _deg(-(src[i] @ axis_from_angles(c, c)) @ Z_H)
+        assert new <= old + 1e-9
