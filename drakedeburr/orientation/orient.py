@@ -13,6 +13,7 @@ from pydrake.math import RigidTransform
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.errors import InputError
+from drakedeburr.frames.contact_frames import steep_contact_frames
 from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
 from drakedeburr.frames.vectors import angle_between
 from drakedeburr.orientation.corner_normals import side_consistent_normals
@@ -44,13 +45,13 @@ class OrientOptions:
         smooth_sigma: kernel standard deviation [CL points] (the source gives no value).
         pso: swarm settings (source: 50, 200, 0.8, 2, 2; seeded).
         exact: sequential-convex settings.
-        max_frame_slope: [rad] the local frames' tangent is the edge's with its slope to the
-            face plane (X_H Y_H) limited to this (issue 42: a real wheel's loop climbs spoke
-            flanks at 70-90 deg, where an axis perpendicular to the edge would be nearly
-            horizontal). On such a stretch the burr leads the edge by the difference, at most
-            90 deg - 45 deg = 45 deg: the largest lead at which a 90 deg cone still touches the
-            edge line with its flank (a line meets the cone tangentially only at >= the
-            half-angle, 45 deg, to its axis). Flat loops (every bundled hub) are unchanged.
+        max_frame_slope: [rad] where the edge's slope to the face plane (X_H Y_H) exceeds this
+            (issue 42: a real wheel's loop descends spoke flanks at 45-90 deg, where an axis
+            perpendicular to the edge leans 45-90 deg off the hub axis), the local frame is the
+            source's turned about the edge bisector by the conical burr's contact rule
+            (:mod:`drakedeburr.frames.contact_frames`): the box centre nearest +Z_H with every
+            box axis >= 45 deg (the burr's half-angle) from the edge line. Loops within it
+            (every bundled hub: <= 43.5 deg) keep the source's frames bit for bit.
     """
 
     second_difference_weight: float = 0.0
@@ -180,12 +181,18 @@ def orient_window(
     if fixed:
         log.debug("window %d: inner normal from across a corner at CL %s: the neighbour's "
                   "carried over", cl.window_index, fixed)
-    R_HL = R_HL_from_normals(t_frame, n, name=f"window {cl.window_index}")
+    name = f"window {cl.window_index}"
+    bounds = _bounds_for(cl.kind, params)
+    # steep stretches: the source's frame on the true tangent turned about the edge bisector
+    # until the box centre is nearest +Z_H with every box axis touching with the flank
+    # (frames.contact_frames); the same array when nothing is steep
+    R_HL = steep_contact_frames(R_HL_from_normals(t_frame, n, name=name), cl.t_H, n,
+                                bounds.theta_min, bounds.theta_max, options.max_frame_slope,
+                                name=name)
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)
     th = rep.x.reshape(prob.m, 2)
     zT_H = prob.axes(rep.x)
-    bounds = _bounds_for(cl.kind, params)
     c = 0.5 * (bounds.theta_min + bounds.theta_max)
     cone_zT_H = prob.axes(np.full(prob.n_vars, c))
     inner, outer = cone_half_angles(bounds)

@@ -10,6 +10,12 @@ That does not make the check depend on the planner: the repair is a property of 
 normals along the hub's own edge (which wall a sample belongs to), not a choice of the plan; it
 is applied here to the hub's dense edge loop, independently of the plan's CL points, tangents
 or axes, and without a reversal (every smooth loop) it returns the normals bit for bit.
+
+On a steep stretch of the edge (slope to the face plane above
+``OrientOptions.max_frame_slope``) the fallback frames follow the orientation stage's physical
+rule (:func:`drakedeburr.frames.contact_frames.steep_contact_frames`: the source's frame turned
+about the edge bisector by the conical burr's contact), applied to the hub's own dense edge
+samples and the window class's box; on a flat loop they are the source's frames bit for bit.
 """
 
 from __future__ import annotations
@@ -19,14 +25,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drakedeburr.frames.contact_frames import steep_contact_frames
 from drakedeburr.frames.local_frames import R_HL_from_normals
 from drakedeburr.orientation.corner_normals import side_consistent_normals
+from drakedeburr.orientation.orient import OrientOptions
 from drakedeburr.verify.geometry import closed_polyline_distance
 
 __all__ = ["LINEAR_KINDS", "WindowRef", "target_motion", "tool_paths_of", "via_anchors",
            "window_ref", "cone_half_angle", "edge_wall_normals"]
 
 log = logging.getLogger(__name__)
+
+#: the slope [rad] above which the orientation stage's frames follow the contact rule
+MAX_FRAME_SLOPE = OrientOptions().max_frame_slope
 
 #: segment kinds executed as linear Cartesian moves unless a target says otherwise
 LINEAR_KINDS = ("approach", "cut", "retract")
@@ -111,7 +122,12 @@ def window_ref(w, targets, tool_path, edge, params) -> WindowRef | None:
     _, v = cKDTree(p_E).query(C)
     n_E = edge_wall_normals(edge, w)
     # the project's one definition of the local frames (frames.local_frames, right-handed)
-    R_HL = R_HL_from_normals(np.asarray(edge.t_H, float)[v], n_E[v], name=f"window {w}")
+    bounds = params.bounds(edge.kind)
+    t_E = np.asarray(edge.t_H, float)
+    R_E = steep_contact_frames(R_HL_from_normals(t_E, n_E, name=f"window {w}"), t_E, n_E,
+                               bounds.theta_min, bounds.theta_max, MAX_FRAME_SLOPE,
+                               name=f"window {w}")
+    R_HL = R_E[v]
     # a closed loop ends on its first point: one CL point for both
     unique, cl_of = [], {}
     for i, k in enumerate(loop):
@@ -121,7 +137,6 @@ def window_ref(w, targets, tool_path, edge, params) -> WindowRef | None:
             j = len(unique) - 1
         cl_of[k] = j
     sel = np.asarray(unique)
-    bounds = params.bounds(edge.kind)
     return WindowRef(C[sel], R_HL[sel], bounds, cl_of, None,
                       "hub edge (the plan carries no ToolPath)")
 
