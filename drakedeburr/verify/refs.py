@@ -122,12 +122,12 @@ def window_ref(w, targets, tool_path, edge, params) -> WindowRef | None:
     _, v = cKDTree(p_E).query(C)
     n_E = edge_wall_normals(edge, w)
     # the project's one definition of the local frames (frames.local_frames, right-handed)
+    # (row by row: built on the CL points' nearest edge samples only)
     bounds = params.bounds(edge.kind)
-    t_E = np.asarray(edge.t_H, float)
-    R_E = steep_contact_frames(R_HL_from_normals(t_E, n_E, name=f"window {w}"), t_E, n_E,
-                               bounds.theta_min, bounds.theta_max, MAX_FRAME_SLOPE,
-                               name=f"window {w}")
-    R_HL = R_E[v]
+    t_v, n_v = np.asarray(edge.t_H, float)[v], n_E[v]
+    R_HL = steep_contact_frames(R_HL_from_normals(t_v, n_v, name=f"window {w}"), t_v, n_v,
+                                bounds.theta_min, bounds.theta_max, MAX_FRAME_SLOPE,
+                                name=f"window {w}")
     # a closed loop ends on its first point: one CL point for both
     unique, cl_of = [], {}
     for i, k in enumerate(loop):
