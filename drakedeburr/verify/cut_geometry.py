@@ -166,30 +166,23 @@ def stretch_coverage(targets, move: np.ndarray, chunks: list, contact: np.ndarra
     stretch (audibot rim window 2). Without them, over the stretches' own CL targets."""
     from scipy.spatial import cKDTree
 
-    cl, label, inner = [], [], []
     whole = loop_cl is not None and cl_of is not None
-    for c, chunk in enumerate(chunks):
+    per_chunk, loop = [], list(loop_cl) if whole else []
+    for chunk in chunks:
         ks = sorted(set(int(k) for k in move[chunk]) | {int(move[chunk][0]) - 1})
         if whole:
-            ids = [cl_of[k] for k in ks if k in cl_of]
-            cl += ids
-            label += [c] * len(ids)
-            inner += [0 < i < len(ids) - 1 for i in range(len(ids))]
+            per_chunk.append([cl_of[k] for k in ks if k in cl_of])
             continue
+        # no ToolPath: the stretches' own CL targets stand for the loop's CL points
         pts = [targets[k].p_HC for k in ks if targets[k].p_HC is not None]
-        cl += pts
-        label += [c] * len(pts)
-        inner += [0 < i < len(pts) - 1 for i in range(len(pts))]
-    if whole:  # each loop CL point: the stretch it is inside of, or -1
-        of = np.full(len(loop_cl), -1)
-        for i, c, ins in zip(cl, label, inner, strict=True):
-            if ins:
-                of[i] = c
-        _, near = cKDTree(np.asarray(loop_cl, float)).query(edge)
-        label, inner = of[near], of[near] >= 0
-    else:
-        _, near = cKDTree(np.asarray(cl, float)).query(edge)
-        label, inner = np.asarray(label)[near], np.asarray(inner)[near]
+        per_chunk.append(list(range(len(loop), len(loop) + len(pts))))
+        loop += pts
+    of = np.full(len(loop), -1)  # each CL point: the stretch it is inside of, or -1
+    for c, ids in enumerate(per_chunk):
+        of[ids[1:-1]] = c
+    _, near = cKDTree(np.asarray(loop, float)).query(edge)
+    label = of[near]
+    inner = label >= 0
     worst = (0.0, -1)
     for c, chunk in enumerate(chunks):
         sel = np.flatnonzero(inner & (label == c))
