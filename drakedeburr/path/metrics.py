@@ -18,7 +18,7 @@ from scipy.spatial.distance import pdist
 
 from drakedeburr.path.edge_curve import EdgeCurve
 
-__all__ = ["segment_figures", "cl_metrics", "coefficient_of_variation"]
+__all__ = ["segment_figures", "cl_metrics", "coefficient_of_variation", "point_chord_heights"]
 
 
 def coefficient_of_variation(d: np.ndarray) -> float:
@@ -50,13 +50,31 @@ def segment_figures(curve: EdgeCurve, u: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
+def point_chord_heights(curve: EdgeCurve, u: np.ndarray) -> np.ndarray:
+    """(M,) chord height of each CL segment against the fitted points themselves (the edge
+    samples the loop came from, not the fit): the largest distance of a point whose parameter
+    lies between the segment's ends from the line through its chord [m] (0 without one)."""
+    u = np.asarray(u, float)
+    a = curve.position(u)
+    b = np.roll(a, -1, axis=0)
+    k = (np.searchsorted(u, curve.u_data, side="right") - 1) % len(u)
+    ab = b[k] - a[k]
+    ab /= np.maximum(np.linalg.norm(ab, axis=1, keepdims=True), 1e-300)
+    dv = curve.p_data - a[k]
+    d = np.linalg.norm(dv - np.einsum("ij,ij->i", dv, ab)[:, None] * ab, axis=1)
+    out = np.zeros(len(u))
+    np.maximum.at(out, k, d)
+    return out
+
+
 def cl_metrics(curve: EdgeCurve, u: np.ndarray) -> dict[str, float]:
     """The figures of the source's Tab. 1-2 plus the thresholds' checks.
 
     Returns:
         count, cv, cv_pairwise, max_chord_height_m (true, on the fitted curve),
         max_chord_height_circle_m (eq. 2), max_chord_length_m, min_chord_length_m,
-        mean_chord_length_m.
+        mean_chord_length_m, max_chord_height_points_m (against the fitted points themselves,
+        :func:`point_chord_heights`: what verify's ``cl_chord_error`` reads).
     """
     seg = segment_figures(curve, u)
     p = curve.position(np.asarray(u, float))
@@ -69,4 +87,5 @@ def cl_metrics(curve: EdgeCurve, u: np.ndarray) -> dict[str, float]:
         "max_chord_length_m": float(seg["chord"].max()),
         "min_chord_length_m": float(seg["chord"].min()),
         "mean_chord_length_m": float(seg["chord"].mean()),
+        "max_chord_height_points_m": float(point_chord_heights(curve, u).max()),
     }

@@ -114,6 +114,8 @@ def format_table(table: dict) -> str:
     for key, fmt, label in (("count", "{:<10d}", "count"), ("cv", "{:<10.4f}", "c_v (neighbour)"),
                             ("cv_pairwise", "{:<10.4f}", "c_v (all pairs)"),
                             ("max_chord_height_m", "{:<10.4f}", "max chord height [mm]"),
+                            ("max_chord_height_points_m", "{:<10.4f}",
+                             "max chord height pts [mm]"),
                             ("max_chord_length_m", "{:<10.2f}", "max chord [mm]"),
                             ("time_s", "{:<10.3f}", "time [s]")):
         for m in methods:
@@ -135,6 +137,7 @@ def _fit_rows(wins: list[dict]) -> list[str]:
             ("facet median [mm]", lambda f: f["facet_median_m"] * 1e3, "{:<10.2f}"),
             ("facet sagitta max [mm]", lambda f: f["sagitta_max_m"] * 1e3, "{:<10.4f}"),
             ("fit chord error [mm]", lambda f: f["chord_error_m"] * 1e3, "{:<10.4f}"),
+            ("fit vs points [mm]", lambda f: f["point_error_m"] * 1e3, "{:<10.4f}"),
             ("fit max curvature [1/mm]", lambda f: f["kappa_max"] * 1e-3, "{:<10.3f}"),
             ("facets' curvature [1/mm]", lambda f: f["kappa_facets"] * 1e-3, "{:<10.3f}"))
     return [label.ljust(34) + "".join(fmt.format(get(f)) if f else "-".ljust(10) for f in fits)
