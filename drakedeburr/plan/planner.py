@@ -450,8 +450,14 @@ def plan_hub(
             cells[tool] = load_cell(config.scenario, config.hub, robot=config.robot, tool=tool)
         return plan_in_cell(cells[tool], hub_model, wts, config, options, progress, only=only)
 
+    def refused_in(tool: str, windows: list[int]) -> dict:
+        if tool not in cells:
+            cells[tool] = load_cell(config.scenario, config.hub, robot=config.robot, tool=tool)
+        return refused_in_cell(cells[tool], hub_model, wts, config, options, windows)
+
     draft = hub_pass(plan_in, [wt.window_index for wt in wts], cell,
-                     long_reach=long_reach_allowed(options, config), t_start=t0)
+                     long_reach=long_reach_allowed(options, config), t_start=t0,
+                     refused_in=refused_in)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         draft = replace(draft, failures=(*skipped, *draft.failures))
     return draft.with_timings(targets_seconds=t_targets).plan()
@@ -464,6 +470,26 @@ def _import_planning() -> None:
     import drakedeburr.orientation.orient
     import drakedeburr.path.cl_planning
     import drakedeburr.plan.window  # noqa: F401
+
+
+def refused_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
+                    windows: Sequence[int]) -> dict:
+    """{window: refusal} of those among ``windows`` (indices of ``wts``) whose targets the tool
+    pre-check refuses in ``cell`` in the recipe's tilt box and in every milder one
+    (:func:`drakedeburr.plan.relax.refused_in_every_box`, the windows at once on the pool's
+    workers). The pre-check reads the hub and the round tool parts in the hub frame only, so
+    the cell is not placed for it. Empty when the pre-check is off."""
+    if not options.tool_precheck:
+        return {}
+    chosen = [wt for wt in wts if wt.window_index in set(windows)]
+    edges = {e.index: e for e in hub_model.windows}
+    cls = relax.first_cl_paths(chosen)
+    items = [(edges[wt.window_index], config.process, cls.get(wt.window_index), wt)
+             for wt in chosen if wt.window_index in edges]
+    found = map_windows(_context(cell, config, options, None), relax.refused_in_every_box,
+                        items, options.workers, name=lambda it: f"window {it[0].index}'s "
+                                                                "pre-check in every box")
+    return {it[0].index: rec for it, rec in zip(items, found, strict=True) if rec is not None}
 
 
 def plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,

@@ -30,9 +30,9 @@ from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "plan_whole", "tool_refusal", "REFUSAL_MARGIN", "plan_window_pass",
-           "cut_targets", "ik_step", "execute_cut", "needs_other_rule", "better_of",
-           "rewound_start"]
+__all__ = ["plan_window", "plan_whole", "precheck", "tool_refusal", "REFUSAL_MARGIN",
+           "plan_window_pass", "cut_targets", "ik_step", "execute_cut", "needs_other_rule",
+           "better_of", "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -55,9 +55,7 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
 def plan_window(ctx: PlanContext, wt: WindowTargets,
                 mode: RunMode = RunMode.FULL) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
-    # (a stand-in context without a cell has nothing to search)
-    refusal = (tool_refusal(ctx, wt) if ctx.options.tool_precheck and ctx.checker is not None
-               else None)
+    refusal = precheck(ctx, wt)
     if refusal is not None:
         if ctx.options.partial_windows and wt.closed:
             from drakedeburr.plan.partial import plan_partial
@@ -66,6 +64,17 @@ def plan_window(ctx: PlanContext, wt: WindowTargets,
         log.info("window %d refused before its IK: %s", wt.window_index, refusal.reason)
         return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [refusal])
     return plan_whole(ctx, wt, mode)
+
+
+def precheck(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
+    """:func:`tool_refusal` of ``wt`` when ``ctx`` runs the tool pre-check
+    (``options.tool_precheck``), else None (so is a stand-in context without a checker: it has
+    nothing to search). A window it refuses is never planned clean: cut in part
+    (:mod:`drakedeburr.plan.partial`), its refusal is a failure record of the plan, else the
+    window is refused with it."""
+    if getattr(ctx, "checker", None) is None or not ctx.options.tool_precheck:
+        return None
+    return tool_refusal(ctx, wt)
 
 
 def plan_whole(ctx: PlanContext, wt: WindowTargets, mode: RunMode = RunMode.FULL) -> WindowPlan:
