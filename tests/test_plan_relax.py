@@ -439,6 +439,8 @@ def test_every_box_refused_is_proven_and_one_box_clear_is_not(monkeypatch):
         return None if ctx == "clear" and wt.tool_path.bounds == boxes[-1] else rec
 
     monkeypatch.setattr(window, "precheck", precheck)
+    # the milder boxes: searched up to a first proven point, the recipe's blocked ones first
+    monkeypatch.setattr(window, "blocked_anywhere", lambda ctx, wt, first=(): precheck(ctx, wt))
     item = (edge, params, relax.first_cl_paths([recipe])[edge.index], recipe)
     assert relax.refused_in_every_box("blocked", item) is rec
     assert len(seen) == 1 + len(boxes)

@@ -180,19 +180,22 @@ def refused_in_every_box(ctx, item) -> FailureRecord | None:
     """``item`` = (WindowEdge, ProcessParameters, its ClPath or None, its recipe's
     WindowTargets): the tool pre-check's refusal of the recipe's targets in ``ctx``
     (:func:`drakedeburr.plan.window.precheck`) when it also refuses the targets of every
-    milder box (:func:`milder_boxes`; a box without targets counts as refused), else None.
+    milder box (:func:`milder_boxes`; a box without targets counts as refused; a milder box
+    searched up to its first proven CL point, the recipe's blocked ones first:
+    :func:`drakedeburr.plan.window.blocked_anywhere`), else None.
     A window so refused plans with a failure record in ``ctx``'s cell whatever the recipe's
     relaxation does (:func:`window_ladder`): the first pass cuts it in part at best, and no
     box is kept. A task for :func:`drakedeburr.plan.parallel.map_windows`."""
-    from drakedeburr.plan.window import precheck
+    from drakedeburr.plan.window import blocked_anywhere, precheck
 
     edge, params, cl, wt = item
     first = precheck(ctx, wt)
     if first is None:
         return None
+    hint = first.where.get("blocked_points", ())
     for box in milder_boxes(edge, params):
         other = box_targets(edge, params, box, cl)
-        if not isinstance(other, str) and precheck(ctx, other) is None:
+        if not isinstance(other, str) and blocked_anywhere(ctx, other, hint) is None:
             return None
     return first
 
@@ -201,13 +204,14 @@ def plan_ladder(ctx, item, mode: RunMode = RunMode.FULL) -> list:
     """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters) or (WindowEdge,
     ProcessParameters, its ClPath or None), each variant by
     :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode``, a variant
-    the tool pre-check refuses not planned (:func:`drakedeburr.plan.window.precheck`) (a task
-    for :func:`drakedeburr.plan.parallel.map_windows`)."""
-    from drakedeburr.plan.window import plan_window, precheck
+    the tool pre-check refuses not planned (:func:`drakedeburr.plan.window.blocked_anywhere`:
+    searched up to its first proven CL point) (a task for
+    :func:`drakedeburr.plan.parallel.map_windows`)."""
+    from drakedeburr.plan.window import blocked_anywhere, plan_window
 
     edge, params, *cl = item
     return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode),
-                         cl[0] if cl else None, functools.partial(precheck, ctx))
+                         cl[0] if cl else None, functools.partial(blocked_anywhere, ctx))
 
 
 def first_cl_paths(wts) -> dict:
