@@ -120,8 +120,9 @@ def test_a_hub_planned_from_a_home_in_collision_starts_and_ends_at_the_clear_one
     cell = load_cell("workpiece_in_hand", "h5_straight", q_home=q_bad)
     hub = load_hub("h5_straight")
     wt = WindowTargets.from_window_edge(hub.windows[0]).stretch(0, 16)
-    plan = planner.plan_in_cell(cell, hub, [wt], load_config("workpiece_in_hand", "h5_straight"),
-                                planner.PlanOptions(placement=False, relax=False), None).plan()
+    placed = planner.placed_cell(cell, hub, [wt], load_config("workpiece_in_hand", "h5_straight"),
+                                 planner.PlanOptions(placement=False, relax=False))
+    plan = planner.plan_in_cell(placed, hub, [wt], None).plan()
     q_home, _ = mut.clear_home(cell, _checker(cell))
     np.testing.assert_allclose(plan.meta["q_home"], q_home, atol=1e-12)
     assert plan.meta["recipe_deviations"][0]["item"] == "home"

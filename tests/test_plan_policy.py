@@ -258,3 +258,48 @@ def test_the_plan_is_made_once_from_its_record():
     assert not {"q_home", "hub_pose", "placement"} & set(bare)
     assert [d["item"] for d in bare["recipe_deviations"]] == ["tool tilt"]
     assert "recipe_deviations" not in PlanDraft(motion=motion).plan().meta
+
+
+@pytest.mark.parametrize("refused, planned", [
+    ({0: "r0", 2: "r2"}, []), ({0: "r0"}, [[0, 2]]), ({}, [[0, 2]])])
+def test_the_long_reach_is_not_planned_when_its_precheck_refuses_every_failing_window(
+        refused, planned):
+    """long_reach_pass with ``refused``: when the long-reach pre-check refuses every window
+    the standard burr left failing in every tilt box, each fails with it too, so its plan
+    cannot leave fewer windows failing: it is not made and the standard plan is kept (as
+    keep_standard/choose_tool would keep it), a record per window naming the refusal;
+    otherwise the long-reach burr is planned as before."""
+    records = {w: FailureRecord(w, "window", f"refused {w}") for w in refused}
+    standard = PlanDraft(failures=(_BODY, FailureRecord(2, "ik", "unreachable", where={
+        "blocking_pair": ["spindle::spindle/spindle::collet", "hub::hub/hub::piece_1"]})))
+    calls, asked = [], []
+
+    def plan_long_reach(only):
+        calls.append(sorted(only))
+        return PlanDraft(failures=tuple(FailureRecord(w, "window", "cut in part")
+                                        for w in only))
+
+    def ask(ws):
+        asked.append(list(ws))
+        return records
+
+    out = policy.long_reach_pass(standard, [0, 1, 2], plan_long_reach, ask)
+    assert asked == [[0, 2]] and calls == planned
+    notes = out.failures[len(standard.failures):]
+    assert out.failures[:2] == standard.failures and [n.window for n in notes] == [0, 2]
+    assert all(n.kind == "relaxation" for n in notes)
+    if not planned:
+        assert all("was not planned" in n.reason for n in notes)
+        assert [n.reason.rsplit("; here: ", 1)[1] for n in notes] == ["refused 0", "refused 2"]
+    else:
+        assert all("cut in part" in n.reason for n in notes)
+
+
+def test_the_long_reach_precheck_is_not_asked_when_a_move_failed():
+    """A failed move between windows (-1): the long-reach plan of the hub may leave fewer
+    windows failing whatever the windows do, so the pre-check proves nothing: not asked."""
+    standard = PlanDraft(failures=(_BODY, FailureRecord(-1, "transition", "no clear move")))
+    asked = []
+    out = policy.long_reach_pass(standard, [0, 1], lambda only: PlanDraft(),
+                                 lambda ws: asked.append(ws) or {})
+    assert asked == [] and out.record.deviations[-1].item == "burr"

@@ -387,3 +387,70 @@ def test_the_relaxation_and_home_import_no_planner_module():
         mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
         assert "drakedeburr.plan.planner" not in mods, mod.__name__
     assert planner.tool_path is tool_paths.tool_path
+
+
+def test_a_box_the_tool_precheck_refuses_is_not_planned_and_the_next_is_tried():
+    """window_ladder with ``refused`` (plan.window.precheck): a box whose targets the tool
+    pre-check refuses can only be cut in part (a failure record), so its stretches are not
+    planned: its result is the refusal alone, said in the tries, and the next box is planned
+    (and kept when clean), as a planned box with failure records would have it."""
+    edge, params = _edge("large"), ProcessParameters()
+    refusal = FailureRecord(edge.index, "window", "at 9 of 90 CL points every tool axis ...",
+                            where={"blocked_points": [3, 4]})
+    asked, planned = [], []
+
+    def refused(wt):
+        asked.append(wt)
+        return refusal if len(asked) == 1 else None
+
+    accepted, tried = relax_windows(
+        [edge], params, {edge.index: "why"},
+        lambda es: [window_ladder(e, params, lambda wt: planned.append(wt) or _plan([]),
+                                  refused=refused) for e in es])
+    assert len(asked) == 2 and planned == [asked[1]]  # the refused box: asked, not planned
+    wt, res, dev = accepted[edge.index]
+    assert wt is asked[1] and not res.failures
+    assert dev.used == _box_text(TILT_STEPS[1])
+    assert tried[edge.index] == [(_box_text(TILT_STEPS[0]), str(refusal))]
+    # the refused box's targets are the milder box's own (its bounds, angles inside)
+    b = asked[0].tool_path.bounds
+    assert (b.theta_min, b.theta_max) == (TILT_STEPS[0].theta_min, TILT_STEPS[0].theta_max)
+    for th in (asked[0].tool_path.theta_A, asked[0].tool_path.theta_B):
+        assert np.all(th >= b.theta_min - 1e-6) and np.all(th <= b.theta_max + 1e-6)
+
+
+def test_every_box_refused_is_proven_and_one_box_clear_is_not(monkeypatch):
+    """relax.refused_in_every_box: the recipe box's refusal when the pre-check refuses it and
+    every milder box (milder_boxes: those window_ladder tries), None as soon as one is clear;
+    a box without targets counts as refused (the ladder cannot keep it either)."""
+    from drakedeburr.plan import relax, window
+    from drakedeburr.plan.tool_paths import tool_path
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    edge, params = _edge("large"), ProcessParameters()
+    recipe = WindowTargets.from_tool_path(tool_path(edge, params))
+    boxes = relax.milder_boxes(edge, params)
+    assert boxes == list(TILT_STEPS)  # the source's large box: every step is milder
+    rec = FailureRecord(edge.index, "window", "blocked")
+    seen = []
+
+    def precheck(ctx, wt):
+        seen.append(wt.tool_path.bounds)
+        return None if ctx == "clear" and wt.tool_path.bounds == boxes[-1] else rec
+
+    monkeypatch.setattr(window, "precheck", precheck)
+    # the milder boxes: searched up to a first proven point, the recipe's blocked ones first
+    monkeypatch.setattr(window, "blocked_anywhere", lambda ctx, wt, first=(): precheck(ctx, wt))
+    item = (edge, params, relax.first_cl_paths([recipe])[edge.index], recipe)
+    assert relax.refused_in_every_box("blocked", item) is rec
+    assert len(seen) == 1 + len(boxes)
+    seen.clear()
+    assert relax.refused_in_every_box("clear", item) is None
+    assert len(seen) == 1 + len(boxes)
+    # a box without targets: refused
+    monkeypatch.setattr(relax, "box_targets", lambda e, p, b, cl: "no targets: into the hub")
+    assert relax.refused_in_every_box("clear", item) is rec
+
+
+def _box_text(b) -> str:
+    return f"theta box {b.theta_min:.2f}-{b.theta_max:.2f} rad"

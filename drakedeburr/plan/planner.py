@@ -68,7 +68,8 @@ from drakedeburr.plan.window_targets import WindowTargets
 from drakedeburr.pool import map_calls, warm_pool, worker_count
 
 __all__ = ["PlanOptions", "plan_windows", "plan_hub", "window_targets_for_hub", "CL_DELTA",
-           "CL_COUNT_BUDGET", "plan_in_cell", "assemble_windows", "cell_passes"]
+           "CL_COUNT_BUDGET", "plan_in_cell", "placed_cell", "PlacedCell", "refused_in_cell",
+           "assemble_windows", "cell_passes"]
 
 log = logging.getLogger(__name__)
 
@@ -418,7 +419,10 @@ def plan_hub(
     plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
     one burr for the whole hub, no tool change within a program); the failing windows are
     planned with it first, and the rest only when it cuts one of them
-    (:func:`drakedeburr.plan.policy.hub_pass`, :func:`~drakedeburr.plan.policy.long_reach_pass`).
+    (:func:`drakedeburr.plan.policy.hub_pass`, :func:`~drakedeburr.plan.policy.long_reach_pass`),
+    and not at all when its tool pre-check refuses every failing window in every tilt box
+    (:func:`refused_in_cell`, in the long-reach cell placed for the hub, the same placement
+    its plan would be made in: each cell is placed once, :func:`placed_cell`).
 
     Args:
         config: the run's configuration (:func:`drakedeburr.config.load_config`): scenario,
@@ -444,14 +448,24 @@ def plan_hub(
                                  windows=options.windows, skipped=skipped)
     t_targets = time.perf_counter() - t0
     cells = {None: cell}
+    placed: dict = {}  # burr -> its cell placed for the hub (deterministic: made once)
+
+    def placed_in(tool: str | None) -> PlacedCell:
+        if tool not in placed:
+            base = cells.get(tool) or load_cell(config.scenario, config.hub, robot=config.robot,
+                                                tool=tool)
+            placed[tool] = placed_cell(base, hub_model, wts, config, options)
+        return placed[tool]
 
     def plan_in(tool: str | None, only: set[int] | None) -> PlanDraft:
-        if tool not in cells:
-            cells[tool] = load_cell(config.scenario, config.hub, robot=config.robot, tool=tool)
-        return plan_in_cell(cells[tool], hub_model, wts, config, options, progress, only=only)
+        return plan_in_cell(placed_in(tool), hub_model, wts, progress, only=only)
+
+    def refused_in(tool: str, windows: list[int]) -> dict:
+        return refused_in_cell(placed_in(tool).ctx, hub_model, wts, windows)
 
     draft = hub_pass(plan_in, [wt.window_index for wt in wts], cell,
-                     long_reach=long_reach_allowed(options, config), t_start=t0)
+                     long_reach=long_reach_allowed(options, config), t_start=t0,
+                     refused_in=refused_in)
     if skipped:  # windows without a tool path are failures of this plan, reported as such
         draft = replace(draft, failures=(*skipped, *draft.failures))
     return draft.with_timings(targets_seconds=t_targets).plan()
@@ -466,18 +480,45 @@ def _import_planning() -> None:
     import drakedeburr.plan.window  # noqa: F401
 
 
-def plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
-                 progress: Progress, only: set[int] | None = None) -> PlanDraft:
-    """The hub's plan in one cell: where the hub sits (placement search), the home it is
-    planned from (:mod:`drakedeburr.plan.home`), the windows and the recipe's relaxation where
-    it fails (:func:`drakedeburr.plan.policy.cell_pass`). ``only``: the windows planned (the
-    placement is still the whole hub's). Returns the PlanDraft (``.plan()`` makes the Plan)
-    with the home, hub pose and placement recorded."""
+def refused_in_cell(ctx: PlanContext, hub_model, wts, windows: Sequence[int]) -> dict:
+    """{window: refusal} of those among ``windows`` (indices of ``wts``) whose targets the tool
+    pre-check refuses in ``ctx`` (a :class:`PlacedCell`'s: the context the windows would be
+    planned in) in the recipe's tilt box and in every milder one
+    (:func:`drakedeburr.plan.relax.refused_in_every_box`, the windows at once on the pool's
+    workers). Empty when the pre-check is off."""
+    if not ctx.options.tool_precheck:
+        return {}
+    chosen = [wt for wt in wts if wt.window_index in set(windows)]
+    edges = {e.index: e for e in hub_model.windows}
+    cls = relax.first_cl_paths(chosen)
+    items = [(edges[wt.window_index], ctx.config.process, cls.get(wt.window_index), wt)
+             for wt in chosen if wt.window_index in edges]
+    found = map_windows(ctx, relax.refused_in_every_box, items, ctx.options.workers,
+                        name=lambda it: f"window {it[0].index}'s pre-check in every box")
+    return {it[0].index: rec for it, rec in zip(items, found, strict=True) if rec is not None}
+
+
+@dataclass(frozen=True)
+class PlacedCell:
+    """A cell placed for a hub (:func:`placed_cell`): the planning context of its windows
+    (the placed cell, its home cleared of the hub), the placement (None: not searched) and its
+    search time [s], the home's move (a Deviation) and the home it moved to, or None."""
+
+    ctx: PlanContext
+    placement: object = None
+    placement_seconds: float = 0.0
+    home_moved: object = None
+    q_home: np.ndarray | None = None
+
+
+def placed_cell(cell, hub_model, wts, config: Config, options: PlanOptions) -> PlacedCell:
+    """Where the hub sits in ``cell`` (placement search for the windows ``wts``) and the home
+    it is planned from (:mod:`drakedeburr.plan.home`): the windows' planning context."""
     from drakedeburr.cell.station import load_cell
     from drakedeburr.plan.home import clear_home
     from drakedeburr.plan.placement import place_hub
 
-    placement = None
+    placement, t_place = None, 0.0
     if options.placement and wts:
         t1 = time.perf_counter()
         placement = place_hub(cell, hub_model, wts, config, options)
@@ -486,20 +527,32 @@ def plan_in_cell(cell, hub_model, wts, config: Config, options: PlanOptions,
             hub_pose=placement.hub_pose)
         t_place = time.perf_counter() - t1
     q_refs = placement.q_refs if placement else None
-    t_windows = time.perf_counter()
     ctx = _context(cell, config, options, q_refs)
     q_home, home_moved = clear_home(cell, ctx.free_checker)
     if home_moved is not None:  # the hub leaves the cell's home without clearance
         cell = load_cell(**{**cell.recipe, "q_home": q_home})
         ctx = _context(cell, config, options, q_refs)
+    return PlacedCell(ctx, placement, t_place, home_moved,
+                      None if home_moved is None else q_home)
+
+
+def plan_in_cell(placed: PlacedCell, hub_model, wts, progress: Progress,
+                 only: set[int] | None = None) -> PlanDraft:
+    """The hub's plan in one cell placed for it (:func:`placed_cell`): the windows and the
+    recipe's relaxation where it fails (:func:`drakedeburr.plan.policy.cell_pass`).
+    ``only``: the windows planned (the placement is still the whole hub's). Returns the
+    PlanDraft (``.plan()`` makes the Plan) with the home, hub pose and placement recorded."""
+    ctx, placement, home_moved = placed.ctx, placed.placement, placed.home_moved
+    t_windows = time.perf_counter()
     if only is not None:
         wts = [wt for wt in wts if wt.window_index in only]
     draft = cell_pass(cell_passes(ctx, progress, t_windows, relax.first_cl_paths(wts)),
-                      {e.index: e for e in hub_model.windows}, wts, options.relax)
+                      {e.index: e for e in hub_model.windows}, wts, ctx.options.relax)
     if home_moved is not None:
-        draft = draft.with_deviations(front=(home_moved,)).with_record(q_home=q_home.copy())
+        draft = draft.with_deviations(front=(home_moved,)).with_record(
+            q_home=placed.q_home.copy())
     if placement is not None:
         draft = draft.with_record(hub_pose=placement.hub_pose.copy(),
                                   placement=placement.record()).with_timings(
-            placement_seconds=t_place)
+            placement_seconds=placed.placement_seconds)
     return draft

@@ -181,7 +181,8 @@ def cell_pass(passes: CellPasses, edges: dict, wts: Sequence, relaxing: bool) ->
 
 
 def long_reach_pass(standard: PlanDraft, windows: Sequence[int],
-                    plan_long_reach: Callable[[set[int] | None], PlanDraft]) -> PlanDraft:
+                    plan_long_reach: Callable[[set[int] | None], PlanDraft],
+                    refused: Callable[[list[int]], dict] | None = None) -> PlanDraft:
     """The hub planned again with the long-reach burr, the standard burr's plan or that one
     kept (:func:`drakedeburr.plan.relax.choose_tool`).
 
@@ -192,15 +193,31 @@ def long_reach_pass(standard: PlanDraft, windows: Sequence[int],
     too; when every such window does, the long-reach plan cannot leave fewer windows failing,
     and the other windows are not planned again (:func:`drakedeburr.plan.relax.keep_standard`).
 
+    Before either, when no move between windows failed, the long-reach burr's tool pre-check
+    is asked of the failing windows (``refused``): when it refuses each of them in the
+    recipe's tilt box and in every milder one, each fails with that burr too (cut in part at
+    best, whatever is planned), so the long-reach plan (of those windows or of the hub) cannot
+    leave fewer windows failing and is not made: the standard burr's plan is kept, as either
+    pass would keep it (:func:`drakedeburr.plan.relax.keep_refused`).
+
     Args:
         standard: the standard burr's plan. windows: the hub's planned windows' indices.
         plan_long_reach: ``only`` (window indices, or None: all) -> their plan in the
             long-reach cell.
+        refused: failing window indices -> {window: its refusal} of those the long-reach
+            pre-check refuses in every box
+            (:func:`drakedeburr.plan.relax.refused_in_every_box`), or None (not asked).
     """
     failing = relax.failing_windows(standard)
     log.warning("the standard burr leaves window(s) %s failing where the spindle meets the "
                 "cell: planning %s again with the %s", failing,
                 "them" if -1 not in failing else "the hub", relax.long_reach().title)
+    if refused is not None and -1 not in failing:
+        proven = refused(failing)
+        if set(failing) <= set(proven):
+            log.warning("the %s's tool pre-check refuses window(s) %s in every tilt box: the "
+                        "standard burr's plan kept", relax.long_reach().title, failing)
+            return relax.keep_refused(standard, {w: proven[w] for w in failing})
     if -1 not in failing and len(failing) < len(windows):
         first = plan_long_reach(set(failing))
         still = relax.failing_windows(first)
@@ -219,7 +236,8 @@ def long_reach_allowed(options, config) -> bool:
 
 def hub_pass(plan_in: Callable[[str | None, set[int] | None], PlanDraft],
              windows: Sequence[int], cell, *, long_reach: bool,
-             t_start: float | None = None) -> PlanDraft:
+             t_start: float | None = None,
+             refused_in: Callable[[str, list[int]], dict] | None = None) -> PlanDraft:
     """The hub's plan: in the given cell (``plan_in(None, None)``), and when ``long_reach`` and
     a failure names the standard burr's body (:func:`drakedeburr.plan.relax.reach_may_help`)
     again with the long-reach burr (:func:`long_reach_pass` on ``plan_in(LONG_REACH, only)``);
@@ -230,12 +248,16 @@ def hub_pass(plan_in: Callable[[str | None, set[int] | None], PlanDraft],
             or None) -> the PlanDraft of the hub in that cell (:func:`cell_pass` there).
         windows: the hub's planned windows' indices. cell: the cell (its ``tool``).
         long_reach: may the long-reach burr be tried (relaxation on, no burr asked for).
+        refused_in: (burr, window indices) -> {window: refusal} of the windows that burr's
+            tool pre-check refuses in every tilt box (:func:`long_reach_pass`), or None.
     """
     t0 = time.perf_counter() if t_start is None else t_start
     plan = plan_in(None, None)
     if long_reach and relax.reach_may_help(plan, cell):
         t1 = time.perf_counter()
-        plan = long_reach_pass(plan, windows, lambda only: plan_in(relax.LONG_REACH, only))
+        plan = long_reach_pass(plan, windows, lambda only: plan_in(relax.LONG_REACH, only),
+                               None if refused_in is None
+                               else lambda ws: refused_in(relax.LONG_REACH, ws))
         plan = plan.with_timings(standard_burr_seconds=t1 - t0,
                                  long_reach_seconds=time.perf_counter() - t1)
     return plan

@@ -42,10 +42,11 @@ from dataclasses import replace
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
 from drakedeburr.plan.options import RunMode
-from drakedeburr.plan.results import Deviation
+from drakedeburr.plan.results import Deviation, WindowPlan, WindowStatus
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
+           "milder_boxes", "box_targets", "refused_in_every_box", "keep_refused",
            "plan_ladder", "oriented", "first_cl_paths", "reach_may_help", "choose_tool",
            "keep_standard", "failing_windows", "long_reach"]
 
@@ -109,7 +110,7 @@ def oriented(edge, cl, params):
     return tool_paths.oriented(edge, cl, params)
 
 
-def window_ladder(edge, params, plan_one, cl=None) -> list:
+def window_ladder(edge, params, plan_one, cl=None, refused=None) -> list:
     """One window's milder variants (:data:`TILT_STEPS`, those milder than the recipe's own
     box), each planned by ``plan_one(WindowTargets)`` in turn up to the first without a failure
     record -> [(box, WindowTargets, result)] in the order planned; a box whose tool path gives
@@ -120,23 +121,30 @@ def window_ladder(edge, params, plan_one, cl=None) -> list:
     path stage (edge fit, adaptive CL points) reads only the edge, not the tilt box, and is
     deterministic, so each box's ToolPath is the orientation of that same ClPath
     (:func:`oriented`): the same targets as :func:`~drakedeburr.plan.tool_paths.tool_path`
-    would make, without planning the CL points again per box."""
-    from drakedeburr.errors import InputError
-    from drakedeburr.plan.tool_paths import tool_path
-    from drakedeburr.plan.window_targets import WindowTargets
+    would make, without planning the CL points again per box.
 
+    ``refused``: ``refused(WindowTargets)`` -> the tool pre-check's refusal of the box's
+    targets or None (:func:`drakedeburr.plan.window.precheck`), or None (not asked). A box
+    whose targets the pre-check refuses (CL points where every axis of the box's own cone
+    puts the round tool parts under the clearance) cannot plan without a failure record: its
+    window is cut in part at best, and a part is a failure record
+    (:mod:`drakedeburr.plan.partial`), so it is never the box kept. Its result is the refusal
+    alone (``IK_FAILED``), the window's stretches not planned, and the next box is tried, as
+    a planned box with failure records is."""
     out = []
-    default = params.bounds(edge.kind)
-    for box in TILT_STEPS:
-        if box.theta_max >= default.theta_max and box.theta_min >= default.theta_min:
-            continue  # not milder than the recipe's own box
-        p = replace(params, bounds_large=box, bounds_small=box)
-        try:
-            wt = WindowTargets.from_tool_path(tool_path(edge, p) if cl is None
-                                              else oriented(edge, cl, p))
-        except InputError as exc:
-            log.info("window %d: %s gives no targets: %s", edge.index, _box(box), exc)
-            out.append((box, None, f"no targets: {exc}"))
+    for box in milder_boxes(edge, params):
+        wt = box_targets(edge, params, box, cl)
+        if isinstance(wt, str):
+            log.info("window %d: %s gives no targets: %s", edge.index, _box(box), wt)
+            out.append((box, None, f"no targets: {wt}"))
+            continue
+        why = None if refused is None else refused(wt)
+        if why is not None:
+            log.info("window %d: %s: the tool pre-check refuses its targets (at best a cut in "
+                     "part, a failure record); its stretches not planned", edge.index,
+                     _box(box))
+            out.append((box, wt, WindowPlan.skipped(edge.index, WindowStatus.IK_FAILED,
+                                                    [why])))
             continue
         res = plan_one(wt)
         out.append((box, wt, res))
@@ -145,16 +153,65 @@ def window_ladder(edge, params, plan_one, cl=None) -> list:
     return out
 
 
+def milder_boxes(edge, params) -> list[OrientationBounds]:
+    """The tilt boxes of :data:`TILT_STEPS` milder than the recipe's own for ``edge``'s kind
+    (those :func:`window_ladder` tries), in order."""
+    default = params.bounds(edge.kind)
+    return [box for box in TILT_STEPS
+            if not (box.theta_max >= default.theta_max and box.theta_min >= default.theta_min)]
+
+
+def box_targets(edge, params, box: OrientationBounds, cl=None):
+    """The WindowTargets of ``edge`` with the tilt box ``box`` (from its ClPath ``cl`` when
+    given: :func:`window_ladder`), or why its tool path gives none (str: the InputError)."""
+    from drakedeburr.errors import InputError
+    from drakedeburr.plan.tool_paths import tool_path
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    p = replace(params, bounds_large=box, bounds_small=box)
+    try:
+        return WindowTargets.from_tool_path(tool_path(edge, p) if cl is None
+                                            else oriented(edge, cl, p))
+    except InputError as exc:
+        return str(exc)
+
+
+def refused_in_every_box(ctx, item) -> FailureRecord | None:
+    """``item`` = (WindowEdge, ProcessParameters, its ClPath or None, its recipe's
+    WindowTargets): the tool pre-check's refusal of the recipe's targets in ``ctx``
+    (:func:`drakedeburr.plan.window.precheck`) when it also refuses the targets of every
+    milder box (:func:`milder_boxes`; a box without targets counts as refused; a milder box
+    searched up to its first proven CL point, the recipe's blocked ones first:
+    :func:`drakedeburr.plan.window.blocked_anywhere`), else None.
+    A window so refused plans with a failure record in ``ctx``'s cell whatever the recipe's
+    relaxation does (:func:`window_ladder`): the first pass cuts it in part at best, and no
+    box is kept. A task for :func:`drakedeburr.plan.parallel.map_windows`."""
+    from drakedeburr.plan.window import blocked_anywhere, precheck
+
+    edge, params, cl, wt = item
+    first = precheck(ctx, wt)
+    if first is None:
+        return None
+    hint = first.where.get("blocked_points", ())
+    for box in milder_boxes(edge, params):
+        other = box_targets(edge, params, box, cl)
+        if not isinstance(other, str) and blocked_anywhere(ctx, other, hint) is None:
+            return None
+    return first
+
+
 def plan_ladder(ctx, item, mode: RunMode = RunMode.FULL) -> list:
     """:func:`window_ladder` of ``item`` = (WindowEdge, ProcessParameters) or (WindowEdge,
     ProcessParameters, its ClPath or None), each variant by
-    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode`` (a task for
+    :func:`drakedeburr.plan.window.plan_window` in ``ctx`` and run mode ``mode``, a variant
+    the tool pre-check refuses not planned (:func:`drakedeburr.plan.window.blocked_anywhere`:
+    searched up to its first proven CL point) (a task for
     :func:`drakedeburr.plan.parallel.map_windows`)."""
-    from drakedeburr.plan.window import plan_window
+    from drakedeburr.plan.window import blocked_anywhere, plan_window
 
     edge, params, *cl = item
     return window_ladder(edge, params, functools.partial(plan_window, ctx, mode=mode),
-                         cl[0] if cl else None)
+                         cl[0] if cl else None, functools.partial(blocked_anywhere, ctx))
 
 
 def first_cl_paths(wts) -> dict:
@@ -195,9 +252,23 @@ def keep_standard(plan, first):
     """The standard burr's ``plan`` kept: the long-reach burr, tried first on the windows it
     left failing (``first``: the plan of those windows alone, placed for the whole hub),
     left every one of them failing; a failure record per window says so."""
-    return _standard_kept(plan, first, f"was tried on window(s) {failing_windows(plan)} first "
-                                       "(the hub placed for it as a whole) and left them "
-                                       "failing, so the hub was not planned again with it")
+    return _standard_kept(plan, _first_records(first), failing_windows(first),
+                          f"was tried on window(s) {failing_windows(plan)} first "
+                          "(the hub placed for it as a whole) and left them "
+                          "failing, so the hub was not planned again with it")
+
+
+def keep_refused(plan, refused: dict):
+    """The standard burr's ``plan`` kept without planning the long-reach burr: its tool
+    pre-check refuses each window the standard burr left failing in the recipe's box and in
+    every milder one (``refused``: window -> the recipe box's refusal,
+    :func:`refused_in_every_box` in the long-reach cell), so each of them fails with it too
+    and it cannot leave fewer windows failing (:func:`choose_tool` keeps the standard burr
+    on a tie); a failure record per window says so, with the long-reach refusal."""
+    return _standard_kept(plan, refused, sorted(refused),
+                          "was not planned: its tool pre-check proves CL points of window(s) "
+                          f"{failing_windows(plan)} blocked over the whole cone of the "
+                          "recipe's tilt box and of every milder one (they fail with it too)")
 
 
 def on_uncut_edge(failures, notes: list) -> list:
@@ -211,18 +282,26 @@ def on_uncut_edge(failures, notes: list) -> list:
             for n in notes]
 
 
-def _standard_kept(plan, tried, how: str):
+def _first_records(plan) -> dict:
+    """Window -> its first failure record in ``plan``."""
+    out: dict = {}
+    for f in plan.failures:
+        out.setdefault(f.window, f)
+    return out
+
+
+def _standard_kept(plan, own: dict, left: list, how: str):
     """``plan`` with a relaxation record per failing window: the long-reach burr ``how``
-    (its plan ``tried`` gives each window's own reason)."""
+    (``own``: window -> the record that gives its own reason there; ``left``: the windows
+    it leaves failing, for the log)."""
     lr = long_reach()
     notes = []
     for w in failing_windows(plan):
-        own = next((f for f in tried.failures if f.window == w), None)
+        rec = own.get(w)
         notes.append(FailureRecord(
             window=w, kind="relaxation", tried=(lr.title,),
-            reason=f"the {lr.title} {how}" + ("" if own is None else f"; here: {own.reason}")))
-    log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title,
-             failing_windows(tried))
+            reason=f"the {lr.title} {how}" + ("" if rec is None else f"; here: {rec.reason}")))
+    log.info("the %s leaves window(s) %s failing: kept the standard burr", lr.title, left)
     return replace(plan, failures=(*plan.failures, *on_uncut_edge(plan.failures, notes)))
 
 
@@ -242,5 +321,5 @@ def choose_tool(plan, alt):
         log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing",
                     std.title, lr.title, len(a), len(b))
         return alt.with_deviations(back=(dev,))
-    return _standard_kept(plan, alt, f"was tried for the hub and left {len(b)} window(s) "
-                                     f"failing {b}")
+    return _standard_kept(plan, _first_records(alt), b,
+                          f"was tried for the hub and left {len(b)} window(s) failing {b}")

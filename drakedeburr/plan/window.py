@@ -15,7 +15,7 @@ import hashlib
 import logging
 import time
 import weakref
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,9 +30,10 @@ from drakedeburr.plan.targets import contact_geometry, tool_point_H
 from drakedeburr.plan.types import FailureRecord
 from drakedeburr.plan.window_targets import WindowTargets
 
-__all__ = ["plan_window", "plan_whole", "tool_refusal", "REFUSAL_MARGIN", "plan_window_pass",
-           "cut_targets", "ik_step", "execute_cut", "needs_other_rule", "better_of",
-           "rewound_start"]
+__all__ = ["plan_window", "plan_whole", "precheck", "blocked_anywhere", "tool_refusal",
+           "REFUSAL_MARGIN",
+           "plan_window_pass", "cut_targets", "ik_step", "execute_cut", "needs_other_rule",
+           "better_of", "rewound_start"]
 
 log = logging.getLogger(__name__)
 
@@ -55,9 +56,7 @@ def window_reference(ctx: PlanContext, wt: WindowTargets) -> np.ndarray:
 def plan_window(ctx: PlanContext, wt: WindowTargets,
                 mode: RunMode = RunMode.FULL) -> WindowPlan:
     """Approach, cut and retract of one window (module docstring), run as ``mode`` says."""
-    # (a stand-in context without a cell has nothing to search)
-    refusal = (tool_refusal(ctx, wt) if ctx.options.tool_precheck and ctx.checker is not None
-               else None)
+    refusal = precheck(ctx, wt)
     if refusal is not None:
         if ctx.options.partial_windows and wt.closed:
             from drakedeburr.plan.partial import plan_partial
@@ -66,6 +65,17 @@ def plan_window(ctx: PlanContext, wt: WindowTargets,
         log.info("window %d refused before its IK: %s", wt.window_index, refusal.reason)
         return WindowPlan.skipped(wt.window_index, WindowStatus.IK_FAILED, [refusal])
     return plan_whole(ctx, wt, mode)
+
+
+def precheck(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
+    """:func:`tool_refusal` of ``wt`` when ``ctx`` runs the tool pre-check
+    (``options.tool_precheck``), else None (so is a stand-in context without a checker: it has
+    nothing to search). A window it refuses is never planned clean: cut in part
+    (:mod:`drakedeburr.plan.partial`), its refusal is a failure record of the plan, else the
+    window is refused with it."""
+    if getattr(ctx, "checker", None) is None or not ctx.options.tool_precheck:
+        return None
+    return tool_refusal(ctx, wt)
 
 
 def plan_whole(ctx: PlanContext, wt: WindowTargets, mode: RunMode = RunMode.FULL) -> WindowPlan:
@@ -160,6 +170,71 @@ def tool_refusal(ctx: PlanContext, wt: WindowTargets) -> FailureRecord | None:
                "edge_slope_deg": float(slope[worst])},
         tried=(f"{int(search.reads.sum())} tool axes read over the cone "
                f"({np.degrees(search.half_angle):.1f} deg) at the {m} CL points",))
+
+
+@dataclass(frozen=True, eq=False)
+class _Points:
+    """CL targets of a window, as :func:`~drakedeburr.plan.clearance.tool_axis_clearance`
+    reads them (a few rows of a WindowTargets, which needs three at least)."""
+
+    retract_H: np.ndarray
+    cone_retract_H: np.ndarray
+    t_H: np.ndarray
+    cone_half_angle: float
+
+    def __len__(self) -> int:
+        return len(self.retract_H)
+
+
+def blocked_anywhere(ctx: PlanContext, wt: WindowTargets, first=()) -> FailureRecord | None:
+    """Does the tool pre-check refuse ``wt`` (:func:`tool_refusal`: some CL target where
+    every axis of the cone is proven :data:`REFUSAL_MARGIN` under the clearance bound)? The
+    targets are searched one at a time, those in ``first`` first (e.g. the points another tilt
+    box proved), then in loop order, up to the first one proven: a record naming that target
+    (how deep the least bad axis puts the tool part), or None when none is, and then the
+    search of every target is kept for :func:`tool_refusal` (one target's search reads that
+    target alone, so the targets searched one by one are the whole window's search, bit for
+    bit). None as well when ``ctx`` runs no pre-check (:func:`precheck`)."""
+    from drakedeburr.plan.clearance import AxisSearch, tool_axis_clearance, tool_scene
+
+    if getattr(ctx, "checker", None) is None or not ctx.options.tool_precheck:
+        return None
+    bound, m = ctx.min_clearance, len(wt)
+    targets = cut_targets(ctx, wt, np.zeros((m, 3)))
+    scene = tool_scene(ctx.checker)
+    key = _search_key(wt, targets.p_HQ[:m], targets.lift, bound)
+    known = _SEARCHES.setdefault(scene, {})
+    if key in known:
+        return tool_refusal(ctx, wt)
+    order = list(dict.fromkeys([int(i) for i in first if 0 <= int(i) < m] + list(range(m))))
+    found: dict = {}
+    for i in order:
+        one = tool_axis_clearance(
+            scene, _Points(wt.retract_H[i:i + 1], wt.cone_retract_H[i:i + 1], wt.t_H[i:i + 1],
+                           wt.cone_half_angle), targets.p_HQ[i:i + 1], targets.lift,
+            bound=bound, margin=REFUSAL_MARGIN)
+        if one.proven[0]:
+            d, part = float(one.best[0]), one.part[0]
+            how = (f"puts the {part} {-1e3 * d:.1f} mm inside the part" if d < 0.0 else
+                   f"leaves the {part} at most {1e3 * d:.2f} mm from the part")
+            return FailureRecord(
+                window=wt.window_index, kind="window", point=i, value=d, limit=float(bound),
+                unit="m", where={"pair": (f"tool::{part}", "hub::hub"), "blocked_points": [i]},
+                reason=f"the tool pre-check proves CL {i} at "
+                       f"{tuple(np.round(wt.p_HC[i] * 1e3, 1).tolist())} mm blocked: every "
+                       f"tool axis within the {np.degrees(one.half_angle):.1f} deg cone {how} "
+                       f"({1e3 * bound:.1f} mm clearance needed; no arm pose changes that), so "
+                       f"the window cannot be cut whole in this box (searched up to the first "
+                       f"such CL point: {len(found) + 1} of {m})",
+                tried=(f"{int(one.reads[0])} tool axes read over the cone at CL {i}",))
+        found[i] = one
+    rows = [found[i] for i in range(m)]
+    known[key] = AxisSearch(
+        best=np.concatenate([r.best for r in rows]), part=tuple(r.part[0] for r in rows),
+        best_axis_H=np.concatenate([r.best_axis_H for r in rows]),
+        proven=np.concatenate([r.proven for r in rows]),
+        reads=np.concatenate([r.reads for r in rows]), half_angle=rows[0].half_angle)
+    return None
 
 
 def needs_other_rule(first: WindowPlan, retry_in_band: float) -> bool:
