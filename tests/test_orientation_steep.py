@@ -225,9 +225,9 @@ def _slope_sweep(lo_deg: float, hi_deg: float, m: int):
 @pytest.mark.parametrize("kind", ["large", "small"])
 def test_turn_in_the_ramp_keeps_the_flank_contact(kind):
     """In the ramp (45-55 deg) the source's frame (psi = 0) and every partial turn keep every
-    box axis >= 45 deg from the edge line (dense box, independent of the rule's grid): the
-    source's upright is normal to the edge line and the box tilts it by at most
-    |theta|max = 0.44 rad, so its axes are >= 90 deg - 25.2 deg from it."""
+    box axis >= 45 deg from the edge line (dense box, independent of the rule's grid): in the
+    source's frame a box axis' component along the edge line is sin theta_B, so its axes are
+    >= 90 deg - |theta_B|max (0.44 rad: 64.8 deg) from it."""
     box = BOXES[kind]
     lo, hi = box.theta_min, box.theta_max
     T, N, d = _slope_sweep(45.05, 55.0, 41)

@@ -39,9 +39,10 @@ smoothstep ``3x^2 - 2x^3`` of ``x = (slope - limit)/(full - limit)``: 0 at the l
 frame is the source's, 1 at the full slope, its derivative 0 at both ends. Applied at once the
 turn made the frame jump where a loop passes the limit (mkz13 rim CL 33 -> 34: the box centre
 57.8 -> 18.4 deg off +Z_H). The turn ``w psi`` still keeps every box axis on the flank: the
-feasible turns form a run of the psi grid that holds 0 (the source's frame: every box axis is
-at least 90 deg - |theta|max from the edge line, 65 deg for the large box) and the rule's psi,
-and the run holds every turn between them.
+feasible turns form a run of the psi grid that holds 0 (the source's frame: a box axis'
+component along the edge line is sin theta_B, so every box axis is at least 90 deg -
+|theta_B|max from it, 64.8 deg for the large box) and the rule's psi, and the run holds every
+turn between them.
 """
 
 from __future__ import annotations
