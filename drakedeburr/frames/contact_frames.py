@@ -32,6 +32,17 @@ directions as long as every axis of the box still meets the edge line at >= alph
 touches the edge with its flank, never with its tip). :func:`steep_contact_frames` applies it
 where the edge's slope to the face plane exceeds a limit and returns its input unchanged (the
 same array) where nothing is steep: a flat loop's frames are bit for bit the source's.
+
+Ramp (:func:`turn_share`): applied in full only from ``FULL_TURN_SLOPE`` (55 deg) up; between
+the limit (45 deg) and there the frame is turned by the share ``w`` of the rule's psi, ``w`` the
+smoothstep ``3x^2 - 2x^3`` of ``x = (slope - limit)/(full - limit)``: 0 at the limit, where the
+frame is the source's, 1 at the full slope, its derivative 0 at both ends. Applied at once the
+turn made the frame jump where a loop passes the limit (mkz13 rim CL 33 -> 34: the box centre
+57.8 -> 18.4 deg off +Z_H). The turn ``w psi`` still keeps every box axis on the flank: the
+feasible turns form a run of the psi grid that holds 0 (the source's frame: a box axis'
+component along the edge line is sin theta_B, so every box axis is at least 90 deg -
+|theta_B|max from it, 64.8 deg for the large box) and the rule's psi, and the run holds every
+turn between them.
 """
 
 from __future__ import annotations
@@ -42,11 +53,13 @@ import numpy as np
 
 from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
 
-__all__ = ["BURR_HALF_ANGLE", "box_boundary_axes", "flank_contact_frames", "steep_contact_frames",
-           "edge_slopes", "rotation_about"]
+__all__ = ["BURR_HALF_ANGLE", "FULL_TURN_SLOPE", "box_boundary_axes", "flank_contact_frames",
+           "steep_contact_frames", "edge_slopes", "rotation_about", "turn_share"]
 
 #: half-angle of the 90 deg conical burr (cell/tools.py's burrs) [rad]
 BURR_HALF_ANGLE = math.radians(45.0)
+#: the slope [rad] from which the contact rule's turn applies in full (module docstring: ramp)
+FULL_TURN_SLOPE = math.radians(55.0)
 #: the edge bisector of a right-angle edge in the local frame [N_new, T, -B]: (N_new + B)/sqrt2
 B_L = np.array([1.0, 0.0, -1.0]) / math.sqrt(2.0)
 #: the approach direction in H: the tool comes from the front, +Z_H
@@ -127,18 +140,35 @@ def _nearest_turn(u_L: np.ndarray, z_L: np.ndarray) -> np.ndarray:
     return np.arctan2(np.cross(u, z) @ B_L, z @ u)
 
 
+def turn_share(slope: np.ndarray, max_slope: float,
+               full_slope: float = FULL_TURN_SLOPE) -> np.ndarray:
+    """(M,) share in [0, 1] of the contact rule's turn applied at edge slopes ``slope`` (M,)
+    [rad]: 0 up to ``max_slope``, the smoothstep ``3x^2 - 2x^3`` of
+    ``x = (slope - max_slope) / (full_slope - max_slope)`` between, 1 from ``full_slope`` up
+    (a step at ``max_slope`` when ``full_slope <= max_slope``: the turn applied at once)."""
+    sl = np.asarray(slope, float)
+    if full_slope <= max_slope:
+        return (sl > max_slope).astype(float)
+    x = np.clip((sl - max_slope) / (full_slope - max_slope), 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
 def steep_contact_frames(R_HL: np.ndarray, t_H: np.ndarray, n_H: np.ndarray,
                          theta_min: float, theta_max: float, max_slope: float,
-                         *, name: str = "") -> np.ndarray:
+                         full_slope: float = FULL_TURN_SLOPE, *, name: str = "") -> np.ndarray:
     """``R_HL`` (M, 3, 3) with the frames of the points whose tangent ``t_H`` climbs or descends
-    steeper than ``max_slope`` [rad] replaced by :func:`flank_contact_frames` of the source's
-    frames on the true tangent and the inner normals ``n_H``; ``R_HL`` itself (the same array)
-    when no point is steep."""
-    steep = edge_slopes(t_H) > max_slope
+    steeper than ``max_slope`` [rad] replaced by the source's frames on the true tangent and the
+    inner normals ``n_H``, turned about the edge bisector by the share :func:`turn_share` (full
+    from ``full_slope`` up) of :func:`flank_contact_frames`' turn; ``R_HL`` itself (the same
+    array) when no point is steep."""
+    slope = edge_slopes(t_H)
+    steep = slope > max_slope
     if not steep.any():
         return R_HL
     src = R_HL_from_normals(np.asarray(t_H, float)[steep], np.asarray(n_H, float)[steep],
                             name=name)
+    psi = flank_contact_frames(src, theta_min, theta_max)[1]
+    share = turn_share(slope[steep], max_slope, full_slope)
     out = np.array(R_HL, float, copy=True)
-    out[steep] = flank_contact_frames(src, theta_min, theta_max)[0]
+    out[steep] = np.einsum("mij,mjk->mik", src, rotation_about(B_L, share * psi))
     return out

@@ -13,7 +13,7 @@ from pydrake.math import RigidTransform
 
 from drakedeburr.config import OrientationBounds, ProcessParameters
 from drakedeburr.errors import InputError
-from drakedeburr.frames.contact_frames import steep_contact_frames
+from drakedeburr.frames.contact_frames import FULL_TURN_SLOPE, steep_contact_frames
 from drakedeburr.frames.local_frames import R_HL_from_normals, axis_from_angles
 from drakedeburr.frames.vectors import angle_between
 from drakedeburr.orientation.corner_normals import side_consistent_normals
@@ -52,10 +52,15 @@ class OrientOptions:
             (:mod:`drakedeburr.frames.contact_frames`): the box centre nearest +Z_H with every
             box axis >= 45 deg (the burr's half-angle) from the edge line. Loops within it
             (every bundled hub: <= 43.5 deg) keep the source's frames bit for bit.
+        full_frame_slope: [rad] from this slope up the contact rule's turn applies in full;
+            between ``max_frame_slope`` and here a smoothstep share of it
+            (:func:`drakedeburr.frames.contact_frames.turn_share`), so that the frame does
+            not jump where a loop passes ``max_frame_slope``.
     """
 
     second_difference_weight: float = 0.0
     max_frame_slope: float = math.radians(45.0)
+    full_frame_slope: float = FULL_TURN_SLOPE
     smooth: bool | None = None
     smooth_sigma: float = 2.0
     pso: PsoOptions = field(default_factory=PsoOptions)
@@ -184,11 +189,12 @@ def orient_window(
     name = f"window {cl.window_index}"
     bounds = _bounds_for(cl.kind, params)
     # steep stretches: the source's frame on the true tangent turned about the edge bisector
-    # until the box centre is nearest +Z_H with every box axis touching with the flank
+    # toward the box centre nearest +Z_H with every box axis touching with the flank, by a
+    # share growing from 0 at max_frame_slope to 1 at full_frame_slope
     # (frames.contact_frames); the same array when nothing is steep
     R_HL = steep_contact_frames(R_HL_from_normals(t_frame, n, name=name), cl.t_H, n,
                                 bounds.theta_min, bounds.theta_max, options.max_frame_slope,
-                                name=name)
+                                options.full_frame_slope, name=name)
     prob = problem_for(cl, R_HL, model, params, options)
     rep = solve_problem(prob, solver, options, x0=x0)
     th = rep.x.reshape(prob.m, 2)

@@ -99,6 +99,15 @@ def plan_whole(ctx: PlanContext, wt: WindowTargets, mode: RunMode = RunMode.FULL
 #: a target is refused only when every axis of its cone is proven this far under the
 #: clearance bound [m] (the distance readings' own spread)
 REFUSAL_MARGIN = 0.2e-3
+#: how often :func:`execute_cut` may halve the dense step where the trajectory would stray
+#: from the program between the samples (:attr:`ProgramFit.finer`): 3, down to 1/8 of
+#: ``options.dense_step``. Where the tool turns fast about its tool point near the wrist
+#: singularity the joint spline swings the tool point off the program's line between samples
+#: and the verifier reads the orientation at the wrong share of the move (audibot rim window 6:
+#: an open stretch starting on a flank-to-face corner, 33 deg/mm at J5 = 0.41 rad: 15 mrad
+#: against the slerp at 0.125 mm; sampled at 0.0625 mm there, the window's worst is 5.7 mrad;
+#: one halving only had been allowed)
+FINER_HALVINGS = 3
 
 
 #: the pre-check's cone searches made in this process, per tool scene (its cell and tool):
@@ -467,9 +476,10 @@ def plan_window_pass(ctx: PlanContext, wt: WindowTargets, q_from: np.ndarray,
 def execute_cut(ctx: PlanContext, wt, ik: IkStep, mode: RunMode = RunMode.FULL) -> CutStep:
     """Steps 3-4 of a window pass (:func:`plan_window_pass`): the
     window's executed cut and its program (:mod:`drakedeburr.plan.cut`), sampled every
-    ``options.dense_step`` of travel and again at half that where the program has moves the
-    sampling cannot resolve (:attr:`ProgramFit.finer`)."""
+    ``options.dense_step`` of travel and again at half that, up to ``FINER_HALVINGS`` times,
+    where the program has moves the sampling cannot resolve (:attr:`ProgramFit.finer`)."""
     step = ctx.options.dense_step
+    halvings = 0
     t1 = time.perf_counter()
     while True:
         tr = track_cut(ctx, wt, ik, step)
@@ -483,9 +493,10 @@ def execute_cut(ctx: PlanContext, wt, ik: IkStep, mode: RunMode = RunMode.FULL) 
             log.debug("window %d: the executed cut stays under the clearance; abandoned for "
                       "a milder recipe", wt.window_index)
             return _cut_step(WindowStatus.ABANDONED, None, records, t1)
-        fit = fit_program(ctx, wt, tr, ik.order, refine=step == ctx.options.dense_step)
+        fit = fit_program(ctx, wt, tr, ik.order, refine=halvings < FINER_HALVINGS)
         if fit.finer:
             step *= 0.5
+            halvings += 1
             log.debug("window %d: between its samples the cut would stray from the program or "
                       "its cone; sampling it every %.3f mm", wt.window_index,
                      step * 1e3)
