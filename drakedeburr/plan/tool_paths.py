@@ -37,7 +37,9 @@ def tool_path(edge, params: ProcessParameters):
     # the interpolating NURBS of a smooth loop, the smoothing fit of a faceted one (a low-poly
     # mesh's edge: facets of >= 3 point spacings joined at tessellation corners, sagitta above
     # the CL chord height), chosen from the points (drakedeburr.path.window_fit)
-    curve = fit_window_edge(edge.p_HE, chord_tolerance=CL_DELTA, name=f"window {edge.index}")
+    # held within the configured chord-height bound of the edge points the verifier reads
+    curve = fit_window_edge(edge.p_HE, chord_tolerance=CL_DELTA, edge_tolerance=params.delta_max,
+                            name=f"window {edge.index}")
     cl = plan_cl(curve, method="adaptive", params=PlannerParams(delta_max=CL_DELTA,
                                                             count_budget=CL_COUNT_BUDGET),
                  window_index=edge.index, kind=edge.kind)
