@@ -150,3 +150,97 @@ def test_an_axis_into_the_hub_at_a_corner_says_the_turn_the_normal_and_by_how_mu
         in msg, msg
     assert "inner normal is -50 deg to the face plane (+0 and +0 deg" in msg, msg
     assert "leaves the axis 2.0 deg below the face plane" in msg, msg
+
+
+def _staircase(tilt_deg: float, slope_deg: float = 20.0, turn_deg: float = 85.0):
+    """An open faceted stretch: 6 points down a slope (``slope_deg``) along +Y, one corner
+    point, 6 points level after the edge turns ``turn_deg`` in plan (vertical walls: inner
+    normals Z x t). The corner point's tangent rounds the corner (the two sides' bisector, as
+    the fitted curve's does) and its normal estimate is the sides' plan bisector swung
+    ``tilt_deg`` off the face plane (the probe artefact at a facet corner)."""
+    s, tr = np.radians(slope_deg), np.radians(turn_deg)
+    t_a, t_b = np.array([0.0, np.cos(s), -np.sin(s)]), np.array([-np.sin(tr), np.cos(tr), 0.0])
+    n_a, n_b = np.cross(Z, t_a), np.cross(Z, t_b)
+    n_a, n_b = n_a / np.linalg.norm(n_a), n_b / np.linalg.norm(n_b)
+    t_c = (t_a + t_b) / np.linalg.norm(t_a + t_b)
+    h = (n_a + n_b) / np.linalg.norm(n_a + n_b)
+    n_c = np.cos(np.radians(tilt_deg)) * h + np.sin(np.radians(tilt_deg)) * Z
+    return np.array([t_a] * 6 + [t_c] + [t_b] * 6), np.array([n_a] * 6 + [n_c] + [n_b] * 6)
+
+
+def _lowest_box_axis_deg(R, lo=0.26, hi=0.44):
+    """(M,) the lowest angle [deg] above the face plane of a tool axis (tip -> spindle) in the
+    (theta_A, theta_B) box [lo, hi]^2 about each frame (a 9 x 9 grid of the box, the
+    large-window recipe's by default)."""
+    from drakedeburr.frames.local_frames import axis_from_angles
+
+    g = np.linspace(lo, hi, 9)
+    a, b = np.meshgrid(g, g)
+    z_T = np.einsum("mij,kj->mki", R, axis_from_angles(a.ravel(), b.ravel()))  # spindle->tip
+    return np.degrees(np.arcsin(np.clip(-z_T[:, :, 2].min(axis=1), -1.0, 1.0)))
+
+
+@pytest.mark.parametrize("tilt", [-75.0, -50.0, 65.0])
+def test_a_corner_normal_outside_its_neighbours_span_is_bounded_by_them(tilt):
+    t, n = _staircase(tilt)
+    out, fixed = mut.side_consistent_normals(t, n, closed=False)
+    assert fixed == [6]
+    others = np.arange(len(n)) != 6
+    assert np.array_equal(out[others], n[others])
+    g = out[6]
+    # perpendicular to its tangent, on the arc between the two sides' normals (both level
+    # here): no further off the face plane than they are, no excess over their span
+    assert abs(g @ t[6]) < 1e-12 and abs(np.linalg.norm(g) - 1.0) < 1e-12
+    assert abs(g @ Z) < 1e-9
+    ang = lambda u, v: np.arccos(np.clip(u @ v, -1.0, 1.0))  # noqa: E731
+    assert ang(g, n[5]) + ang(g, n[7]) - ang(n[5], n[7]) < 1e-9
+    # the recipe's box about the bounded frame keeps every tool axis above the face plane,
+    # where about the estimate's frame it did not (independent: the box's axes in H)
+    low_before = _lowest_box_axis_deg(R_HL_from_normals(t, n))[6]
+    low_after = _lowest_box_axis_deg(R_HL_from_normals(t, out))
+    if tilt < -60.0:
+        assert low_before < 0.0, low_before
+    assert (low_after > 0.0).all() and low_after[6] > low_before, (low_before, low_after)
+
+
+def test_a_corner_normal_between_its_neighbours_and_smooth_corners_are_kept():
+    t, n = _staircase(0.0)  # the corner's normal the sides' bisector: within their span
+    out, fixed = mut.corner_bounded_normals(t, n, closed=False)
+    assert fixed == [] and out is n
+    # a round window of 24 points (15 deg a step: a 30 deg turn across the neighbours, no
+    # more), its normal 5 deg off Z x t at every other point: within the span's excess
+    s = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    tc = np.c_[-np.sin(s), np.cos(s), np.zeros_like(s)]
+    nc = np.cross(Z, tc)
+    nc[::2] = np.cos(np.radians(5.0)) * nc[::2] + np.sin(np.radians(5.0)) * Z
+    out, fixed = mut.side_consistent_normals(tc, nc)
+    assert fixed == [] and np.array_equal(out, nc)
+
+
+@pytest.mark.slow
+def test_audibot_corners_keep_the_axis_above_the_face_in_every_box(tmp_path, extdata):
+    """The audibot rim's windows 1 (CL 110), 3 (CL 177) and 8 (CL 53): a corner normal -50,
+    +53 and +65 deg to the face plane put the axis below it (windows 3 and 8 under the
+    narrowest theta box); bounded, every box gives targets."""
+    from dataclasses import replace
+
+    from drakedeburr.config import OrientationBounds
+    from drakedeburr.hub.import_mesh import import_mesh
+    from drakedeburr.hub.model import load_hub
+    from drakedeburr.plan.tool_paths import tool_path
+    from drakedeburr.plan.window_targets import WindowTargets
+
+    res = import_mesh(extdata / "wheel_models/audibot__wheel_rim_only_DERIVED_m.stl", tmp_path)
+    hub = load_hub(res.dir)
+    for lo, hi in ((0.0, 0.15), (0.09, 0.26), (0.26, 0.44)):
+        box = OrientationBounds(lo, hi)
+        params = replace(hub.process, bounds_large=box, bounds_small=box)
+        for w in (1, 3, 8):
+            tp = tool_path(hub.windows[w], params)
+            up = -tp.zT_H @ Z
+            assert (up > 0.0).all(), (w, lo, hi, np.flatnonzero(up <= 0.0))
+            wt = WindowTargets.from_tool_path(tp)
+            # independent: each frame's upright and the axis' tilt from it within the box
+            tilt = np.arccos(np.clip(np.sum(-tp.zT_H * -tp.R_HL[:, :, 2], axis=1), -1, 1))
+            assert tilt.max() <= np.hypot(hi, hi) + 1e-6
+            assert len(wt) == len(tp)
