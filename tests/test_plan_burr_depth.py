@@ -120,17 +120,19 @@ def test_a_square_edge_at_the_recipes_flank_moves_nothing():
     assert worst <= 0.0 and not offsets.any()
 
 
+@pytest.mark.parametrize("mode", ["FULL", "REPORT_ONLY"])
 @pytest.mark.parametrize("readings, moved, record", [
     ((-1e-5,), False, False),  # within: nothing moves, no record
     ((0.1e-3, -1e-6), True, False),  # moved once, then within
     ((0.2e-3, 0.15e-3, 0.12e-3, 0.1e-3), True, True),  # still too deep after every round
 ])
 def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readings, moved,
-                                                               record):
+                                                               record, mode):
     """The window loop (window._plan_window_once): each reading too deep plans the window
     again with the moved tool points; what moved is in the window's stats, and a window still
     deeper than the verifier's bound after the last round gets a failure record (which sends
-    it to the recipe relaxation)."""
+    it to the recipe relaxation). A report-only pass is relieved the same way: its plan is
+    the one a window failing in every recipe keeps and runs."""
     from drakedeburr.plan import window as mut
     from drakedeburr.plan.options import PlanOptions
     from drakedeburr.plan.results import WindowPlan, WindowStatus
@@ -160,7 +162,7 @@ def test_a_window_is_planned_again_with_its_tool_points_moved(monkeypatch, readi
         options=PlanOptions(workers=1), cell=SimpleNamespace(hub_sdf=Path("/hub/hub.sdf")),
         kin=SimpleNamespace(X_HT_from_q=lambda q: np.tile(np.eye(4), (len(q), 1, 1))),
         config=SimpleNamespace(tolerances=SimpleNamespace(edge_deviation=0.17e-3)))
-    out = mut._plan_window_once(ctx, wt, np.zeros(6), mut.RunMode.FULL)
+    out = mut._plan_window_once(ctx, wt, np.zeros(6), mut.RunMode[mode])
     assert len(planned) == min(len(readings), burr_depth.ROUNDS + 1)
     relief = getattr(out.stats, "chamfer_relief", None)
     assert (relief is not None) == moved
