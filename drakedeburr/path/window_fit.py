@@ -53,8 +53,8 @@ and the ``cl`` table): the fit used, the facets (count, median length, share of 
 largest sagitta), the chord error of the fit against the polygon (largest distance of the
 curve from the data polyline), the fit's largest curvature against the largest curvature the
 facets imply (corner turn over the mean of its two facets) and the inflections the fit adds;
-the bound the fit was held to, the largest distance of a point from the fit at its parameter,
-and the refit rounds.
+the bound the fit was held to, the largest distance of a point from the fit at its parameter
+and whether the fit was held (one pass: the offsets saturated once).
 """
 
 from __future__ import annotations
