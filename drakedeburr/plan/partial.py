@@ -334,7 +334,8 @@ def _joined(ctx: PlanContext, wt, parts: list, failures: list, loop: dict) -> Wi
     for (_, a, _), (_, b, run) in zip(parts[:-1], parts[1:], strict=True):
         js, _mv, recs = joint_stretch(ctx, a.stretches[-1].timed.q[-1], b.q_start,
                                       ctx.config.process.window_switch_speed, "transition",
-                                      f"window {wt.window_index} to CL {run.first}")
+                                      f"window {wt.window_index} to CL {run.first}",
+                                      wt.window_index)
         failures += recs
         stretches += [js, *b.stretches]
     idx_all = {id(st): idx for idx, p, _ in parts for st in p.stretches}

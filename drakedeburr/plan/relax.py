@@ -19,8 +19,11 @@ What is relaxed, in order, for a window whose plan leaves failure records:
    its clamp or the collet against something (a deep dish: the spindle body meets
    the dish wall whatever the tilt), the hub is planned again with the long-reach burr (the
    same head, 50 mm further out: ``drakedeburr.cell.tools.TOOL_VARIANTS``) and that plan kept
-   when fewer windows fail. One burr serves the whole hub (no tool change within a program);
-   the standard burr is stiffer, so it stays the default;
+   when it cuts better (:func:`better_cut`: a program whose moves all keep the clearance
+   beats one with a failing move; else no less edge, no window left wholly uncut that the
+   standard burr cut in part, and fewer windows failing or more edge cut). One burr serves
+   the whole hub (no tool change within a program); the standard burr is stiffer, so it
+   stays the default;
 3. nothing else is tried automatically: a slower feed does not make a motion feasible (the
    timing already slows wherever a limit binds), and a smaller head would cut another chamfer
    (a recipe change, the part's to make).
@@ -37,7 +40,7 @@ from __future__ import annotations
 
 import functools
 import logging
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from drakedeburr.cell.tools import DEFAULT_TOOL, tool_variant
 from drakedeburr.config import OrientationBounds
@@ -48,7 +51,8 @@ from drakedeburr.plan.types import FailureRecord
 __all__ = ["Deviation", "TILT_STEPS", "LONG_REACH", "relax_windows", "window_ladder",
            "milder_boxes", "box_targets", "refused_in_every_box", "keep_refused",
            "plan_ladder", "oriented", "first_cl_paths", "reach_may_help", "choose_tool",
-           "keep_standard", "failing_windows", "long_reach"]
+           "keep_standard", "failing_windows", "long_reach", "MOVE_KINDS", "EDGE_TIE",
+           "CutTally", "cut_tally", "better_cut"]
 
 log = logging.getLogger(__name__)
 
@@ -230,6 +234,73 @@ def long_reach():
     return tool_variant(LONG_REACH)
 
 
+#: failure kinds of a move off the cut (approach, retract, a joint move between stretches,
+#: windows or home) that misses the clearance: the program would run the arm or the tool body
+#: closer to the cell than the bound, so it cannot run as planned
+MOVE_KINDS = frozenset({"approach", "retract", "transition", "home"})
+#: two plans' cut edge lengths closer than this are the same cut [m] (well under one CL
+#: spacing: the same CL points cut give the same length to rounding)
+EDGE_TIE = 1e-3
+
+
+@dataclass(frozen=True)
+class CutTally:
+    """What a hub's plan cuts, as a cell engineer compares two plans of it.
+
+    Attributes:
+        runs: no move off the cut misses the clearance (no record of :data:`MOVE_KINDS`).
+        cut_m: window -> its edge cut [m] (a window cut whole: its loop; in part: the edge
+            of its planned stretches), for each window cut at least in part.
+        failing: the number of windows with failure records (-1, a move between windows or
+            home, counts as one).
+    """
+
+    runs: bool
+    cut_m: dict
+    failing: int
+
+    @property
+    def edge_m(self) -> float:
+        """The edge cut over all windows [m]."""
+        return float(sum(self.cut_m.values()))
+
+    def text(self) -> str:
+        """One line: edge cut, windows cut, failing windows, whether it runs."""
+        return (f"{1e3 * self.edge_m:.1f} mm of edge in {len(self.cut_m)} window(s), "
+                f"{self.failing} failing" + ("" if self.runs else ", a move off the cut "
+                                                                 "under the clearance"))
+
+
+def cut_tally(plan) -> CutTally:
+    """The :class:`CutTally` of a :class:`~drakedeburr.plan.results.PlanDraft` (its failure
+    records and its figures' per-window statistics; a draft without figures cuts nothing
+    that is counted, so two such are compared by their failing windows alone)."""
+    cut = {}
+    for s in (plan.record.figures or {}).get("windows") or ():
+        part = s.get("partial")
+        m = 1e-3 * float(part["cut_mm"]) if part else float(s.get("edge_length_m") or 0.0)
+        if m > 0:
+            cut[int(s["window"])] = m
+    return CutTally(runs=not any(f.kind in MOVE_KINDS for f in plan.failures), cut_m=cut,
+                    failing=len(failing_windows(plan)))
+
+
+def better_cut(alt: CutTally, base: CutTally) -> bool:
+    """Does the plan tallied ``alt`` cut the hub better than ``base`` (a tie keeps ``base``)?
+
+    1. A program whose moves all keep the clearance beats one that does not (a move under
+       the clearance is a collision risk: that program is not run, whatever it would cut).
+    2. Else ``alt`` must cut no less edge (within :data:`EDGE_TIE`) and every window
+       ``base`` cuts at least in part (a window wholly uncut is a part sent back), and then
+       leave fewer windows failing or cut more edge.
+    """
+    if alt.runs != base.runs:
+        return alt.runs
+    if alt.edge_m < base.edge_m - EDGE_TIE or not set(base.cut_m) <= set(alt.cut_m):
+        return False
+    return alt.failing < base.failing or alt.edge_m > base.edge_m + EDGE_TIE
+
+
 def failing_windows(plan) -> list[int]:
     """The windows with failure records (-1: a move between windows or home)."""
     return sorted({f.window for f in plan.failures})
@@ -307,19 +378,25 @@ def _standard_kept(plan, own: dict, left: list, how: str):
 
 def choose_tool(plan, alt):
     """The standard burr's plan or the long-reach one's (``alt``), both
-    :class:`~drakedeburr.plan.results.PlanDraft`: the long-reach plan only
-    when it leaves fewer windows failing (a tie keeps the standard burr, the stiffer). The
-    kept plan records the choice: a recipe deviation when it is the long-reach burr, else a
-    failure record per failing window saying what the long-reach burr left failing."""
+    :class:`~drakedeburr.plan.results.PlanDraft`: the long-reach plan only when it cuts the
+    hub better (:func:`better_cut` of their :func:`cut_tally`: a tie keeps the standard burr,
+    the stiffer). The kept plan records the choice: a recipe deviation when it is the
+    long-reach burr, else a failure record per failing window saying what the long-reach burr
+    left failing and cut."""
     a, b = failing_windows(plan), failing_windows(alt)
+    ta, tb = cut_tally(plan), cut_tally(alt)
     std, lr = tool_variant(DEFAULT_TOOL), long_reach()
-    if len(b) < len(a):
-        first = plan.failures[0]
+    if better_cut(tb, ta):
+        first = plan.failures[0] if plan.failures else None
         dev = Deviation(-1, "burr", std.title, lr.title,
                         f"the standard burr left window(s) {a} failing ({len(plan.failures)} "
-                        f"records; first: window {first.window}, {first.reason})")
-        log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing",
-                    std.title, lr.title, len(a), len(b))
+                        "records" + ("" if first is None else
+                                     f"; first: window {first.window}, {first.reason}")
+                        + f"); it cuts {ta.text()}, the {lr.title} {tb.text()}")
+        log.warning("burr changed for the hub: %s -> %s: %d -> %d window(s) failing "
+                    "(cut: %s -> %s)", std.title, lr.title, len(a), len(b), ta.text(),
+                    tb.text())
         return alt.with_deviations(back=(dev,))
     return _standard_kept(plan, _first_records(alt), b,
-                          f"was tried for the hub and left {len(b)} window(s) failing {b}")
+                          f"was tried for the hub and left {len(b)} window(s) failing {b} "
+                          f"(it cuts {tb.text()}; the standard burr {ta.text()})")

@@ -63,11 +63,13 @@ def time_joint(ctx: PlanContext, q, s, v_cap) -> TimedPath:
     return time_path(s, q, p, air_limits(ctx.limits(v_cap)), fk=ctx.kin.p_HT)
 
 
-def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
+def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label, window: int = -1
                   ) -> tuple[Stretch, object, list[FailureRecord]]:
     """A collision-free joint move ``q0 -> q1`` checked as executed (every ``joint_step``
     rad) against the acceptance bound with the burr head not filtered; returns the stretch,
-    the move and its failure records."""
+    the move and its failure records. ``window``: the window whose stretches the move joins
+    (a partial window's runs, :mod:`drakedeburr.plan.partial`), its records' window; -1 (the
+    default) a move between windows or home."""
     kin = ctx.kin
     bound = ctx.min_clearance + DISTANCE_SLACK
     mv = joint_move(ctx.cell, kin, ctx.free_checker, q0, q1, min_distance=bound,
@@ -77,7 +79,7 @@ def joint_stretch(ctx: PlanContext, q0, q1, v_cap, kind, label
     failures = []
     if not mv.ok:
         failures.append(FailureRecord(
-            window=-1, kind=kind, value=float(mv.clearance), limit=ctx.min_clearance, unit="m",
+            window=window, kind=kind, value=float(mv.clearance), limit=ctx.min_clearance, unit="m",
             tried=(mv.method,),
             reason=f"{label}: no collision-free joint move found (clearance "
                    f"{mv.clearance * 1e3:.2f} mm, {mv.method})"))
