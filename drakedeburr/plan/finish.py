@@ -8,7 +8,6 @@ import time
 import numpy as np
 
 from drakedeburr.plan.cut_path import least_axis_curvature
-from drakedeburr.plan.interpolate import track_poses
 from drakedeburr.plan.options import PlanContext
 from drakedeburr.plan.program_reading import rot_angle
 from drakedeburr.plan.results import (
@@ -21,7 +20,7 @@ from drakedeburr.plan.results import (
     WindowStatus,
 )
 from drakedeburr.plan.stretch import TargetPoint, make_target, time_cartesian
-from drakedeburr.plan.transitions import approach_pose
+from drakedeburr.plan.transitions import clear_retract
 from drakedeburr.plan.types import FailureRecord
 
 __all__ = ["finish_window", "box_share", "move_speeds"]
@@ -43,24 +42,26 @@ def box_share(wt, order: np.ndarray, q: np.ndarray, kin) -> float | None:
 
 
 def _approach_and_retract(ctx: PlanContext, wt, ex: ExecutedCut, failures: list):
-    """The tracked approach and retract (None if one is unreachable; recorded)."""
+    """The tracked approach and retract (None if one is unreachable; recorded): each along
+    the tool axis, or tilted toward +Z_H where that passes the cell under the clearance
+    (:func:`drakedeburr.plan.transitions.clear_retract`)."""
     X0, Xe = ex.cp.X_target[0], ex.cp.X_target[-1]
     d = ctx.options.approach_distance
     out = []
     for name, X, q0 in (("approach", X0, ex.cut.q[0]), ("retract", Xe, ex.cut.q[-1])):
-        path = track_poses(ctx.kin, np.stack([X, approach_pose(X, d)]), q0,
+        mv = clear_retract(ctx.kin, ctx.checker, X, q0, d, ctx.cut_clearance,
                            ctx.options.dense_step)
-        if not np.all(path.ok):
+        if mv is None:
             failures.append(FailureRecord(window=wt.window_index, kind=name,
                                           reason=f"{name} unreachable on the window's "
                                                  "configuration"))
             return None
-        dd = float(np.min(ctx.checker.min_distances_along(path.q[1:], ctx.min_clearance + 1e-3)))
+        dd = mv.clearance
         if dd < ctx.cut_clearance:
             failures.append(FailureRecord(window=wt.window_index, kind=name, value=float(dd),
-                                          limit=ctx.cut_clearance, unit="m",
+                                          limit=ctx.cut_clearance, unit="m", tried=mv.tried,
                                           reason=f"{name} clearance {dd * 1e3:.2f} mm"))
-        out.append(path)
+        out.append(mv.path)
     return out
 
 

@@ -416,7 +416,7 @@ def plan_hub(
     The hub is planned with ``config.tool`` on the cell's spindle; when that is not given and
     the standard burr leaves windows failing where the spindle body, clamp or collet meets
     something (a deep dish), the hub is planned again with the long-reach burr and that
-    plan kept when it leaves fewer windows failing (:func:`drakedeburr.plan.relax.choose_tool`:
+    plan kept when it cuts the hub better (:func:`drakedeburr.plan.relax.choose_tool`:
     one burr for the whole hub, no tool change within a program); the failing windows are
     planned with it first, and the rest only when it cuts one of them
     (:func:`drakedeburr.plan.policy.hub_pass`, :func:`~drakedeburr.plan.policy.long_reach_pass`),

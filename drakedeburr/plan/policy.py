@@ -14,8 +14,9 @@ The passes, in order (:func:`hub_pass` calls them):
    replaces are planned in full once for their report (:func:`report_only_pass`,
    :attr:`RunMode.REPORT_ONLY`);
 3. :func:`long_reach_pass`: where the standard burr's body blocked a window, the hub in the
-   long-reach cell (its failing windows first), kept when fewer windows fail
-   (:func:`drakedeburr.plan.relax.choose_tool`).
+   long-reach cell (its failing windows first), kept when it cuts the hub better
+   (:func:`drakedeburr.plan.relax.choose_tool`: what is cut, not the count of failure
+   entries; a program with a move under the clearance loses).
 
 How windows are planned and assembled in one cell is given to the policy as a
 :class:`CellPasses` (the planner's: :func:`drakedeburr.plan.planner.cell_passes`), so the

@@ -16,9 +16,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from drakedeburr.plan.interpolate import DensePath, track_poses
 from drakedeburr.plan.kinematics import CellKinematics, ClearanceChecker
 
-__all__ = ["JointMove", "approach_pose", "joint_move", "check_joint_samples", "tcp_line",
+__all__ = ["JointMove", "approach_pose", "RETRACT_TILTS", "retract_pose", "LinearMove",
+           "clear_retract", "joint_move", "check_joint_samples", "tcp_line",
            "rounded_corners", "faster_move"]
 
 log = logging.getLogger(__name__)
@@ -29,6 +31,67 @@ def approach_pose(X_HT: np.ndarray, distance: float) -> np.ndarray:
     X = np.array(X_HT, float)
     X[:3, 3] = X[:3, 3] - distance * X[:3, 2]
     return X
+
+
+#: tilts [rad] of a retract (and approach) off the tool axis toward the hub's face normal
+#: +Z_H, tried in turn where the move along the axis passes the cell closer than the bound:
+#: at a steep stretch's end the spindle body or collet can run within the clearance of the
+#: rim's wall while it backs out along its own axis; lifted out of the face it leaves it
+RETRACT_TILTS = np.radians((0.0, 30.0, 60.0, 90.0))
+
+
+def retract_pose(X_HT: np.ndarray, distance: float, tilt: float = 0.0) -> np.ndarray:
+    """The pose ``distance`` [m] from ``X_HT`` (same orientation) back along the tool axis
+    turned by ``tilt`` [rad] toward +Z_H (at most onto +Z_H); ``tilt`` 0 is
+    :func:`approach_pose`, bit for bit."""
+    if tilt == 0.0:
+        return approach_pose(X_HT, distance)
+    a = -np.asarray(X_HT, float)[:3, 2]
+    z = np.array([0.0, 0.0, 1.0])
+    phi = float(np.arccos(np.clip(a @ z, -1.0, 1.0)))
+    perp = z - (a @ z) * a
+    if phi < 1e-9 or np.linalg.norm(perp) < 1e-12:  # the axis on +-Z_H: no turn toward it
+        return approach_pose(X_HT, distance)
+    t = min(float(tilt), phi)
+    u = np.cos(t) * a + np.sin(t) * perp / np.linalg.norm(perp)
+    X = np.array(X_HT, float)
+    X[:3, 3] = X[:3, 3] + distance * u
+    return X
+
+
+@dataclass(frozen=True, eq=False)
+class LinearMove:
+    """A linear move off the cut (a retract from a stretch's end; an approach is its reverse)
+    and its clearance: ``path`` (the tracked dense poses from the cut's end), ``clearance``
+    [m] (least over its samples after the first, the cut's own end), ``tilt`` [rad] off the
+    tool axis toward +Z_H (:data:`RETRACT_TILTS`), ``tried`` the tilts read (deg)."""
+
+    path: DensePath
+    clearance: float
+    tilt: float
+    tried: tuple[str, ...] = ()
+
+
+def clear_retract(kin: CellKinematics, checker: ClearanceChecker, X_HT: np.ndarray,
+                  q0: np.ndarray, distance: float, bound: float, step: float
+                  ) -> LinearMove | None:
+    """The retract of ``distance`` [m] from the cut's end ``X_HT`` (joints ``q0``): along the
+    tool axis when every sample keeps ``bound`` [m] (``checker``: the burr's contact with the
+    part filtered, as on the cut), else the first of :data:`RETRACT_TILTS` toward +Z_H that
+    does; where none does, the one of least shortfall (its clearance says by how much). None
+    when no tilt's move is reachable on ``q0``'s branch. Deterministic."""
+    best, tried = None, []
+    for tilt in RETRACT_TILTS:
+        path = track_poses(kin, np.stack([X_HT, retract_pose(X_HT, distance, tilt)]), q0, step)
+        tried.append(f"{np.degrees(tilt):.0f} deg")
+        if not np.all(path.ok):
+            continue
+        d = float(np.min(checker.min_distances_along(path.q[1:], bound + 1e-3)))
+        if best is None or d > best.clearance:
+            best = LinearMove(path=path, clearance=d, tilt=float(tilt))
+        if d >= bound:
+            break
+    return None if best is None else replace(best, tried=tuple(tried))
 
 
 @dataclass(frozen=True, eq=False)
