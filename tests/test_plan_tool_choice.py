@@ -121,3 +121,29 @@ def test_without_figures_the_failing_windows_decide_as_before():
     assert better_cut(cut_tally(PlanDraft(failures=(_uncut(1),))), cut_tally(std))
     assert not better_cut(cut_tally(PlanDraft(failures=(_uncut(2), _uncut(3)))),
                           cut_tally(std))
+
+
+def test_the_failing_windows_first_keep_the_standard_burr_when_cut_no_better():
+    """policy.long_reach_pass: the standard burr cuts windows 0-2 whole and 3, 4 in part;
+    the long-reach burr, tried on windows 3 and 4 first, cuts window 4 whole but none of
+    window 3 (fewer failing windows there, the old rule planned the hub again): it cannot
+    cut the hub better, the standard plan is kept without planning the hub again. Cutting
+    both whole, the hub is planned with it."""
+    from drakedeburr.plan.policy import long_reach_pass
+
+    std = _draft({0: LOOP_MM, 1: LOOP_MM, 2: LOOP_MM, 3: 200.0, 4: 100.0})
+    made = []
+
+    def plan_long_reach(only, first):
+        made.append(only)
+        return first if only is not None else _draft(
+            {w: LOOP_MM for w in range(5)}, tool=LONG_REACH)
+
+    worse = _draft({4: LOOP_MM}, (_uncut(3),), tool=LONG_REACH)
+    kept = long_reach_pass(std, range(5), lambda only: plan_long_reach(only, worse))
+    assert made == [{3, 4}] and kept.record.tool is None
+    assert "cut them no better" in kept.failures[-1].reason
+    made.clear()
+    whole = _draft({3: LOOP_MM, 4: LOOP_MM}, tool=LONG_REACH)
+    kept = long_reach_pass(std, range(5), lambda only: plan_long_reach(only, whole))
+    assert made == [{3, 4}, None] and kept.record.tool == LONG_REACH

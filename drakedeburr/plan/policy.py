@@ -190,9 +190,12 @@ def long_reach_pass(standard: PlanDraft, windows: Sequence[int],
     The windows the standard burr left failing are planned first (``plan_long_reach(only)``:
     in the long-reach cell placed for the whole hub, as the full pass places it). A window's
     plan depends only on the cell, the placement and its own targets, so one that fails there
-    (its milder recipes included, and no move between windows failing) fails in the full pass
-    too; when every such window does, the long-reach plan cannot leave fewer windows failing,
-    and the other windows are not planned again (:func:`drakedeburr.plan.relax.keep_standard`).
+    (its milder recipes included, and no move between windows failing) is cut the same in the
+    full pass too; the other windows the standard burr cuts whole, so when the long-reach plan
+    of the failing windows does not cut them better (:func:`drakedeburr.plan.relax.better_cut`
+    against the standard plan's tally of those windows), its plan of the hub cannot cut it
+    better, and the other windows are not planned again
+    (:func:`drakedeburr.plan.relax.keep_standard`).
 
     Before either, when no move between windows failed, the long-reach burr's tool pre-check
     is asked of the failing windows (``refused``): when it refuses each of them in the
@@ -222,7 +225,10 @@ def long_reach_pass(standard: PlanDraft, windows: Sequence[int],
     if -1 not in failing and len(failing) < len(windows):
         first = plan_long_reach(set(failing))
         still = relax.failing_windows(first)
-        if -1 not in still and set(failing) <= set(still):
+        # the other windows the standard burr cuts whole: the long-reach plan of the hub
+        # cuts better only where it cuts these better
+        if -1 not in still and not relax.better_cut(relax.cut_tally(first),
+                                                    relax.cut_tally(standard, failing)):
             return relax.keep_standard(standard, first)
         log.warning("the %s cuts window(s) %s: planning the hub with it",
                     relax.long_reach().title, sorted(set(failing) - set(still)))

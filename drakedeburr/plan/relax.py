@@ -271,18 +271,21 @@ class CutTally:
                                                                  "under the clearance"))
 
 
-def cut_tally(plan) -> CutTally:
+def cut_tally(plan, windows=None) -> CutTally:
     """The :class:`CutTally` of a :class:`~drakedeburr.plan.results.PlanDraft` (its failure
     records and its figures' per-window statistics; a draft without figures cuts nothing
-    that is counted, so two such are compared by their failing windows alone)."""
+    that is counted, so two such are compared by their failing windows alone); ``windows``:
+    of those windows alone (their records and the moves between windows), or None: all."""
+    keep = (lambda w: True) if windows is None else (lambda w: w in set(windows) or w == -1)
     cut = {}
     for s in (plan.record.figures or {}).get("windows") or ():
         part = s.get("partial")
         m = 1e-3 * float(part["cut_mm"]) if part else float(s.get("edge_length_m") or 0.0)
-        if m > 0:
+        if m > 0 and keep(int(s["window"])):
             cut[int(s["window"])] = m
-    return CutTally(runs=not any(f.kind in MOVE_KINDS for f in plan.failures), cut_m=cut,
-                    failing=len(failing_windows(plan)))
+    failures = [f for f in plan.failures if keep(f.window)]
+    return CutTally(runs=not any(f.kind in MOVE_KINDS for f in failures), cut_m=cut,
+                    failing=len({f.window for f in failures}))
 
 
 def better_cut(alt: CutTally, base: CutTally) -> bool:
@@ -321,12 +324,15 @@ def reach_may_help(plan, cell) -> bool:
 
 def keep_standard(plan, first):
     """The standard burr's ``plan`` kept: the long-reach burr, tried first on the windows it
-    left failing (``first``: the plan of those windows alone, placed for the whole hub),
-    left every one of them failing; a failure record per window says so."""
+    left failing (``first``: the plan of those windows alone, placed for the whole hub), cut
+    them no better (:func:`better_cut` against the standard plan's tally of those windows);
+    a failure record per window says so."""
+    mine = cut_tally(plan, [w for w in failing_windows(plan) if w >= 0])
     return _standard_kept(plan, _first_records(first), failing_windows(first),
                           f"was tried on window(s) {failing_windows(plan)} first "
-                          "(the hub placed for it as a whole) and left them "
-                          "failing, so the hub was not planned again with it")
+                          "(the hub placed for it as a whole) and cut them no "
+                          f"better ({cut_tally(first).text()}; the standard burr "
+                          f"{mine.text()}), so the hub was not planned again with it")
 
 
 def keep_refused(plan, refused: dict):
