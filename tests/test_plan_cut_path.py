@@ -285,3 +285,37 @@ def test_no_target_is_held_where_the_cones_turn_smoothly():
     assert mut.target_cones_held(c_read, C, bp.target_index, None, 10e-3) is None
     assert mut.target_cones_held(c_read, C, bp.target_index, np.ones(len(bp.s), bool),
                                  10e-3) is None
+
+
+def test_a_free_target_keeps_the_axis_margin_inside_its_own_cone_after_a_cone_jump(monkeypatch):
+    """Audibot window 6 CL 137 -> 138 (a bounded corner normal): the cone turns 44.5 deg over a
+    0.2 mm move; the corner target's reading at its sample is off its own cone by more than
+    the free samples' margin (10 mrad here). Held in its own cone, the target keeps that
+    margin; before it kept 4 mrad (the plan's own target came out 6.5 mrad outside)."""
+    half, margin = 0.1197, 10e-3
+    moves = np.array([5.0, 0.93, 0.2, 0.94, 7.0]) * 1e-3
+    bends = np.radians([2.0, 30.0, 25.0, 3.0])
+    ang = np.concatenate([[0.0], np.cumsum(np.radians([2.0, 30.6, 44.5, 4.9, 0.5]))])
+    P = np.zeros((len(moves) + 1, 3))
+    h = 0.0
+    for i, L in enumerate(moves):
+        h += bends[i - 1] if i else 0.0
+        P[i + 1] = P[i] + L * np.array([np.cos(h), np.sin(h), 0.0])
+    C = np.array([_about_x(a) for a in ang])
+    lean = ang + np.array([0.0, 0.0, half - 1e-6, -half + 1e-6, 0.0, 0.0])
+    X = np.tile(np.eye(4), (len(P), 1, 1))
+    X[:, :3, 3] = P
+    for i, a in enumerate(lean):
+        z = -_about_x(a)
+        x = np.cross([0, 1.0, 0], z)
+        x /= np.linalg.norm(x)
+        X[i, :3, :3] = np.stack([x, np.cross(z, x), z], 1)
+    shape = mut.CutPathOptions(step=0.125e-3, axes=mut.AxisSmoothing(margin=margin))
+
+    def own_margins():
+        a = -mut.cut_path(X, C, half, shape, deviation=0.03e-3).X_target[:, :3, 2]
+        return half - np.arccos(np.clip(np.sum(a * C, axis=1), -1.0, 1.0))
+
+    assert own_margins().min() >= margin - 1e-6
+    monkeypatch.setattr(mut, "target_cones_held", lambda *args: None)
+    assert own_margins().min() < margin - 1e-3
