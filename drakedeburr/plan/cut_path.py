@@ -39,7 +39,8 @@ from drakedeburr.plan.program_reading import cone_axes_on_moves
 log = logging.getLogger(__name__)
 
 __all__ = ["BlendedPath", "blend_corners", "AxisSmoothing", "smooth_axes",
-           "least_axis_curvature", "CutPath", "CutPathOptions", "cut_path", "axes_interp"]
+           "least_axis_curvature", "CutPath", "CutPathOptions", "cut_path", "axes_interp",
+           "target_cones_held"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,7 +192,8 @@ class AxisSmoothing:
 
 def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_angle: float,
                 weights: AxisSmoothing = AxisSmoothing(), pin: np.ndarray | None = None,
-                pin_axes: np.ndarray | None = None) -> np.ndarray:
+                pin_axes: np.ndarray | None = None,
+                held: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Smoothest tool-axis curve inside per-sample cones (a second-order cone program).
 
     Minimises ``w_rate * sum |du/ds|^2 ds + w_curv * sum |d2u/ds2|^2 ds + w_pref * sum |u -
@@ -207,6 +209,9 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
             preferred one (where the smoothed axis cost clearance: the preferred axes come
             from the clearance-constrained IK); pin_axes: (N, 3) the axes to stay near
             (default ``a_pref``).
+        held: (sample indices (H,), unit cone axes (H, 3)): samples whose axis must also lie
+            in these cones, with the sample's own margin (a program target's own cone where
+            the reading at its sample is off it, :func:`target_cones_held`).
 
     Returns:
         (N, 3) unit axes, or None if the program fails (no axis curve in the cones).
@@ -255,6 +260,9 @@ def smooth_axes(s: np.ndarray, a_pref: np.ndarray, cone_axis: np.ndarray, half_a
     cl = c @ E  # cone axes in the (e1, e2, z0) basis
     for i in range(N):
         _add_cone(prog, u[i], cl[i], cos_i[i])
+    if held is not None:
+        for i, axis in zip(np.asarray(held[0], int), np.asarray(held[1], float) @ E, strict=True):
+            _add_cone(prog, u[i], axis / np.linalg.norm(axis), cos_i[i])
     if pin is not None:
         ap = (a_pref if pin_axes is None else np.asarray(pin_axes, float)) @ E
         ap /= np.linalg.norm(ap, axis=1, keepdims=True)
@@ -417,9 +425,12 @@ def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: floa
     R = Rotation.from_quat(quat / np.linalg.norm(quat, axis=1, keepdims=True)).as_matrix()
     # the cone where the verifier reads it (on the program's moves); by travel where that
     # leaves the smoothing no axis (at a pinned sample of a tight corner)
-    kw = dict(weights=options.axes, pin=_in_intervals(bp.s, pin), pin_axes=a_ik)
-    a = smooth_axes(bp.s, -R[:, :, 2], cone_axes_on_moves(bp.p, X_targets[:, :3, 3],
-                                                          cone_retract_H), half_angle, **kw)
+    pin_s = _in_intervals(bp.s, pin)
+    c_read = cone_axes_on_moves(bp.p, X_targets[:, :3, 3], cone_retract_H)
+    kw = dict(weights=options.axes, pin=pin_s, pin_axes=a_ik,
+              held=target_cones_held(c_read, cone_retract_H, bp.target_index, pin_s,
+                                     options.axes.margin))
+    a = smooth_axes(bp.s, -R[:, :, 2], c_read, half_angle, **kw)
     if a is None:
         log.debug("no smooth axis inside the cones read on the moves; reading them by travel")
         a = smooth_axes(bp.s, -R[:, :, 2], axes_interp(ts, cone_retract_H, bp.s), half_angle,
@@ -443,6 +454,33 @@ def cut_path(X_targets: np.ndarray, cone_retract_H: np.ndarray, half_angle: floa
     Xt[:, :3, :3] = R[bp.target_index]
     return CutPath(X_HT=X, s=bp.s, target_index=bp.target_index, X_target=Xt, zone=bp.zone,
                    psi_ik=psi_ik)
+
+
+def target_cones_held(c_read: np.ndarray, cone: np.ndarray, target_index: np.ndarray,
+                      pin: np.ndarray | None, margin: float
+                      ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The targets whose axis the axis program also holds in their own cone: those whose cone
+    as read at their sample on the moves (``c_read`` (N, 3)) is more than half the sample's
+    margin (``margin``; ``min(PIN_MARGIN, margin)`` where ``pin``) off their own cone axis
+    (``cone`` (K, 3)). At a corner the blend passes its target up to its deviation inside, and
+    the projection on the moves reads the cone a share of a move before or after the target:
+    where the cone turns fast there (audibot rim window 7 CL 46 -> 47: 27 deg over 0.46 mm, the
+    neighbouring cones of half-angle 7.1 deg apart) that share is 0.63 mrad of cone turn, more
+    than the pinned margin, and the program's target came out 0.11 mrad outside its own cone.
+    Elsewhere the reading is within a few urad of the target's cone: no target is held.
+    Returns (sample indices, cone axes) or None."""
+    idx = np.asarray(target_index, int)
+    m = np.full(len(idx), margin)
+    if pin is not None:
+        m[np.asarray(pin, bool)[idx]] = min(PIN_MARGIN, margin)
+    cos_off = np.sum(c_read[idx] * cone, axis=1)
+    off = np.arctan2(np.linalg.norm(np.cross(c_read[idx], cone), axis=1), cos_off)
+    sel = np.flatnonzero(off > 0.5 * m)
+    if sel.size == 0:
+        return None
+    log.debug("axis program: %d target(s) also held in their own cone (reading off by up to "
+              "%.2f mrad)", sel.size, 1e3 * float(off[sel].max()))
+    return idx[sel], np.asarray(cone, float)[sel]
 
 
 def _in_intervals(s: np.ndarray, iv: np.ndarray | None) -> np.ndarray | None:
