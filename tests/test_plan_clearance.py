@@ -234,3 +234,37 @@ def test_the_planning_bound_covers_what_hides_between_two_samples():
         worst = max(worst, ends.min() - dist[inside].min())
     assert worst <= margin
     assert ctx.cut_clearance - worst >= d
+
+
+def test_a_configuration_read_again_gives_the_readings_of_a_fresh_checker(cell_path,
+                                                                          monkeypatch):
+    """ClearanceChecker.pairs_within keeps its answers per configuration: a repeat is served
+    without a query, and every answer equals that of a checker that never read before."""
+    from drakedeburr.plan.kinematics import ClearanceChecker
+
+    cell, kin, checker, q = cell_path
+    rows = q[:: max(1, len(q) // 8)]
+    first = [checker.pairs_within(qi, 5e-3) for qi in rows]
+    queried = []
+    real = type(checker)._pairs
+    monkeypatch.setattr(type(checker), "_pairs",
+                        lambda self, *a: queried.append(1) or real(self, *a))
+    again = [checker.pairs_within(qi.copy(), 5e-3) for qi in rows]
+    assert not queried and again == first
+    again[0].append("x")  # a caller's change does not reach the memo
+    assert checker.pairs_within(rows[0], 5e-3) == first[0]
+    fresh = ClearanceChecker(cell, filter_burr_contact=checker.filter_burr_contact,
+                             tolerances=checker.tolerances)
+    assert [fresh.pairs_within(qi, 5e-3) for qi in rows] == first
+    assert [checker.distance(qi, 5e-3) for qi in rows] == [fresh.distance(qi, 5e-3)
+                                                           for qi in rows]
+    # the memo keys the distance too: a wider look is a new query, and finds at least as much
+    queried.clear()  # (the fresh checker queried)
+    wider = [checker.pairs_within(qi, 8e-3) for qi in rows]
+    assert queried and all(len(w) >= len(f) for w, f in zip(wider, first, strict=True))
+    # geometric truth: the readings are distances of the pairs at those poses (Drake's own
+    # signed distance of the pair is never below the certified reading)
+    for qi, pairs in zip(rows, first, strict=True):
+        query = fresh.query_at(qi)
+        for (a, b), d in pairs:
+            assert d <= query.ComputeSignedDistancePairClosestPoints(a, b).distance + 1e-12

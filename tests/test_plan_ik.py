@@ -426,3 +426,39 @@ def test_the_ik_clearance_bounds_follow_the_tolerance(fillet):
         assert (got is not None) == accepted, (shift, d)
         if accepted:
             assert got[1] == pytest.approx(d, abs=1e-9)
+
+
+def test_a_program_solved_again_is_answered_from_the_memo_with_the_same_bits(fillet,
+                                                                              monkeypatch):
+    from pydrake.solvers import SnoptSolver
+
+    import drakedeburr.plan.ik as mut
+
+    opts = mut.IkOptions(analytic_first=False)
+    ctx = _context(fillet, opts)
+    mut._SOLVED.pop(ctx.checker, None)
+    first = mut.solve_window_ik(ctx, _targets(fillet), fillet[0].q_home)
+    assert mut._SOLVED[ctx.checker]  # every target ran the Drake program
+    calls = []
+    real = mut._solve_program
+    monkeypatch.setattr(mut, "_solve_program", lambda *a: calls.append(1) or real(*a))
+    again = mut.solve_window_ik(ctx, _targets(fillet), fillet[0].q_home)
+    assert not calls  # the same window again: every program answered from the memo
+    assert again.q.tobytes() == first.q.tobytes() and again.ok.tolist() == first.ok.tolist()
+    assert again.X_HT.tobytes() == first.X_HT.tobytes()
+    # the memo's answer is the program's own: solved afresh, the same bits
+    run = SimpleNamespace(cell=fillet[0], checker=ctx.checker, lift=fillet[5],
+                          half=max(float(fillet[3].cone_half_angle), 1e-3))
+    tg, solver, q1 = _targets(fillet).at(1), SnoptSolver(), first.q[0]
+    served = mut._solve_point(run, tg, q1, q1, False, solver, opts)
+    fresh = real(run, tg, q1, q1, False, solver, opts)
+    assert served[0] == fresh[0] and served[1].tobytes() == fresh[1].tobytes()
+    served[1][:] = 0.0  # a caller's change does not reach the memo
+    assert mut._solve_point(run, tg, q1, q1, False, solver, opts)[1].tobytes() == \
+        fresh[1].tobytes()
+    # and the solutions hold the program's constraints (Drake's FK and distances)
+    err, ang, clear = _drake_recheck(fillet, again.q, opts)
+    assert first.ok.all()
+    assert np.all(err <= 10 * opts.position_tolerance)
+    assert np.all(ang <= fillet[3].cone_half_angle + 1e-6)
+    assert np.all(clear >= opts.min_distance - 1e-5)

@@ -96,3 +96,66 @@ def test_an_axis_into_the_hub_on_a_climbing_edge_names_the_slope():
                                          r"point 0 at \[150\.0, 0\.0, 0\.0\] mm .* runs at 90 "
                                          r"deg to the face plane"):
         WindowTargets.from_tool_path(tp)
+
+
+def _X_HT_np_cross(p_HT, retract_H, t_H, spin=0.0):
+    """X_HT_from_axis as written before its cross products were spelled out (np.cross)."""
+    p = np.atleast_2d(np.asarray(p_HT, float))
+    z = -_unit(np.atleast_2d(np.asarray(retract_H, float)))
+    t = np.atleast_2d(np.asarray(t_H, float))
+    e1 = _unit(t - np.sum(t * z, axis=-1, keepdims=True) * z)
+    e2 = np.cross(z, e1)
+    s = np.broadcast_to(np.asarray(spin, float), (p.shape[0],))[:, None]
+    x = np.cos(s) * e1 + np.sin(s) * e2
+    y = np.cross(z, x)
+    X = np.zeros((p.shape[0], 4, 4))
+    X[:, :3, 0], X[:, :3, 1], X[:, :3, 2], X[:, :3, 3] = x, y, z, p
+    X[:, 3, 3] = 1.0
+    return X
+
+
+@pytest.mark.parametrize("shape_a, shape_b", [((1000, 3), (1000, 3)), ((3,), (3,)),
+                                              ((3,), (500, 3)), ((7, 9, 3), (9, 3))])
+def test_cross_is_np_cross_bit_for_bit(shape_a, shape_b):
+    rng = np.random.default_rng(42)
+    for scale in (1e-9, 1.0, 1e6):
+        a = rng.normal(size=shape_a) * scale
+        b = rng.normal(size=shape_b) * rng.uniform(0.5, 2.0, shape_b)
+        got, ref = mut.cross(a, b), np.cross(a, b)
+        assert got.shape == ref.shape
+        assert got.tobytes() == ref.tobytes()
+        # and geometric truth: orthogonal to both factors, |a x b| = |a||b| sin(angle)
+        if len(shape_a) == len(shape_b) == 2:
+            assert np.allclose(np.sum(got * a, axis=-1), 0.0, atol=1e-9 * scale ** 2)
+            na, nb = np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1)
+            cos = np.sum(a * b, axis=-1) / (na * nb)
+            np.testing.assert_allclose(np.linalg.norm(got, axis=-1),
+                                       na * nb * np.sqrt(1 - cos ** 2), rtol=1e-6)
+
+
+def test_X_HT_from_axis_and_spin_of_equal_the_np_cross_versions_bit_for_bit():
+    rng = np.random.default_rng(7)
+    m = 2000
+    p = rng.normal(size=(m, 3)) * 0.3
+    a = _unit(rng.normal(size=(m, 3)))
+    t = rng.normal(size=(m, 3))
+    for spin in (0.0, -1.1, np.float64(2.5), rng.uniform(-np.pi, np.pi, m)):
+        X = mut.X_HT_from_axis(p, a, t, spin)
+        assert X.tobytes() == _X_HT_np_cross(p, a, t, spin).tobytes()
+        z = X[:, :3, 2]
+        e1 = _unit(t - np.sum(t * z, axis=-1, keepdims=True) * z)
+        e2 = np.cross(z, e1)
+        ref = np.arctan2(np.sum(X[:, :3, 0] * e2, axis=-1), np.sum(X[:, :3, 0] * e1, axis=-1))
+        assert mut.spin_of(X, t).tobytes() == ref.tobytes()
+    one = mut.X_HT_from_axis(p[0], a[0], t[0], 0.3)
+    assert one.tobytes() == _X_HT_np_cross(p[0], a[0], t[0], 0.3).tobytes()
+
+
+def test_unit_rows_equal_np_linalg_norm_division_bit_for_bit():
+    rng = np.random.default_rng(3)
+    for shape in ((1000, 3), (3,), (5, 7, 3), (1, 3)):
+        v = rng.normal(size=shape) * rng.choice([1e-8, 1.0, 1e5], size=shape[:-1] + (1,))
+        ref = v / np.linalg.norm(v, axis=-1, keepdims=True)
+        got = mut._unit(v)
+        assert got.tobytes() == ref.tobytes()
+        np.testing.assert_allclose(np.linalg.norm(got, axis=-1), 1.0, rtol=1e-15, atol=0)

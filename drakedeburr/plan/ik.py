@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import logging
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
@@ -262,8 +263,42 @@ def _solver_options(solver_id, options: IkOptions, with_distance: bool = False):
     return so
 
 
+#: the target programs solved in this process, per checker (its cell and collision filters):
+#: the policy's passes (first pass, milder recipes, report-only pass) and the retries of a
+#: window solve many programs again with the same data (audibot rim: 1 in 5), and a program's
+#: solution is a function of that data (SNOPT / IPOPT are deterministic; re-solved, every
+#: repeat gave the same bits)
+_SOLVED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: programs kept per checker at most (the oldest dropped first)
+SOLVED_MEMO_SIZE = 20000
+
+
+def _program_key(run: _WindowRun, tg: IkTarget, q_prev: np.ndarray, q_seed: np.ndarray,
+                 with_distance: bool, solver, options: IkOptions) -> bytes:
+    """Everything :func:`_solve_program` reads, as bytes (the checker, hence the cell and its
+    filters, keys the memo itself)."""
+    arrays = (tg.p_HT, tg.cone_retract_H, tg.pref_retract_H, q_prev, q_seed,
+              (run.lift, run.half, float(with_distance)))
+    return (b"".join(np.asarray(a, float).tobytes() for a in arrays)
+            + solver.solver_id().name().encode() + repr(options).encode())
+
+
 def _solve_point(run: _WindowRun, tg: IkTarget, q_prev: np.ndarray, q_seed: np.ndarray,
                  with_distance: bool, solver, options: IkOptions) -> tuple[bool, np.ndarray]:
+    """:func:`_solve_program`, answered from :data:`_SOLVED` when the same program was solved
+    before in this process (a fresh copy of its solution)."""
+    memo = _SOLVED.setdefault(run.checker, {})
+    key = _program_key(run, tg, q_prev, q_seed, with_distance, solver, options)
+    if key not in memo:
+        if len(memo) >= SOLVED_MEMO_SIZE:
+            del memo[next(iter(memo))]
+        memo[key] = _solve_program(run, tg, q_prev, q_seed, with_distance, solver, options)
+    ok, q = memo[key]
+    return ok, q.copy()
+
+
+def _solve_program(run: _WindowRun, tg: IkTarget, q_prev: np.ndarray, q_seed: np.ndarray,
+                   with_distance: bool, solver, options: IkOptions) -> tuple[bool, np.ndarray]:
     from pydrake.multibody.inverse_kinematics import InverseKinematics
 
     cell = run.cell
@@ -295,7 +330,7 @@ def _solve_point(run: _WindowRun, tg: IkTarget, q_prev: np.ndarray, q_seed: np.n
     prog.SetInitialGuess(q, np.clip(q_seed, lo, hi))
     result = solver.Solve(prog, np.clip(q_seed, lo, hi),
                           _solver_options(solver.solver_id(), options, with_distance))
-    return bool(result.is_success()), result.GetSolution(q)
+    return bool(result.is_success()), np.array(result.GetSolution(q), float)
 
 
 def solve_window_ik(

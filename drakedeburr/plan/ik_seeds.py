@@ -18,7 +18,7 @@ from drakedeburr.plan.kinematics import (
     CellKinematics,
     ClearanceChecker,
 )
-from drakedeburr.plan.targets import X_HT_from_axis
+from drakedeburr.plan.targets import X_HT_from_axis, cross
 
 if TYPE_CHECKING:
     from drakedeburr.plan.ik import IkOptions
@@ -164,7 +164,7 @@ def analytic_seed(kin: CellKinematics, X_prev: np.ndarray, p_HT: np.ndarray,
     if np.linalg.norm(x) < 1e-6:
         return q_prev
     x /= np.linalg.norm(x)
-    y = np.cross(z, x)
+    y = cross(z, x)
     psi = np.linspace(-spin_span, spin_span, spin_samples)
     X = np.repeat(np.eye(4)[None], spin_samples, axis=0)
     X[:, :3, 0] = np.cos(psi)[:, None] * x + np.sin(psi)[:, None] * y

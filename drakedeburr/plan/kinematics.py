@@ -25,6 +25,10 @@ from drakedeburr.frames.vectors import inverse_transform
 
 #: cone probe results kept per checker (:meth:`ClearanceChecker.memo_probe`), at most this many
 PROBE_MEMO_SIZE = 4096
+#: :meth:`ClearanceChecker.pairs_within` answers kept per checker (the oldest dropped first):
+#: the same configuration is read again by the policy's passes and the IK's retries (a
+#: quarter of the audibot rim's reads), and a reading is a function of the configuration
+PAIRS_MEMO_SIZE = 20000
 
 __all__ = ["CellKinematics", "ClearanceChecker", "cell_kinematics", "resolve_level",
            "DISTANCE_SLACK", "NARROWPHASE_SLACK", "JOINT_WEIGHTS", "WRIST_MARGIN"]
@@ -260,6 +264,7 @@ class ClearanceChecker:
     #: motion bound (``clearance._counted``: ``(bound, pairs)``)
     probes: dict = field(init=False, default_factory=dict, repr=False)
     counted: tuple | None = field(init=False, default=None, repr=False)
+    _read: dict = field(init=False, default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
@@ -389,8 +394,15 @@ class ClearanceChecker:
     def pairs_within(self, q: np.ndarray, max_distance: float) -> list:
         """(pair ids, certified reading [m]) of every unfiltered pair whose certified reading
         is within ``max_distance`` [m] at ``q``; Drake is asked ``NARROWPHASE_SLACK`` farther
-        so that a pair its narrow phase reads too far is still found."""
-        return self._pairs(self.query_at(q), max_distance)
+        so that a pair its narrow phase reads too far is still found. Kept per configuration
+        and distance (:data:`PAIRS_MEMO_SIZE`): a configuration read again is answered with
+        the same readings without posing the context."""
+        key = (np.asarray(q, float).tobytes(), float(max_distance))
+        if key not in self._read:
+            if len(self._read) >= PAIRS_MEMO_SIZE:
+                del self._read[next(iter(self._read))]
+            self._read[key] = tuple(self._pairs(self.query_at(q), max_distance))
+        return list(self._read[key])
 
     def _pairs(self, query, max_distance: float) -> list:
         """:meth:`pairs_within` on a posed ``query``."""
