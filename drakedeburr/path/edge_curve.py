@@ -25,7 +25,8 @@ from drakedeburr.errors import InputError
 from drakedeburr.path.brent import minimize_bounded_batch
 
 __all__ = ["EdgeCurve", "fit_edge_curve", "fit_faceted_curve", "facet_sagitta",
-           "polygon_facets", "chord_parameters", "polyline_fit_report"]
+           "polygon_facets", "chord_parameters", "polyline_fit_report", "checked_loop",
+           "edge_curve_of_spline"]
 
 # samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
 _GAUSS_ORDER = 8
@@ -296,6 +297,18 @@ def _edge_curve(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
     s_table = np.concatenate([[0.0], np.cumsum(ds)])
     return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
                      length=float(s_table[-1]))
+
+
+def checked_loop(p: np.ndarray, name: str = "edge") -> np.ndarray:
+    """The (N, 3) points of a closed loop as every fit takes them (N >= 5, finite, no repeated
+    consecutive points, a repeated closing point dropped). Raises InputError otherwise."""
+    return _checked_loop(p, name)
+
+
+def edge_curve_of_spline(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
+    """The EdgeCurve of a periodic cubic ``spline`` on [0, 1) whose data points ``p`` (N, 3)
+    sit at the parameters ``u`` (N + 1,: increasing from 0, the last one 1)."""
+    return _edge_curve(spline, u, p)
 
 
 def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:

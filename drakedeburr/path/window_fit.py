@@ -72,6 +72,11 @@ from drakedeburr.path.edge_curve import (
     fit_faceted_curve,
     polyline_fit_report,
 )
+from drakedeburr.path.polygon_fit import (
+    corner_deviation,
+    curvature_against_need,
+    fit_polygon_curve,
+)
 
 __all__ = ["fit_window_edge", "edge_fit_figures", "is_faceted", "point_errors",
            "bounded_faceted_fit"]
@@ -91,22 +96,28 @@ def point_errors(curve: EdgeCurve) -> np.ndarray:
 
 
 def edge_fit_figures(curve: EdgeCurve, facets: dict, fit: str, bound=None,
-                     held: bool = False) -> dict:
-    """The report of one window's fit (module doc), SI: ``fit`` ("faceted" or
+                     held: bool = False, *, need_bound: float | None = None) -> dict:
+    """The report of one window's fit (module doc), SI: ``fit`` ("faceted", "polygon" or
     "interpolating"), ``facets``, ``facet_median_m``, ``facet_share``, ``sagitta_max_m``,
     ``chord_error_m`` (fit against the data polyline), ``point_error_m`` (the largest
     :func:`point_errors`), ``point_bound_m`` (the bound the fit was held to, None: none),
     ``held`` (the fit was moved to meet it), ``kappa_max`` and ``kappa_facets`` [1/m],
-    ``kappa_ratio`` (kappa_max / kappa_facets, None without facet corners), ``inflections``."""
+    ``kappa_ratio`` (kappa_max / kappa_facets, None without facet corners), ``inflections``;
+    with ``need_bound`` [m] also ``kappa_need`` [1/m] and ``kappa_need_ratio``
+    (:func:`~drakedeburr.path.polygon_fit.curvature_against_need`: the fit's peak curvature on
+    each data span against what its corners need within ``need_bound``)."""
     rep = polyline_fit_report(curve)
     kf = facets["kappa_facets"]
-    return {"fit": fit, "facets": facets["facets"], "facet_median_m": facets["facet_median"],
-            "facet_share": facets["facet_share"], "sagitta_max_m": facets["sagitta_max"],
-            "chord_error_m": rep["deviation_max"],
-            "point_error_m": float(point_errors(curve).max()), "point_bound_m": bound,
-            "held": bool(held), "kappa_max": rep["kappa_max"],
-            "kappa_facets": kf, "kappa_ratio": rep["kappa_max"] / kf if kf > 0 else None,
-            "inflections": rep["inflections"]}
+    out = {"fit": fit, "facets": facets["facets"], "facet_median_m": facets["facet_median"],
+           "facet_share": facets["facet_share"], "sagitta_max_m": facets["sagitta_max"],
+           "chord_error_m": rep["deviation_max"],
+           "point_error_m": float(point_errors(curve).max()), "point_bound_m": bound,
+           "held": bool(held), "kappa_max": rep["kappa_max"],
+           "kappa_facets": kf, "kappa_ratio": rep["kappa_max"] / kf if kf > 0 else None,
+           "inflections": rep["inflections"]}
+    if need_bound is not None:
+        out.update(curvature_against_need(curve, need_bound))
+    return out
 
 
 def bounded_faceted_fit(p: np.ndarray, bound: float | None, *,
@@ -154,4 +165,10 @@ def fit_window_edge(p: np.ndarray, *, chord_tolerance: float,
         (curve, held), fit = bounded_faceted_fit(p, bound, name=name), "faceted"
     else:
         curve, fit = fit_edge_curve(p, name=name), "interpolating"
-    return replace(curve, fit=edge_fit_figures(curve, facets, fit, bound, held))
+    # the bound the fit must keep to the polyline: the held bound, else the CL chord bound
+    tube = bound if bound is not None else float(chord_tolerance)
+    if corner_deviation(curve) > tube:
+        curve, fit, held = fit_polygon_curve(curve.p_data, tube, name=name), "polygon", True
+        bound = tube
+    return replace(curve, fit=edge_fit_figures(curve, facets, fit, bound, held,
+                                               need_bound=tube))
