@@ -56,9 +56,9 @@ _SAMPLES = 32
 #: the bound the samples are held to, as a share of b (the curve between samples)
 _MARGIN = 0.98
 #: the factor a corner's control distance shrinks by where the bound is not met, and the
-#: rounds before it is left as it is (0.8^60 ~ 1e-6: on the corner)
-_SHRINK = 0.8
-_ROUNDS = 60
+#: rounds before it is left as it is (0.9^130 ~ 1e-6: on the corner)
+_SHRINK = 0.9
+_ROUNDS = 130
 
 
 def loop_turns(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,8 +111,9 @@ def curvature_against_need(curve: EdgeCurve, bound: float, samples: int = 16) ->
     """The fit's curvature against what the corners need (:func:`curvature_need` with
     ``bound``): ``{"kappa_need": the largest need [1/m], "kappa_need_ratio": the largest ratio,
     over the data spans, of the fit's peak curvature on the span to the larger need of its two
-    ends (at least 1e-3 1/m)}``."""
-    need = np.maximum(curvature_need(curve.p_data, bound), 1e-3)
+    ends, at least 1/m (a radius of 1 m, straighter than any window: on a straight facet the
+    ratio is the fit's own curvature in 1/m)}``."""
+    need = np.maximum(curvature_need(curve.p_data, bound), 1.0)
     u0 = curve.u_data
     u1 = np.r_[u0[1:], 1.0]
     t = (np.arange(samples + 1)) / samples
@@ -122,14 +123,22 @@ def curvature_against_need(curve: EdgeCurve, bound: float, samples: int = 16) ->
 
 
 def _controls(p: np.ndarray, a: np.ndarray, s: np.ndarray, length: np.ndarray):
-    """(control points (3N, 3), their arc positions (3N,) [m] from point 0): A_i, P_i, B_i
-    per point, rotated to start at P_0."""
+    """(control points (M, 3), their arc positions (M,) [m] from point 0): each point P_i, and
+    on each facet i (P_i -> P_i+1) the points at a_i, 2 a_i, 4 a_i, ... from P_i and at
+    a_i+1, 2 a_i+1, ... from P_i+1, each side up to the facet's middle (collinear: the facet
+    stays straight; the knot intervals beside a corner are all a_i, as at a uniform corner,
+    and grow by 2 at most towards the middle)."""
     unit = (np.roll(p, -1, axis=0) - p) / length[:, None]
-    A = p - a[:, None] * np.roll(unit, 1, axis=0)
-    B = p + a[:, None] * unit
-    q = np.stack([A, p, B], axis=1).reshape(-1, 3)
-    tau = np.stack([s - a, s, s + a], axis=1).reshape(-1)
-    return np.roll(q, -1, axis=0), np.mod(np.roll(tau, -1), s[-1] + length[-1])
+    a_next = np.roll(a, -1)
+    q, tau = [], []
+    for i in range(len(p)):
+        half = 0.5 * length[i]
+        near = a[i] * 2.0 ** np.arange(int(np.ceil(np.log2(half / a[i]))) + 1)
+        far = a_next[i] * 2.0 ** np.arange(int(np.ceil(np.log2(half / a_next[i]))) + 1)
+        x = np.r_[0.0, near[near < half], length[i] - far[far < half][::-1]]
+        q.append(p[i] + x[:, None] * unit[i])
+        tau.append(s[i] + x)
+    return np.concatenate(q), np.concatenate(tau)
 
 
 def _spline(q: np.ndarray, tau: np.ndarray) -> BSpline:
@@ -173,7 +182,7 @@ def fit_polygon_curve(p: np.ndarray, bound: float, *, name: str = "edge") -> Edg
     s = np.concatenate([[0.0], np.cumsum(length)])
     total = s[-1]
     share = _SHARE * np.minimum(length, np.roll(length, 1))
-    a = np.minimum(share, 3.0 * bound / np.maximum(np.sin(0.5 * turn), 1e-12))
+    a = np.minimum(share, _MARGIN * 3.0 * bound / np.maximum(np.sin(0.5 * turn), 1e-12))
     for _ in range(_ROUNDS):
         q, tau = _controls(p, a, s[:-1], length)
         spline = _spline(q, tau / total)
