@@ -27,6 +27,15 @@ Any other loop (a densely sampled designed curve, an exact CAD edge) keeps the i
 fit, spline for spline: its plans do not change. The choice is made from the points, never
 from the source's name.
 
+**Polygons.** Either fit passes through a point that turns by more than ``FACET_MAX_TURN``
+(no sample of a smooth curve: a corner the points do not resolve), and overshoots it. When the
+fit so leaves the polyline, on the spans beside such a corner, by more than the bound it must
+keep to it (the held bound below; without one the CL chord bound ``chord_tolerance``), the
+loop is fitted as the polygon it is instead (:mod:`drakedeburr.path.polygon_fit`: straight on
+its facets, turning inside each corner, within the bound of the polyline and of every point):
+the low-poly rims of issue 42 (corners of 55-124 deg at 2 mm; the interpolating fit stood
+0.17-0.30 mm off their polylines).
+
 **Held to the loop's points.** The smoothing fit estimates the designed curve the facets were
 cut from: free by up to a facet's sagitta in its middle (0.16-0.21 mm on the audibot rim's
 8-9 mm facets). But the cut is judged against the loop's points themselves (verify's
@@ -49,12 +58,15 @@ compare the planners at delta_max on the curve itself) leaves nothing for the fi
 the designed-curve estimate, and its chord error against the points is reported.
 
 **What is reported** (``EdgeCurve.fit``, copied into every ClPath's ``metrics["edge_fit"]``
-and the ``cl`` table): the fit used, the facets (count, median length, share of the loop,
-largest sagitta), the chord error of the fit against the polygon (largest distance of the
-curve from the data polyline), the fit's largest curvature against the largest curvature the
-facets imply (corner turn over the mean of its two facets) and the inflections the fit adds;
-the bound the fit was held to, the largest distance of a point from the fit at its parameter
-and whether the fit was held (one pass: the offsets saturated once).
+and the ``cl`` table): the fit used ("faceted", "polygon" or "interpolating"), the facets
+(count, median length, share of the loop, largest sagitta), the chord error of the fit
+against the polygon (largest distance of the curve from the data polyline), the fit's
+largest curvature against the largest curvature the facets imply (corner turn over the mean
+of its two facets) and the inflections the fit adds; the bound the fit was held to, the
+largest distance of a point from the fit at its parameter and whether the fit was held (one
+pass: the offsets saturated once); the fit's peak curvature on each data span against the
+curvature its corners need within the bound (``kappa_need``, ``kappa_need_ratio``:
+:func:`~drakedeburr.path.polygon_fit.curvature_need`).
 """
 
 from __future__ import annotations
