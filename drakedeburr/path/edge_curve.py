@@ -515,7 +515,8 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
 
     * ``facet_median``, ``facet_min`` [m]: facet lengths; ``spacing`` [m]: median data spacing;
     * ``deviation_max`` [m]: largest distance of C(u) from the polyline (``samples`` per data
-      span) - the fit's own chord error against the facets; ``deviation_per_facet`` its ratio
+      span, and at each point's parameter) - the fit's own chord error against the facets;
+      ``deviation_per_facet`` its ratio
       to ``facet_median``;
     * ``kappa_max`` [1/m]: the fit's largest curvature; ``kappa_polyline`` [1/m]: the
       polyline's largest corner turn over the mean of its two facets (the curvature the facets
@@ -542,6 +543,11 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
     a = np.repeat(p, samples, axis=0)
     b = np.repeat(np.roll(p, -1, axis=0), samples, axis=0)
     dev = _dist_to_segment(q, a, b)
+    # and at the points' own parameters, against the two segments beside each point (where a
+    # fit that cuts a corner, path.polygon_fit, stands farthest from the polyline)
+    at = curve.position(u0)
+    dev0 = np.minimum(_dist_to_segment(at, np.roll(p, 1, axis=0), p),
+                      _dist_to_segment(at, p, np.roll(p, -1, axis=0)))
     d1, d2 = curve.derivative(uu, 1), curve.derivative(uu, 2)
     c = p.mean(axis=0)
     normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
@@ -554,8 +560,8 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
     kp = float(k_poly.max())
     return {"facets": int(len(corners)), "facet_median": float(np.median(facet)),
             "facet_min": float(facet.min()), "spacing": spacing,
-            "deviation_max": float(dev.max()),
-            "deviation_per_facet": float(dev.max() / np.median(facet)),
+            "deviation_max": float(max(dev.max(), dev0.max())),
+            "deviation_per_facet": float(max(dev.max(), dev0.max()) / np.median(facet)),
             "kappa_max": float(k_abs.max()), "kappa_polyline": kp,
             "kappa_ratio": float(k_abs.max() / kp) if kp > 0 else float("inf"),
             "inflections": flips}
