@@ -516,11 +516,11 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
     * ``facet_median``, ``facet_min`` [m]: facet lengths; ``spacing`` [m]: median data spacing;
     * ``deviation_max`` [m]: largest distance of C(u) from the polyline (``samples`` per data
       span, and at each point's parameter) - the fit's own chord error against the facets;
-      ``deviation_per_facet`` its ratio
-      to ``facet_median``;
-    * ``kappa_max`` [1/m]: the fit's largest curvature; ``kappa_polyline`` [1/m]: the
-      polyline's largest corner turn over the mean of its two facets (the curvature the facets
-      themselves imply); ``kappa_ratio`` = kappa_max / kappa_polyline;
+      ``deviation_per_facet`` its ratio to ``facet_median``;
+    * ``kappa_max`` [1/m]: the fit's largest curvature (at the samples);
+      ``kappa_polyline`` [1/m]: the polyline's largest corner turn over the mean of its two
+      facets (the curvature the facets themselves imply); ``kappa_ratio`` = kappa_max /
+      kappa_polyline;
     * ``inflections``: sign changes of the curvature about the loop's mean plane normal where
       the polyline itself turns only one way (0 on a convex polygon if the fit invents no
       wiggles); ``facets``: facet count.
