@@ -25,7 +25,8 @@ from drakedeburr.errors import InputError
 from drakedeburr.path.brent import minimize_bounded_batch
 
 __all__ = ["EdgeCurve", "fit_edge_curve", "fit_faceted_curve", "facet_sagitta",
-           "polygon_facets", "chord_parameters", "polyline_fit_report"]
+           "polygon_facets", "chord_parameters", "polyline_fit_report", "checked_loop",
+           "edge_curve_of_spline"]
 
 # samples per data span for the arc-length table (Gauss-Legendre, exact to ~1e-12 for cubics)
 _GAUSS_ORDER = 8
@@ -298,6 +299,18 @@ def _edge_curve(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
                      length=float(s_table[-1]))
 
 
+def checked_loop(p: np.ndarray, name: str = "edge") -> np.ndarray:
+    """The (N, 3) points of a closed loop as every fit takes them (N >= 5, finite, no repeated
+    consecutive points, a repeated closing point dropped). Raises InputError otherwise."""
+    return _checked_loop(p, name)
+
+
+def edge_curve_of_spline(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
+    """The EdgeCurve of a periodic cubic ``spline`` on [0, 1) whose data points ``p`` (N, 3)
+    sit at the parameters ``u`` (N + 1,: increasing from 0, the last one 1)."""
+    return _edge_curve(spline, u, p)
+
+
 def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     """Fit a closed cubic B-spline (NURBS with unit weights) through a closed polyline.
 
@@ -502,11 +515,12 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
 
     * ``facet_median``, ``facet_min`` [m]: facet lengths; ``spacing`` [m]: median data spacing;
     * ``deviation_max`` [m]: largest distance of C(u) from the polyline (``samples`` per data
-      span) - the fit's own chord error against the facets; ``deviation_per_facet`` its ratio
-      to ``facet_median``;
-    * ``kappa_max`` [1/m]: the fit's largest curvature; ``kappa_polyline`` [1/m]: the
-      polyline's largest corner turn over the mean of its two facets (the curvature the facets
-      themselves imply); ``kappa_ratio`` = kappa_max / kappa_polyline;
+      span, and at each point's parameter) - the fit's own chord error against the facets;
+      ``deviation_per_facet`` its ratio to ``facet_median``;
+    * ``kappa_max`` [1/m]: the fit's largest curvature (at the samples);
+      ``kappa_polyline`` [1/m]: the polyline's largest corner turn over the mean of its two
+      facets (the curvature the facets themselves imply); ``kappa_ratio`` = kappa_max /
+      kappa_polyline;
     * ``inflections``: sign changes of the curvature about the loop's mean plane normal where
       the polyline itself turns only one way (0 on a convex polygon if the fit invents no
       wiggles); ``facets``: facet count.
@@ -529,6 +543,11 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
     a = np.repeat(p, samples, axis=0)
     b = np.repeat(np.roll(p, -1, axis=0), samples, axis=0)
     dev = _dist_to_segment(q, a, b)
+    # and at the points' own parameters, against the two segments beside each point (where a
+    # fit that cuts a corner, path.polygon_fit, stands farthest from the polyline)
+    at = curve.position(u0)
+    dev0 = np.minimum(_dist_to_segment(at, np.roll(p, 1, axis=0), p),
+                      _dist_to_segment(at, p, np.roll(p, -1, axis=0)))
     d1, d2 = curve.derivative(uu, 1), curve.derivative(uu, 2)
     c = p.mean(axis=0)
     normal = np.linalg.svd(p - c, full_matrices=False)[2][2]
@@ -541,8 +560,8 @@ def polyline_fit_report(curve: EdgeCurve, *, corner_angle: float = np.radians(1.
     kp = float(k_poly.max())
     return {"facets": int(len(corners)), "facet_median": float(np.median(facet)),
             "facet_min": float(facet.min()), "spacing": spacing,
-            "deviation_max": float(dev.max()),
-            "deviation_per_facet": float(dev.max() / np.median(facet)),
+            "deviation_max": float(max(dev.max(), dev0.max())),
+            "deviation_per_facet": float(max(dev.max(), dev0.max()) / np.median(facet)),
             "kappa_max": float(k_abs.max()), "kappa_polyline": kp,
             "kappa_ratio": float(k_abs.max() / kp) if kp > 0 else float("inf"),
             "inflections": flips}

@@ -27,6 +27,15 @@ Any other loop (a densely sampled designed curve, an exact CAD edge) keeps the i
 fit, spline for spline: its plans do not change. The choice is made from the points, never
 from the source's name.
 
+**Polygons.** Either fit passes through a point that turns by more than ``FACET_MAX_TURN``
+(no sample of a smooth curve: a corner the points do not resolve), and overshoots it. When the
+fit so leaves the polyline, on the spans beside such a corner, by more than the bound it must
+keep to it (the held bound below; without one the CL chord bound ``chord_tolerance``), the
+loop is fitted as the polygon it is instead (:mod:`drakedeburr.path.polygon_fit`: straight on
+its facets, turning inside each corner, within the bound of the polyline and of every point):
+the low-poly rims of issue 42 (corners of 55-124 deg at 2 mm; the interpolating fit stood
+0.17-0.30 mm off their polylines).
+
 **Held to the loop's points.** The smoothing fit estimates the designed curve the facets were
 cut from: free by up to a facet's sagitta in its middle (0.16-0.21 mm on the audibot rim's
 8-9 mm facets). But the cut is judged against the loop's points themselves (verify's
@@ -49,12 +58,15 @@ compare the planners at delta_max on the curve itself) leaves nothing for the fi
 the designed-curve estimate, and its chord error against the points is reported.
 
 **What is reported** (``EdgeCurve.fit``, copied into every ClPath's ``metrics["edge_fit"]``
-and the ``cl`` table): the fit used, the facets (count, median length, share of the loop,
-largest sagitta), the chord error of the fit against the polygon (largest distance of the
-curve from the data polyline), the fit's largest curvature against the largest curvature the
-facets imply (corner turn over the mean of its two facets) and the inflections the fit adds;
-the bound the fit was held to, the largest distance of a point from the fit at its parameter
-and whether the fit was held (one pass: the offsets saturated once).
+and the ``cl`` table): the fit used ("faceted", "polygon" or "interpolating"), the facets
+(count, median length, share of the loop, largest sagitta), the chord error of the fit
+against the polygon (largest distance of the curve from the data polyline), the fit's
+largest curvature against the largest curvature the facets imply (corner turn over the mean
+of its two facets) and the inflections the fit adds; the bound the fit was held to, the
+largest distance of a point from the fit at its parameter and whether the fit was held (one
+pass: the offsets saturated once); the fit's peak curvature on each data span against the
+curvature its corners need within the bound (``kappa_need``, ``kappa_need_ratio``:
+:func:`~drakedeburr.path.polygon_fit.curvature_need`).
 """
 
 from __future__ import annotations
@@ -71,6 +83,11 @@ from drakedeburr.path.edge_curve import (
     fit_edge_curve,
     fit_faceted_curve,
     polyline_fit_report,
+)
+from drakedeburr.path.polygon_fit import (
+    corner_deviation,
+    curvature_against_need,
+    fit_polygon_curve,
 )
 
 __all__ = ["fit_window_edge", "edge_fit_figures", "is_faceted", "point_errors",
@@ -91,22 +108,28 @@ def point_errors(curve: EdgeCurve) -> np.ndarray:
 
 
 def edge_fit_figures(curve: EdgeCurve, facets: dict, fit: str, bound=None,
-                     held: bool = False) -> dict:
-    """The report of one window's fit (module doc), SI: ``fit`` ("faceted" or
+                     held: bool = False, *, need_bound: float | None = None) -> dict:
+    """The report of one window's fit (module doc), SI: ``fit`` ("faceted", "polygon" or
     "interpolating"), ``facets``, ``facet_median_m``, ``facet_share``, ``sagitta_max_m``,
     ``chord_error_m`` (fit against the data polyline), ``point_error_m`` (the largest
     :func:`point_errors`), ``point_bound_m`` (the bound the fit was held to, None: none),
     ``held`` (the fit was moved to meet it), ``kappa_max`` and ``kappa_facets`` [1/m],
-    ``kappa_ratio`` (kappa_max / kappa_facets, None without facet corners), ``inflections``."""
+    ``kappa_ratio`` (kappa_max / kappa_facets, None without facet corners), ``inflections``;
+    with ``need_bound`` [m] also ``kappa_need`` [1/m] and ``kappa_need_ratio``
+    (:func:`~drakedeburr.path.polygon_fit.curvature_against_need`: the fit's peak curvature on
+    each data span against what its corners need within ``need_bound``)."""
     rep = polyline_fit_report(curve)
     kf = facets["kappa_facets"]
-    return {"fit": fit, "facets": facets["facets"], "facet_median_m": facets["facet_median"],
-            "facet_share": facets["facet_share"], "sagitta_max_m": facets["sagitta_max"],
-            "chord_error_m": rep["deviation_max"],
-            "point_error_m": float(point_errors(curve).max()), "point_bound_m": bound,
-            "held": bool(held), "kappa_max": rep["kappa_max"],
-            "kappa_facets": kf, "kappa_ratio": rep["kappa_max"] / kf if kf > 0 else None,
-            "inflections": rep["inflections"]}
+    out = {"fit": fit, "facets": facets["facets"], "facet_median_m": facets["facet_median"],
+           "facet_share": facets["facet_share"], "sagitta_max_m": facets["sagitta_max"],
+           "chord_error_m": rep["deviation_max"],
+           "point_error_m": float(point_errors(curve).max()), "point_bound_m": bound,
+           "held": bool(held), "kappa_max": rep["kappa_max"],
+           "kappa_facets": kf, "kappa_ratio": rep["kappa_max"] / kf if kf > 0 else None,
+           "inflections": rep["inflections"]}
+    if need_bound is not None:
+        out.update(curvature_against_need(curve, need_bound))
+    return out
 
 
 def bounded_faceted_fit(p: np.ndarray, bound: float | None, *,
@@ -154,4 +177,10 @@ def fit_window_edge(p: np.ndarray, *, chord_tolerance: float,
         (curve, held), fit = bounded_faceted_fit(p, bound, name=name), "faceted"
     else:
         curve, fit = fit_edge_curve(p, name=name), "interpolating"
-    return replace(curve, fit=edge_fit_figures(curve, facets, fit, bound, held))
+    # the bound the fit must keep to the polyline: the held bound, else the CL chord bound
+    tube = bound if bound is not None else float(chord_tolerance)
+    if corner_deviation(curve) > tube:
+        curve, fit, held = fit_polygon_curve(curve.p_data, tube, name=name), "polygon", True
+        bound = tube
+    return replace(curve, fit=edge_fit_figures(curve, facets, fit, bound, held,
+                                               need_bound=tube))
