@@ -269,6 +269,9 @@ def test_inconsistent_program_refused():
     ("rapid", "MODULE m\n  PROC main()\n    WaitTime 1;\n  ENDPROC\nENDMODULE\n",
      r":3: instruction 'WaitTime' is outside the motion subset"),
     ("rapid", "MODULE m\n  VAR num n := 1;\nENDMODULE\n", r":2: data type 'num'"),
+    # a ';' alone in the routine (found by tests/test_bad_input_fuzz.py: an IndexError before)
+    ("rapid", "MODULE m\n  PROC main()\n    ;\n  ENDPROC\nENDMODULE\n",
+     r":3: an empty statement"),
     ("ls", "/PROG  BAD\n/ATTR\n/MN\n   1:  CALL FOO ;\n/POS\n/END\n",
      r"bad.ls:4: /MN line 1 'CALL FOO' is outside the motion subset"),
     ("krl", "DEF bad( )\n   WAIT SEC 1\nEND\n", r"bad.src:2: statement 'WAIT SEC 1'"),

@@ -266,6 +266,9 @@ def _parse(stmts, file: str) -> tuple[dict, list, list, list]:
             continue
         if where != "body":
             continue
+        if not s.strip():
+            raise ProgramFormatError(f"{file}:{k}: an empty statement (a ';' alone) is "
+                                     "outside the motion subset this reader accepts")
         word = s.split()[0]
         if word in ("ConfJ", "ConfL") and s[len(word):].replace(" ", "") in ("\\On", "\\Off"):
             continue
