@@ -194,16 +194,24 @@ def _cone_jump_corner(half):
     34.4, 26.8 (over a 0.69 mm move), 9 and 0.3 deg over the moves - neighbouring cones of
     half-angle 0.124 rad do not overlap - and the IK's axes sit on their cones' rims, leaning
     across the jumps."""
-    moves = np.array([2.2, 1.96, 0.69, 1.72, 6.4]) * 1e-3
-    bends = np.radians([7.0, 30.0, 22.7, 1.5])
-    ang = np.concatenate([[0.0], np.cumsum(np.radians([4.0, 34.4, 26.8, 9.0, 0.3]))])
+    return _corner(np.array([2.2, 1.96, 0.69, 1.72, 6.4]) * 1e-3, [7.0, 30.0, 22.7, 1.5],
+                   [4.0, 34.4, 26.8, 9.0, 0.3], [0.0, half - 1e-6, -half + 1e-6, -half + 1e-6,
+                                                 0.0, 0.0])
+
+
+def _corner(moves, bends_deg, cone_turns_deg, lean_off):
+    """A planar corner: tool points joined by ``moves`` [m] turning ``bends_deg`` at the inner
+    points, cone axes turning ``cone_turns_deg`` about X over the moves, the targets' axes
+    leaning ``lean_off`` [rad] off their cone axes. Returns (points, cone axes, targets)."""
+    bends = np.radians(bends_deg)
+    ang = np.concatenate([[0.0], np.cumsum(np.radians(cone_turns_deg))])
     P = np.zeros((len(moves) + 1, 3))
     h = 0.0
     for i, L in enumerate(moves):
         h += bends[i - 1] if i else 0.0
         P[i + 1] = P[i] + L * np.array([np.cos(h), np.sin(h), 0.0])
     C = np.array([_about_x(a) for a in ang])
-    lean = ang + np.array([0.0, half - 1e-6, -half + 1e-6, -half + 1e-6, 0.0, 0.0])
+    lean = ang + np.asarray(lean_off, float)
     X = np.tile(np.eye(4), (len(P), 1, 1))
     X[:, :3, 3] = P
     for i, a in enumerate(lean):
@@ -293,23 +301,9 @@ def test_a_free_target_keeps_the_axis_margin_inside_its_own_cone_after_a_cone_ju
     the free samples' margin (10 mrad here). Held in its own cone, the target keeps that
     margin; before it kept 4 mrad (the plan's own target came out 6.5 mrad outside)."""
     half, margin = 0.1197, 10e-3
-    moves = np.array([5.0, 0.93, 0.2, 0.94, 7.0]) * 1e-3
-    bends = np.radians([2.0, 30.0, 25.0, 3.0])
-    ang = np.concatenate([[0.0], np.cumsum(np.radians([2.0, 30.6, 44.5, 4.9, 0.5]))])
-    P = np.zeros((len(moves) + 1, 3))
-    h = 0.0
-    for i, L in enumerate(moves):
-        h += bends[i - 1] if i else 0.0
-        P[i + 1] = P[i] + L * np.array([np.cos(h), np.sin(h), 0.0])
-    C = np.array([_about_x(a) for a in ang])
-    lean = ang + np.array([0.0, 0.0, half - 1e-6, -half + 1e-6, 0.0, 0.0])
-    X = np.tile(np.eye(4), (len(P), 1, 1))
-    X[:, :3, 3] = P
-    for i, a in enumerate(lean):
-        z = -_about_x(a)
-        x = np.cross([0, 1.0, 0], z)
-        x /= np.linalg.norm(x)
-        X[i, :3, :3] = np.stack([x, np.cross(z, x), z], 1)
+    P, C, X = _corner(np.array([5.0, 0.93, 0.2, 0.94, 7.0]) * 1e-3, [2.0, 30.0, 25.0, 3.0],
+                      [2.0, 30.6, 44.5, 4.9, 0.5], [0.0, 0.0, half - 1e-6, -half + 1e-6, 0.0,
+                                                    0.0])
     shape = mut.CutPathOptions(step=0.125e-3, axes=mut.AxisSmoothing(margin=margin))
 
     def own_margins():
