@@ -117,18 +117,51 @@ def burr_engagement(sp, cfg) -> CheckItem:
                f"[{np.nanmin(engage) * 1e3:.3f}, {np.nanmax(engage) * 1e3:.3f}] mm")
 
 
+def _target_cones(sp) -> dict:
+    from drakedeburr.verify.cut_geometry import target_cones
+
+    return sp.memo("target_cones", lambda: target_cones(sp.plan, sp.X_HT_targets, sp.refs,
+                                                        sp.cut_windows))
+
+
+def _cone_figures(sp, tc: dict) -> dict:
+    """Per window: the samples' cone figures and the program targets' (``target_*``)."""
+    out = {w: dict(v) for w, v in sp.cut.cone_per_window.items()}
+    for w, v in tc["per_window"].items():
+        out.setdefault(w, {}).update(v)
+    return out
+
+
 def cone(sp, cfg) -> CheckItem:
+    """The executed tool axis inside its cone on the dense samples AND the program's own
+    targets' axes (FK of their joints) inside the cone of the CL point each cuts
+    (:func:`drakedeburr.verify.cut_geometry.target_cones`); the item names the worse."""
     tol, c = cfg.tolerances, sp.cut
-    if not np.isfinite(c.cone_margin).any():
+    tc = _target_cones(sp)
+    tm = tc["margin"]
+    dense, targets = np.isfinite(c.cone_margin).any(), np.isfinite(tm).any()
+    if not dense and not targets:
         return _not_measurable("cone", "rad")
-    i_c = int(np.nanargmin(c.cone_margin))
-    return CheckItem(
-        "cone", float(c.cone_margin[i_c]) >= -tol.cone_slack, float(c.cone_margin[i_c]),
-        -tol.cone_slack, "rad", ">=", **sp.where(i_c),
-        detail=f"executed tool axis inside its admissible cone (the IK's cone standing for "
-               f"the (theta_A, theta_B) box), smallest margin; there theta_A="
-               f"{c.theta_A[i_c]:.4f}, theta_B={c.theta_B[i_c]:.4f} rad",
-        per_window=c.cone_per_window)
+    m_s = float(np.nanmin(c.cone_margin)) if dense else np.inf
+    m_t = float(np.nanmin(tm)) if targets else np.inf
+    n_out = int(np.sum(tm[np.isfinite(tm)] < -tol.cone_slack))
+    summary = (f"; program targets: {int(np.isfinite(tm).sum())} read, smallest margin "
+               f"{m_t:.3e} rad, {n_out} outside" if targets else
+               "; program targets: none anchored on a CL point")
+    if m_t < m_s:
+        k = int(np.nanargmin(tm))
+        where = {"window": int(sp.targets[k].window_index), "target_index": k}
+        head = (f"program target {k}'s own axis (FK of its joints) vs the cone of the CL "
+                f"point it cuts: smallest margin (dense samples: {m_s:.3e} rad)")
+    else:
+        i_c = int(np.nanargmin(c.cone_margin))
+        where = sp.where(i_c)
+        head = (f"executed tool axis inside its admissible cone (the IK's cone standing for "
+                f"the (theta_A, theta_B) box), smallest margin; there theta_A="
+                f"{c.theta_A[i_c]:.4f}, theta_B={c.theta_B[i_c]:.4f} rad")
+    worst = min(m_s, m_t)
+    return CheckItem("cone", worst >= -tol.cone_slack, worst, -tol.cone_slack, "rad", ">=",
+                     **where, detail=head + summary, per_window=_cone_figures(sp, tc))
 
 
 def theta_box(sp, cfg) -> CheckItem:

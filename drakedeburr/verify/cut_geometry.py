@@ -6,6 +6,12 @@ point's depth inside the burr cone (engagement), the executed axis' theta_A/thet
 interpolated local frame (the source's box) and its margin to the IK's cone. theta_A =
 atan2(a.N, a.B), theta_B = asin(-a.T) for the axis a in the local frame [N, T, B]
 (docs/orientation.md), recomputed from :mod:`drakedeburr.frames.local_frames`.
+
+Apart from the dense samples, :func:`target_cones` reads the program's own targets: the axis of
+each target from the forward kinematics of the joints the program is written with, against the
+cone of the CL point the target cuts (a via target: the chord point's cone, as the samples read
+it). A target outside its cone fails the ``cone`` check whatever the interpolation between the
+targets reads.
 """
 
 from __future__ import annotations
@@ -14,11 +20,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from drakedeburr.frames.local_frames import angles_from_zT_H
-from drakedeburr.frames.vectors import angle_between
 from drakedeburr.verify.geometry import closed_polyline_distance, lerp_frames, point_segment
 from drakedeburr.verify.refs import cone_half_angle
 
-__all__ = ["cut_geometry", "stretch_coverage"]
+__all__ = ["cut_geometry", "stretch_coverage", "target_cones", "axis_angle"]
 
 
 def _anchored(ref, k0: np.ndarray, k1: np.ndarray, f: np.ndarray) -> dict | None:
@@ -61,6 +66,54 @@ def _engagement(X_HT: np.ndarray, E: np.ndarray) -> np.ndarray:
     return ((BURR.apex_offset - p_TE[:, 2]) * np.tan(alpha) - r) * np.cos(alpha)
 
 
+def axis_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle [rad] between the directions ``a`` and ``b`` (n, 3), by atan2 (exact near 0)."""
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def target_cones(plan, X_HT_targets: np.ndarray, refs: dict, cut_windows) -> dict:
+    """Margin [rad] of each program target's own tool axis (+Z_T of ``X_HT_targets``, the FK of
+    the targets' joints) to the cone of the CL point it cuts (module docstring): ``{"margin":
+    (M,) NaN off the cut targets, "per_window": {window: figures}}``. A via target reads the
+    cone at its chord point (its two CL points' cone axes interpolated); a plan without cone
+    axes is read against the theta box in the CL points' local frames, as the samples are."""
+    targets = plan.targets
+    margin = np.full(len(targets), np.nan)
+    per_window = {}
+    for w in cut_windows:
+        ref = refs.get(w)
+        if ref is None:
+            continue
+        ks = [k for k, t in enumerate(targets)
+              if t.window_index == w and ref.anchor(k) is not None]
+        if not ks:
+            continue
+        an = np.array([ref.anchor(k) for k in ks], float)
+        ca, cb, g = an[:, 0].astype(int), an[:, 1].astype(int), an[:, 2]
+        z = _unit(np.asarray(X_HT_targets, float)[ks, :3, 2])
+        tp = ref.tool_path
+        if tp is not None and getattr(tp, "cone_zT_H", None) is not None:
+            c_H = _unit(np.asarray(tp.cone_zT_H, float))
+            half = cone_half_angle(plan, w, tp)
+            m = half - axis_angle(_unit((1 - g)[:, None] * c_H[ca] + g[:, None] * c_H[cb]), z)
+            info = {"cone_half_angle": half}
+        else:
+            tA, tB = angles_from_zT_H(lerp_frames(ref.R_HL[ca], ref.R_HL[cb], g), z)
+            lo, hi = ref.bounds.theta_min, ref.bounds.theta_max
+            m = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])
+            info = {"cone": "no cone axes in the plan: the theta box is checked"}
+        margin[ks] = m
+        j = int(np.argmin(m))
+        per_window[w] = {"targets": len(ks), "target_min_margin": float(m[j]),
+                         "target_worst": int(ks[j]),
+                         "target_worst_cl": int(ca[j]) if ca[j] == cb[j] else -1, **info}
+    return {"margin": margin, "per_window": per_window}
+
+
 def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
     """Margin of the executed +Z_T to the IK's cone about the interpolated cone axis [rad] and
     the window's cone figures (the theta box stands in when the plan has no cone axes)."""
@@ -76,7 +129,7 @@ def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
     f = a["f"]
     c = (1 - f)[:, None] * c0 + f[:, None] * c1
     c /= np.linalg.norm(c, axis=1, keepdims=True)
-    ang = angle_between(c, z_T)
+    ang = axis_angle(c, z_T)
     return half - ang, {"cone_half_angle": half, "max_angle_to_cone_axis": float(ang.max())}
 
 
