@@ -171,3 +171,51 @@ def test_workpiece_in_hand_overload_fails_and_a_rated_arm_passes(tmp_path):
             assert main(["-q", "export", str(folder), "-o", str(out)]) == 0
             text = out.read_text()
             assert "ABB IRB 2600-20/1.65" in text and "loaddata" in text
+
+
+def _payload_warnings(caplog) -> list[str]:
+    return [r.getMessage() for r in caplog.records if r.levelno >= 30 and "kg" in r.getMessage()]
+
+
+def test_the_default_arm_is_the_one_warning_names(caplog, monkeypatch):
+    """No --robot, workpiece in hand (h5_deepdish, 15.9 kg): the scenario's IRB 1600-10 (rated
+    10 kg) only stands in while the default is chosen: one warning, naming the arm used (the
+    M-710iC/50), and no "payload check fails" for an arm that is not used; loading the cell
+    with the arm chosen (the run's cells) warns nothing more."""
+    import logging
+
+    import drakedeburr.cell.station as station
+    from drakedeburr.cell.loads import arm_or_rated_default
+
+    monkeypatch.setattr(station, "_PAYLOAD_WARNED", set())  # as in a fresh process
+    caplog.set_level(logging.WARNING)
+    robot = arm_or_rated_default(None, "workpiece_in_hand", "h5_deepdish")
+    cell = station.load_cell("workpiece_in_hand", "h5_deepdish", robot=robot)
+    assert robot == cell.arm.name == "m710ic50"
+    msgs = _payload_warnings(caplog)
+    assert len(msgs) == 1, msgs
+    assert "irb1600 is not rated for the 15.9 kg" in msgs[0] and "using m710ic50" in msgs[0]
+    assert "fail" not in msgs[0]
+    assert payload(SimpleNamespace(cell=cell), None).passed
+
+
+def test_a_forced_small_arm_warns_once_that_payload_fails(caplog, monkeypatch):
+    """--robot irb1600 (forced): no default chosen; the cell warns once that the payload check
+    fails (the arm, the mass, the rating), however often the run loads the cell; the payload
+    item fails."""
+    import logging
+
+    import drakedeburr.cell.station as station
+    from drakedeburr.cell.loads import arm_or_rated_default
+
+    monkeypatch.setattr(station, "_PAYLOAD_WARNED", set())
+    caplog.set_level(logging.WARNING)
+    robot = arm_or_rated_default("irb1600", "workpiece_in_hand", "h5_deepdish")
+    assert robot == "irb1600"
+    for _ in range(2):
+        cell = station.load_cell("workpiece_in_hand", "h5_deepdish", robot=robot)
+    msgs = _payload_warnings(caplog)
+    assert len(msgs) == 1, msgs
+    assert "the arm irb1600 carries 15.9 kg" in msgs[0] and "rated for 10.0 kg" in msgs[0]
+    assert "payload check fails and no program is written" in msgs[0]
+    assert not payload(SimpleNamespace(cell=cell), None).passed

@@ -59,7 +59,7 @@ def rated_default_arm(scenario, hub=None) -> str | None:
     from drakedeburr.cell.station import bundled_cell_name, load_cell
     from drakedeburr.resources import scenario_path
 
-    cell = load_cell(scenario, hub)
+    cell = load_cell(scenario, hub, warn_payload=False)  # the cell run uses warns, not this
     load = cell_load(cell)
     if all(f.ok for f in payload_figures(cell.arm, load)):
         return None

@@ -38,13 +38,7 @@ from drakedeburr._io import load_yaml
 from drakedeburr.cell.recipe import CellMemo, cell_recipe, plan_cell_args
 from drakedeburr.cell.tools import apply_tool
 from drakedeburr.errors import InputError
-from drakedeburr.resources import (
-    add_package_to,
-    hub_dir,
-    hub_names,
-    models_dir,
-    scenario_path,
-)
+from drakedeburr.resources import add_package_to, hub_dir, hub_names, models_dir, scenario_path
 from drakedeburr.robots import (
     BASE_FRAME_NAME,
     FLANGE_FRAME_NAME,
@@ -390,6 +384,7 @@ def load_cell(
     tool: str | None = None,
     time_step: float = 0.0,
     q_home: np.ndarray | None = None,
+    warn_payload: bool = True,
 ) -> Cell:
     """Build the cell of a scenario with a hub.
 
@@ -408,6 +403,8 @@ def load_cell(
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
         q_home: (6,) home [rad] in place of the mount's (where a hub leaves that one without
             clearance: :mod:`drakedeburr.plan.home`); ``None``: the mount's.
+        warn_payload: warn (once) when the arm is not rated for what it carries; False for a
+            look at the load only (:func:`drakedeburr.cell.loads.rated_default_arm`).
 
     Returns:
         The :class:`Cell`.
@@ -475,7 +472,8 @@ def load_cell(
     for arr in (cell.q_lower, cell.q_upper, cell.v_lower, cell.v_upper, cell.a_lower,
                 cell.a_upper, cell.q_home):
         arr.setflags(write=False)
-    _check_payload(cell)
+    if warn_payload:
+        _check_payload(cell)
     log.debug("loaded cell %s (%s-in-hand) with hub %s, arm %s", scenario_file.name, mode,
               hub_sdf, arm.name)
     return cell
@@ -583,9 +581,10 @@ _PAYLOAD_WARNED: set = set()
 
 
 def _check_payload(cell: Cell) -> None:
-    """Warn when what the arm carries (every moving body that is not an arm link) exceeds the
-    arm's rated payload; planning is kinematic and goes on, the verifier's required ``payload``
-    item fails (drakedeburr.verify.checks_payload: no program)."""
+    """Warn once per process when what the arm carries (every moving body that is not an arm
+    link) exceeds the arm's rated payload: planning is kinematic and goes on, the verifier's
+    required ``payload`` item fails (drakedeburr.verify.checks_payload) and no program is
+    written. Not for an arm that only stood in while the default was chosen (``warn_payload``)."""
     plant = cell.plant
     carried = 0.0
     for instance in cell.moving_model_instances:
@@ -596,5 +595,6 @@ def _check_payload(cell: Cell) -> None:
     if carried > cell.arm.payload_kg and key not in _PAYLOAD_WARNED:
         _PAYLOAD_WARNED.add(key)  # once per process: planning loads the cell many times
         log.warning("%s: the arm %s carries %.1f kg (tool/gripper/hub models) but is rated for "
-                    "%.1f kg: the payload check will fail (docs/robots.md)", cell.scenario.name,
-                    cell.arm.name, carried, cell.arm.payload_kg)
+                    "%.1f kg: the payload check fails and no program is written "
+                    "(docs/robots.md)", cell.scenario.name, cell.arm.name, carried,
+                    cell.arm.payload_kg)
