@@ -32,5 +32,14 @@ def test_plan_hub_window_is_verified():
     # the verifier reads the planner's own ToolPath (CL points on the edge)
     assert all(v.get("reference") == "ToolPath"
                for v in a.item("cone").per_window.values())
+    # the program's own targets (FK of their joints) inside their CL points' cones too
+    # (drakedeburr.verify.cut_geometry.target_cones), read apart from the dense samples
+    cone = a.item("cone")
+    slack = a.settings["tolerances"]["cone_slack"]
+    assert cone.passed and cone.value >= -slack, cone
+    n_cl = sum(t.window_index == 0 and t.cl_index >= 0 for t in plan.targets)
+    fig = cone.per_window[0]
+    assert fig["targets"] >= n_cl > 0 and fig["target_min_margin"] >= -slack
+    assert "program targets: " in cone.detail and " 0 outside" in cone.detail
     b = vs.verify(plan, expected_windows=[0], params=None, cell=cell)
     assert report_json(a, include_run=False) == report_json(b, include_run=False)

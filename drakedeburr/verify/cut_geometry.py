@@ -160,13 +160,23 @@ def _window(plan, samples, program, ref, edge: np.ndarray, idx: np.ndarray, out:
     box = np.minimum.reduce([tA - lo, hi - tA, tB - lo, hi - tB])
     out["box_margin"][idx] = box
     out["cone_margin"][idx], cone_info = _cone(plan, w, ref, a, X[:, :3, 2], box)
-    out["cone_per_window"][w] = {
-        "theta_A_min": float(tA.min()), "theta_A_max": float(tA.max()),
-        "theta_B_min": float(tB.min()), "theta_B_max": float(tB.max()), "bounds": [lo, hi],
-        "reference": ref.source, "in_box_share": float(np.mean(box >= -tol.cone_slack)),
-        **cone_info}
+    out["cone_per_window"][w] = {"bounds": [lo, hi], "reference": ref.source, **cone_info}
     out["s_cut"][idx] = np.concatenate([[0.0], np.cumsum(np.linalg.norm(
         np.diff(samples.p_HT[idx], axis=0), axis=1))])
+
+
+def _window_figures(out: dict, idx: np.ndarray, tol, half: float | None) -> dict:
+    """The cone figures of a window's samples ``idx`` read (all its stretches; ``half``: the
+    cone's half-angle, None where the theta box stands in)."""
+    i = idx[np.isfinite(out["theta_A"][idx])]
+    tA, tB, box = out["theta_A"][i], out["theta_B"][i], out["box_margin"][i]
+    fig = {"theta_A_min": float(tA.min()), "theta_A_max": float(tA.max()),
+           "theta_B_min": float(tB.min()), "theta_B_max": float(tB.max()),
+           "in_box_share": float(np.mean(box >= -tol.cone_slack)), "samples": len(i),
+           "sample_min_margin": float(np.min(out["cone_margin"][i]))}
+    if half is not None:
+        fig["max_angle_to_cone_axis"] = float(half - fig["sample_min_margin"])
+    return fig
 
 
 def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows, tol):
@@ -195,6 +205,9 @@ def cut_geometry(plan, samples, program, refs: dict, edge_of: dict, cut_windows,
         chunks = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
         for chunk in chunks:
             _window(plan, samples, program, ref, edge, chunk, out, tol)
+        if w in out["cone_per_window"]:  # over every stretch of a partial window
+            info = out["cone_per_window"][w]
+            info.update(_window_figures(out, idx, tol, info.get("cone_half_angle")))
         if w in partial:
             whole = ref.tool_path is not None
             out["coverage"][w] = stretch_coverage(
