@@ -396,10 +396,8 @@ def load_cell(
         robot: registered arm name (``drakedeburr robots``) or spec; ``None``: the scenario's
             own arm. A bundled cell is built with the arm at its mount there.
         hub_pose: (4, 4) pose of the hub frame H in the ``hub_mount`` frame [m] (where a
-            placement search put this hub: :mod:`drakedeburr.plan.placement`); ``None``: H on
-            the mount frame itself.
-        tool: the burr variant on the scenario's bundled spindle (``TOOL_VARIANTS``); None:
-            the standard burr.
+            placement search put it: :mod:`drakedeburr.plan.placement`); ``None``: identity.
+        tool: the burr on the scenario's bundled spindle (``TOOL_VARIANTS``); None: standard.
         time_step: MultibodyPlant time step [s]; 0 = continuous (planning needs no dynamics).
         q_home: (6,) home [rad] in place of the mount's (where a hub leaves that one without
             clearance: :mod:`drakedeburr.plan.home`); ``None``: the mount's.
