@@ -219,3 +219,13 @@ def test_a_forced_small_arm_warns_once_that_payload_fails(caplog, monkeypatch):
     assert "the arm irb1600 carries 15.9 kg" in msgs[0] and "rated for 10.0 kg" in msgs[0]
     assert "payload check fails and no program is written" in msgs[0]
     assert not payload(SimpleNamespace(cell=cell), None).passed
+    # a worker process builds the cell again from its recipe: no second warning from there
+    monkeypatch.setattr(station, "_PAYLOAD_WARNED", set())  # the worker's own process
+    again = station.load_cell(**cell.recipe)
+    assert again.arm.name == "irb1600" and len(_payload_warnings(caplog)) == 1
+    # verify in a new process: the plan's cell, built there the first time, warns
+    monkeypatch.setattr(station, "_PAYLOAD_WARNED", set())
+    plan = SimpleNamespace(scenario="workpiece_in_hand", hub="h5_deepdish",
+                           meta={"robot": "irb1600"})
+    assert station.load_plan_cell(plan).arm.name == "irb1600"
+    assert len(_payload_warnings(caplog)) == 2

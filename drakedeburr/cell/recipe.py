@@ -37,10 +37,12 @@ class CellMemo:
 
 def cell_recipe(scenario, hub=None, *, robot=None, tool=None, time_step: float = 0.0,
                 hub_pose=None, q_home=None) -> dict:
-    """The arguments as :func:`~drakedeburr.cell.station.load_cell` records them."""
+    """The arguments as :func:`~drakedeburr.cell.station.load_cell` records them. A cell built
+    again from them (a worker's, a placement candidate's) does not warn about its payload
+    again (``warn_payload`` False): the run's first build of it did."""
     return dict(scenario=scenario, hub=hub, robot=robot, tool=tool, time_step=time_step,
                 hub_pose=None if hub_pose is None else np.array(hub_pose, float),
-                q_home=None if q_home is None else np.array(q_home, float))
+                q_home=None if q_home is None else np.array(q_home, float), warn_payload=False)
 
 
 def plan_cell_args(plan) -> dict:

@@ -371,8 +371,9 @@ def _apply_arm(directives, scenario_file: Path, robot: str | RobotSpec | None) -
 
 
 def load_plan_cell(plan) -> Cell:
-    """The cell a plan was made in (:func:`drakedeburr.cell.recipe.plan_cell_args`)."""
-    return load_cell(**plan_cell_args(plan))
+    """The cell a plan was made in (:func:`drakedeburr.cell.recipe.plan_cell_args`), built
+    here for the first time in this run: its payload warned about."""
+    return load_cell(**{**plan_cell_args(plan), "warn_payload": True})
 
 
 def load_cell(
