@@ -268,9 +268,9 @@ def _dist_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return _norm(p - (a + t * ab))
 
 
-def _checked_loop(p: np.ndarray, name: str) -> np.ndarray:
-    """(N, 3) points of a closed loop, checked (N >= 5, finite, no repeated consecutive points;
-    a repeated closing point dropped)."""
+def checked_loop(p: np.ndarray, name: str = "edge") -> np.ndarray:
+    """The (N, 3) points of a closed loop as every fit takes them (N >= 5, finite, no repeated
+    consecutive points, a repeated closing point dropped). Raises InputError otherwise."""
     p = np.asarray(p, float)
     if p.ndim != 2 or p.shape[1] != 3 or len(p) < 5:
         raise InputError(f"{name}: need (N >= 5, 3) loop points, got shape {p.shape}")
@@ -286,10 +286,10 @@ def _checked_loop(p: np.ndarray, name: str) -> np.ndarray:
     return p
 
 
-def _edge_curve(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
-    """The EdgeCurve of a periodic spline with the (N + 1,) data parameters ``u`` (the last
-    one, 1, the closing point's) of the (N, 3) points ``p``: the arc-length table on the data
-    parameters (Gauss-Legendre per span)."""
+def edge_curve_of_spline(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
+    """The EdgeCurve of a periodic cubic spline on [0, 1) with the (N + 1,) data parameters
+    ``u`` (the last one, 1, the closing point's) of the (N, 3) points ``p``: the arc-length
+    table on the data parameters (Gauss-Legendre per span)."""
     x, w = _GL8
     t = u[:-1, None] + (x + 1.0) * 0.5 * np.diff(u)[:, None]
     speed = np.linalg.norm(spline(t, nu=1), axis=-1)
@@ -297,18 +297,6 @@ def _edge_curve(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
     s_table = np.concatenate([[0.0], np.cumsum(ds)])
     return EdgeCurve(spline=spline, u_data=u[:-1], p_data=p, u_table=u, s_table=s_table,
                      length=float(s_table[-1]))
-
-
-def checked_loop(p: np.ndarray, name: str = "edge") -> np.ndarray:
-    """The (N, 3) points of a closed loop as every fit takes them (N >= 5, finite, no repeated
-    consecutive points, a repeated closing point dropped). Raises InputError otherwise."""
-    return _checked_loop(p, name)
-
-
-def edge_curve_of_spline(spline: BSpline, u: np.ndarray, p: np.ndarray) -> EdgeCurve:
-    """The EdgeCurve of a periodic cubic ``spline`` on [0, 1) whose data points ``p`` (N, 3)
-    sit at the parameters ``u`` (N + 1,: increasing from 0, the last one 1)."""
-    return _edge_curve(spline, u, p)
 
 
 def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
@@ -326,14 +314,14 @@ def fit_edge_curve(p: np.ndarray, *, name: str = "edge") -> EdgeCurve:
     Raises:
         InputError: too few points, non-finite values, or repeated consecutive points.
     """
-    p = _checked_loop(p, name)
+    p = checked_loop(p, name)
     u = chord_parameters(p)
     try:
         spline = make_interp_spline(u, np.vstack([p, p[:1]]), k=3, bc_type="periodic")
     except (np.linalg.LinAlgError, ValueError) as exc:  # degenerate loop: named, not a crash
         raise InputError(f"{name}: the periodic B-spline fit of its {len(p)} points failed "
                          f"({type(exc).__name__}: {str(exc)[:160]})") from exc
-    return _edge_curve(spline, u, p)
+    return edge_curve_of_spline(spline, u, p)
 
 
 #: the smallest expected deviation of a data point from the true curve [m] (a point on a
@@ -463,7 +451,7 @@ def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
     """
     from scipy.interpolate import make_splprep
 
-    p = _checked_loop(p, name)
+    p = checked_loop(p, name)
     u = chord_parameters(p)
     sigma = facet_sagitta(p, corner_angle=corner_angle)["sigma"]
     w = 1.0 / np.r_[sigma, sigma[:1]]
@@ -474,7 +462,7 @@ def fit_faceted_curve(p: np.ndarray, *, name: str = "edge",
         raise InputError(f"{name}: the smoothing B-spline fit of its {len(p)} points failed "
                          f"({type(exc).__name__}: {str(exc)[:160]})") from exc
     spline = BSpline(fit.t, np.asarray(fit.c), fit.k, extrapolate="periodic")
-    return _edge_curve(spline, u, p)
+    return edge_curve_of_spline(spline, u, p)
 
 
 def _corner_runs(turn: np.ndarray, s: np.ndarray, angle: float, merge: float):

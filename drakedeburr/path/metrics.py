@@ -18,7 +18,11 @@ from scipy.spatial.distance import pdist
 
 from drakedeburr.path.edge_curve import EdgeCurve
 
-__all__ = ["segment_figures", "cl_metrics", "coefficient_of_variation", "point_chord_heights"]
+__all__ = ["segment_figures", "cl_metrics", "coefficient_of_variation", "point_chord_heights",
+           "chord_edge_deviation"]
+
+# samples per CL chord (ends included) read against the edge polyline
+_CHORD_SAMPLES = 9
 
 
 def coefficient_of_variation(d: np.ndarray) -> float:
@@ -65,6 +69,36 @@ def point_chord_heights(curve: EdgeCurve, u: np.ndarray) -> np.ndarray:
     out = np.zeros(len(u))
     np.maximum.at(out, k, d)
     return out
+
+
+def _polyline_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) distance of each point ``q`` (n, 3) from the nearest of the segments a[j]-b[j]."""
+    ab = b - a
+    ll = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    out = np.empty(len(q))
+    for i in range(0, len(q), 256):  # (256, m, 3) at a time
+        d = q[i:i + 256, None, :] - a[None]
+        t = np.clip(np.einsum("kij,ij->ki", d, ab) / ll, 0.0, 1.0)
+        out[i:i + 256] = np.linalg.norm(d - t[..., None] * ab, axis=-1).min(axis=1)
+    return out
+
+
+def chord_edge_deviation(curve: EdgeCurve, u: np.ndarray) -> float:
+    """How far the CL chords run from the real edge [m]: the larger of (a) the farthest edge
+    point (the loop the fit came from, ``curve.p_data``) from the closed CL polyline and (b) the
+    farthest point of a CL chord (ends and 7 inner samples each) from the closed edge polyline.
+
+    Both sides: (a) is the chord height against the points (a tessellation corner the chords
+    cut), (b) adds where the CL points themselves stand off the edge (the fit's own error, which
+    the chord height against the fit does not see)."""
+    u = np.asarray(u, float)
+    c = curve.position(u)
+    cn = np.roll(c, -1, axis=0)
+    e = np.asarray(curve.p_data, float)
+    en = np.roll(e, -1, axis=0)
+    t = np.linspace(0.0, 1.0, _CHORD_SAMPLES)[:, None, None]
+    samples = (c[None] + t * (cn - c)[None]).reshape(-1, 3)
+    return float(max(_polyline_distance(e, c, cn).max(), _polyline_distance(samples, e, en).max()))
 
 
 def cl_metrics(curve: EdgeCurve, u: np.ndarray) -> dict[str, float]:
