@@ -75,6 +75,12 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
+def _chord_axes(c_H: np.ndarray, ca: np.ndarray, cb: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Unit cone axes at chord points: the CL points ``ca``/``cb``'s axes ``c_H`` mixed by
+    ``g`` (the samples' and the targets' reading of the cone between two CL points)."""
+    return _unit((1 - g)[:, None] * c_H[ca] + g[:, None] * c_H[cb])
+
+
 def target_cones(plan, X_HT_targets: np.ndarray, refs: dict, cut_windows) -> dict:
     """Margin [rad] of each program target's own tool axis (+Z_T of ``X_HT_targets``, the FK of
     the targets' joints) to the cone of the CL point it cuts (module docstring): ``{"margin":
@@ -97,9 +103,8 @@ def target_cones(plan, X_HT_targets: np.ndarray, refs: dict, cut_windows) -> dic
         z = _unit(np.asarray(X_HT_targets, float)[ks, :3, 2])
         tp = ref.tool_path
         if tp is not None and getattr(tp, "cone_zT_H", None) is not None:
-            c_H = _unit(np.asarray(tp.cone_zT_H, float))
             half = cone_half_angle(plan, w, tp)
-            m = half - axis_angle(_unit((1 - g)[:, None] * c_H[ca] + g[:, None] * c_H[cb]), z)
+            m = half - axis_angle(_chord_axes(np.asarray(tp.cone_zT_H, float), ca, cb, g), z)
             info = {"cone_half_angle": half}
         else:
             tA, tB = angles_from_zT_H(lerp_frames(ref.R_HL[ca], ref.R_HL[cb], g), z)
@@ -122,14 +127,10 @@ def _cone(plan, w: int, ref, a: dict, z_T: np.ndarray, box_margin: np.ndarray):
         return box_margin, {"cone": "no cone axes in the plan: the theta box is checked"}
     half = cone_half_angle(plan, w, tp)
     c_H = np.asarray(tp.cone_zT_H, float)
-    c0 = (1 - a["g0"])[:, None] * c_H[a["ca0"]] + a["g0"][:, None] * c_H[a["cb0"]]
-    c1 = (1 - a["g1"])[:, None] * c_H[a["ca1"]] + a["g1"][:, None] * c_H[a["cb1"]]
-    c0 /= np.linalg.norm(c0, axis=1, keepdims=True)
-    c1 /= np.linalg.norm(c1, axis=1, keepdims=True)
+    c0 = _chord_axes(c_H, a["ca0"], a["cb0"], a["g0"])
+    c1 = _chord_axes(c_H, a["ca1"], a["cb1"], a["g1"])
     f = a["f"]
-    c = (1 - f)[:, None] * c0 + f[:, None] * c1
-    c /= np.linalg.norm(c, axis=1, keepdims=True)
-    ang = axis_angle(c, z_T)
+    ang = axis_angle(_unit((1 - f)[:, None] * c0 + f[:, None] * c1), z_T)
     return half - ang, {"cone_half_angle": half, "max_angle_to_cone_axis": float(ang.max())}
 
 
